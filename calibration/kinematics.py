@@ -1,0 +1,307 @@
+"""Forward kinematics in quaternions (paper eq. 9-12) for serial robots described by data files.
+
+A robot is a YAML file in ``robots/`` (or anywhere, given by path) holding its standard
+Denavit-Hartenberg table, the controller's joint coupling, joint limits and axis speeds. At load the
+table is turned into the paper's chain: for each axis a rotation axis ``N_i`` and a displacement
+``D_i`` to the next axis, both in the home (all-zero) configuration, so that (eq. 11-12)
+
+    Q(i) = Q(i-1) * RtoQ(N_i, θ_i),     P(i) = P(i-1) + rot(Q(i), D_i),
+
+with ``Q(0) = 1`` and ``P(0) = D_0``. The flange (tool0) orientation is ``Q(6) * Q_tool0,home``.
+Controller angles (ABB convention, degrees) become serial angles through the coupling matrix: on the
+IRB 1400 the serial angle of axis 3 is controller axis 3 minus controller axis 2 (parallel arm).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+import yaml
+from scipy.optimize import least_squares
+from scipy.spatial.transform import Rotation
+
+from .rotations import (
+    canonical_quaternions,
+    matrix_from_quaternion,
+    quaternion_from_axis_angle,
+    quaternion_from_matrix,
+    quaternion_multiply,
+    rotate_vectors,
+)
+from .transforms import transform_from_rotation_translation
+
+__all__ = [
+    "RobotModel",
+    "load_robot",
+    "known_robots",
+    "dh_transforms",
+    "InverseKinematicsResult",
+    "inverse_kinematics",
+]
+
+ROBOTS_DIR = Path(__file__).with_name("robots")
+
+
+def dh_transforms(dh_table, theta_rad) -> np.ndarray:
+    """Standard DH link transforms ``Rz(θ) Tz(d) Tx(a) Rx(α)``.
+
+    Parameters
+    ----------
+    dh_table : array-like, shape (k, 4)
+        Rows ``(d_mm, a_mm, alpha_deg, theta_offset_deg)``.
+    theta_rad : array-like, shape (..., k)
+        Full DH angles (offset included), radians.
+
+    Returns
+    -------
+    ndarray, shape (..., k, 4, 4)
+    """
+    dh = np.asarray(dh_table, dtype=float)
+    theta = np.asarray(theta_rad, dtype=float)
+    d, a, alpha = dh[:, 0], dh[:, 1], np.radians(dh[:, 2])
+    ct, st = np.cos(theta), np.sin(theta)
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    out = np.zeros(theta.shape + (4, 4))
+    out[..., 0, 0] = ct
+    out[..., 0, 1] = -st * ca
+    out[..., 0, 2] = st * sa
+    out[..., 0, 3] = a * ct
+    out[..., 1, 0] = st
+    out[..., 1, 1] = ct * ca
+    out[..., 1, 2] = -ct * sa
+    out[..., 1, 3] = a * st
+    out[..., 2, 1] = sa
+    out[..., 2, 2] = ca
+    out[..., 2, 3] = d
+    out[..., 3, 3] = 1.0
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class RobotModel:
+    """A serial robot in the paper's quaternion chain form.
+
+    Attributes
+    ----------
+    name : str
+    base_offset : ndarray, shape (3,)
+        ``D_0``: the first axis' reference point in the base frame, mm.
+    axes : ndarray, shape (k, 3)
+        ``N_i``: unit rotation axes in the home configuration.
+    links : ndarray, shape (k, 3)
+        ``D_i``: from axis i to axis i+1 (the last: to the tool0 origin), mm, home configuration.
+    tool0_home : ndarray, shape (4,)
+        Orientation of tool0 at home, (w, x, y, z).
+    coupling : ndarray, shape (k, k)
+        ``serial_angles = coupling @ controller_angles``.
+    joint_limits_deg : ndarray, shape (k, 2)
+    max_speed_deg_s : ndarray, shape (k,)
+    dh : ndarray, shape (k, 4)
+        The source table, kept for checks.
+    """
+
+    name: str
+    base_offset: np.ndarray
+    axes: np.ndarray
+    links: np.ndarray
+    tool0_home: np.ndarray
+    coupling: np.ndarray
+    joint_limits_deg: np.ndarray
+    max_speed_deg_s: np.ndarray
+    dh: np.ndarray
+
+    @property
+    def dof(self) -> int:
+        return int(self.axes.shape[0])
+
+    @classmethod
+    def from_dh(cls, name, dh, coupling_rows=(), joint_limits_deg=None, max_speed_deg_s=None) -> "RobotModel":
+        """Build the chain from a standard DH table (rows ``d, a, alpha_deg, theta_offset_deg``)."""
+        dh = np.asarray(dh, dtype=float)
+        k = dh.shape[0]
+        frames = np.eye(4)[None].repeat(k + 1, axis=0)
+        links = dh_transforms(dh, np.radians(dh[:, 3]))
+        for i in range(k):
+            frames[i + 1] = frames[i] @ links[i]
+        centres = frames[:k, :3, 3]  # axis i passes through the origin of frame i-1
+        axes = frames[:k, :3, 2]
+        displacements = np.diff(np.vstack([centres, frames[k, :3, 3]]), axis=0)
+        coupling = np.eye(k)
+        for i, j, c in coupling_rows:
+            coupling[int(i) - 1, int(j) - 1] += float(c)
+        limits = np.asarray(joint_limits_deg if joint_limits_deg is not None else [[-180, 180]] * k, dtype=float)
+        speeds = np.asarray(max_speed_deg_s if max_speed_deg_s is not None else [100.0] * k, dtype=float)
+        return cls(
+            name=name,
+            base_offset=centres[0].copy(),
+            axes=axes / np.linalg.norm(axes, axis=1, keepdims=True),
+            links=displacements,
+            tool0_home=quaternion_from_matrix(frames[k, :3, :3]),
+            coupling=coupling,
+            joint_limits_deg=limits,
+            max_speed_deg_s=speeds,
+            dh=dh,
+        )
+
+    def serial_angles_rad(self, joints_deg) -> np.ndarray:
+        """Serial chain angles (radians) of controller angles ``(..., k)`` in degrees."""
+        joints = np.asarray(joints_deg, dtype=float)
+        return np.radians(np.einsum("ij,...j->...i", self.coupling, joints))
+
+    def forward(self, joints_deg) -> tuple[np.ndarray, np.ndarray]:
+        """tool0 in base for controller angles, by eq. 11-12.
+
+        Parameters
+        ----------
+        joints_deg : array-like, shape (..., k)
+            Controller axis angles in degrees (ABB convention).
+
+        Returns
+        -------
+        position_mm : ndarray, shape (..., 3)
+        quaternion_wxyz : ndarray, shape (..., 4)
+            ``w >= 0``.
+        """
+        theta = self.serial_angles_rad(joints_deg)
+        lead = theta.shape[:-1]
+        q = np.broadcast_to(np.array([1.0, 0.0, 0.0, 0.0]), lead + (4,))  # Q(0), θ_0 = 0
+        p = np.broadcast_to(self.base_offset, lead + (3,))  # P(0) = D_0
+        for i in range(self.dof):
+            q = quaternion_multiply(q, quaternion_from_axis_angle(self.axes[i], theta[..., i]))  # eq. 11
+            p = p + rotate_vectors(q, self.links[i])  # eq. 12
+        return p, canonical_quaternions(quaternion_multiply(q, self.tool0_home))
+
+    def forward_transform(self, joints_deg) -> np.ndarray:
+        """tool02base ``(..., 4, 4)`` for controller angles ``(..., k)`` in degrees."""
+        p, q = self.forward(joints_deg)
+        return transform_from_rotation_translation(matrix_from_quaternion(q), p)
+
+    def within_limits(self, joints_deg, margin_deg: float = 0.0) -> np.ndarray:
+        """True where every axis is inside its limits shrunk by ``margin_deg``; shape ``(...)``."""
+        joints = np.asarray(joints_deg, dtype=float)
+        low = self.joint_limits_deg[:, 0] + margin_deg
+        high = self.joint_limits_deg[:, 1] - margin_deg
+        return np.all((joints >= low) & (joints <= high), axis=-1)
+
+    def limit_violations(self, joints_deg, margin_deg: float = 0.0) -> list[str]:
+        """Readable list of the axes of one posture outside their limits (empty when inside)."""
+        joints = np.asarray(joints_deg, dtype=float)
+        out = []
+        for axis, (value, (low, high)) in enumerate(zip(joints, self.joint_limits_deg), start=1):
+            if not np.isfinite(value):
+                out.append(f"axis {axis} is {value}")
+            elif value < low + margin_deg or value > high - margin_deg:
+                out.append(f"axis {axis} = {value:.4f} deg outside [{low + margin_deg:g}, {high - margin_deg:g}]")
+        return out
+
+
+def _normalise_name(name: str) -> str:
+    return "".join(ch for ch in name.lower() if ch.isalnum())
+
+
+@lru_cache(maxsize=None)
+def _robot_files() -> dict:
+    table = {}
+    for path in sorted(ROBOTS_DIR.glob("*.yaml")):
+        data = yaml.safe_load(path.read_text())
+        for name in [data["name"], *data.get("aliases", [])]:
+            table[_normalise_name(name)] = path
+    return table
+
+
+def known_robots() -> list[str]:
+    """Names of the robot models shipped with the package."""
+    return sorted({yaml.safe_load(p.read_text())["name"] for p in set(_robot_files().values())})
+
+
+@lru_cache(maxsize=None)
+def _load_path(path: Path) -> RobotModel:
+    data = yaml.safe_load(Path(path).read_text())
+    try:
+        return RobotModel.from_dh(
+            data["name"],
+            data["dh"],
+            data.get("coupling", ()),
+            data.get("joint_limits_deg"),
+            data.get("max_speed_deg_s"),
+        )
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"robot file {path} is not a valid robot model: {exc}") from None
+
+
+def load_robot(name_or_path: str) -> RobotModel:
+    """A robot model by name (``IRB1400``) or by the path of a YAML file of the same layout.
+
+    Raises
+    ------
+    ValueError
+        If the name is unknown and no such file exists.
+    """
+    key = _normalise_name(str(name_or_path))
+    files = _robot_files()
+    if key in files:
+        return _load_path(files[key])
+    path = Path(name_or_path)
+    if path.suffix in (".yaml", ".yml") and path.is_file():
+        return _load_path(path.resolve())
+    raise ValueError(f"unknown robot model {name_or_path!r}; known: {', '.join(known_robots())} (or a path to a robot YAML file)")
+
+
+@dataclass(frozen=True)
+class InverseKinematicsResult:
+    """Numerical inverse kinematics for one pose.
+
+    Attributes
+    ----------
+    joints_deg : ndarray, shape (k,)
+    success : bool
+        Position within ``tolerance_mm`` and orientation within ``tolerance_deg``, limits respected.
+    position_error_mm, rotation_error_deg : float
+    """
+
+    joints_deg: np.ndarray
+    success: bool
+    position_error_mm: float
+    rotation_error_deg: float
+
+
+def inverse_kinematics(
+    robot: RobotModel,
+    tool02base,
+    seed_deg,
+    margin_deg: float = 0.0,
+    tolerance_mm: float = 1e-3,
+    tolerance_deg: float = 1e-4,
+) -> InverseKinematicsResult:
+    """Controller angles that put tool0 at ``tool02base``, found from ``seed_deg`` by least squares.
+
+    The configuration found is the one nearest the seed (the solver does not switch arm, elbow or
+    wrist configuration by itself). Angles stay inside the joint limits shrunk by ``margin_deg``.
+
+    Parameters
+    ----------
+    robot : RobotModel
+    tool02base : array-like, shape (4, 4)
+    seed_deg : array-like, shape (k,)
+    """
+    target = np.asarray(tool02base, dtype=float)
+    target_rotation = Rotation.from_matrix(target[:3, :3])
+    lever_mm = 500.0  # weights orientation like a position error at half a metre
+
+    def residual(joints):
+        p, q = robot.forward(joints)
+        rot_err = (target_rotation.inv() * Rotation.from_quat(q, scalar_first=True)).as_rotvec()
+        return np.concatenate([p - target[:3, 3], lever_mm * rot_err])
+
+    low = robot.joint_limits_deg[:, 0] + margin_deg
+    high = robot.joint_limits_deg[:, 1] - margin_deg
+    seed = np.clip(np.asarray(seed_deg, dtype=float), low + 1e-9, high - 1e-9)
+    fit = least_squares(residual, seed, bounds=(low, high), x_scale=1.0, xtol=1e-12, ftol=1e-12, gtol=1e-12)
+    r = residual(fit.x)
+    pos_err = float(np.linalg.norm(r[:3]))
+    rot_err = float(np.degrees(np.linalg.norm(r[3:]) / lever_mm))
+    ok = pos_err <= tolerance_mm and rot_err <= tolerance_deg
+    return InverseKinematicsResult(fit.x, ok, pos_err, rot_err)

@@ -1,0 +1,150 @@
+"""Error measures of the paper (section 2.2, eq. 16-23) and errors against a known truth.
+
+Conventions: lengths in mm; rotation metrics in radians unless the name ends in ``_deg``.
+``fixed`` points are the board points carried into the frame the board is fixed in
+(``base`` eye-in-hand, ``tool0`` eye-to-hand): ``fixed_i = hand_i @ X @ points_cam_i`` (eq. 13).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .transforms import invert_transforms, rotation_error_deg, translation_error_mm
+
+__all__ = [
+    "axxb_residuals",
+    "lp_distance",
+    "d_geod_matrix",
+    "d_hyper",
+    "d_frob",
+    "d_1",
+    "d_2",
+    "d_geod_quaternion",
+    "fixed_points",
+    "mean_point",
+    "d_org",
+    "d_back",
+    "posture_residuals",
+    "errors_against_truth",
+]
+
+
+def axxb_residuals(hand, target2cam, x, pairs) -> tuple[np.ndarray, np.ndarray]:
+    """Per-pair ``δR = ||R_A R_X - R_X R_B||_F`` and ``δt = |R_A t_X + t_A - R_X t_B - t_X|`` (eq. 16).
+
+    Parameters
+    ----------
+    hand : ndarray, shape (n, 4, 4)
+        Hand poses ``A_i``.
+    target2cam : ndarray, shape (n, 4, 4)
+        Board poses ``B_i``.
+    x : ndarray, shape (4, 4)
+    pairs : ndarray, shape (p, 2)
+
+    Returns
+    -------
+    delta_r : ndarray, shape (p,)
+    delta_t_mm : ndarray, shape (p,)
+    """
+    i, j = pairs[:, 0], pairs[:, 1]
+    a = invert_transforms(hand[i]) @ hand[j]
+    b = target2cam[i] @ invert_transforms(target2cam[j])
+    ax = a @ x
+    xb = x @ b
+    delta_r = np.linalg.norm(ax[:, :3, :3] - xb[:, :3, :3], axis=(1, 2))
+    delta_t = np.linalg.norm(ax[:, :3, 3] - xb[:, :3, 3], axis=1)
+    return delta_r, delta_t
+
+
+def lp_distance(t_r, t_s, p: float = 2.0) -> np.ndarray:
+    """``L_p`` distance between positions (eq. 17); ``p = inf`` gives the largest coordinate gap."""
+    diff = np.abs(np.asarray(t_r, float) - np.asarray(t_s, float))
+    if np.isinf(p):
+        return diff.max(axis=-1)
+    return np.sum(diff**p, axis=-1) ** (1.0 / p)
+
+
+def d_geod_matrix(r_r, r_s) -> np.ndarray:
+    """``||log(R_r^-1 R_s)||`` (eq. 18): the rotation angle between two rotations, radians."""
+    return np.radians(rotation_error_deg(r_r, r_s))
+
+
+def d_hyper(r_r, r_s) -> np.ndarray:
+    """``||log(R_r) - log(R_s)||`` (eq. 18) with ``log`` as the rotation vector, radians."""
+    a = Rotation.from_matrix(np.asarray(r_r, float)).as_rotvec()
+    b = Rotation.from_matrix(np.asarray(r_s, float)).as_rotvec()
+    return np.linalg.norm(a - b, axis=-1)
+
+
+def d_frob(r_r, r_s) -> np.ndarray:
+    """``||R_r - R_s||_F`` (eq. 18)."""
+    return np.linalg.norm(np.asarray(r_r, float) - np.asarray(r_s, float), axis=(-2, -1))
+
+
+def d_1(q_r, q_s) -> np.ndarray:
+    """``1 - |q_r . q_s|`` (eq. 19), in [0, 1]."""
+    return 1.0 - np.abs(np.sum(np.asarray(q_r, float) * np.asarray(q_s, float), axis=-1))
+
+
+def d_2(q_r, q_s) -> np.ndarray:
+    """``min(|q_r - q_s|, |q_r + q_s|)`` (eq. 19), in [0, sqrt(2)]."""
+    q_r = np.asarray(q_r, float)
+    q_s = np.asarray(q_s, float)
+    return np.minimum(np.linalg.norm(q_r - q_s, axis=-1), np.linalg.norm(q_r + q_s, axis=-1))
+
+
+def d_geod_quaternion(q_r, q_s) -> np.ndarray:
+    """``2 acos(|q_r . q_s|)`` (eq. 19), in [0, pi]: equals :func:`d_geod_matrix`."""
+    dot = np.abs(np.sum(np.asarray(q_r, float) * np.asarray(q_s, float), axis=-1))
+    return 2.0 * np.arccos(np.clip(dot, 0.0, 1.0))
+
+
+def fixed_points(hand, x, points_cam) -> np.ndarray:
+    """Board points in the fixed frame, ``hand_i @ X @ points_i`` (eq. 13).
+
+    Parameters
+    ----------
+    hand : ndarray, shape (n, 4, 4)
+    x : ndarray, shape (4, 4)
+    points_cam : ndarray, shape (n, m, 3)
+
+    Returns
+    -------
+    ndarray, shape (n, m, 3)
+    """
+    chain = hand @ x
+    return np.einsum("nij,nmj->nmi", chain[:, :3, :3], points_cam) + chain[:, None, :3, 3]
+
+
+def mean_point(fixed) -> np.ndarray:
+    """Mean position of each point over the postures (eq. 21): ``(n, m, 3) -> (m, 3)``."""
+    return np.asarray(fixed, float).mean(axis=0)
+
+
+def d_org(fixed) -> float:
+    """Mean distance of the points from their mean point (eq. 22), averaged over the points, mm."""
+    fixed = np.asarray(fixed, float)
+    return float(np.linalg.norm(fixed - fixed.mean(axis=0), axis=-1).mean())
+
+
+def d_back(fixed) -> float:
+    """Mean distance between the same point seen from two postures (eq. 23), averaged over points, mm."""
+    fixed = np.asarray(fixed, float)
+    n = fixed.shape[0]
+    i, j = np.triu_indices(n, k=1)
+    return float(np.linalg.norm(fixed[i] - fixed[j], axis=-1).mean())
+
+
+def posture_residuals(fixed) -> np.ndarray:
+    """Per posture: mean distance of its points from the mean points (eq. 21-22 per posture), mm."""
+    fixed = np.asarray(fixed, float)
+    return np.linalg.norm(fixed - fixed.mean(axis=0), axis=-1).mean(axis=1)
+
+
+def errors_against_truth(x, x_true) -> dict:
+    """Rotation (deg) and translation (mm) errors of ``X`` against a known truth."""
+    return {
+        "rotation_error_deg": float(rotation_error_deg(x, x_true)),
+        "translation_error_mm": float(translation_error_mm(x, x_true)),
+    }

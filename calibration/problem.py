@@ -1,0 +1,79 @@
+"""The hand-eye problem in one frame-neutral form.
+
+Eye-in-hand (camera on the flange): the hand pose is ``tool02base`` and the unknown ``X`` is
+``cam2tool0``; the board is fixed in ``base``. Eye-to-hand (camera fixed, board on the flange): the
+hand pose is ``base2tool0`` and ``X`` is ``cam2base``; the board is fixed in ``tool0``. In both cases
+
+    fixed_points = hand_i @ X @ points_cam_i          for every posture i,
+
+so one solver serves both; ``world`` below is the frame the board is fixed in.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .compact_points import CompactPoints
+from .transforms import invert_transforms
+
+__all__ = ["EYE_IN_HAND", "EYE_TO_HAND", "SETUPS", "HandEyeProblem", "hand_poses"]
+
+EYE_IN_HAND = "eye_in_hand"
+EYE_TO_HAND = "eye_to_hand"
+SETUPS = (EYE_IN_HAND, EYE_TO_HAND)
+
+
+def hand_poses(tool02base, setup: str) -> np.ndarray:
+    """Hand poses ``(n, 4, 4)`` of the frame-neutral problem for a setup."""
+    if setup == EYE_IN_HAND:
+        return np.asarray(tool02base, dtype=float)
+    if setup == EYE_TO_HAND:
+        return invert_transforms(tool02base)
+    raise ValueError(f"unknown setup {setup!r}; use one of {', '.join(SETUPS)}")
+
+
+@dataclass(frozen=True)
+class HandEyeProblem:
+    """Everything a solver needs, as arrays.
+
+    Attributes
+    ----------
+    setup : str
+        ``eye_in_hand`` or ``eye_to_hand``.
+    hand : ndarray, shape (n, 4, 4)
+        Hand poses (``tool02base`` or ``base2tool0``), mm.
+    compact : CompactPoints
+        Three points per posture in the camera frame and the board poses ``target2cam``.
+    points_cam : ndarray, shape (n, m, 3)
+        The full measured point set per posture (the compact points when no corners were given).
+    posture_ids : ndarray of int, shape (n,)
+        Posture indices as written in the session.
+    target_points : ndarray, shape (m, 3) or None
+        The full point set in the target frame, when known (board grid).
+    """
+
+    setup: str
+    hand: np.ndarray
+    compact: CompactPoints
+    points_cam: np.ndarray
+    posture_ids: np.ndarray
+    target_points: np.ndarray | None = None
+    notes: dict = field(default_factory=dict)
+
+    @property
+    def n(self) -> int:
+        return int(self.hand.shape[0])
+
+    @property
+    def target2cam(self) -> np.ndarray:
+        return self.compact.target2cam
+
+    def subset(self, keep) -> "HandEyeProblem":
+        """The problem restricted to the postures ``keep`` (boolean mask or index array)."""
+        keep = np.asarray(keep)
+        c = self.compact
+        compact = CompactPoints(c.points[keep], c.target_points, c.target2cam[keep], c.plane_rms_mm[keep], c.square_mm)
+        return HandEyeProblem(self.setup, self.hand[keep], compact, self.points_cam[keep],
+                              self.posture_ids[keep], self.target_points, dict(self.notes))

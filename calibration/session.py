@@ -1,0 +1,319 @@
+"""Capture sessions on disk, format ``handeye-session/1`` (see the conventions).
+
+::
+
+    SESSION/
+      session.yaml
+      postures/000.yaml, 001.yaml, ...     one file per posture, each written atomically
+      images/000_left.png, ...             optional
+      truth.yaml                           synthetic sessions only: the answer, for checks
+
+Every write goes to a temporary file in the same folder, is flushed to disk and renamed over the
+target, so an interrupted writer leaves either the old file or the new one, never half a file.
+Reading validates every value and reports the first problem naming the posture and its file.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from .compact_points import BoardGeometry
+from .errors import SessionError
+from .problem import SETUPS
+from .transforms import pose_from_transform, transform_from_pose
+
+__all__ = [
+    "FORMAT",
+    "Posture",
+    "Session",
+    "write_yaml_atomic",
+    "create_session",
+    "write_posture",
+    "read_session",
+    "read_truth",
+    "write_truth",
+]
+
+FORMAT = "handeye-session/1"
+_POSTURE_KEYS = {"index", "tool0_in_base", "joints_deg", "points_mm", "target_in_camera"}
+
+
+@dataclass
+class Posture:
+    """One robot posture and what the camera measured there.
+
+    Attributes
+    ----------
+    index : int
+    tool0_in_base : ndarray, shape (4, 4) or None
+        Authoritative flange pose (mm).
+    joints_deg : ndarray, shape (6,) or None
+        Controller axis angles.
+    points_mm : ndarray, shape (m, 3) or None
+        Board corners in the camera frame, target index order.
+    target_in_camera : ndarray, shape (4, 4) or None
+        Board pose ``target2cam``.
+    extra : dict
+        Any other keys of the posture file (quality figures, image names), kept as they are.
+    """
+
+    index: int
+    tool0_in_base: np.ndarray | None = None
+    joints_deg: np.ndarray | None = None
+    points_mm: np.ndarray | None = None
+    target_in_camera: np.ndarray | None = None
+    extra: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        out: dict = {"index": int(self.index)}
+        if self.tool0_in_base is not None:
+            out["tool0_in_base"] = _rounded_pose(self.tool0_in_base)
+        if self.joints_deg is not None:
+            out["joints_deg"] = [round(float(v), 9) for v in self.joints_deg]
+        if self.points_mm is not None:
+            out["points_mm"] = [[round(float(v), 6) for v in p] for p in np.asarray(self.points_mm)]
+        if self.target_in_camera is not None:
+            out["target_in_camera"] = _rounded_pose(self.target_in_camera)
+        out.update(self.extra)
+        return out
+
+
+@dataclass
+class Session:
+    """A capture session: set-up, robot model, board and postures.
+
+    Attributes
+    ----------
+    setup : str
+        ``eye_in_hand`` or ``eye_to_hand``.
+    robot : str or None
+        Robot model name (joints -> tool0), e.g. ``IRB1400``.
+    target : BoardGeometry or None
+    postures : list of Posture
+        Sorted by index.
+    path : Path or None
+    extra : dict
+        Other keys of ``session.yaml``, kept as they are.
+    """
+
+    setup: str = "eye_in_hand"
+    robot: str | None = None
+    target: BoardGeometry | None = None
+    postures: list = field(default_factory=list)
+    path: Path | None = None
+    extra: dict = field(default_factory=dict)
+
+    def header(self) -> dict:
+        out: dict = {"format": FORMAT, "setup": self.setup}
+        if self.robot:
+            out["robot"] = self.robot
+        if self.target is not None:
+            target = {"type": "checkerboard", "corners": [int(c) for c in self.target.corners]}
+            if self.target.square_mm is not None:
+                target["square_mm"] = float(self.target.square_mm)
+            out["target"] = target
+        out.update(self.extra)
+        return out
+
+
+def _rounded_pose(transform) -> dict:
+    pose = pose_from_transform(transform)
+    return {
+        "position_mm": [round(v, 6) for v in pose["position_mm"]],
+        "quaternion_wxyz": [round(v, 12) for v in pose["quaternion_wxyz"]],
+    }
+
+
+def write_yaml_atomic(path: Path, data: dict) -> None:
+    """Write ``data`` as YAML to ``path`` atomically (temporary file, fsync, rename)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=120)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w") as handle:
+            handle.write(text)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    try:  # make the rename itself durable
+        dir_fd = os.open(path.parent, os.O_RDONLY)
+        try:
+            os.fsync(dir_fd)
+        finally:
+            os.close(dir_fd)
+    except OSError:
+        pass
+
+
+def create_session(path, session: Session, overwrite: bool = False) -> Path:
+    """Create ``path/session.yaml`` and ``path/postures/``.
+
+    Raises
+    ------
+    SessionError
+        If ``path`` already holds a session and ``overwrite`` is false (nothing is touched).
+    """
+    path = Path(path)
+    if (path / "session.yaml").exists() and not overwrite:
+        raise SessionError(f"{path} already holds a session; choose another folder or pass --overwrite")
+    if overwrite and (path / "postures").is_dir():
+        for old in (path / "postures").glob("*.yaml"):
+            old.unlink()
+    if session.setup not in SETUPS:
+        raise SessionError(f"setup must be one of {', '.join(SETUPS)}; got {session.setup!r}")
+    (path / "postures").mkdir(parents=True, exist_ok=True)
+    write_yaml_atomic(path / "session.yaml", session.header())
+    session.path = path
+    return path
+
+
+def posture_file(path, index: int) -> Path:
+    return Path(path) / "postures" / f"{int(index):03d}.yaml"
+
+
+def write_posture(path, posture: Posture) -> Path:
+    """Write one posture file atomically; returns its path."""
+    target = posture_file(path, posture.index)
+    write_yaml_atomic(target, posture.to_dict())
+    return target
+
+
+def _load_yaml(path: Path, what: str) -> dict:
+    try:
+        data = yaml.safe_load(path.read_text())
+    except FileNotFoundError:
+        raise SessionError(f"{what} not found: {path}") from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" (line {mark.line + 1})" if mark is not None else ""
+        raise SessionError(f"{path} is not valid YAML{where}") from None
+    if not isinstance(data, dict):
+        raise SessionError(f"{path} does not hold a YAML mapping")
+    return data
+
+
+def _array(value, shape_tail, what: str) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} is not a list of numbers") from None
+    if arr.ndim != len(shape_tail) or any(s is not None and s != a for s, a in zip(shape_tail, arr.shape)):
+        want = " x ".join("m" if s is None else str(s) for s in shape_tail)
+        raise ValueError(f"{what} must have shape {want}; got {' x '.join(map(str, arr.shape)) or 'a scalar'}")
+    if not np.all(np.isfinite(arr)):
+        bad = np.argwhere(~np.isfinite(arr))[0]
+        raise ValueError(f"{what} holds {arr[tuple(bad)]} at {list(map(int, bad))}")
+    return arr
+
+
+def _pose(value, what: str) -> np.ndarray:
+    if not isinstance(value, dict) or "position_mm" not in value or "quaternion_wxyz" not in value:
+        raise ValueError(f"{what} needs position_mm and quaternion_wxyz")
+    position = _array(value["position_mm"], (3,), f"{what}.position_mm")
+    quaternion = _array(value["quaternion_wxyz"], (4,), f"{what}.quaternion_wxyz")
+    try:
+        return transform_from_pose(position, quaternion)
+    except ValueError as exc:
+        raise ValueError(f"{what}: {exc}") from None
+
+
+def _parse_posture(data: dict, file_index: int) -> Posture:
+    index = data.get("index", file_index)
+    if not isinstance(index, int) or isinstance(index, bool):
+        raise ValueError(f"index must be an integer; got {index!r}")
+    posture = Posture(index=index, extra={k: v for k, v in data.items() if k not in _POSTURE_KEYS})
+    if data.get("tool0_in_base") is not None:
+        posture.tool0_in_base = _pose(data["tool0_in_base"], "tool0_in_base")
+    if data.get("joints_deg") is not None:
+        posture.joints_deg = _array(data["joints_deg"], (None,), "joints_deg")
+    if data.get("points_mm") is not None:
+        posture.points_mm = _array(data["points_mm"], (None, 3), "points_mm")
+    if data.get("target_in_camera") is not None:
+        posture.target_in_camera = _pose(data["target_in_camera"], "target_in_camera")
+    if posture.tool0_in_base is None and posture.joints_deg is None:
+        raise ValueError("holds neither tool0_in_base nor joints_deg")
+    if posture.points_mm is None and posture.target_in_camera is None:
+        raise ValueError("holds neither points_mm nor target_in_camera")
+    return posture
+
+
+def _parse_target(value) -> BoardGeometry | None:
+    if value is None:
+        return None
+    if not isinstance(value, dict) or "corners" not in value:
+        raise SessionError("session.yaml: target needs corners: [along x, along y]")
+    corners = value["corners"]
+    if (not isinstance(corners, (list, tuple)) or len(corners) != 2
+            or not all(isinstance(c, int) and not isinstance(c, bool) and c >= 2 for c in corners)):
+        raise SessionError(f"session.yaml: target.corners must be two integers >= 2; got {corners!r}")
+    square = value.get("square_mm")
+    if square is not None:
+        if not isinstance(square, (int, float)) or isinstance(square, bool) or not math.isfinite(square) or square <= 0:
+            raise SessionError(f"session.yaml: target.square_mm must be a positive number; got {square!r}")
+        square = float(square)
+    return BoardGeometry((int(corners[0]), int(corners[1])), square)
+
+
+def read_session(path) -> Session:
+    """Read and validate a session folder.
+
+    Raises
+    ------
+    SessionError
+        With a one-line message naming the file (and posture) at fault.
+    """
+    path = Path(path)
+    if not path.is_dir():
+        raise SessionError(f"no session folder at {path}")
+    header = _load_yaml(path / "session.yaml", "session.yaml")
+    fmt = header.get("format")
+    if fmt != FORMAT:
+        raise SessionError(f"{path / 'session.yaml'}: format must be {FORMAT!r}; got {fmt!r}")
+    setup = header.get("setup", "eye_in_hand")
+    if setup not in SETUPS:
+        raise SessionError(f"{path / 'session.yaml'}: setup must be one of {', '.join(SETUPS)}; got {setup!r}")
+    robot = header.get("robot")
+    target = _parse_target(header.get("target"))
+    extra = {k: v for k, v in header.items() if k not in {"format", "setup", "robot", "target"}}
+    postures = []
+    seen: dict[int, Path] = {}
+    for file in sorted((path / "postures").glob("*.yaml")):
+        stem = file.stem
+        file_index = int(stem) if stem.isdigit() else -1
+        data = _load_yaml(file, "posture file")
+        try:
+            posture = _parse_posture(data, file_index)
+        except ValueError as exc:
+            label = data.get("index", file_index)
+            raise SessionError(f"posture {label} ({file.relative_to(path)}): {exc}") from None
+        if posture.index in seen:
+            raise SessionError(f"posture {posture.index} appears twice: {seen[posture.index].name} and {file.name}")
+        seen[posture.index] = file
+        postures.append(posture)
+    postures.sort(key=lambda p: p.index)
+    return Session(setup=setup, robot=robot, target=target, postures=postures, path=path, extra=extra)
+
+
+def write_truth(path, truth: dict) -> None:
+    """Write ``truth.yaml`` beside a synthetic session (the answer, for checks and ``mcy``)."""
+    write_yaml_atomic(Path(path) / "truth.yaml", truth)
+
+
+def read_truth(path) -> dict | None:
+    """The synthetic truth of a session, or ``None`` when the session has none."""
+    file = Path(path) / "truth.yaml"
+    if not file.exists():
+        return None
+    return _load_yaml(file, "truth.yaml")

@@ -1,0 +1,290 @@
+"""One entry point: a session (or problem) and a method name in, a :class:`CalibrationResult` out.
+
+Input checks live here, with messages an operator can act on; the solvers behind assume clean data.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .compact_points import compact_points_from_corners, compact_points_from_poses
+from .errors import CalibrationError
+from .kinematics import load_robot
+from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points, posture_residuals
+from .problem import EYE_IN_HAND, HandEyeProblem, hand_poses
+from .selection import CandidateScorer, select_candidate
+from .session import Session
+from .transforms import pose_from_transform, transform_from_pose
+from .triplets import all_postures_solution, relative_motions, triplet_candidates
+
+__all__ = [
+    "PAPER_METHODS",
+    "DEFAULT_METHOD",
+    "CalibrationResult",
+    "problem_from_session",
+    "check_motion",
+    "calibrate",
+    "calibrate_session",
+    "truth_from_dict",
+]
+
+#: The paper's variants (section 4): MC without selection, the others select among triplets.
+PAPER_METHODS = ("mc", "mcr", "mct", "mcb", "mco", "mcy")
+DEFAULT_METHOD = "mcb"
+
+MIN_POSTURES = 3
+MIN_ROTATION_DEG = 2.0
+MIN_AXIS_SPREAD_DEG = 2.0
+
+
+@dataclass
+class CalibrationResult:
+    """The answer of one method on one data set.
+
+    Attributes
+    ----------
+    method : str
+    setup : str
+    x : ndarray, shape (4, 4)
+        ``cam2tool0`` (eye-in-hand) or ``cam2base`` (eye-to-hand), mm.
+    metrics : dict
+        ``d_org_mm``, ``d_back_mm`` (eq. 22-23, on the full point set), ``delta_r`` and
+        ``delta_t_mm`` (eq. 16, RMS over all posture pairs), and which points were used.
+    residuals_mm : dict
+        Per posture index: mean distance of its points from the mean points (eq. 21-22).
+    outliers : list of int
+        Posture indices judged inconsistent (empty for methods that do not judge).
+    runtime_s : float
+        The solve alone.
+    details : dict
+        Method-specific information (chosen triplet, candidate counts, ...).
+    truth_errors : dict or None
+        Errors against the known truth (synthetic sessions).
+    """
+
+    method: str
+    setup: str
+    x: np.ndarray
+    metrics: dict
+    residuals_mm: dict
+    outliers: list
+    runtime_s: float
+    details: dict = field(default_factory=dict)
+    truth_errors: dict | None = None
+
+    @property
+    def parent(self) -> str:
+        return "tool0" if self.setup == EYE_IN_HAND else "base"
+
+    def to_json(self) -> dict:
+        """The JSON of ``handeye calibrate --json`` (conventions.md)."""
+        out = {
+            "method": self.method,
+            "setup": self.setup,
+            "camera_pose": {"parent": self.parent, **pose_from_transform(self.x)},
+            "metrics": self.metrics,
+            "outliers": [int(i) for i in self.outliers],
+            "runtime_s": self.runtime_s,
+            "posture_residuals_mm": {str(k): v for k, v in self.residuals_mm.items()},
+            "details": self.details,
+        }
+        if self.truth_errors is not None:
+            out["truth_errors"] = self.truth_errors
+        return out
+
+
+def _posture_tool0(session: Session) -> np.ndarray:
+    robot = None
+    poses = []
+    for p in session.postures:
+        if p.tool0_in_base is not None:
+            poses.append(p.tool0_in_base)
+            continue
+        if robot is None:
+            if not session.robot:
+                raise CalibrationError(
+                    f"posture {p.index} holds joints_deg only; add 'robot: IRB1400' (or your model) to session.yaml"
+                )
+            try:
+                robot = load_robot(session.robot)
+            except ValueError as exc:
+                raise CalibrationError(str(exc)) from None
+        if p.joints_deg.shape != (robot.dof,):
+            raise CalibrationError(f"posture {p.index}: joints_deg has {p.joints_deg.size} values; {robot.name} has {robot.dof} axes")
+        poses.append(robot.forward_transform(p.joints_deg))
+    return np.array(poses)
+
+
+def problem_from_session(session: Session) -> HandEyeProblem:
+    """Turn a validated session into arrays, checking what the solver needs.
+
+    Raises
+    ------
+    CalibrationError
+        Too few postures, a posture with a different corner count, no usable board data.
+    """
+    postures = session.postures
+    if len(postures) < MIN_POSTURES:
+        raise CalibrationError(f"at least {MIN_POSTURES} postures are needed; got {len(postures)}")
+    ids = np.array([p.index for p in postures])
+    tool02base = _posture_tool0(session)
+    hand = hand_poses(tool02base, session.setup)
+    with_points = [p for p in postures if p.points_mm is not None]
+    if len(with_points) == len(postures):
+        board = session.target
+        if board is None:
+            raise CalibrationError("the postures hold points_mm but session.yaml has no target.corners; add the board's corner counts")
+        for p in postures:
+            if len(p.points_mm) != board.count:
+                raise CalibrationError(
+                    f"posture {p.index} has {len(p.points_mm)} corners; the board has "
+                    f"{board.corners[0]}x{board.corners[1]} = {board.count}"
+                )
+        points = np.array([p.points_mm for p in postures])
+        compact = compact_points_from_corners(points, board)
+        target_points = board.grid(compact.square_mm)
+        return HandEyeProblem(session.setup, hand, compact, points, ids, target_points)
+    missing = [p.index for p in postures if p.target_in_camera is None]
+    if missing:
+        raise CalibrationError(f"posture {missing[0]} holds neither points_mm nor target_in_camera like the others")
+    length = 100.0
+    if session.target is not None and session.target.square_mm:
+        length = (max(session.target.corners) - 1) * session.target.square_mm
+    compact = compact_points_from_poses(np.array([p.target_in_camera for p in postures]), length)
+    return HandEyeProblem(session.setup, hand, compact, compact.points, ids, compact.target_points)
+
+
+def check_motion(problem: HandEyeProblem) -> None:
+    """Refuse data whose robot motion cannot determine ``X``.
+
+    Raises
+    ------
+    CalibrationError
+        When every relative rotation is below ~2 deg, or all rotation axes are (nearly) parallel.
+    """
+    motions = relative_motions(problem)
+    angles = motions.angle_a_deg
+    if angles.max() < MIN_ROTATION_DEG:
+        raise CalibrationError(
+            f"the flange barely rotates between postures (largest relative rotation {angles.max():.2f} deg); "
+            f"rotate it by 15-45 deg about different axes between postures"
+        )
+    vectors = motions.q_a[angles >= MIN_ROTATION_DEG, 1:]
+    axes = vectors / np.linalg.norm(vectors, axis=1, keepdims=True)
+    scatter = axes.T @ axes / len(axes)
+    eig = np.linalg.eigvalsh(scatter)
+    spread_deg = np.degrees(np.arcsin(np.sqrt(max(1.0 - eig[-1], 0.0))))
+    if spread_deg < MIN_AXIS_SPREAD_DEG:
+        raise CalibrationError(
+            f"all relative rotations are about nearly parallel axes (spread {spread_deg:.2f} deg); "
+            f"rotate the flange about at least two different axes"
+        )
+
+
+def truth_from_dict(truth: dict | None, setup: str) -> dict | None:
+    """``{'x': 4x4, 'target2fixed': 4x4}`` from a ``truth.yaml`` mapping, or ``None``."""
+    if not truth:
+        return None
+    try:
+        camera, board = truth["camera_pose"], truth["target_pose"]
+        x = transform_from_pose(camera["position_mm"], camera["quaternion_wxyz"])
+        target = transform_from_pose(board["position_mm"], board["quaternion_wxyz"])
+    except (KeyError, TypeError, ValueError):
+        return None
+    return {"x": x, "target2fixed": target}
+
+
+def _summarise(problem: HandEyeProblem, x: np.ndarray) -> tuple[dict, dict]:
+    fixed = fixed_points(problem.hand, x, problem.points_cam)
+    motions_pairs = np.stack(np.triu_indices(problem.n, k=1), axis=1)
+    delta_r, delta_t = axxb_residuals(problem.hand, problem.target2cam, x, motions_pairs)
+    metrics = {
+        "d_org_mm": d_org(fixed),
+        "d_back_mm": d_back(fixed),
+        "delta_r": float(np.sqrt(np.mean(delta_r**2))),
+        "delta_t_mm": float(np.sqrt(np.mean(delta_t**2))),
+        "points": "corners" if problem.points_cam.shape[1] > 3 else "compact",
+        "postures": problem.n,
+    }
+    residuals = {int(i): float(r) for i, r in zip(problem.posture_ids, posture_residuals(fixed))}
+    return metrics, residuals
+
+
+def _solve_paper(problem: HandEyeProblem, method: str, truth: dict | None) -> tuple[np.ndarray, dict]:
+    motions = relative_motions(problem)
+    if method == "mc":
+        return all_postures_solution(problem, motions), {"candidates": 0}
+    candidates = triplet_candidates(problem, motions)
+    scorer = CandidateScorer(problem.hand, problem.compact.points)
+    truth_points = None
+    if method == "mcy":
+        if truth is None:
+            raise CalibrationError("mcy needs the true board pose (truth.yaml of a synthetic session)")
+        t = truth["target2fixed"]
+        truth_points = problem.compact.target_points @ t[:3, :3].T + t[:3, 3]
+    try:
+        selection = select_candidate(method, candidates, scorer, motions, problem.compact.points[:, 0, :], truth_points)
+    except ValueError as exc:
+        raise CalibrationError(f"{exc}: rotate the flange about different axes between postures") from None
+    triplet = candidates.triplets[selection.index]
+    details = {
+        "candidates": int(len(candidates)),
+        "valid_candidates": int(candidates.valid.sum()),
+        "exact_evaluations": int(selection.exact_evaluations),
+        "selected_triplet": [int(problem.posture_ids[i]) for i in triplet],
+        "criterion_value": selection.score,
+    }
+    return candidates.transform(selection.index), details
+
+
+_WARM = False
+
+
+def _warm_up_numerics() -> None:
+    """Start numpy's BLAS/LAPACK thread pools once, so ``runtime_s`` times the solve, not start-up."""
+    global _WARM
+    if not _WARM:
+        a = np.eye(64)
+        np.linalg.eigh(np.broadcast_to(np.eye(4), (8, 4, 4)))
+        _ = a @ a
+        _WARM = True
+
+
+def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | None = None) -> CalibrationResult:
+    """Solve ``AX = XB`` with one method.
+
+    Parameters
+    ----------
+    problem : HandEyeProblem
+    method : str, optional
+        A paper variant (:data:`PAPER_METHODS`); ``None`` runs :data:`DEFAULT_METHOD`.
+    truth : dict, optional
+        ``{'x': 4x4, 'target2fixed': 4x4}`` of a synthetic data set: enables ``mcy`` and truth errors.
+
+    Raises
+    ------
+    CalibrationError
+    """
+    method = (method or DEFAULT_METHOD).lower()
+    if method not in PAPER_METHODS:
+        raise CalibrationError(f"unknown method {method!r}; choose one of {', '.join(PAPER_METHODS)}")
+    if problem.n < MIN_POSTURES:
+        raise CalibrationError(f"at least {MIN_POSTURES} postures are needed; got {problem.n}")
+    check_motion(problem)
+    _warm_up_numerics()
+    start = time.perf_counter()
+    x, details = _solve_paper(problem, method, truth)
+    runtime = time.perf_counter() - start
+    metrics, residuals = _summarise(problem, x)
+    result = CalibrationResult(method, problem.setup, x, metrics, residuals, [], runtime, details)
+    if truth is not None:
+        result.truth_errors = errors_against_truth(x, truth["x"])
+    return result
+
+
+def calibrate_session(session: Session, method: str | None = None, truth: dict | None = None) -> CalibrationResult:
+    """:func:`calibrate` on a session read from disk."""
+    return calibrate(problem_from_session(session), method, truth)

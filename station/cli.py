@@ -1,0 +1,60 @@
+"""The ``handeye`` command: parses, delegates to a library function, reports errors in one line.
+
+Each sub-command lives in ``station/commands/<name>.py`` with two functions: ``add_parser`` (builds
+its argparse sub-parser, importing nothing heavy) and ``run`` (does the work, importing what it
+needs). A new command is one new module and one line in ``COMMANDS``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from ..calibration.errors import HandEyeError
+
+#: Sub-commands in the order ``handeye --help`` lists them.
+COMMANDS = ("simulate", "calibrate")
+
+DESCRIPTION = """\
+Hand-eye calibration of a stereo camera on an ABB robot flange (eye-in-hand) or beside the robot
+(eye-to-hand), from posture capture to RAPID tooldata.
+
+Typical use:
+  handeye simulate -o demo_session --sigma-cam 5     # a synthetic session with its truth
+  handeye calibrate demo_session                      # camera pose in tool0 + quality figures
+"""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="handeye", description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMANDS:
+        module = importlib.import_module(f"{__package__}.commands.{name}")
+        command = module.add_parser(sub)
+        command.set_defaults(_module=module)
+    return parser
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if getattr(args, "_module", None) is None:
+        parser.print_help()
+        return 2
+    try:
+        return int(args._module.run(args) or 0)
+    except HandEyeError as exc:
+        print(f"handeye {args.command}: error: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"handeye {args.command}: interrupted; everything written so far is kept", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Sub-commands of ``handeye`` (one module each; see ``station/cli.py``)."""

@@ -1,0 +1,62 @@
+"""The plain-text calibration summary an engineer reads at the station."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..rapid.literals import pose_literal, rounded_pose
+from .calibrate import CalibrationOutcome
+
+_BAR = 30
+
+
+def _residual_table(residuals: dict, outliers: list) -> list[str]:
+    if not residuals:
+        return []
+    worst = max(residuals.values()) or 1.0
+    median = float(np.median(list(residuals.values())))
+    lines = ["Per-posture residual (mean distance of its board points from their mean, mm):"]
+    for index, value in residuals.items():
+        bar = "#" * max(1, int(round(_BAR * value / worst)))
+        flag = "  <- outlier" if index in outliers else ("  <- high" if value > 3 * median else "")
+        lines.append(f"  {index:4d} {value:9.3f}  {bar}{flag}")
+    return lines
+
+
+def calibration_summary(outcome: CalibrationOutcome) -> str:
+    """Human-readable report of one calibration."""
+    r = outcome.result
+    position, quaternion = rounded_pose(r.x)
+    euler = Rotation.from_matrix(r.x[:3, :3]).as_euler("ZYX", degrees=True)
+    frame = "tool0 (RAPID tooldata.tframe)" if r.parent == "tool0" else "base (camera fixed beside the robot)"
+    m = r.metrics
+    lines = [
+        f"Session {outcome.session_path}: {m['postures']} postures, {r.setup}, method {r.method}",
+        "",
+        f"Camera pose in {frame}:",
+        f"  {pose_literal(r.x)}",
+        f"  position  x {position[0]:.3f}  y {position[1]:.3f}  z {position[2]:.3f} mm",
+        f"  rotation  q1..q4 {quaternion[0]:.6f} {quaternion[1]:.6f} {quaternion[2]:.6f} {quaternion[3]:.6f}"
+        f"   (EulerZYX z {euler[0]:.4f}  y {euler[1]:.4f}  x {euler[2]:.4f} deg)",
+        "",
+        "Quality (lower is better):",
+        f"  d_org   {m['d_org_mm']:.3f} mm   mean distance of a board point from its mean position (eq. 22)",
+        f"  d_back  {m['d_back_mm']:.3f} mm   mean distance of a board point between two postures (eq. 23)",
+        f"  dR      {m['delta_r']:.5f}     rotation residual of AX = XB, RMS over pairs (eq. 16)",
+        f"  dt      {m['delta_t_mm']:.3f} mm   translation residual of AX = XB, RMS over pairs (eq. 16)",
+        f"  (computed on the {'board corners' if m['points'] == 'corners' else 'three board points'})",
+    ]
+    if r.truth_errors is not None:
+        lines += ["", "Against the synthetic truth:",
+                  f"  rotation error {r.truth_errors['rotation_error_deg']:.4f} deg, "
+                  f"translation error {r.truth_errors['translation_error_mm']:.3f} mm"]
+    if r.outliers:
+        lines += ["", f"Outlier postures (excluded): {', '.join(map(str, r.outliers))}"]
+    lines += [""] + _residual_table(r.residuals_mm, r.outliers)
+    d = r.details
+    extra = ""
+    if d.get("candidates"):
+        extra = f" ({d['candidates']} triplets, {d.get('exact_evaluations', 0)} scored exactly, chosen {d.get('selected_triplet')})"
+    lines += ["", f"Solve time {1000 * r.runtime_s:.1f} ms{extra}"]
+    return "\n".join(lines)

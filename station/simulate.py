@@ -1,0 +1,51 @@
+"""Write a synthetic session to disk (the library side of ``handeye simulate``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..calibration.errors import HandEyeError
+from ..calibration.session import create_session, write_posture, write_truth
+from ..calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session, truth_dict
+
+
+@dataclass(frozen=True)
+class SimulateOptions:
+    output: str
+    postures: int = 30
+    sigma_rob_deg: float = 0.0
+    sigma_cam_mm: float = 0.0
+    camera_noise: str = "paper"
+    joint_offset_deg: tuple = (0.0,) * 6
+    setup: str = "eye_in_hand"
+    corners: tuple = (13, 8)
+    square_mm: float = 30.0
+    seed: int = 0
+    scene_seed: int = 0
+    overwrite: bool = False
+
+
+def simulate_session(options: SimulateOptions, progress=lambda message: None) -> Path:
+    """Sample a scene, draw noise and write the session with ``truth.yaml``; returns the folder."""
+    if options.postures < 3:
+        raise HandEyeError(f"at least 3 postures are needed; got {options.postures}")
+    if options.square_mm <= 0:
+        raise HandEyeError(f"--square-mm must be positive; got {options.square_mm}")
+    path = Path(options.output)
+    if (path / "session.yaml").exists() and not options.overwrite:
+        raise HandEyeError(f"{path} already holds a session; choose another folder or pass --overwrite")
+    progress(f"planning {options.postures} reachable postures with the board in view ...")
+    try:
+        scene = make_scene(SceneConfig(postures=options.postures, corners=tuple(options.corners),
+                                       square_mm=options.square_mm, setup=options.setup, seed=options.scene_seed))
+    except RuntimeError as exc:
+        raise HandEyeError(str(exc)) from None
+    noise = NoiseConfig(options.sigma_rob_deg, options.sigma_cam_mm, options.camera_noise,
+                        tuple(options.joint_offset_deg), options.seed)
+    session = sample_session(scene, noise)
+    create_session(path, session, overwrite=options.overwrite)
+    write_truth(path, truth_dict(scene, noise))
+    for posture in session.postures:
+        write_posture(path, posture)
+    return path
