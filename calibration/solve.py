@@ -15,6 +15,7 @@ from .errors import CalibrationError
 from .kinematics import load_robot
 from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points, posture_residuals
 from .problem import EYE_IN_HAND, HandEyeProblem, hand_poses
+from .refine import angle_gaps_deg, posture_residuals_to, refine_point_consistency, robust_outliers
 from .selection import CandidateScorer, select_candidate
 from .session import Session
 from .transforms import pose_from_transform, transform_from_pose
@@ -33,7 +34,9 @@ __all__ = [
 
 #: The paper's variants (section 4): MC without selection, the others select among triplets.
 PAPER_METHODS = ("mc", "mcr", "mct", "mcb", "mco", "mcy")
-DEFAULT_METHOD = "mcb"
+#: The recommended default: mcb, outlier postures out, robust refinement, uncertainty.
+ROBUST_METHOD = "robust"
+DEFAULT_METHOD = ROBUST_METHOD
 
 MIN_POSTURES = 3
 MIN_ROTATION_DEG = 2.0
@@ -63,6 +66,8 @@ class CalibrationResult:
         Method-specific information (chosen triplet, candidate counts, ...).
     truth_errors : dict or None
         Errors against the known truth (synthetic sessions).
+    uncertainty : dict or None
+        One-sigma ``translation_mm`` (x, y, z) and ``rotation_deg`` (about x, y, z) of X.
     """
 
     method: str
@@ -74,6 +79,7 @@ class CalibrationResult:
     runtime_s: float
     details: dict = field(default_factory=dict)
     truth_errors: dict | None = None
+    uncertainty: dict | None = None
 
     @property
     def parent(self) -> str:
@@ -91,6 +97,8 @@ class CalibrationResult:
             "posture_residuals_mm": {str(k): v for k, v in self.residuals_mm.items()},
             "details": self.details,
         }
+        if self.uncertainty is not None:
+            out["uncertainty"] = self.uncertainty
         if self.truth_errors is not None:
             out["truth_errors"] = self.truth_errors
         return out
@@ -253,6 +261,48 @@ def _warm_up_numerics() -> None:
         _WARM = True
 
 
+MAX_OUTLIER_ROUNDS = 5
+
+
+def _solve_robust(problem: HandEyeProblem, truth: dict | None):
+    """mcb on the postures that keep the rotation-angle invariant, then alternate robust refinement
+    and outlier detection until the inlier set is stable; never drops more than half the postures."""
+    n = problem.n
+    gaps = angle_gaps_deg(relative_motions(problem))
+    gap_flags = robust_outliers(gaps)
+    if n - gap_flags.sum() < max(MIN_POSTURES, (n + 1) // 2):
+        gap_flags[:] = False
+    start_problem = problem.subset(~gap_flags)
+    try:
+        x, start_details = _solve_paper(start_problem, "mcb", None)
+    except CalibrationError:
+        x, start_details = _solve_paper(problem, "mcb", None)
+    flags = gap_flags.copy()
+    for rounds in range(1, MAX_OUTLIER_ROUNDS + 1):
+        keep = ~flags
+        refinement = refine_point_consistency(problem.hand[keep], problem.compact.points[keep], x)
+        x = refinement.x
+        residuals = posture_residuals_to(problem.hand, x, problem.compact.points, refinement.fixed_points)
+        new_flags = robust_outliers(residuals) | gap_flags
+        if new_flags.sum() > n // 2:  # keep the better half at least
+            new_flags = residuals > np.sort(residuals)[n - n // 2 - 1]
+        if n - new_flags.sum() < MIN_POSTURES or np.array_equal(new_flags, flags):
+            break
+        flags = new_flags
+    details = {
+        "start": {"method": "mcb", **start_details},
+        "outlier_rounds": rounds,
+        "refinement": {"loss": "soft_l1", "evaluations": refinement.iterations, "converged": refinement.success},
+        "angle_gap_deg": {str(int(i)): float(g) for i, g in zip(problem.posture_ids, gaps)},
+    }
+    uncertainty = {
+        "translation_mm": [float(v) for v in refinement.sigma_translation_mm],
+        "rotation_deg": [float(v) for v in refinement.sigma_rotation_deg],
+        "level": "one sigma, from the covariance of the refinement",
+    }
+    return x, details, flags, residuals, uncertainty
+
+
 def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | None = None) -> CalibrationResult:
     """Solve ``AX = XB`` with one method.
 
@@ -269,17 +319,26 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
     CalibrationError
     """
     method = (method or DEFAULT_METHOD).lower()
-    if method not in PAPER_METHODS:
-        raise CalibrationError(f"unknown method {method!r}; choose one of {', '.join(PAPER_METHODS)}")
+    if method not in PAPER_METHODS + (ROBUST_METHOD,):
+        raise CalibrationError(f"unknown method {method!r}; choose one of {', '.join(PAPER_METHODS + (ROBUST_METHOD,))}")
     if problem.n < MIN_POSTURES:
         raise CalibrationError(f"at least {MIN_POSTURES} postures are needed; got {problem.n}")
     check_motion(problem)
     _warm_up_numerics()
     start = time.perf_counter()
-    x, details = _solve_paper(problem, method, truth)
-    runtime = time.perf_counter() - start
-    metrics, residuals = _summarise(problem, x)
-    result = CalibrationResult(method, problem.setup, x, metrics, residuals, [], runtime, details)
+    outliers, uncertainty = [], None
+    if method == ROBUST_METHOD:
+        x, details, flags, posture_res, uncertainty = _solve_robust(problem, truth)
+        runtime = time.perf_counter() - start
+        metrics, _ = _summarise(problem.subset(~flags), x)
+        residuals = {int(i): float(r) for i, r in zip(problem.posture_ids, posture_res)}
+        outliers = [int(i) for i in problem.posture_ids[flags]]
+    else:
+        x, details = _solve_paper(problem, method, truth)
+        runtime = time.perf_counter() - start
+        metrics, residuals = _summarise(problem, x)
+    result = CalibrationResult(method, problem.setup, x, metrics, residuals, outliers, runtime, details,
+                               uncertainty=uncertainty)
     if truth is not None:
         result.truth_errors = errors_against_truth(x, truth["x"])
     return result

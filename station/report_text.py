@@ -47,16 +47,24 @@ def calibration_summary(outcome: CalibrationOutcome) -> str:
         f"  dt      {m['delta_t_mm']:.3f} mm   translation residual of AX = XB, RMS over pairs (eq. 16)",
         f"  (computed on the {'board corners' if m['points'] == 'corners' else 'three board points'})",
     ]
+    if r.uncertainty is not None:
+        u = r.uncertainty
+        lines += ["", "Uncertainty (one sigma):",
+                  "  position  x {:.3f}  y {:.3f}  z {:.3f} mm".format(*u["translation_mm"]),
+                  "  rotation  about x {:.4f}  y {:.4f}  z {:.4f} deg".format(*u["rotation_deg"])]
     if r.truth_errors is not None:
         lines += ["", "Against the synthetic truth:",
                   f"  rotation error {r.truth_errors['rotation_error_deg']:.4f} deg, "
                   f"translation error {r.truth_errors['translation_error_mm']:.3f} mm"]
     if r.outliers:
-        lines += ["", f"Outlier postures (excluded): {', '.join(map(str, r.outliers))}"]
+        lines += ["", f"Outlier postures (excluded from the solution): {', '.join(map(str, r.outliers))}",
+                  "  check them: board partly hidden or misdetected, robot not at rest, wrong pose pairing"]
     lines += [""] + _residual_table(r.residuals_mm, r.outliers)
     d = r.details
     extra = ""
-    if d.get("candidates"):
-        extra = f" ({d['candidates']} triplets, {d.get('exact_evaluations', 0)} scored exactly, chosen {d.get('selected_triplet')})"
+    start = d.get("start", d)
+    if start.get("candidates"):
+        extra = (f" ({start['candidates']} triplets, {start.get('exact_evaluations', 0)} scored exactly, "
+                 f"chosen {start.get('selected_triplet')})")
     lines += ["", f"Solve time {1000 * r.runtime_s:.1f} ms{extra}"]
     return "\n".join(lines)
