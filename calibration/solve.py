@@ -23,7 +23,9 @@ from .triplets import all_postures_solution, relative_motions, triplet_candidate
 
 __all__ = [
     "PAPER_METHODS",
+    "ROBUST_METHOD",
     "DEFAULT_METHOD",
+    "ALL_METHODS",
     "CalibrationResult",
     "problem_from_session",
     "check_motion",
@@ -37,6 +39,8 @@ PAPER_METHODS = ("mc", "mcr", "mct", "mcb", "mco", "mcy")
 #: The recommended default: mcb, outlier postures out, robust refinement, uncertainty.
 ROBUST_METHOD = "robust"
 DEFAULT_METHOD = ROBUST_METHOD
+#: Every method name ``calibrate`` accepts.
+ALL_METHODS = PAPER_METHODS + (ROBUST_METHOD,)
 
 MIN_POSTURES = 3
 MIN_ROTATION_DEG = 2.0
@@ -319,8 +323,8 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
     CalibrationError
     """
     method = (method or DEFAULT_METHOD).lower()
-    if method not in PAPER_METHODS + (ROBUST_METHOD,):
-        raise CalibrationError(f"unknown method {method!r}; choose one of {', '.join(PAPER_METHODS + (ROBUST_METHOD,))}")
+    if method not in ALL_METHODS:
+        raise CalibrationError(f"unknown method {method!r}; choose one of {', '.join(ALL_METHODS)}")
     if problem.n < MIN_POSTURES:
         raise CalibrationError(f"at least {MIN_POSTURES} postures are needed; got {problem.n}")
     check_motion(problem)
