@@ -217,10 +217,10 @@ def plot(table: dict, folder: Path) -> list[Path]:
                 values = [v for v in sorted(cells) if sweep == "postures" or v > 0]
                 style = "-" if name.startswith("mc") or name == "robust" else ("--" if not name.startswith("opencv") else ":")
                 if name == "truth":
-                    style = "k-."
+                    style = "-."
                 width = 2.5 if name in ("mcb", "robust") else 1.2
                 ax.plot(values, [cells[v][key] for v in values], style, marker="o", markersize=3, linewidth=width,
-                        label=name, color=None if name == "truth" else colours[index % len(colours)])
+                        label=name, color="black" if name == "truth" else colours[index % len(colours)])
             ax.set_xlabel(sweep)
             ax.set_title(label)
             ax.grid(True, which="both", alpha=0.3)
