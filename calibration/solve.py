@@ -125,7 +125,8 @@ def _posture_tool0(session: Session) -> np.ndarray:
             except ValueError as exc:
                 raise CalibrationError(str(exc)) from None
         if p.joints_deg.shape != (robot.dof,):
-            raise CalibrationError(f"posture {p.index}: joints_deg has {p.joints_deg.size} values; {robot.name} has {robot.dof} axes")
+            raise CalibrationError(
+                f"posture {p.index}: joints_deg has {p.joints_deg.size} values; {robot.name} has {robot.dof} axes")
         poses.append(robot.forward_transform(p.joints_deg))
     return np.array(poses)
 
@@ -148,7 +149,8 @@ def problem_from_session(session: Session) -> HandEyeProblem:
     if len(with_points) == len(postures):
         board = session.target
         if board is None:
-            raise CalibrationError("the postures hold points_mm but session.yaml has no target.corners; add the board's corner counts")
+            raise CalibrationError(
+                "the postures hold points_mm but session.yaml has no target.corners; add the board's corner counts")
         for p in postures:
             if len(p.points_mm) != board.count:
                 raise CalibrationError(

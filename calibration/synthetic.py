@@ -16,19 +16,26 @@ solved with inverse kinematics, and kept when reachable with margin and the boar
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from .compact_points import BoardGeometry, board_corners
 from .kinematics import RobotModel, inverse_kinematics, load_robot
-from .problem import EYE_IN_HAND, EYE_TO_HAND, SETUPS
+from .views import (
+    NOMINAL_XB3_LEFT,
+    ViewSampling,
+    board_visible,
+    ik_from_standard_seeds,
+    look_at,
+    sample_eye_in_hand_postures,
+)
+from .problem import EYE_IN_HAND, SETUPS
 from .session import Posture, Session
 from .transforms import invert_transforms, pose_from_transform, transform_from_rotation_translation
 
 __all__ = [
-    "NOMINAL_CAMERA",
     "SceneConfig",
     "Scene",
     "NoiseConfig",
@@ -38,8 +45,6 @@ __all__ = [
     "camera_noise",
 ]
 
-#: Nominal XB3 wide-pair camera (3.8 mm lens, 1280x960), used to keep the board in view.
-NOMINAL_CAMERA = {"width": 1280, "height": 960, "f_px": 983.0, "cx": 643.6, "cy": 493.4}
 
 
 def _transform(rotvec_deg, translation) -> np.ndarray:
@@ -159,30 +164,6 @@ def camera_noise(rng: np.random.Generator, shape, sigma_mm: float, model: str = 
     raise ValueError(f"unknown camera noise model {model!r}; use 'paper' or 'gaussian'")
 
 
-def _look_at(camera_position, target_position, roll_rad, up=(0.0, 0.0, 1.0)) -> np.ndarray:
-    """cam2base with z towards the target, x right and y down in the image, rolled about z."""
-    z = np.asarray(target_position, float) - np.asarray(camera_position, float)
-    z /= np.linalg.norm(z)
-    x = np.cross(z, up)
-    if np.linalg.norm(x) < 1e-6:
-        x = np.cross(z, [1.0, 0.0, 0.0])
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    base = np.stack([x, y, z], axis=1)
-    roll = Rotation.from_rotvec([0.0, 0.0, roll_rad]).as_matrix()
-    return transform_from_rotation_translation(base @ roll, camera_position)
-
-
-def _board_in_view(target2cam: np.ndarray, corners: np.ndarray, margin_px: float = 25.0) -> bool:
-    pts = corners @ target2cam[:3, :3].T + target2cam[:3, 3]
-    if np.any(pts[:, 2] < 100.0):
-        return False
-    cam = NOMINAL_CAMERA
-    u = cam["f_px"] * pts[:, 0] / pts[:, 2] + cam["cx"]
-    v = cam["f_px"] * pts[:, 1] / pts[:, 2] + cam["cy"]
-    return bool(np.all((u > margin_px) & (u < cam["width"] - margin_px) & (v > margin_px) & (v < cam["height"] - margin_px)))
-
-
 def _default_geometry(config: SceneConfig):
     nx, ny = config.corners
     half = np.array([(nx - 1) * config.square_mm / 2, (ny - 1) * config.square_mm / 2, 0.0])
@@ -196,19 +177,10 @@ def _default_geometry(config: SceneConfig):
     # Eye-to-hand: camera on a stand looking at the work zone; board 60 mm in front of the flange.
     camera_position = np.array([1750.0, -700.0, 1350.0])
     look = np.array([950.0, 0.0, 700.0])
-    x_true = _look_at(camera_position, look, np.radians(5.0))
+    x_true = look_at(camera_position, look, np.radians(5.0))
     rot = Rotation.from_euler("x", 180.0, degrees=True).as_matrix()
     target2fixed = transform_from_rotation_translation(rot, np.array([0.0, 0.0, 60.0]) - rot @ half)
     return x_true, target2fixed, look
-
-
-def _seed_joints(robot: RobotModel, tool02base: np.ndarray):
-    best = None
-    for seed in ([0, 10, 20, 0, 60, 0], [0, 0, 0, 0, 45, 0], [0, 20, 30, 0, -60, 180], [0, -10, 10, 90, 60, -90]):
-        ik = inverse_kinematics(robot, tool02base, seed, margin_deg=5.0)
-        if ik.success and (best is None or np.abs(ik.joints_deg[[3, 5]]).sum() < np.abs(best[[3, 5]]).sum()):
-            best = ik.joints_deg
-    return best
 
 
 def make_scene(config: SceneConfig = SceneConfig()) -> Scene:
@@ -226,6 +198,14 @@ def make_scene(config: SceneConfig = SceneConfig()) -> Scene:
     board = BoardGeometry(tuple(config.corners), config.square_mm)
     corners = board_corners(config.corners, config.square_mm)
     x_true, target2fixed, centre = _default_geometry(config)
+    if config.setup == EYE_IN_HAND:
+        sampling = ViewSampling(distance_mm=tuple(config.distance_mm), cone_deg=config.cone_deg,
+                                roll_deg=config.roll_deg, aim_mm=config.aim_mm)
+        try:
+            joints = sample_eye_in_hand_postures(robot, x_true, target2fixed, corners, config.postures, rng, sampling)
+        except RuntimeError as exc:
+            raise RuntimeError(f"{exc} (synthetic scene)") from None
+        return Scene(config, robot, x_true, target2fixed, joints, board)
     joints = []
     seed = None
     attempts = 0
@@ -238,33 +218,25 @@ def make_scene(config: SceneConfig = SceneConfig()) -> Scene:
         azimuth = rng.uniform(0, 2 * np.pi)
         roll = np.radians(rng.uniform(-config.roll_deg, config.roll_deg))
         aim = rng.normal(0.0, config.aim_mm, 3)
-        if config.setup == EYE_IN_HAND:
-            # View from above, the robot side of the board preferred (x below the board centre).
-            direction = np.array([np.sin(tilt) * np.cos(azimuth), np.sin(tilt) * np.sin(azimuth), np.cos(tilt)])
-            direction[0] = -abs(direction[0])
-            cam2base = _look_at(centre + distance * direction, centre + aim, roll + np.pi / 2, up=(1.0, 0.0, 0.0))
-            tool02base = cam2base @ invert_transforms(x_true)
-            target2cam = invert_transforms(cam2base) @ target2fixed
-        else:
-            # Board in front of the camera, facing it, tilted and turned.
-            optical = x_true[:3, 2]
-            board_centre = x_true[:3, 3] + distance * optical + aim * 4.0
-            facing = _look_at(board_centre, x_true[:3, 3], 0.0)  # z from board towards camera
-            tilt_rot = Rotation.from_rotvec(tilt * np.array([np.cos(azimuth), np.sin(azimuth), 0.0])).as_matrix()
-            spin = Rotation.from_rotvec([0.0, 0.0, roll]).as_matrix()
-            # target z points away from the camera
-            rot = facing[:3, :3] @ tilt_rot @ Rotation.from_euler("x", 180.0, degrees=True).as_matrix() @ spin
-            half = target2fixed[:3, :3].T @ (np.array([0.0, 0.0, 60.0]) - target2fixed[:3, 3])
-            target2base = transform_from_rotation_translation(rot, board_centre - rot @ half)
-            tool02base = target2base @ invert_transforms(target2fixed)
-            target2cam = invert_transforms(x_true) @ target2base
-        if not _board_in_view(target2cam, corners):
+        # Eye-to-hand: the board in front of the fixed camera, facing it, tilted and turned.
+        optical = x_true[:3, 2]
+        board_centre = x_true[:3, 3] + distance * optical + aim * 4.0
+        facing = look_at(board_centre, x_true[:3, 3], 0.0)  # z from the board towards the camera
+        tilt_rot = Rotation.from_rotvec(tilt * np.array([np.cos(azimuth), np.sin(azimuth), 0.0])).as_matrix()
+        spin = Rotation.from_rotvec([0.0, 0.0, roll]).as_matrix()
+        # target z points away from the camera
+        rot = facing[:3, :3] @ tilt_rot @ Rotation.from_euler("x", 180.0, degrees=True).as_matrix() @ spin
+        half = target2fixed[:3, :3].T @ (np.array([0.0, 0.0, 60.0]) - target2fixed[:3, 3])
+        target2base = transform_from_rotation_translation(rot, board_centre - rot @ half)
+        tool02base = target2base @ invert_transforms(target2fixed)
+        target2cam = invert_transforms(x_true) @ target2base
+        if not board_visible(target2cam, corners, (NOMINAL_XB3_LEFT,)):
             continue
         if seed is None:
-            found = _seed_joints(robot, tool02base)
+            found = ik_from_standard_seeds(robot, tool02base, 5.0)
         else:
             ik = inverse_kinematics(robot, tool02base, seed, margin_deg=5.0)
-            found = ik.joints_deg if ik.success else _seed_joints(robot, tool02base)
+            found = ik.joints_deg if ik.success else ik_from_standard_seeds(robot, tool02base, 5.0)
         if found is None or np.any(np.abs(found - (seed if seed is not None else found)) > 150.0):
             continue
         seed = found if seed is None else seed

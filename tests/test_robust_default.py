@@ -1,5 +1,4 @@
 import numpy as np
-import pytest
 
 from handeye.calibration.refine import angle_gaps_deg, refine_point_consistency, robust_outliers
 from handeye.calibration.solve import DEFAULT_METHOD, calibrate

@@ -26,7 +26,8 @@ from handeye.calibration.transforms import transform_from_rotation_translation
 try:
     import cv2
 
-    OPENCV = {name: getattr(cv2, f"CALIB_HAND_EYE_{name.upper()}") for name in ("tsai", "park", "horaud", "andreff", "daniilidis")}
+    OPENCV = {name: getattr(cv2, f"CALIB_HAND_EYE_{name.upper()}")
+              for name in ("tsai", "park", "horaud", "andreff", "daniilidis")}
     if not hasattr(cv2, "calibrateHandEye"):
         OPENCV = {}
 except ImportError:  # pragma: no cover
@@ -126,7 +127,7 @@ def main():
         for m, (r, t) in table.items():
             ratio = f"{r / best[0]:.2f} / {t / best[1]:.2f}" if best else "-"
             print(f"| {m} | {r:.4f} | {t:.3f} | {ratio} |")
-    print(f"\n## Speed (mcb, d_back over all triplets)\n")
+    print("\n## Speed (mcb, d_back over all triplets)\n")
     print(f"- 30 postures (4060 triplets): median {1000 * results['mcb_runtime_30_s']['median']:.1f} ms, "
           f"max {1000 * results['mcb_runtime_30_s']['max']:.1f} ms over {args.trials} sessions")
     print(f"- 100 postures (161,700 triplets): median {results['mcb_runtime_100_s']['median']:.2f} s, "
