@@ -32,6 +32,7 @@ translations whose size does not fit millimetres.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -176,6 +177,14 @@ def _usable(rotvec_a, rotvec_b, limits: DiagnosticLimits) -> np.ndarray:
     return (na > lo) & (na < hi) & (nb > lo) & (nb < hi)
 
 
+def _align(target_vectors, source_vectors) -> np.ndarray:
+    """Rotation carrying ``source_vectors`` onto ``target_vectors`` (least squares), quietly: with
+    (nearly) parallel vectors scipy warns that the answer is not unique, which the residuals show."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return Rotation.align_vectors(target_vectors, source_vectors)[0].as_matrix()
+
+
 def screw_pitch_scale(tool0_in_base, target_in_camera, limits: DiagnosticLimits = DiagnosticLimits()) -> float | None:
     """Length ratio robot / camera from the screw pitches of the relative motions.
 
@@ -237,8 +246,7 @@ def setup_rotation_residuals(tool0_in_base, target_in_camera,
         if ok.sum() < 2:
             out[setup] = float("nan")
             continue
-        fit, _ = Rotation.align_vectors(va[ok], vb[ok])
-        rx = fit.as_matrix()
+        rx = _align(va[ok], vb[ok])
         residual = rotation_error_deg(rel_a[ok, :3, :3] @ rx, rx @ rel_b[ok, :3, :3])
         out[setup] = float(np.median(residual))
     return out
@@ -271,7 +279,7 @@ def hand_eye_fit(tool0_in_base, target_in_camera, setup: str,
     if ok.sum() < 2:
         return nan
     rel_a, rel_b = rel_a[ok], rel_b[ok]
-    rx = Rotation.align_vectors(va[ok], vb[ok])[0].as_matrix()
+    rx = _align(va[ok], vb[ok])
     lhs = (rel_a[:, :3, :3] - np.eye(3)).reshape(-1, 3)
     rhs = (rel_b[:, :3, 3] @ rx.T - rel_a[:, :3, 3]).reshape(-1)
     tx = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
