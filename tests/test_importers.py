@@ -629,6 +629,9 @@ def test_malformed_stream_and_plain(tmp_path, eih):
     lines[6] = lines[6].rsplit(",", 1)[0]
     cam.write_text("\n".join(lines) + "\n")
     _one_line_error(read_stream, [hand, cam], match=r"target_ir.csv: line 7: expected 8 values")
+    session = read_stream([hand, cam], skip_invalid=True, max_postures=0)
+    dropped = {d["reason"]: d["examples"] for d in session.extra["import"]["dropped"]}
+    assert dropped["invalid: expected 8 values"] == ["line 7"]
     lines[6] = lines[5].replace("0.", "0.x", 1)
     cam.write_text("\n".join(lines) + "\n")
     _one_line_error(read_stream, [hand, cam], match=r"line 7: not a number")
@@ -672,9 +675,11 @@ def test_cli_import_and_refuse_overwrite(tmp_path, capsys, eth):
     assert code == 1 and stdout == ""
     assert stderr.count("\n") == 1 and "already holds a session" in stderr and "--overwrite" in stderr
     assert (out / "postures" / "000.yaml").read_text() == before
+    (out / "truth.yaml").write_text("camera_pose: {}\n")  # as if a simulated session had been there
     code, stdout, stderr = run_cli(capsys, "import", src, "-o", out, "--overwrite", "--setup", "eye_in_hand")
     assert code == 0
     assert "setup:    eye_in_hand, given" in stdout
+    assert "removed:  truth.yaml of the replaced session" in stdout and not (out / "truth.yaml").exists()
     assert stderr.startswith("handeye import: warning: the data fit eye_to_hand much better")
     assert read_session(out).setup == "eye_in_hand"
 

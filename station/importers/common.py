@@ -16,7 +16,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ...calibration.compact_points import BoardGeometry
-from ...calibration.diagnostics import DiagnosticLimits, setup_rotation_residuals
+from ...calibration.diagnostics import DiagnosticLimits, hand_eye_fit, setup_rotation_residuals
 from ...calibration.errors import SessionError
 from ...calibration.problem import SETUPS
 from ...calibration.session import Posture, Session
@@ -186,7 +186,11 @@ def _resolve_units(robot, camera, units, documented: str | None, notes: list) ->
 
 
 def _resolve_setup(robot_mm, camera_mm, setup, declared, default: str, notes: list) -> tuple[str, str]:
-    """Set-up from: the option, else the file's declaration, else the data when decisive, else the default."""
+    """Set-up from: the option, else the file's declaration, else the data when decisive, else the default.
+
+    Decisive: the rotation axes fit one set-up 3x better than the other, and the translations fit it
+    too (otherwise the rotations are probably read in a wrong convention and the checks say so).
+    """
     if setup is not None:
         return setup, "given"
     if declared is not None:
@@ -198,7 +202,10 @@ def _resolve_setup(robot_mm, camera_mm, setup, declared, default: str, notes: li
         if len(fits) == 2:
             best = min(fits, key=fits.get)
             other = next(k for k in fits if k != best)
-            if fits[other] > limits.setup_ratio * max(fits[best], 0.05) and fits[other] > limits.gap_floor_deg:
+            fit = hand_eye_fit(robot_mm, camera_mm, best, limits)
+            translations_fit = fit["motion_mm"] > 0 and fit["translation_mm"] <= limits.translation_ratio * fit["motion_mm"]
+            if (fits[other] > limits.setup_ratio * max(fits[best], 0.05) and fits[other] > limits.gap_floor_deg
+                    and translations_fit):
                 how = (f"detected from the data: median rotation residual {fits[best]:.2f} deg as {best}, "
                        f"{fits[other]:.2f} deg as {other}")
                 if best != default:

@@ -90,8 +90,16 @@ def split_stream_files(paths) -> tuple[Path, Path]:
     return paths[0], paths[1]
 
 
-def read_pose_stream(path, order: str = "xyzw") -> tuple[np.ndarray, np.ndarray]:
+def read_pose_stream(path, order: str = "xyzw", errors: EntryErrors | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Stamps ``(n,)`` and poses ``(n, 4, 4)`` (file units) of one CSV stream.
+
+    Parameters
+    ----------
+    path : str or Path
+    order : str
+        Quaternion order of the file, ``xyzw`` or ``wxyz``.
+    errors : EntryErrors, optional
+        Where malformed lines go (dropped when it skips invalid entries); default: stop at the first.
 
     Raises
     ------
@@ -99,6 +107,7 @@ def read_pose_stream(path, order: str = "xyzw") -> tuple[np.ndarray, np.ndarray]
         Naming the file and line of the first malformed row.
     """
     check_quaternion_order(order)
+    errors = errors or EntryErrors(path, False, Dropped())
     text = read_text(path)
     stamps, poses = [], []
     first = True
@@ -111,18 +120,23 @@ def read_pose_stream(path, order: str = "xyzw") -> tuple[np.ndarray, np.ndarray]
             first = False
             continue  # a header line
         first = False
+        label = f"line {number}"
         if len(fields) != 8:
-            raise SessionError(f"{path}: line {number}: expected 8 values (t, x, y, z, quaternion {order}); got {len(fields)}")
+            errors.bad(label, f"expected 8 values (t, x, y, z, quaternion {order}); got {len(fields)}")
+            continue
         try:
             values = [float(f) for f in fields]
         except ValueError:
-            raise SessionError(f"{path}: line {number}: not a number in {stripped[:60]!r}") from None
+            errors.bad(label, f"not a number in {stripped[:60]!r}")
+            continue
         try:
             pose = transform_from_quaternion(values[1:4], values[4:8], order)
         except ValueError as exc:
-            raise SessionError(f"{path}: line {number}: {exc}") from None
+            errors.bad(label, str(exc))
+            continue
         if not np.isfinite(values[0]):
-            raise SessionError(f"{path}: line {number}: the stamp is not finite")
+            errors.bad(label, "the stamp is not finite")
+            continue
         stamps.append(values[0])
         poses.append(pose)
     if not stamps:
@@ -182,7 +196,7 @@ def read_stream(paths, *, setup=None, units=None, board=None, skip_invalid: bool
         ``m`` or ``mm``; default: detected (the ETH set is in metres).
     board : BoardGeometry, optional
     skip_invalid : bool
-        Unused (a malformed line always stops the import: streams have no entries to drop).
+        Drop malformed lines (reported) instead of stopping at the first.
     quaternion_order : str
         ``xyzw`` (scalar last, default, the ETH layout) or ``wxyz``.
     camera_pose : str
@@ -198,7 +212,6 @@ def read_stream(paths, *, setup=None, units=None, board=None, skip_invalid: bool
     ------
     SessionError
     """
-    del skip_invalid
     check_units(units)
     check_quaternion_order(quaternion_order)
     if camera_pose not in CAMERA_POSES:
@@ -208,8 +221,9 @@ def read_stream(paths, *, setup=None, units=None, board=None, skip_invalid: bool
     if max_postures < 0 or (0 < max_postures < 3):
         raise SessionError(f"max postures must be 0 (keep all) or at least 3; got {max_postures}")
     robot_path, camera_path = split_stream_files(paths)
-    robot_t, robot_poses = read_pose_stream(robot_path, quaternion_order)
-    camera_t, camera_poses = read_pose_stream(camera_path, quaternion_order)
+    dropped = Dropped()
+    robot_t, robot_poses = read_pose_stream(robot_path, quaternion_order, EntryErrors(robot_path, skip_invalid, dropped))
+    camera_t, camera_poses = read_pose_stream(camera_path, quaternion_order, EntryErrors(camera_path, skip_invalid, dropped))
     notes = []
     for name, t in (("robot", robot_t), ("camera", camera_t)):
         if np.any(np.diff(t) < 0):
@@ -220,7 +234,6 @@ def read_stream(paths, *, setup=None, units=None, board=None, skip_invalid: bool
     camera_t, camera_poses = camera_t[order], camera_poses[order]
     if camera_pose == "camera_in_target":
         camera_poses = invert_transforms(camera_poses)
-    dropped = Dropped()
     nearest, offset = pair_by_stamp(robot_t, camera_t, tolerance_s)
     keep = offset <= tolerance_s
     for k in np.flatnonzero(~keep):
