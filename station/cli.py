@@ -13,8 +13,9 @@ import sys
 
 from ..calibration.errors import HandEyeError
 
-#: Sub-commands in the order ``handeye --help`` lists them.
-COMMANDS = ("simulate", "calibrate", "benchmark")
+#: Sub-commands in the order ``handeye --help`` lists them: a module name, or ``(command, module)``
+#: when the command's name cannot be a module's (``import`` is a Python keyword).
+COMMANDS = ("simulate", ("import", "import_"), "calibrate", "benchmark")
 
 DESCRIPTION = """\
 Hand-eye calibration of a stereo camera on an ABB robot flange (eye-in-hand) or beside the robot
@@ -31,7 +32,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="handeye", description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in COMMANDS:
+    for entry in COMMANDS:
+        name = entry if isinstance(entry, str) else entry[1]
         module = importlib.import_module(f"{__package__}.commands.{name}")
         command = module.add_parser(sub)
         command.set_defaults(_module=module)

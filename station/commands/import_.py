@@ -1,0 +1,126 @@
+"""``handeye import``: other tools' hand-eye samples -> a session folder (handeye-session/1).
+
+The module is ``import_`` because ``import`` is a Python keyword; ``cli.COMMANDS`` maps the command
+name to it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+HELP = "turn MoveIt, ViSP, OpenCV/camodocal, easy_handeye, CSV stream or plain CSV/JSON samples into a session"
+
+EPILOG = """\
+Formats (--format; detected from the files when omitted):
+  moveit        MoveIt Calibration pose_samples.json: [[T_base_eef, T_cam_target], ...], 4x4, metres
+  visp          folder of ViSP pose_fPe_<i>.yaml (or <robot>_pose_rPe_<i>.yaml) + pose_cPo_<i>.yaml,
+                [tx ty tz θux θuy θuz] metres/radians
+  opencv        OpenCV FileStorage T1_<i> = end effector in base, T2_<i> = marker in camera (camodocal)
+  stream        two CSV streams "t,x,y,z,qx,qy,qz,qw": robot (hand in base) then camera (default: camera
+                in target, the ETH layout; --camera-pose target_in_camera otherwise); each camera sample
+                pairs with the nearest robot stamp within --tolerance-ms; --max-postures keeps the
+                slowest pair per time window; --rest-mm-s/--rest-deg-s keep only a hand at rest
+  plain         CSV with a header: index,tool0_x,tool0_y,tool0_z,tool0_qw,tool0_qx,tool0_qy,tool0_qz,
+                target_x,...,target_qz (tool0 in base, target in camera; q1..q4 columns follow
+                --quaternion-order); or JSON {"postures": [{"tool0_in_base": {"position": [..],
+                "quaternion": [..]}, "target_in_camera": {"matrix": [[..4x4..]]}}, ...]}
+  easy_handeye  easy_handeye2 .samples (YAML; calibration_type sets the set-up)
+
+Set-up: --setup wins; else what the file says; else the data decide when they fit one set-up
+clearly better (relative rotation axes); else the format's default (moveit, opencv: eye_to_hand;
+others: eye_in_hand). Units: --units wins; else each side is detected from its values (median
+length under 20 -> metres). The session is written in mm, quaternions (w, x, y, z).
+
+The import checks the data and warns, one line each, about duplicated postures, stale board poses,
+mixed units, board poses flipped 180 deg, gross outliers, and a set-up the data contradict.
+
+Examples:
+  handeye import pose_samples.json -o moveit_session
+  handeye import TransformPairsInput.yml -o camodocal --format opencv
+  handeye import hand.csv target.csv -o eth --format stream --tolerance-ms 20 --max-postures 30
+  handeye import poses.csv -o mine --units mm --board 13x8 --square-mm 30
+"""
+
+
+def _corners(text: str) -> tuple[int, int]:
+    try:
+        a, b = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"corners must look like 13x8; got {text!r}") from None
+    if a < 2 or b < 2:
+        raise argparse.ArgumentTypeError("a board needs at least 2x2 inner corners")
+    return max(a, b), min(a, b)
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number; got {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be > 0; got {text}")
+    return value
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number; got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0; got {text}")
+    return value
+
+
+#: The importers' names (station.importers.FORMAT_NAMES; repeated here so that building the parser
+#: imports nothing heavy; a test keeps the two equal).
+FORMAT_NAMES = ("moveit", "visp", "opencv", "stream", "plain", "easy_handeye")
+
+
+def add_parser(sub):
+    p = sub.add_parser("import", help=HELP, description=HELP, epilog=EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("sources", nargs="+", metavar="SOURCE", help="input file(s) or folder")
+    p.add_argument("-o", "--output", required=True, metavar="SESSION", help="session folder to create")
+    p.add_argument("--format", choices=FORMAT_NAMES, help="input format (default: detected)")
+    p.add_argument("--setup", choices=("eye_in_hand", "eye_to_hand"), help="override the set-up")
+    p.add_argument("--units", choices=("m", "mm"), help="length unit of the input (default: detected)")
+    p.add_argument("--quaternion-order", choices=("wxyz", "xyzw"),
+                   help="quaternion order (stream: default xyzw; plain q1..q4 columns / JSON: default wxyz)")
+    p.add_argument("--board", type=_corners, metavar="NXxNY", help="target inner corners, e.g. 9x6 (optional)")
+    p.add_argument("--square-mm", type=_positive, metavar="MM", help="target square size in mm (with --board)")
+    p.add_argument("--skip-invalid", action="store_true", help="drop malformed entries (reported) instead of stopping")
+    p.add_argument("--overwrite", action="store_true", help="replace a session already in the folder")
+    stream = p.add_argument_group("stream options")
+    stream.add_argument("--tolerance-ms", type=_positive, metavar="MS", help="largest stamp difference of a pair (default 30)")
+    stream.add_argument("--max-postures", type=_count, metavar="N",
+                        help="keep the slowest pair in each of N time windows (default 40; 0 = keep all)")
+    stream.add_argument("--rest-mm-s", type=_positive, metavar="V", help="keep only pairs with the hand slower than V mm/s")
+    stream.add_argument("--rest-deg-s", type=_positive, metavar="W", help="keep only pairs with the hand turning slower than W deg/s")
+    stream.add_argument("--camera-pose", choices=("camera_in_target", "target_in_camera"),
+                        help="what the camera stream holds (default camera_in_target, the ETH layout)")
+    opencv = p.add_argument_group("opencv options")
+    opencv.add_argument("--robot-prefix", metavar="NAME", help="robot matrices are NAME_<i> (default T1)")
+    opencv.add_argument("--camera-prefix", metavar="NAME", help="camera matrices are NAME_<i> (default T2)")
+    return p
+
+
+def run(args) -> int:
+    from ..import_session import ImportOptions, import_summary, import_to_session
+
+    options = ImportOptions(
+        sources=tuple(args.sources), output=args.output, format=args.format, setup=args.setup, units=args.units,
+        quaternion_order=args.quaternion_order, board=args.board, square_mm=args.square_mm,
+        skip_invalid=args.skip_invalid, overwrite=args.overwrite,
+        format_options={
+            "tolerance_s": None if args.tolerance_ms is None else args.tolerance_ms / 1000.0,
+            "max_postures": args.max_postures, "rest_mm_s": args.rest_mm_s, "rest_deg_s": args.rest_deg_s,
+            "camera_pose": args.camera_pose, "robot_prefix": args.robot_prefix, "camera_prefix": args.camera_prefix,
+        },
+    )
+    outcome = import_to_session(options)
+    for finding in outcome.findings:
+        print(f"handeye import: warning: {finding.message}", file=sys.stderr)
+    print("\n".join(import_summary(outcome)))
+    return 0

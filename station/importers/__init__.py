@@ -1,0 +1,193 @@
+"""Importers: other tools' hand-eye samples -> a ``handeye-session/1`` session (mm, quaternions wxyz).
+
+One module per format, each with ``read_<format>(path(s), **options) -> Session``; this package
+holds the registry and the format detection used by ``handeye import``.
+
+==============  =======================================================  ==============  ======
+format          files                                                     default setup   units
+==============  =======================================================  ==============  ======
+moveit          MoveIt Calibration ``pose_samples.json``                  eye_to_hand     m
+visp            folder of ViSP ``pose_fPe_<i>.yaml`` + ``pose_cPo_<i>``   eye_in_hand     m
+opencv          OpenCV FileStorage ``T1_<i>``/``T2_<i>`` (camodocal)       eye_to_hand     m
+stream          two time-stamped CSV streams (ETH layout)                 eye_in_hand     m
+plain           CSV / JSON of flange pose + board pose (documented here)  eye_in_hand     m|mm
+easy_handeye    easy_handeye2 ``.samples`` (YAML)                         from the file   m
+==============  =======================================================  ==============  ======
+
+"Default set-up" applies when neither ``setup=`` nor the file decides and the data do not decide
+clearly either (see ``common.build_session``); units are detected from the values unless given.
+Every reader records how it decided in ``session.extra["import"]``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from ...calibration.errors import SessionError
+from ...calibration.session import Session
+from .easy_handeye import looks_like_easy_handeye, read_easy_handeye
+from .moveit import looks_like_moveit, read_moveit
+from .opencv_storage import looks_like_opencv, read_opencv
+from .plain import looks_like_plain_csv, looks_like_plain_json, read_plain
+from .stream import looks_like_stream, read_stream
+from .visp import looks_like_visp, read_visp
+
+__all__ = [
+    "Importer",
+    "IMPORTERS",
+    "FORMAT_NAMES",
+    "detect_format",
+    "read_any",
+    "read_moveit",
+    "read_visp",
+    "read_opencv",
+    "read_stream",
+    "read_plain",
+    "read_easy_handeye",
+]
+
+
+@dataclass(frozen=True)
+class Importer:
+    """A format: its reader, what it reads, the options it accepts beyond the common ones."""
+
+    name: str
+    reader: Callable[..., Session]
+    description: str
+    default_setup: str | None
+    options: tuple = ()
+    several_paths: bool = False
+
+
+#: Options every reader takes.
+COMMON_OPTIONS = ("setup", "units", "board", "skip_invalid")
+
+IMPORTERS = {
+    "moveit": Importer("moveit", read_moveit, "MoveIt Calibration pose_samples.json ([T_base_eef, T_cam_target] pairs)",
+                       "eye_to_hand"),
+    "visp": Importer("visp", read_visp, "ViSP pose vectors: folder of pose_fPe_<i>.yaml (or *_pose_rPe_<i>.yaml) + pose_cPo_<i>.yaml",
+                     "eye_in_hand", several_paths=True),
+    "opencv": Importer("opencv", read_opencv, "OpenCV FileStorage pose pairs T1_<i> (robot) / T2_<i> (camera), camodocal layout",
+                       "eye_to_hand", ("robot_prefix", "camera_prefix")),
+    "stream": Importer("stream", read_stream, "two time-stamped CSV pose streams (t,x,y,z,qx,qy,qz,qw), robot then camera",
+                       "eye_in_hand", ("quaternion_order", "camera_pose", "tolerance_s", "max_postures", "rest_mm_s",
+                                       "rest_deg_s"), several_paths=True),
+    "plain": Importer("plain", read_plain, "plain CSV/JSON, one posture per row: tool0 in base + target in camera",
+                      "eye_in_hand", ("quaternion_order",)),
+    "easy_handeye": Importer("easy_handeye", read_easy_handeye, "easy_handeye2 .samples (YAML robot/tracking transforms)",
+                             None),
+}
+FORMAT_NAMES = tuple(IMPORTERS)
+
+
+def _head(path: Path, size: int = 4096) -> str:
+    try:
+        with open(path, "rb") as handle:
+            return handle.read(size).decode("utf-8", errors="replace")
+    except OSError as exc:
+        raise SessionError(f"{path}: cannot read ({exc.strerror or exc})") from None
+
+
+def _formats_hint() -> str:
+    return f"pass --format ({', '.join(FORMAT_NAMES)})"
+
+
+def detect_format(paths) -> str:
+    """The format name of a path or paths, from the files' content (and names).
+
+    Raises
+    ------
+    SessionError
+        Missing path, or a content no importer recognises.
+    """
+    if isinstance(paths, (str, Path)):
+        paths = [paths]
+    paths = [Path(p) for p in paths]
+    if not paths:
+        raise SessionError("no input given")
+    for p in paths:
+        if not p.exists():
+            raise SessionError(f"{p}: no such file or folder")
+    if len(paths) == 2 and all(p.is_file() for p in paths):
+        if all(looks_like_stream(_head(p)) for p in paths):
+            return "stream"
+    if len(paths) > 1:
+        if all(p.is_file() and looks_like_visp(p) for p in paths):
+            return "visp"
+        raise SessionError(f"several inputs are read only as two CSV streams or ViSP pose files; {_formats_hint()}")
+    path = paths[0]
+    if path.is_dir():
+        if looks_like_visp(path):
+            return "visp"
+        csvs = [p for p in path.iterdir() if p.suffix.lower() == ".csv"]
+        if len(csvs) == 2 and all(looks_like_stream(_head(p)) for p in csvs):
+            return "stream"
+        raise SessionError(f"{path}: a folder without ViSP pose files or two CSV streams; {_formats_hint()}")
+    head = _head(path)
+    suffix = path.suffix.lower()
+    if looks_like_visp(path):
+        return "visp"
+    if looks_like_opencv(path, head):
+        return "opencv"
+    if suffix == ".json" or head.lstrip()[:1] in ("[", "{"):
+        if looks_like_moveit(path, head):
+            return "moveit"
+        if looks_like_plain_json(head):
+            return "plain"
+    if suffix == ".samples" or looks_like_easy_handeye(head):
+        if looks_like_easy_handeye(head):
+            return "easy_handeye"
+    if looks_like_plain_csv(head):
+        return "plain"
+    if looks_like_stream(head):
+        raise SessionError(f"{path} looks like a time-stamped pose stream: give the robot stream and the camera stream "
+                           f"(two files, or their folder)")
+    raise SessionError(f"{path}: cannot tell the format from its content; {_formats_hint()}")
+
+
+def read_any(paths, format: str | None = None, **options) -> Session:
+    """Read ``paths`` with the named (or detected) importer; options not applicable are refused.
+
+    Parameters
+    ----------
+    paths : path or list of paths
+    format : str, optional
+        One of :data:`FORMAT_NAMES`; detected when ``None``.
+    **options
+        ``setup``, ``units``, ``board``, ``skip_invalid`` and the format's own (``IMPORTERS[name].options``);
+        options whose value is ``None`` count as not given.
+
+    Returns
+    -------
+    Session
+        With ``session.extra["import"]`` recording the format and how set-up and units were decided.
+
+    Raises
+    ------
+    SessionError
+    """
+    if format is None:
+        format = detect_format(paths)
+        how = "detected"
+    else:
+        how = "given"
+    if format not in IMPORTERS:
+        raise SessionError(f"unknown format {format!r}; choose one of {', '.join(FORMAT_NAMES)}")
+    importer = IMPORTERS[format]
+    given = {k: v for k, v in options.items() if v is not None}
+    unknown = [k for k in given if k not in COMMON_OPTIONS + importer.options]
+    if unknown:
+        flag = "--" + unknown[0].replace("_", "-")
+        raise SessionError(f"{flag} does not apply to {format} files (it applies to: "
+                           f"{', '.join(n for n, i in IMPORTERS.items() if unknown[0] in i.options) or 'none'})")
+    if isinstance(paths, (list, tuple)) and not importer.several_paths:
+        if len(paths) != 1:
+            raise SessionError(f"{format} reads one file; got {len(paths)}")
+        paths = paths[0]
+    if isinstance(paths, (list, tuple)) and len(paths) == 1 and format == "visp":
+        paths = paths[0]
+    session = importer.reader(paths, **given)
+    session.extra["import"]["format_how"] = how
+    return session

@@ -1,0 +1,108 @@
+"""easy_handeye2 sample files (``<name>.samples``, YAML), as its "save samples" writes them::
+
+    parameters:
+      calibration_type: eye_in_hand          or eye_on_base (= eye-to-hand); may be empty
+      robot_base_frame: ...
+      ...
+    samples:
+    - robot:
+        translation: {x: .., y: .., z: ..}     metres
+        rotation: {x: .., y: .., z: .., w: ..}
+      tracking:
+        translation: {...}
+        rotation: {...}
+
+``tracking`` is the marker (board) in the tracking/camera frame: ``target_in_camera``. ``robot``
+is a tf lookup: for ``eye_in_hand`` the effector in the robot base (``tool0_in_base``); for
+``eye_on_base`` easy_handeye2 looks it up the other way round (the base in the effector), so it is
+inverted here. When ``calibration_type`` is empty the robot sample is read as the effector in the
+base and the set-up comes from the data (else eye-in-hand).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import yaml
+
+from ...calibration.errors import SessionError
+from ...calibration.session import Session
+from ...calibration.transforms import invert_transforms
+from .common import Dropped, EntryErrors, build_session, read_text, transform_from_quaternion
+
+__all__ = ["FORMAT", "DEFAULT_SETUP", "read_easy_handeye", "looks_like_easy_handeye"]
+
+FORMAT = "easy_handeye"
+DEFAULT_SETUP = "eye_in_hand"
+_TYPES = {"eye_in_hand": "eye_in_hand", "eye_on_hand": "eye_in_hand", "eye_on_base": "eye_to_hand",
+          "eye_to_hand": "eye_to_hand"}
+
+
+def looks_like_easy_handeye(head: str) -> bool:
+    return "samples:" in head and "tracking:" in head and "translation:" in head
+
+
+def _transform(value) -> np.ndarray:
+    if not isinstance(value, dict) or not isinstance(value.get("translation"), dict) or not isinstance(value.get("rotation"), dict):
+        raise ValueError("needs translation {x, y, z} and rotation {x, y, z, w}")
+    t, r = value["translation"], value["rotation"]
+    try:
+        position = [float(t[k]) for k in "xyz"]
+        quaternion = [float(r[k]) for k in "xyzw"]
+    except KeyError as exc:
+        raise ValueError(f"lacks {exc.args[0]}") from None
+    except (TypeError, ValueError):
+        raise ValueError("holds a value that is not a number") from None
+    return transform_from_quaternion(position, quaternion, "xyzw")
+
+
+def read_easy_handeye(path, *, setup=None, units=None, board=None, skip_invalid: bool = False) -> Session:
+    """Read an easy_handeye2 ``.samples`` file into a session (mm).
+
+    Raises
+    ------
+    SessionError
+    """
+    text = read_text(path)
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" (line {mark.line + 1})" if mark is not None else ""
+        raise SessionError(f"{path}: not valid YAML{where}") from None
+    if not isinstance(data, dict) or not isinstance(data.get("samples"), list):
+        raise SessionError(f"{path}: expected easy_handeye2 samples (a 'samples' list of robot/tracking transforms)")
+    parameters = data.get("parameters") if isinstance(data.get("parameters"), dict) else {}
+    kind = str(parameters.get("calibration_type") or "").strip()
+    if kind and kind not in _TYPES:
+        raise SessionError(f"{path}: parameters.calibration_type {kind!r} is neither eye_in_hand nor eye_on_base")
+    declared = _TYPES.get(kind)
+    dropped = Dropped()
+    errors = EntryErrors(path, skip_invalid, dropped)
+    robot, camera, labels = [], [], []
+    for k, sample in enumerate(data["samples"]):
+        label = f"samples[{k}]"
+        if not isinstance(sample, dict) or "robot" not in sample or "tracking" not in sample:
+            errors.bad(label, "needs robot and tracking transforms")
+            continue
+        try:
+            a = _transform(sample["robot"])
+        except ValueError as exc:
+            errors.bad(label, f"robot {exc}")
+            continue
+        try:
+            b = _transform(sample["tracking"])
+        except ValueError as exc:
+            errors.bad(label, f"tracking {exc}")
+            continue
+        robot.append(invert_transforms(a) if declared == "eye_to_hand" else a)
+        camera.append(b)
+        labels.append(label)
+    notes = []
+    if declared == "eye_to_hand":
+        notes.append("eye_on_base samples hold the base in the effector frame: inverted to tool0_in_base")
+    if setup is not None and declared is not None and setup != declared:
+        notes.append(f"--setup {setup} overrides the file's calibration_type {kind}")
+    return build_session(FORMAT, path, np.array(robot).reshape(-1, 4, 4), np.array(camera).reshape(-1, 4, 4), labels,
+                         setup=setup, declared_setup=declared, default_setup=DEFAULT_SETUP, units=units,
+                         documented_units="m", board=board, dropped=dropped, entries_read=len(data["samples"]),
+                         notes=notes)

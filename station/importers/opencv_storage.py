@@ -1,0 +1,159 @@
+"""OpenCV FileStorage pose pairs (camodocal's ``TransformPairsInput.yml`` layout).
+
+Layout, YAML or XML as OpenCV writes them::
+
+    %YAML:1.0
+    frameCount: 42                 optional
+    T1_0: !!opencv-matrix          robot: end effector in base (tool0_in_base), 4x4, metres
+       rows: 4
+       cols: 4
+       dt: d
+       data: [ ... 16 values, row-major ... ]
+    T2_0: !!opencv-matrix          camera: marker/board in camera (target_in_camera), 4x4, metres
+       ...
+
+Pairs are ``T1_<i>`` / ``T2_<i>`` for ``i = 0, 1, ...`` (other prefixes by option). The file is read
+with ``cv2.FileStorage``. Default set-up: detected from the data when they decide it clearly, else
+``eye_to_hand`` (the camodocal example, an AR tag on the arm seen by a fixed camera).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ...calibration.errors import SessionError
+from ...calibration.session import Session
+from .common import Dropped, EntryErrors, build_session, rigid_transform
+
+__all__ = ["FORMAT", "DEFAULT_SETUP", "read_opencv", "looks_like_opencv"]
+
+FORMAT = "opencv"
+DEFAULT_SETUP = "eye_to_hand"
+_KEY = re.compile(r"^([A-Za-z][A-Za-z0-9]*)_(\d+)$")
+
+
+def looks_like_opencv(path, head: str) -> bool:
+    """An OpenCV FileStorage file (``%YAML:1.0`` or ``<opencv_storage>``) holding ``T1_0``-like matrices."""
+    start = head.lstrip()
+    return (start.startswith("%YAML:1.") or "<opencv_storage>" in head[:200]) and (
+        "opencv-matrix" in head or "T1_0" in head)
+
+
+def _cv_message(exc: BaseException) -> str:
+    """The useful part of an OpenCV error: ``line N: message`` when OpenCV names a line."""
+    text = str(exc.__cause__ or exc).strip()
+    found = re.search(r"in function '.*?\((\d+)\):\s*(.*?)'?\s*$", text, re.S)
+    if found:
+        return f"line {found.group(1)}: {found.group(2).strip()}"
+    found = re.search(r"error: \([-\d]+:([^)]*)\)\s*(.*?)(?: in function .*)?$", text, re.S)
+    if found:
+        return f"{found.group(1).strip()}: {found.group(2).strip()}"
+    return text.splitlines()[0] if text else type(exc).__name__
+
+
+def read_opencv(path, *, setup=None, units=None, board=None, skip_invalid: bool = False,
+                robot_prefix: str = "T1", camera_prefix: str = "T2") -> Session:
+    """Read OpenCV FileStorage pose pairs into a session (mm).
+
+    Parameters
+    ----------
+    path : str or Path
+    setup : str, optional
+        Default: detected from the data, else ``eye_to_hand``.
+    units : str, optional
+        ``m`` or ``mm``; default: detected (camodocal writes metres).
+    board : BoardGeometry, optional
+    skip_invalid : bool
+        Drop malformed pairs (reported) instead of stopping at the first.
+    robot_prefix, camera_prefix : str
+        Matrix names ``<prefix>_<i>`` of the robot and camera poses.
+
+    Raises
+    ------
+    SessionError
+    """
+    import cv2  # station-side only: the calibration core does not depend on OpenCV
+
+    path = Path(path)
+    if not path.exists():
+        raise SessionError(f"{path}: no such file")
+    if path.is_dir():
+        raise SessionError(f"{path} is a folder; give the FileStorage file itself")
+    previous = cv2.utils.logging.getLogLevel()
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+    try:
+        try:
+            storage = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+        except (cv2.error, SystemError) as exc:
+            raise SessionError(f"{path}: not a readable OpenCV FileStorage file ({_cv_message(exc)})") from None
+        if not storage.isOpened():
+            raise SessionError(f"{path}: not a readable OpenCV FileStorage file")
+        try:
+            return _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, camera_prefix)
+        finally:
+            storage.release()
+    finally:
+        cv2.utils.logging.setLogLevel(previous)
+
+
+def _read_matrix(storage, name: str):
+    import cv2
+
+    node = storage.getNode(name)
+    if node.isNone():
+        return None
+    try:
+        matrix = node.mat()
+    except (cv2.error, SystemError) as exc:
+        raise ValueError(f"not a matrix ({_cv_message(exc)})") from None
+    if matrix is None:
+        raise ValueError("not an opencv-matrix")
+    return rigid_transform(matrix)
+
+
+def _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, camera_prefix) -> Session:
+    import cv2
+
+    indices = set()
+    for name in storage.root().keys():
+        found = _KEY.match(name)
+        if found and found.group(1) in (robot_prefix, camera_prefix):
+            indices.add(int(found.group(2)))
+    if not indices:
+        raise SessionError(f"{path}: no {robot_prefix}_<i> / {camera_prefix}_<i> matrices (camodocal TransformPairsInput layout)")
+    count_node = storage.getNode("frameCount")
+    declared = None if count_node.isNone() else int(count_node.real())
+    dropped = Dropped()
+    errors = EntryErrors(path, skip_invalid, dropped)
+    robot, camera, labels = [], [], []
+    for i in sorted(indices):
+        pair = []
+        for prefix in (robot_prefix, camera_prefix):
+            name = f"{prefix}_{i}"
+            try:
+                m = _read_matrix(storage, name)
+            except ValueError as exc:
+                errors.bad(name, str(exc))
+                break
+            except (cv2.error, SystemError) as exc:
+                errors.bad(name, _cv_message(exc))
+                break
+            if m is None:
+                other = camera_prefix if prefix == robot_prefix else robot_prefix
+                dropped.add(f"{other}_<i> without a matching {prefix}_<i>", f"pair {i}")
+                break
+            pair.append(m)
+        if len(pair) != 2:
+            continue
+        robot.append(pair[0])
+        camera.append(pair[1])
+        labels.append(f"{robot_prefix}_{i} + {camera_prefix}_{i}")
+    notes = []
+    if declared is not None and declared != len(indices):
+        notes.append(f"frameCount says {declared} but the file holds {len(indices)} numbered pairs")
+    return build_session(FORMAT, path, np.array(robot).reshape(-1, 4, 4), np.array(camera).reshape(-1, 4, 4), labels,
+                         setup=setup, default_setup=DEFAULT_SETUP, units=units, documented_units="m", board=board,
+                         dropped=dropped, entries_read=len(indices), notes=notes)

@@ -1,0 +1,275 @@
+"""Time-stamped pose streams in CSV (the ETH Zurich ``hand_eye_calibration`` layout).
+
+Two files, one pose per line, no header (a first line that is not numbers is skipped)::
+
+    t, x, y, z, qx, qy, qz, qw          stamp in seconds, position, quaternion scalar LAST, metres
+
+- the robot stream: the hand (flange) in the robot base, ``tool0_in_base`` (``*_base_link_*.csv``,
+  ~50 Hz in the ETH set);
+- the camera stream: by default the CAMERA IN THE TARGET frame, as the ETH set stores it
+  (``*_target_*.csv``, ~30 Hz); ``target_in_camera`` is its inverse. ``camera_pose=
+  "target_in_camera"`` reads files that already hold the board in the camera frame.
+
+Pairing: every camera sample takes the robot sample with the nearest stamp; pairs farther apart
+than ``tolerance_s`` (default 30 ms) are dropped. Optionally only pairs where the hand is at rest
+(slower than ``rest_mm_s`` and ``rest_deg_s``) are kept. A stream gives thousands of pairs: by
+default the time span is cut into ``max_postures`` (40) equal windows and the pair where the hand
+moves slowest is kept from each (least blur and time-offset error); ``max_postures=0`` keeps all.
+Default set-up: eye-in-hand (the ETH set), unless the data clearly say otherwise.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ...calibration.errors import SessionError
+from ...calibration.session import Session
+from ...calibration.transforms import invert_transforms
+from .common import (
+    Dropped,
+    EntryErrors,
+    build_session,
+    check_quaternion_order,
+    check_units,
+    detect_unit,
+    read_text,
+    transform_from_quaternion,
+)
+
+__all__ = ["FORMAT", "DEFAULT_SETUP", "CAMERA_POSES", "read_stream", "read_pose_stream", "pair_by_stamp",
+           "looks_like_stream", "split_stream_files"]
+
+FORMAT = "stream"
+DEFAULT_SETUP = "eye_in_hand"
+CAMERA_POSES = ("camera_in_target", "target_in_camera")
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def looks_like_stream(head: str) -> bool:
+    """CSV lines of 8 numbers whose first (the stamp) is large: ``t, x, y, z, q, q, q, q``."""
+    lines = [ln for ln in head.splitlines() if ln.strip() and not ln.lstrip().startswith("#")][:3]
+    if not lines:
+        return False
+    body = lines[1:] if not all(_is_number(f) for f in lines[0].split(",")) else lines
+    for line in body[:2]:
+        fields = [f.strip() for f in line.split(",")]
+        if len(fields) != 8 or not all(_is_number(f) for f in fields):
+            return False
+    return bool(body)
+
+
+def split_stream_files(paths) -> tuple[Path, Path]:
+    """(robot stream, camera stream) from two files, or a folder holding exactly two CSV files.
+
+    A name containing ``target`` or ``camera`` marks the camera stream (the ETH layout); otherwise
+    the order given is kept: robot first, camera second.
+    """
+    if isinstance(paths, (str, Path)):
+        paths = [paths]
+    paths = [Path(p) for p in paths]
+    if len(paths) == 1 and paths[0].is_dir():
+        csvs = sorted(p for p in paths[0].iterdir() if p.suffix.lower() == ".csv")
+        if len(csvs) != 2:
+            raise SessionError(f"{paths[0]}: expected two CSV streams (robot, camera); found {len(csvs)} CSV files")
+        paths = csvs
+    if len(paths) != 2:
+        raise SessionError(f"a stream import needs two CSV files, robot stream then camera stream; got {len(paths)}")
+    marked = [any(word in p.name.lower() for word in ("target", "camera", "marker")) for p in paths]
+    if marked == [True, False]:
+        return paths[1], paths[0]
+    return paths[0], paths[1]
+
+
+def read_pose_stream(path, order: str = "xyzw", errors: EntryErrors | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Stamps ``(n,)`` and poses ``(n, 4, 4)`` (file units) of one CSV stream.
+
+    Parameters
+    ----------
+    path : str or Path
+    order : str
+        Quaternion order of the file, ``xyzw`` or ``wxyz``.
+    errors : EntryErrors, optional
+        Where malformed lines go (dropped when it skips invalid entries); default: stop at the first.
+
+    Raises
+    ------
+    SessionError
+        Naming the file and line of the first malformed row.
+    """
+    check_quaternion_order(order)
+    errors = errors or EntryErrors(path, False, Dropped())
+    text = read_text(path)
+    stamps, poses = [], []
+    first = True
+    for number, line in enumerate(text.splitlines(), start=1):
+        stripped = line.strip()
+        if not stripped or stripped.startswith("#"):
+            continue
+        fields = [f.strip() for f in stripped.split(",")]
+        if first and not all(_is_number(f) for f in fields):
+            first = False
+            continue  # a header line
+        first = False
+        label = f"line {number}"
+        if len(fields) != 8:
+            errors.bad(label, f"expected 8 values (t, x, y, z, quaternion {order}); got {len(fields)}")
+            continue
+        try:
+            values = [float(f) for f in fields]
+        except ValueError:
+            errors.bad(label, f"not a number in {stripped[:60]!r}")
+            continue
+        try:
+            pose = transform_from_quaternion(values[1:4], values[4:8], order)
+        except ValueError as exc:
+            errors.bad(label, str(exc))
+            continue
+        if not np.isfinite(values[0]):
+            errors.bad(label, "the stamp is not finite")
+            continue
+        stamps.append(values[0])
+        poses.append(pose)
+    if not stamps:
+        raise SessionError(f"{path}: no pose lines")
+    return np.array(stamps), np.array(poses)
+
+
+def pair_by_stamp(robot_t, camera_t, tolerance_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """For every camera stamp the index of the nearest robot stamp and the offset (s).
+
+    Parameters
+    ----------
+    robot_t : ndarray, shape (n,)
+        Sorted robot stamps.
+    camera_t : ndarray, shape (m,)
+
+    Returns
+    -------
+    nearest : ndarray of int, shape (m,)
+    offset : ndarray, shape (m,)
+        ``|camera_t - robot_t[nearest]|``; compare with ``tolerance_s``.
+    """
+    right = np.clip(np.searchsorted(robot_t, camera_t), 1, len(robot_t) - 1) if len(robot_t) > 1 else np.zeros(len(camera_t), int)
+    left = np.maximum(right - 1, 0)
+    take_left = np.abs(camera_t - robot_t[left]) <= np.abs(camera_t - robot_t[right])
+    nearest = np.where(take_left, left, right)
+    return nearest, np.abs(camera_t - robot_t[nearest])
+
+
+def _hand_speeds(t, poses, scale_mm) -> tuple[np.ndarray, np.ndarray]:
+    """Translational (mm/s) and angular (deg/s) speed at each robot sample (central differences)."""
+    n = len(t)
+    if n < 2:
+        return np.zeros(n), np.zeros(n)
+    lo = np.maximum(np.arange(n) - 1, 0)
+    hi = np.minimum(np.arange(n) + 1, n - 1)
+    dt = np.maximum(t[hi] - t[lo], 1e-9)
+    v = np.linalg.norm(poses[hi, :3, 3] - poses[lo, :3, 3], axis=1) * scale_mm / dt
+    rel = np.einsum("nji,njk->nik", poses[lo, :3, :3], poses[hi, :3, :3])
+    w = np.degrees(np.linalg.norm(Rotation.from_matrix(rel).as_rotvec(), axis=1)) / dt
+    return v, w
+
+
+def read_stream(paths, *, setup=None, units=None, board=None, skip_invalid: bool = False,
+                quaternion_order: str = "xyzw", camera_pose: str = "camera_in_target",
+                tolerance_s: float = 0.03, max_postures: int = 40,
+                rest_mm_s: float | None = None, rest_deg_s: float | None = None) -> Session:
+    """Pair two time-stamped pose streams into a session (mm).
+
+    Parameters
+    ----------
+    paths : sequence of two paths, or a folder
+        Robot stream then camera stream (names with ``target``/``camera``/``marker`` mark the camera).
+    setup : str, optional
+        Default: detected from the data, else ``eye_in_hand``.
+    units : str, optional
+        ``m`` or ``mm``; default: detected (the ETH set is in metres).
+    board : BoardGeometry, optional
+    skip_invalid : bool
+        Drop malformed lines (reported) instead of stopping at the first.
+    quaternion_order : str
+        ``xyzw`` (scalar last, default, the ETH layout) or ``wxyz``.
+    camera_pose : str
+        ``camera_in_target`` (default, ETH) or ``target_in_camera``.
+    tolerance_s : float
+        Largest stamp difference of a pair.
+    max_postures : int
+        Keep at most this many pairs, the slowest in each of as many time windows; 0 keeps all.
+    rest_mm_s, rest_deg_s : float, optional
+        Keep only pairs where the hand moves slower than these.
+
+    Raises
+    ------
+    SessionError
+    """
+    check_units(units)
+    check_quaternion_order(quaternion_order)
+    if camera_pose not in CAMERA_POSES:
+        raise SessionError(f"camera pose must be one of {', '.join(CAMERA_POSES)}; got {camera_pose!r}")
+    if not (tolerance_s > 0):
+        raise SessionError(f"the pairing tolerance must be positive; got {tolerance_s}")
+    if max_postures < 0 or (0 < max_postures < 3):
+        raise SessionError(f"max postures must be 0 (keep all) or at least 3; got {max_postures}")
+    robot_path, camera_path = split_stream_files(paths)
+    dropped = Dropped()
+    robot_t, robot_poses = read_pose_stream(robot_path, quaternion_order, EntryErrors(robot_path, skip_invalid, dropped))
+    camera_t, camera_poses = read_pose_stream(camera_path, quaternion_order, EntryErrors(camera_path, skip_invalid, dropped))
+    notes = []
+    for name, t in (("robot", robot_t), ("camera", camera_t)):
+        if np.any(np.diff(t) < 0):
+            notes.append(f"the {name} stream's stamps are not in order: sorted")
+    order = np.argsort(robot_t, kind="stable")
+    robot_t, robot_poses = robot_t[order], robot_poses[order]
+    order = np.argsort(camera_t, kind="stable")
+    camera_t, camera_poses = camera_t[order], camera_poses[order]
+    if camera_pose == "camera_in_target":
+        camera_poses = invert_transforms(camera_poses)
+    nearest, offset = pair_by_stamp(robot_t, camera_t, tolerance_s)
+    keep = offset <= tolerance_s
+    for k in np.flatnonzero(~keep):
+        dropped.add(f"no robot sample within {tolerance_s * 1000:g} ms", f"t={camera_t[k]:.3f}")
+    robot_unit = units or detect_unit(robot_poses)[0]
+    speed_v, speed_w = _hand_speeds(robot_t, robot_poses, 1000.0 if robot_unit == "m" else 1.0)
+    v, w = speed_v[nearest], speed_w[nearest]
+    if rest_mm_s is not None or rest_deg_s is not None:
+        moving = keep & (((v > rest_mm_s) if rest_mm_s is not None else False)
+                         | ((w > rest_deg_s) if rest_deg_s is not None else False))
+        limits = " / ".join(s for s in (f"{rest_mm_s:g} mm/s" if rest_mm_s is not None else "",
+                                        f"{rest_deg_s:g} deg/s" if rest_deg_s is not None else "") if s)
+        for k in np.flatnonzero(moving):
+            dropped.add(f"hand moving (faster than {limits})", f"t={camera_t[k]:.3f}")
+        keep &= ~moving
+    candidates = np.flatnonzero(keep)
+    if max_postures and len(candidates) > max_postures:
+        edges = np.linspace(camera_t[candidates[0]], camera_t[candidates[-1]], max_postures + 1)
+        window = np.clip(np.searchsorted(edges, camera_t[candidates], side="right") - 1, 0, max_postures - 1)
+        score = v[candidates] / 100.0 + w[candidates] / 10.0  # 100 mm/s ~ 10 deg/s
+        chosen = []
+        for b in range(max_postures):
+            members = np.flatnonzero(window == b)
+            if len(members):
+                chosen.append(candidates[members[np.argmin(score[members])]])
+        chosen = np.array(chosen, dtype=int)
+        for k in np.setdiff1d(candidates, chosen):
+            dropped.add(f"decimated (kept the slowest pair in each of {max_postures} time windows)",
+                        f"t={camera_t[k]:.3f}")
+        candidates = chosen
+    labels = [f"t={camera_t[k]:.4f} (robot t={robot_t[nearest[k]]:.4f}, {offset[k] * 1000:.1f} ms apart)"
+              for k in candidates]
+    details = {"pairing": {"tolerance_ms": tolerance_s * 1000.0, "robot_samples": int(len(robot_t)),
+                           "camera_samples": int(len(camera_t)), "camera_pose_in_file": camera_pose,
+                           "max_postures": int(max_postures)}}
+    return build_session(FORMAT, [robot_path, camera_path], robot_poses[nearest[candidates]],
+                         camera_poses[candidates], labels, setup=setup, default_setup=DEFAULT_SETUP, units=units,
+                         documented_units="m", board=board, dropped=dropped, entries_read=len(camera_t),
+                         notes=notes, details=details)
