@@ -823,15 +823,14 @@ def test_visp_app_folder_with_images_end_to_end(tmp_path, eih):
     solved camera mount match the truth."""
     import cv2
 
-    from handeye.calibration.synthetic import NOMINAL_CAMERA
+    from handeye.calibration.views import NOMINAL_XB3_LEFT as cam
 
-    cam = NOMINAL_CAMERA
-    k = np.array([[cam["f_px"], 0, cam["cx"]], [0, cam["f_px"], cam["cy"]], [0, 0, 1.0]])
+    k = np.array([[cam.f_px, 0, cam.cx], [0, cam.f_px, cam.cy], [0, 0, 1.0]])
     folder = tmp_path / "app"
     folder.mkdir()
     for i, (a, b) in enumerate(zip(eih.tool0, eih.target), start=1):
         (folder / f"robot_pose_rPe_{i}.yaml").write_text(_pose_vector_yaml(_metres(a[None])[0]))
-        image = render_board(b, eih.board.corners, eih.board.square_mm, k, (cam["width"], cam["height"]), px_per_mm=3.0)
+        image = render_board(b, eih.board.corners, eih.board.square_mm, k, (cam.width, cam.height), px_per_mm=3.0)
         cv2.imwrite(str(folder / f"robot_image-{i}.png"), image)
     _camera_xml(folder / "robot_camera.xml", k)
     (folder / "chessboard-data.txt").write_text("Chessboard\n13 x 8\nsquare size: 0.030 m\n")
