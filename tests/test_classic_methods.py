@@ -18,10 +18,12 @@ from scipy.spatial.transform import Rotation
 from conftest import shared_dataset
 from handeye.calibration.classic import CLASSIC_METHODS
 from handeye.calibration.classic.common import (
+    MAX_DEFAULT_PAIRS,
     MAX_PAIR_ANGLE_DEG,
     MIN_PAIR_ANGLE_DEG,
     constrained_null_combination,
     consecutive_pairs,
+    default_pairs,
     left_matrix,
     nearest_rotation,
     prepare_motions,
@@ -131,6 +133,24 @@ def test_length_unit_does_not_change_the_pose(scenes, method, setup):
     assert np.allclose(x_mm[:3, 3], 1000.0 * x_m[:3, 3], rtol=0, atol=1e-7)
 
 
+def test_default_pairs_are_all_pairs_up_to_the_cap_then_strided_over_every_posture():
+    assert len(default_pairs(30)) == 435
+    big = default_pairs(2800)  # a continuous stream
+    assert len(big) <= MAX_DEFAULT_PAIRS
+    assert set(big.ravel()) == set(range(2800))
+    assert np.all(big[:, 0] < big[:, 1]) and len(np.unique(big, axis=0)) == len(big)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_hundreds_of_postures_stay_exact_with_the_capped_default(scenes, method):
+    scene = scenes[EYE_TO_HAND]
+    hand, target2cam = _poses(scene)
+    repeats = 25  # 300 postures: 44850 pairs, more than the cap
+    x = CLASSIC_METHODS[method](np.tile(hand, (repeats, 1, 1)), np.tile(target2cam, (repeats, 1, 1)))
+    assert rotation_error_deg(x, scene.x_true) <= 1e-6
+    assert translation_error_mm(x, scene.x_true) <= 1e-4
+
+
 # ---------------------------------------------------------------- degenerate data
 
 
@@ -237,7 +257,9 @@ def test_bad_input_gives_one_line_errors(scenes):
         with pytest.raises(CalibrationError, match=message) as info:
             solve(*args)
         assert "\n" not in str(info.value)
-    for pairs, message in (([[0, 12]], "valid indices are 0..11"), ([[3, 3], [0, 1]], r"\(i, i\)"), ([0, 1], r"\(p, 2\)")):
+    bad_pairs = (([[0, 12]], "valid indices are 0..11"), ([[3, 3], [0, 1]], r"\(i, i\)"), ([0, 1], r"\(p, 2\)"),
+                 ([[0.5, 2]], "integer"), ([["a", "b"]], "integer"))
+    for pairs, message in bad_pairs:
         with pytest.raises(CalibrationError, match=message):
             solve(hand, target2cam, pairs=pairs)
 

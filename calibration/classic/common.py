@@ -44,9 +44,11 @@ __all__ = [
     "MIN_PAIR_ANGLE_DEG",
     "MAX_PAIR_ANGLE_DEG",
     "MIN_AXIS_SPREAD_DEG",
+    "MAX_DEFAULT_PAIRS",
     "Motions",
     "check_poses",
     "all_pairs",
+    "default_pairs",
     "consecutive_pairs",
     "check_pairs",
     "relative_motions",
@@ -71,6 +73,8 @@ MAX_PAIR_ANGLE_DEG = 175.0
 #: RMS angle (deg) of the kept pairs' rotation axes about their mean direction below which the axes
 #: count as parallel (the rotation about that direction is then undetermined).
 MIN_AXIS_SPREAD_DEG = 2.0
+#: Above this many pairs the default keeps an evenly spread subset of all pairs (memory stays ~100 MB).
+MAX_DEFAULT_PAIRS = 20000
 #: Largest accepted ``max |R^T R - I|`` of an input rotation before it is refused.
 ORTHONORMAL_TOLERANCE = 1e-3
 
@@ -112,7 +116,7 @@ class Motions:
 
     @property
     def count(self) -> int:
-        return int(len(self.pairs))
+        return len(self.pairs)
 
 
 def check_poses(hand, target2cam) -> tuple[np.ndarray, np.ndarray]:
@@ -159,9 +163,23 @@ def check_poses(hand, target2cam) -> tuple[np.ndarray, np.ndarray]:
 
 
 def all_pairs(n: int) -> np.ndarray:
-    """All posture pairs ``i < j``, shape ``(n(n-1)/2, 2)`` (the default of every solver here)."""
+    """All posture pairs ``i < j``, shape ``(n(n-1)/2, 2)``, lexicographic order."""
     i, j = np.triu_indices(n, k=1)
     return np.stack([i, j], axis=1)
+
+
+def default_pairs(n: int) -> np.ndarray:
+    """The pairs every solver here uses when none are given.
+
+    All pairs ``i < j``; when there are more than ``MAX_DEFAULT_PAIRS`` of them (continuous streams
+    of thousands of samples), the pairs ``(i, i + s)`` for a few strides ``s`` spread evenly over
+    ``1 .. n/2``, so that every posture takes part and at most ``MAX_DEFAULT_PAIRS`` remain.
+    """
+    if n * (n - 1) // 2 <= MAX_DEFAULT_PAIRS:
+        return all_pairs(n)
+    count = max(1, MAX_DEFAULT_PAIRS // n)
+    strides = np.unique(np.round(np.linspace(1, n // 2, count)).astype(np.intp))
+    return np.concatenate([np.stack([np.arange(n - s), np.arange(s, n)], axis=1) for s in strides])
 
 
 def consecutive_pairs(n: int) -> np.ndarray:
@@ -171,7 +189,7 @@ def consecutive_pairs(n: int) -> np.ndarray:
 
 
 def check_pairs(pairs, n: int) -> np.ndarray:
-    """Validate user-given pairs; ``None`` gives :func:`all_pairs`.
+    """Validate user-given pairs; ``None`` gives :func:`default_pairs`.
 
     Raises
     ------
@@ -179,16 +197,17 @@ def check_pairs(pairs, n: int) -> np.ndarray:
         Not an integer ``(p, 2)`` array, an index outside ``0..n-1``, or a pair ``(i, i)``.
     """
     if pairs is None:
-        return all_pairs(n)
+        return default_pairs(n)
     arr = np.asarray(pairs)
     if arr.ndim != 2 or arr.shape[1] != 2 or len(arr) == 0:
         raise CalibrationError(f"pairs must be a non-empty (p, 2) array of posture indices; got shape {arr.shape}")
-    if not np.issubdtype(arr.dtype, np.integer):
-        if not np.all(np.isfinite(arr)) or np.any(arr != np.round(arr)):
-            raise CalibrationError("pairs must hold integer posture indices")
+    integral = arr.dtype.kind in "iu" or (arr.dtype.kind == "f" and np.all(np.isfinite(arr)) and np.all(arr == np.round(arr)))
+    if not integral:
+        raise CalibrationError("pairs must hold integer posture indices")
     arr = arr.astype(np.intp)
     if arr.min() < 0 or arr.max() >= n:
-        raise CalibrationError(f"pairs refer to posture {int(arr.max()) if arr.max() >= n else int(arr.min())}; valid indices are 0..{n - 1}")
+        bad = int(arr.max()) if arr.max() >= n else int(arr.min())
+        raise CalibrationError(f"pairs refer to posture {bad}; valid indices are 0..{n - 1}")
     if np.any(arr[:, 0] == arr[:, 1]):
         raise CalibrationError("a pair (i, i) carries no motion; give pairs of two different postures")
     return arr
@@ -233,7 +252,7 @@ def prepare_motions(hand, target2cam, pairs=None) -> Motions:
     ----------
     hand, target2cam : array-like, shape (n, 4, 4)
     pairs : array-like of int, shape (p, 2), optional
-        Default: all pairs ``i < j``.
+        Default: all pairs ``i < j`` (:func:`default_pairs`).
 
     Returns
     -------

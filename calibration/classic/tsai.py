@@ -46,8 +46,9 @@ def solve_tsai(hand, target2cam, pairs=None) -> np.ndarray:
 
     Notes
     -----
-    ``P' = tan(θ_X/2) n_X`` is infinite for a camera rotated by 180 deg relative to the hand frame:
-    the method degrades as ``θ_X`` nears 180 deg (no problem for the station's ~90 deg mount).
+    ``P' = tan(θ_X/2) n_X`` is infinite when ``X`` rotates by 180 deg: the method degrades as
+    ``θ_X`` nears 180 deg (no problem for the station's ~90 deg mount; the camodocal set's
+    ``θ_X`` of ~167 deg already costs it).
     """
     motions = prepare_motions(hand, target2cam, pairs)
     # eq. 6-7: relative motions (common.relative_motions); P = 2 sin(θ/2) n = twice the quaternion's vector part.
