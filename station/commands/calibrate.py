@@ -7,7 +7,10 @@ import argparse
 HELP = "solve a session for the camera pose (cam2tool0, or cam2base eye-to-hand)"
 
 EPILOG = """\
-Methods (--method):
+Methods (--method); without it the recommended default runs:
+  robust  (default) mcb, then outlier postures detected and excluded, a robust refinement of the
+          point consistency over the inliers, and a one-sigma uncertainty of the pose
+The paper's variants (Deniz & Cakir):
   mc    all postures at once (Horn least squares over every pair; no selection)
   mcb   best triplet by back-projection d_back, eq. 23 (mean distance between the same board point
         seen from two postures)
@@ -15,7 +18,8 @@ Methods (--method):
   mcr   best triplet by the rotation residual of AX = XB (eq. 16)
   mct   best triplet by the translation residual of AX = XB (eq. 16)
   mcy   best triplet by the distance to the true board points (synthetic sessions only)
-Without --method the recommended default runs.
+Classic AX = XB solvers (calibration/classic/README.md says what each minimises):
+  tsai, park, horaud, andreff, daniilidis, chou, lu, liang
 
 The text report gives the pose as a RAPID tframe literal, the quality figures and each posture's
 residual. --json FILE writes the machine-readable result ('-' for standard output).
