@@ -319,7 +319,8 @@ class MockCamera(Camera):
     board : PrintedBoard, optional
         The sheet (default 13x8 corners, 30 mm squares, 30 mm margin).
     target2base : array-like, shape (4, 4), optional
-        Board pose in the base frame (default: 1 m in front of the camera at the base origin).
+        Board pose in the base frame (default: facing the camera at the base origin, 1 m away,
+        centred between the left and right cameras).
     cam2base : array-like (4, 4) or callable returning one, optional
         Camera pose in the base frame, or a provider called at every grab (e.g.
         ``lambda: robot.tool0_in_base() @ cam2tool0``). Default: the base frame itself.
@@ -347,9 +348,10 @@ class MockCamera(Camera):
         self._connected = False
         self._lock = threading.Lock()
         self._last = 0.0
-        if target2base is None:
+        if target2base is None:  # facing the head, 1 m away, centred between the left and right cameras
             target2base = np.eye(4)
-            target2base[:3, 3] = -self.renderer.board.centre() + np.array([0.0, 0.0, 1000.0])
+            middle = -0.5 * self.renderer.model.T  # right camera at -T in the left camera's frame (R = I nominal)
+            target2base[:3, 3] = -self.renderer.board.centre() + np.array([middle[0], 0.0, 1000.0])
         self.set_scene(target2base=target2base, cam2base=cam2base if cam2base is not None else np.eye(4))
 
     @property

@@ -104,17 +104,17 @@ def test_symmetric_board_is_flagged_ambiguous_with_x_to_the_right():
 
 def test_no_board_half_board_and_wrong_counts_are_refused():
     img, _ = drawn_board(13, 8)
-    with pytest.raises(BoardNotFound, match="no 13x8-corner checkerboard found in the image"):
+    with pytest.raises(BoardNotFound, match="no checkerboard in the image"):
         detect_board(np.full_like(img, 120), (13, 8))
     noise = np.random.default_rng(0).integers(0, 255, img.shape).astype(np.uint8)
     with pytest.raises(BoardNotFound):
         detect_board(noise, (13, 8))
     half = img.copy()
     half[:, img.shape[1] // 2:] = 110
-    with pytest.raises(BoardNotFound, match="whole board"):
+    with pytest.raises(BoardNotFound, match="in the left image"):  # either message (the hint is heuristic)
         detect_board(half, (13, 8), what="left image")
     for wrong in ((14, 8), (12, 8), (13, 7), (9, 6)):
-        with pytest.raises(BoardNotFound, match=f"{wrong[0]}x{wrong[1]}"):
+        with pytest.raises(BoardNotFound, match=f"not all of its {wrong[0]}x{wrong[1]} inner corners.*--board"):
             detect_board(img, wrong)
 
 
@@ -203,3 +203,35 @@ def test_stereo_bad_inputs():
         observe_board(left, np.full_like(right, 100), MODEL, BOARD.geometry)
     with pytest.raises(FrameError, match="empty"):
         observe_board(np.zeros((0, 0), np.uint8), right, MODEL, BOARD.geometry)
+
+
+def test_symmetric_board_stereo_orders_agree_through_the_rectified_rows():
+    board = PrintedBoard(BoardGeometry((8, 6), 40.0), 30.0)  # 9x7 squares: no printed orientation
+    grid = board_corners(board.corners, board.square_mm)
+    for roll in (88.0, 92.0, 180.0):
+        pose = board_view(1000, 15, 30, roll, board, (120, 0))
+        left, right = StereoRenderer(MODEL, board, seed=1).gray_pair(pose)
+        obs = observe_board(left, right, MODEL, board.geometry)
+        assert obs.quality["orientation"] == "ambiguous"
+        assert obs.quality["row_disagreement_rms_px"] < 0.1
+        truth = grid @ pose[:3, :3].T + pose[:3, 3]
+        turned = truth.reshape(6, 8, 3)[::-1, ::-1].reshape(-1, 3)  # the same board read turned by 180 deg
+        err = min(np.abs(obs.points_mm - truth).max(), np.abs(obs.points_mm - turned).max())
+        assert err < 1.5
+
+
+def test_conflicting_pattern_readings_are_refused(monkeypatch):
+    pose = board_view(1000, 10, 0, 0, BOARD, (120, 0))
+    left, right = _pair(pose)
+    real = cb.detect_board
+
+    def misread_right(image, board, **kw):
+        det = real(image, board, **kw)
+        if kw.get("what") == "right image":  # as if glare made the right image read the board turned
+            return cb.Detection(det.alternatives[0], det.board, det.image_size, False, det.pattern_score,
+                                (det.corners_px,))
+        return det
+
+    monkeypatch.setattr(cb, "detect_board", misread_right)
+    with pytest.raises(StereoMismatch, match="different board orientations"):
+        observe_board(left, right, MODEL, BOARD.geometry)

@@ -272,10 +272,13 @@ def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside
     nx, ny = board.corners
     found = _find_grid(gray, (nx, ny), thorough)
     if found is None:
-        raise BoardNotFound(
-            f"no {nx}x{ny}-corner checkerboard found in the {what}: check that the whole board with its white "
-            f"margin is in view and lit evenly, and that {nx}x{ny} are its inner corners"
-        )
+        if cv2.checkChessboard(gray, (nx, ny)):
+            raise BoardNotFound(
+                f"a checkerboard is in the {what} but not all of its {nx}x{ny} inner corners were found: check that "
+                f"the whole board with its white margin is in view and that {nx}x{ny} is its inner-corner count "
+                f"(--board; e.g. 13x8 for 14x9 squares)"
+            )
+        raise BoardNotFound(f"no checkerboard in the {what}: check that the board is in view, lit evenly and in focus")
     grid = found.reshape(ny, nx, 2)
     if refine:
         grid = _refine(gray, grid)
