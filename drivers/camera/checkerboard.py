@@ -447,7 +447,7 @@ def observe_board(left: np.ndarray, right: np.ndarray, model: StereoModel, board
     # Make the right ordering agree with the left one: among the right image's orderings with the
     # correct handedness, corresponding corners share rectified rows and have positive disparity.
     options = [det_right.corners_px, *det_right.alternatives]
-    best, best_rms, best_tri = None, np.inf, None
+    best, best_rms = None, np.inf
     for k, corners in enumerate(options):
         rl, rr = model.rectify_points(det_left.corners_px, corners)
         rms = float(np.sqrt(np.mean((rl[:, 1] - rr[:, 1]) ** 2)))

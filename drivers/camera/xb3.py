@@ -26,6 +26,7 @@ back; the bytes are decoded by :mod:`.decode`. Registers are read and written wi
 
 from __future__ import annotations
 
+import collections
 import ctypes
 import ctypes.util
 import select
@@ -39,6 +40,7 @@ from .interface import Camera, StereoFrame
 __all__ = [
     "DEBIAN_PACKAGE",
     "LIBRARY_NAMES",
+    "LIBRARY_MESSAGES",
     "Dc1394",
     "XB3Camera",
     "load_library",
@@ -121,6 +123,17 @@ class _VideoFrame(ctypes.Structure):
 
 _LOG_HANDLER = ctypes.CFUNCTYPE(None, ctypes.c_int, ctypes.c_char_p, ctypes.c_void_p)
 
+#: The last messages libdc1394 logged (errors and warnings), instead of its own printing to stderr.
+LIBRARY_MESSAGES: collections.deque = collections.deque(maxlen=50)
+
+
+def _collect(_kind, message, _user):
+    LIBRARY_MESSAGES.append((message or b"").decode("ascii", "replace").strip())
+
+
+# One module-level callback: libdc1394 keeps the pointer for the life of the process.
+_HANDLER = _LOG_HANDLER(_collect)
+
 
 def _not_installed(tried) -> CameraError:
     return CameraError(
@@ -154,7 +167,6 @@ class Dc1394:
     def __init__(self, library: ctypes.CDLL | str | None = None):
         lib = library if isinstance(library, ctypes.CDLL) else load_library(library)
         self.lib = lib
-        self.messages: list[str] = []
         self._declare()
         self._quiet_logs()
         self.context = lib.dc1394_new()
@@ -198,13 +210,9 @@ class Dc1394:
             fn.argtypes = argtypes
 
     def _quiet_logs(self) -> None:
-        """Collect the library's error/warning messages instead of letting it print them."""
-        def handler(_kind, message, _user):
-            self.messages.append((message or b"").decode("ascii", "replace").strip())
-
-        self._handler = _LOG_HANDLER(handler)  # keep a reference: the library calls it later
+        """Collect the library's error/warning messages in :data:`LIBRARY_MESSAGES` instead of printing them."""
         for kind in (LOG_ERROR, LOG_WARNING):
-            self.lib.dc1394_log_register_handler(kind, self._handler, None)
+            self.lib.dc1394_log_register_handler(kind, _HANDLER, None)
 
     def check(self, err: int, step: str) -> None:
         if err != DC1394_SUCCESS:
