@@ -1,0 +1,480 @@
+"""Checkerboard corners in images, in the canonical order of the target frame, and their 3D positions.
+
+Detection: ``cv2.findChessboardCorners`` (adaptive threshold, fast check: a few milliseconds at
+1280x960, found or not), retried on a half-size copy of large images (made with ``INTER_AREA``, so
+a half-size pixel ``x`` is full-size ``2x + 0.5``), then ``cv2.cornerSubPix`` on the full image with
+a half-window of 0.4 x the smallest corner spacing.
+
+Canonical order (target frame of conventions.md): corner index ``k = row * nx + col``; the origin
+is a corner of the grid, x runs along the rows (``nx = corners[0]`` corners), y along the
+columns, and z = x × y points into the board, away from a camera that sees the printed face. In
+the image this means the grid's x and y directions turn clockwise (image y points down).
+The detector may start at any corner and run either way; of the orderings with the right handedness
+the printed pattern picks one: the square between corners 0, 1, nx and nx + 1 is BLACK. For a
+board of even × odd squares (e.g. 13x8 inner corners = 14x9 squares) that is exactly "x runs from
+the edge whose two corner squares are black towards the edge whose corner squares are white". A
+board whose squares are odd × odd or even × even looks the same turned by 180 degrees; there the
+ordering whose x axis points most to the right in the left image is taken and the detection is
+flagged ``ambiguous`` (the right image then follows the left through the rectified rows).
+
+A detection is refused (:class:`BoardNotFound`, one line) when the grid is not found, when the
+pattern contrast is too low to read the orientation, or when the squares just outside the detected
+grid continue the checker pattern (the board has more corners than asked for).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from ...calibration.compact_points import BoardGeometry, board_corners
+from .errors import BoardNotFound, CameraError, FrameError, StereoMismatch
+from .stereo import StereoModel
+
+__all__ = [
+    "Detection",
+    "BoardObservation",
+    "as_board",
+    "detect_board",
+    "canonical_orderings",
+    "pattern_score",
+    "board_pose_from_corners",
+    "observe_board",
+    "board_quality",
+    "plane_fit",
+]
+
+DETECT_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
+#: Images at least this wide are searched again at half size when the full-size search fails.
+HALF_SIZE_FROM_WIDTH = 1000
+SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-4)
+#: Refinement half-window as a fraction of the smallest corner spacing, and its bounds (px).
+WINDOW_FRACTION = 0.4
+WINDOW_MIN, WINDOW_MAX = 2, 15
+#: Smallest black/white difference (grey levels) at which the printed pattern is trusted.
+MIN_CONTRAST = 12.0
+#: Alternation (as a fraction of the contrast) beyond the grid above which the board is larger than asked.
+MAX_OUTER_ALTERNATION = 0.5
+#: Largest RMS rectified row disagreement (px) of a stereo detection before it is refused.
+MAX_ROW_DISAGREEMENT_PX = 2.0
+
+
+def as_board(board, square_mm: float | None = None) -> BoardGeometry:
+    """A :class:`BoardGeometry` from a geometry, ``(nx, ny)`` or ``"13x8"``."""
+    if isinstance(board, BoardGeometry):
+        if square_mm is not None and board.square_mm != square_mm:
+            return BoardGeometry(board.corners, float(square_mm))
+        return board
+    if isinstance(board, str):
+        parts = board.lower().replace("×", "x").split("x")
+        try:
+            board = tuple(int(p) for p in parts)
+        except ValueError:
+            board = ()
+        if len(board) != 2:
+            raise CameraError(f"board must be written as inner corners NXxNY, e.g. 13x8; got {'x'.join(parts)!r}")
+    nx, ny = (int(v) for v in board)
+    if nx < 2 or ny < 2:
+        raise CameraError(f"a board needs at least 2x2 inner corners; got {nx}x{ny}")
+    if square_mm is not None and not (np.isfinite(square_mm) and square_mm > 0):
+        raise CameraError(f"square size must be a positive number of mm; got {square_mm}")
+    return BoardGeometry((nx, ny), None if square_mm is None else float(square_mm))
+
+
+@dataclass(frozen=True)
+class Detection:
+    """Corners of one board in one image, canonical order.
+
+    Attributes
+    ----------
+    corners_px : ndarray, shape (nx*ny, 2)
+        Pixel coordinates (pixel centres at integers), index ``row * nx + col``.
+    board : BoardGeometry
+    image_size : tuple of int
+        ``(width, height)``.
+    ambiguous : bool
+        The pattern cannot tell the board from itself turned by 180 deg (odd x odd or even x even squares).
+    pattern_score : float
+        Mean white minus mean black grey level of the inner squares in this ordering (> 0).
+    alternatives : tuple of ndarray
+        The other ordering(s) with the right handedness (the 180-deg turn), for stereo matching.
+    """
+
+    corners_px: np.ndarray
+    board: BoardGeometry
+    image_size: tuple
+    ambiguous: bool
+    pattern_score: float
+    alternatives: tuple = ()
+
+    @property
+    def grid(self) -> np.ndarray:
+        """Corners as ``(ny, nx, 2)``."""
+        nx, ny = self.board.corners
+        return self.corners_px.reshape(ny, nx, 2)
+
+
+def _gray_u8(image: np.ndarray, what: str = "image") -> np.ndarray:
+    if not isinstance(image, np.ndarray) or image.size == 0:
+        raise FrameError(f"{what} is empty")
+    if image.ndim == 3 and image.shape[2] in (3, 4):
+        image = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY if image.shape[2] == 3 else cv2.COLOR_BGRA2GRAY)
+    elif image.ndim == 3 and image.shape[2] == 1:
+        image = image[..., 0]
+    if image.ndim != 2:
+        raise FrameError(f"{what} must be a grey or BGR image; got shape {image.shape}")
+    if image.dtype == np.uint16:
+        image = (image >> 8).astype(np.uint8)
+    elif image.dtype != np.uint8:
+        image = np.clip(image, 0, 255).astype(np.uint8)
+    return np.ascontiguousarray(image)
+
+
+def _find_grid(gray: np.ndarray, pattern: tuple[int, int], thorough: bool = False) -> np.ndarray | None:
+    """Detector corners ``(n, 2)`` at full-size pixel coordinates, or ``None``.
+
+    Tries the full image with the fast check (a few ms either way), then a half-size copy of large
+    images (corners mapped back with ``x = 2 x_half + 0.5``); ``thorough`` adds a search without the
+    fast check (slow when there is no board: up to seconds at 1280x960).
+    """
+    found, corners = cv2.findChessboardCorners(gray, pattern, flags=DETECT_FLAGS)
+    if found:
+        return corners.reshape(-1, 2).astype(np.float64)
+    h, w = gray.shape
+    if w >= HALF_SIZE_FROM_WIDTH:
+        small = cv2.resize(gray, (w // 2, h // 2), interpolation=cv2.INTER_AREA)
+        found, corners = cv2.findChessboardCorners(small, pattern, flags=DETECT_FLAGS)
+        if found:
+            return corners.reshape(-1, 2).astype(np.float64) * 2.0 + 0.5
+    if thorough:
+        found, corners = cv2.findChessboardCorners(gray, pattern, flags=DETECT_FLAGS & ~cv2.CALIB_CB_FAST_CHECK)
+        if found:
+            return corners.reshape(-1, 2).astype(np.float64)
+    return None
+
+
+def _refine(gray: np.ndarray, grid: np.ndarray) -> np.ndarray:
+    """``cornerSubPix`` with a half-window of 0.4 x the smallest corner spacing; grid ``(ny, nx, 2)``."""
+    spacing = min(np.linalg.norm(np.diff(grid, axis=1), axis=2).min(), np.linalg.norm(np.diff(grid, axis=0), axis=2).min())
+    half = int(np.clip(np.floor(WINDOW_FRACTION * spacing), WINDOW_MIN, WINDOW_MAX))
+    pts = grid.reshape(-1, 1, 2).astype(np.float32)
+    refined = cv2.cornerSubPix(gray, pts, (half, half), (-1, -1), SUBPIX_CRITERIA)
+    return refined.reshape(grid.shape).astype(np.float64)
+
+
+def _handedness(grid: np.ndarray) -> float:
+    """2-D cross product of the grid's mean x and y steps in the image (> 0: turns clockwise = z into the board)."""
+    ex = np.mean(grid[:, 1:] - grid[:, :-1], axis=(0, 1))
+    ey = np.mean(grid[1:, :] - grid[:-1, :], axis=(0, 1))
+    return float(ex[0] * ey[1] - ex[1] * ey[0])
+
+
+def canonical_orderings(grid: np.ndarray) -> list[np.ndarray]:
+    """The re-orderings of a detector grid ``(ny, nx, 2)`` whose axes turn clockwise in the image.
+
+    Two for a non-square grid (one and its 180-deg turn); four for a square one (transposes too).
+    """
+    ny, nx = grid.shape[:2]
+    candidates = [grid, grid[:, ::-1], grid[::-1, :], grid[::-1, ::-1]]
+    if nx == ny:
+        t = grid.transpose(1, 0, 2)
+        candidates += [t, t[:, ::-1], t[::-1, :], t[::-1, ::-1]]
+    return [np.ascontiguousarray(c) for c in candidates if _handedness(c) > 0]
+
+
+def _square_samples(grid: np.ndarray, a: np.ndarray, b: np.ndarray, image: np.ndarray) -> np.ndarray:
+    """Mean grey level near the centres of squares ``(a, b)`` (square ``(a, b)`` spans columns
+    ``a-1..a`` and rows ``b-1..b`` of the grid); NaN where the samples leave the image."""
+    ny, nx = grid.shape[:2]
+    src = np.stack(np.meshgrid(np.arange(nx), np.arange(ny)), axis=-1).reshape(-1, 2).astype(np.float64)
+    homography, _ = cv2.findHomography(src, grid.reshape(-1, 2), 0)
+    offsets = np.array([(dx, dy) for dx in (-0.2, 0.0, 0.2) for dy in (-0.2, 0.0, 0.2)])
+    centres = np.stack([a - 0.5, b - 0.5], axis=-1).astype(np.float64)
+    pts = (centres[:, None, :] + offsets[None, :, :]).reshape(-1, 1, 2)
+    img_pts = cv2.perspectiveTransform(pts, homography).reshape(len(centres), len(offsets), 2)
+    h, w = image.shape
+    xi = np.rint(img_pts[..., 0]).astype(int)
+    yi = np.rint(img_pts[..., 1]).astype(int)
+    inside = (xi >= 0) & (xi < w) & (yi >= 0) & (yi < h)
+    values = np.where(inside, image[np.clip(yi, 0, h - 1), np.clip(xi, 0, w - 1)], 0).astype(np.float64)
+    out = values.mean(axis=1)
+    out[~inside.all(axis=1)] = np.nan
+    return out
+
+
+def pattern_score(grid: np.ndarray, image: np.ndarray) -> float:
+    """Mean grey level of the inner squares that should be white minus those that should be black.
+
+    In the canonical ordering square ``(a, b)`` is black when ``a + b`` is even, so the score is
+    positive for the canonical ordering (and negative for its 180-deg turn on an even x odd board).
+    """
+    ny, nx = grid.shape[:2]
+    a, b = np.meshgrid(np.arange(1, nx), np.arange(1, ny))
+    a, b = a.ravel(), b.ravel()
+    values = _square_samples(grid, a, b, image)
+    even = (a + b) % 2 == 0
+    return float(np.nanmean(values[~even]) - np.nanmean(values[even]))
+
+
+def _outer_alternation(grid: np.ndarray, image: np.ndarray, contrast: float) -> float:
+    """Largest alternation of the checker pattern one square ring beyond the outer squares, per side,
+    as a fraction of the contrast (about 1 when the board continues, about 0 on the white margin)."""
+    ny, nx = grid.shape[:2]
+    sides = [
+        (np.full(ny + 1, -1), np.arange(0, ny + 1)),       # beyond the x-min edge
+        (np.full(ny + 1, nx + 1), np.arange(0, ny + 1)),   # beyond the x-max edge
+        (np.arange(0, nx + 1), np.full(nx + 1, -1)),       # beyond the y-min edge
+        (np.arange(0, nx + 1), np.full(nx + 1, ny + 1)),   # beyond the y-max edge
+    ]
+    worst = 0.0
+    for a, b in sides:
+        values = _square_samples(grid, a, b, image)
+        ok = np.isfinite(values)
+        if ok.sum() < 3:
+            continue
+        sign = np.where((a + b) % 2 == 0, -1.0, 1.0)[ok]  # +1 where a continued board would be white
+        v = values[ok] - values[ok].mean()
+        worst = max(worst, float(np.mean(v * sign)) / (0.5 * contrast))
+    return worst
+
+
+def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside: bool = True,
+                 thorough: bool = False, what: str = "image") -> Detection:
+    """Find the board's inner corners in one image and put them in canonical order.
+
+    Parameters
+    ----------
+    image : ndarray, shape (h, w) or (h, w, 3)
+        Grey or BGR image (uint8; uint16 is scaled down).
+    board : BoardGeometry or (nx, ny) or "NXxNY"
+    refine : bool
+        Sub-pixel refinement (``cornerSubPix``).
+    check_outside : bool
+        Refuse grids that are part of a larger board.
+    thorough : bool
+        Also search without OpenCV's fast check (finds hard boards; slow when there is none).
+    what : str
+        Name of the image in messages ("left image", ...).
+
+    Returns
+    -------
+    Detection
+
+    Raises
+    ------
+    BoardNotFound
+    FrameError
+    """
+    board = as_board(board)
+    gray = _gray_u8(image, what)
+    nx, ny = board.corners
+    found = _find_grid(gray, (nx, ny), thorough)
+    if found is None:
+        if cv2.checkChessboard(gray, (nx, ny)):
+            raise BoardNotFound(
+                f"a checkerboard is in the {what} but not all of its {nx}x{ny} inner corners were found: check that "
+                f"the whole board with its white margin is in view and that {nx}x{ny} is its inner-corner count "
+                f"(--board; e.g. 13x8 for 14x9 squares)"
+            )
+        raise BoardNotFound(f"no checkerboard in the {what}: check that the board is in view, lit evenly and in focus")
+    grid = found.reshape(ny, nx, 2)
+    if refine:
+        grid = _refine(gray, grid)
+    candidates = canonical_orderings(grid)
+    if not candidates:
+        raise BoardNotFound(f"the corner grid in the {what} is degenerate (no consistent ordering)")
+    scores = [pattern_score(c, gray) for c in candidates]
+    contrast = max(abs(s) for s in scores)
+    if not np.isfinite(contrast) or contrast < MIN_CONTRAST:
+        raise BoardNotFound(
+            f"the board's squares in the {what} differ by only {contrast:.0f} grey levels: too dark, "
+            f"overexposed or blurred; adjust exposure or lighting"
+        )
+    distinguishable = (nx + ny) % 2 == 1
+    if distinguishable:
+        best = int(np.argmax(scores))
+        ambiguous = False
+    else:  # pattern symmetric under a half turn: x axis towards the image's right
+        dirs = [np.mean(c[:, -1] - c[:, 0], axis=0) for c in candidates]
+        best = int(np.argmax([d[0] / (np.linalg.norm(d) + 1e-12) for d in dirs]))
+        ambiguous = True
+    chosen = candidates[best]
+    if check_outside:
+        alternation = _outer_alternation(chosen, gray, contrast)
+        if alternation > MAX_OUTER_ALTERNATION:
+            raise BoardNotFound(
+                f"the {nx}x{ny} corners found in the {what} are part of a larger checkerboard: "
+                f"give the board's full inner-corner count (--board)"
+            )
+    others = tuple(c.reshape(-1, 2) for k, c in enumerate(candidates) if k != best)
+    h, w = gray.shape
+    return Detection(chosen.reshape(-1, 2), board, (w, h), ambiguous, float(scores[best]), others)
+
+
+def board_pose_from_corners(corners_px, board, camera_matrix, dist_coeffs=None) -> tuple[np.ndarray, float]:
+    """Board pose ``target2cam`` (mm) of a canonical detection with ``cv2.solvePnP`` (monocular).
+
+    Parameters
+    ----------
+    corners_px : array-like, shape (nx*ny, 2)
+    board : BoardGeometry with square_mm
+    camera_matrix : array-like, shape (3, 3)
+    dist_coeffs : array-like, optional
+
+    Returns
+    -------
+    target2cam : ndarray, shape (4, 4)
+    reprojection_rms_px : float
+    """
+    board = as_board(board)
+    if board.square_mm is None:
+        raise CameraError("the square size is needed for a board pose")
+    obj = board_corners(board.corners, board.square_mm).astype(np.float64)
+    img = np.asarray(corners_px, dtype=np.float64).reshape(-1, 1, 2)
+    k = np.asarray(camera_matrix, dtype=np.float64)
+    d = np.zeros(5) if dist_coeffs is None else np.asarray(dist_coeffs, dtype=np.float64)
+    ok, rvec, tvec = cv2.solvePnP(obj, img, k, d, flags=cv2.SOLVEPNP_ITERATIVE)
+    if not ok:
+        raise BoardNotFound("solvePnP found no board pose for these corners")
+    rvec, tvec = cv2.solvePnPRefineLM(obj, img, k, d, rvec, tvec)
+    projected, _ = cv2.projectPoints(obj, rvec, tvec, k, d)
+    rms = float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - img.reshape(-1, 2)) ** 2, axis=1))))
+    pose = np.eye(4)
+    pose[:3, :3] = cv2.Rodrigues(rvec)[0]
+    pose[:3, 3] = tvec.ravel()
+    return pose, rms
+
+
+def plane_fit(points_mm: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Least-squares plane of points ``(n, 3)``: ``(centroid, unit normal, signed distances)``."""
+    centroid = points_mm.mean(axis=0)
+    _, _, vt = np.linalg.svd(points_mm - centroid, full_matrices=False)
+    normal = vt[2]
+    return centroid, normal, (points_mm - centroid) @ normal
+
+
+def board_quality(points_mm: np.ndarray, board: BoardGeometry, row_disagreement_px: np.ndarray | None = None) -> dict:
+    """Per-posture quality figures of a triangulated board.
+
+    Returns
+    -------
+    dict
+        ``corners`` (count), ``row_disagreement_rms_px`` / ``_max_px`` (rectified rows, left minus right),
+        ``plane_rms_mm`` / ``plane_max_mm`` (distance of the corners from their least-squares plane),
+        ``distance_mm`` (camera origin to the board centre), ``tilt_deg`` (board normal against the
+        optical axis; 0 = facing the camera), ``square_mm_measured`` (mean neighbour spacing).
+    """
+    nx, ny = board.corners
+    centroid, normal, dist = plane_fit(points_mm)
+    if normal[2] > 0:
+        normal = -normal  # towards the camera
+    grid = points_mm.reshape(ny, nx, 3)
+    spacing = np.concatenate([np.linalg.norm(np.diff(grid, axis=1), axis=2).ravel(),
+                              np.linalg.norm(np.diff(grid, axis=0), axis=2).ravel()])
+    out = {
+        "corners": int(len(points_mm)),
+        "plane_rms_mm": float(np.sqrt(np.mean(dist**2))),
+        "plane_max_mm": float(np.abs(dist).max()),
+        "distance_mm": float(np.linalg.norm(centroid)),
+        "tilt_deg": float(np.degrees(np.arccos(np.clip(-normal[2], -1.0, 1.0)))),
+        "square_mm_measured": float(spacing.mean()),
+    }
+    if row_disagreement_px is not None:
+        out["row_disagreement_rms_px"] = float(np.sqrt(np.mean(row_disagreement_px**2)))
+        out["row_disagreement_max_px"] = float(np.abs(row_disagreement_px).max())
+    return out
+
+
+@dataclass(frozen=True)
+class BoardObservation:
+    """The board seen by the stereo pair at one posture.
+
+    Attributes
+    ----------
+    points_mm : ndarray, shape (nx*ny, 3)
+        Corners in the camera frame (camera 1 = left), target index order, mm.
+    left, right : Detection
+        The two detections, consistently ordered.
+    quality : dict
+        :func:`board_quality` figures plus ``corners_left``, ``corners_right``, ``orientation``.
+    """
+
+    points_mm: np.ndarray
+    left: Detection
+    right: Detection
+    quality: dict
+
+
+def observe_board(left: np.ndarray, right: np.ndarray, model: StereoModel, board, *,
+                  max_row_disagreement_px: float = MAX_ROW_DISAGREEMENT_PX) -> BoardObservation:
+    """Detect the board in a left/right pair, order both detections consistently and triangulate.
+
+    Parameters
+    ----------
+    left, right : ndarray
+        Grey or BGR images of camera 1 (left) and camera 2 (right), raw (not rectified).
+    model : StereoModel
+    board : BoardGeometry or (nx, ny) or "NXxNY"
+
+    Raises
+    ------
+    FrameError
+        Image sizes differ from each other or from the model.
+    BoardNotFound
+        The board is not (completely) seen in one of the images.
+    StereoMismatch
+        The two detections do not agree with the stereo model.
+    """
+    board = as_board(board)
+    for name, image in (("left", left), ("right", right)):
+        if not isinstance(image, np.ndarray) or image.ndim not in (2, 3) or image.size == 0:
+            raise FrameError(f"the {name} image is empty or not an image")
+    if left.shape[:2] != right.shape[:2]:
+        raise FrameError(
+            f"left image is {left.shape[1]}x{left.shape[0]} but right image is {right.shape[1]}x{right.shape[0]}: "
+            f"give the two images of one stereo frame"
+        )
+    size = (left.shape[1], left.shape[0])
+    if size != tuple(model.image_size):
+        raise FrameError(
+            f"images are {size[0]}x{size[1]} but the stereo model is for {model.image_size[0]}x{model.image_size[1]}: "
+            f"use the stereo file of this camera and resolution"
+        )
+    det_left = detect_board(left, board, what="left image")
+    det_right = detect_board(right, board, what="right image")
+    # Make the right ordering agree with the left one: among the right image's orderings with the
+    # correct handedness, corresponding corners share rectified rows and have positive disparity.
+    options = [det_right.corners_px, *det_right.alternatives]
+    best, best_rms = None, np.inf
+    for k, corners in enumerate(options):
+        rl, rr = model.rectify_points(det_left.corners_px, corners)
+        rms = float(np.sqrt(np.mean((rl[:, 1] - rr[:, 1]) ** 2)))
+        if np.all(rl[:, 0] - rr[:, 0] > 0) and rms < best_rms:
+            best, best_rms = k, rms
+    if best is None:
+        raise StereoMismatch(
+            "no corner in the right image lies left of its match in the left image: are the left and right images swapped?"
+        )
+    if best_rms > max_row_disagreement_px:
+        raise StereoMismatch(
+            f"left and right corners disagree by {best_rms:.1f} px (RMS) in rectified rows: the stereo model does "
+            f"not fit this camera, or the images are not one stereo frame"
+        )
+    if best != 0 and not (det_left.ambiguous or det_right.ambiguous):
+        raise StereoMismatch(
+            "the printed pattern gives different board orientations in the left and right images: check lighting "
+            "(glare on the board)"
+        )
+    right_corners = options[best]
+    if best != 0:
+        rest = tuple(o for k, o in enumerate(options) if k != best)
+        det_right = Detection(right_corners, board, det_right.image_size, det_right.ambiguous,
+                              det_right.pattern_score, rest)
+    tri = model.triangulate(det_left.corners_px, right_corners)
+    quality = board_quality(tri.points_mm, board, tri.row_disagreement_px)
+    quality["corners_left"] = int(len(det_left.corners_px))
+    quality["corners_right"] = int(len(right_corners))
+    quality["orientation"] = "ambiguous" if det_left.ambiguous else "pattern"
+    return BoardObservation(tri.points_mm, det_left, det_right, quality)

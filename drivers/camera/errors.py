@@ -1,0 +1,27 @@
+"""Camera-side exceptions: sub-classes of :class:`~handeye.drivers.errors.CameraError`.
+
+Each carries a one-line message that names the offending value and what to do next, so the
+``handeye`` command can print it as it is and a capture loop can reject the posture and go on.
+"""
+
+from __future__ import annotations
+
+from ..errors import CameraError
+
+__all__ = ["CameraError", "FrameError", "BoardNotFound", "StereoModelError", "StereoMismatch"]
+
+
+class FrameError(CameraError):
+    """A frame or image cannot be used: truncated raw buffer, wrong size, unreadable file."""
+
+
+class BoardNotFound(CameraError):
+    """The checkerboard was not found (completely, with the expected corner count) in an image."""
+
+
+class StereoModelError(CameraError):
+    """A stereo calibration file is missing, malformed or inconsistent."""
+
+
+class StereoMismatch(CameraError):
+    """Left and right detections do not agree with the stereo model (swapped or unrelated images)."""
