@@ -103,10 +103,10 @@ class SimulatedRobot:
         with self._lock:
             self._settle()
             now = self._clock()
-            self._from = self._joints_at(now)
-            self._to = target.copy()
-            self._t0 = now
-            self._duration = self.motion_time(target) * self.time_scale
+            start = self._joints_at(now)
+            delta = np.abs(target - start)
+            self._duration = float(np.max(delta / (self.speed_fraction * self.model.max_speed_deg_s))) * self.time_scale
+            self._from, self._to, self._t0 = start, target.copy(), now
             self._target_posture = int(posture)
             self._arrived_posture = 0
             self._arrival_reported = False

@@ -14,7 +14,7 @@ import sys
 from ..calibration.errors import HandEyeError
 
 #: Sub-commands in the order ``handeye --help`` lists them.
-COMMANDS = ("simulate", "calibrate")
+COMMANDS = ("simulate", "calibrate", "mock", "robot", "rapid")
 
 DESCRIPTION = """\
 Hand-eye calibration of a stereo camera on an ABB robot flange (eye-in-hand) or beside the robot

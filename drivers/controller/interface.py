@@ -231,7 +231,7 @@ class Controller(ABC):
         return k
 
     def goto_posture(self, k: int, *, expected_joints=None, wait: bool = True,
-                     timeout: float | None = None) -> ControllerStatus:
+                     timeout: float | None = None) -> ControllerStatus | None:
         """Move to approved posture ``k`` (1-based) with ``MoveAbsJ ... fine``.
 
         Parameters
@@ -241,7 +241,9 @@ class Controller(ABC):
         expected_joints : array-like, shape (6,), optional
             The joint angles the PC expects at ``k``: refused if outside the joint limits.
         wait : bool
-            Return only when the robot stands still at ``k`` (default); else when the move is accepted.
+            Return only when the robot stands still at ``k`` (default); else return None as soon as
+            the request is sent (a single-task RAPID program answers the next request only after
+            the move; :meth:`wait_at_rest` waits for it).
         timeout : float, optional
             Budget for the whole call (default: ``motion_timeout`` when waiting, else ``timeout``).
 
@@ -258,7 +260,7 @@ class Controller(ABC):
         budget = self._budget(timeout if timeout is not None else (self.motion_timeout if wait else None))
         self._request_posture(k, budget)
         if not wait:
-            return self.status(timeout=max(budget.remaining(), 1e-3))
+            return None
         return self.wait_at_rest(k, deadline=budget)
 
     @abstractmethod

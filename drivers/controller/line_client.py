@@ -74,6 +74,12 @@ class LineBuffer:
     def clear(self) -> None:
         self.data.clear()
 
+    def timeout_text(self) -> str:
+        """What a timeout message says about bytes received without a line end."""
+        if not self.data:
+            return "timed out"
+        return f"timed out with {len(self.data)} bytes of an unfinished line (garbage?): {bytes(self.data[:40])!r}"
+
 
 class LineController(Controller):
     """A :class:`Controller` speaking the handeye line protocol over a :class:`LineTransport`."""

@@ -229,21 +229,22 @@ class ModbusController(Controller):
         self._call("ping", lambda d: self._read_named(d, "heartbeat"), timeout)
         return time.perf_counter() - start
 
-    def _floats(self, values, what, limit) -> np.ndarray:
+    def _floats(self, values, what, limit, decimals: int) -> np.ndarray:
+        """float32 register values as float64, rounded to the line protocol's precision."""
         arr = np.array(values, dtype=float)
         if not np.all(np.isfinite(arr)) or np.any(np.abs(arr) > limit):
             raise self.protocol_error(f"{what} registers at {self.address} hold {arr.tolist()}: not valid values "
                                       f"(check word_order in {self.map.source})")
-        return arr
+        return np.round(arr, decimals)
 
     def read_joints(self, timeout=None) -> np.ndarray:
         values = self._call("read joints", lambda d: self._read_named(d, "joints"), timeout)
-        return self._floats(values["joints"], "joint", 400.0)
+        return self._floats(values["joints"], "joint", 400.0, 4)
 
     def read_tool0_pose(self, timeout=None) -> FlangePose:
         values = self._call("read flange pose", lambda d: self._read_named(d, "tool0_position", "tool0_quaternion"), timeout)
-        p = self._floats(values["tool0_position"], "flange position", 4000.0)
-        q = self._floats(values["tool0_quaternion"], "flange quaternion", 1.0 + 1e-6)
+        p = self._floats(values["tool0_position"], "flange position", 4000.0, 3)
+        q = self._floats(values["tool0_quaternion"], "flange quaternion", 1.0 + 1e-6, 6)
         norm = float(np.linalg.norm(q))
         if abs(norm - 1.0) > 1e-4:
             raise self.protocol_error(f"flange quaternion from {self.address} is not unit (norm {norm:.6g})")
@@ -373,5 +374,7 @@ class ModbusController(Controller):
 
     def read_tool(self, timeout=None) -> ToolData:
         values = self._call("read tool data", lambda d: self._read_named(d, "tool_readback"), timeout)["tool_readback"]
-        arr = self._floats(values, "tool read-back", 4000.0)
-        return ToolData.from_values(arr)
+        arr = self._floats(values, "tool read-back", 4000.0, 6)
+        p, q, m, c = arr[0:3], arr[3:7], arr[7], arr[8:11]
+        return ToolData(tuple(float(v) for v in np.round(p, 3)), tuple(float(v) for v in q), float(np.round(m, 3)),
+                        tuple(float(v) for v in np.round(c, 3)))

@@ -8,6 +8,7 @@ holding-register address, type (``uint16`` or ``float32``), count, who writes it
 
 from __future__ import annotations
 
+import re
 import struct
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,7 +34,7 @@ REQUIRED = {
     "tool_error": ("uint16", 1, "robot"), "joints": ("float32", 6, "robot"), "tool0_position": ("float32", 3, "robot"),
     "tool0_quaternion": ("float32", 4, "robot"), "tool_readback": ("float32", 11, "robot"),
     "request": ("uint16", 1, "pc"), "grabbed": ("uint16", 1, "pc"), "tool_command": ("uint16", 1, "pc"),
-    "pc_heartbeat": ("uint16", 1, "pc"), "tool_values": ("float32", 11, "pc"),
+    "tool_values": ("float32", 11, "pc"),
 }
 _WIDTH = {"uint16": 1, "float32": 2}
 
@@ -77,6 +78,18 @@ class Register:
     @property
     def end(self) -> int:
         return self.address + self.size
+
+    def signals(self) -> list[str]:
+        """Controller signal names, ranges expanded: ``aoHeJ1..aoHeJ6``, ``aoHeX..aoHeZ``."""
+        if ".." not in self.signal:
+            return [self.signal] if self.signal else []
+        first, last = self.signal.split("..")
+        m1, m2 = re.fullmatch(r"(.*?)(\d+)", first), re.fullmatch(r"(.*?)(\d+)", last)
+        if m1 and m2 and m1.group(1) == m2.group(1):
+            return [f"{m1.group(1)}{i}" for i in range(int(m1.group(2)), int(m2.group(2)) + 1)]
+        if first[:-1] == last[:-1]:
+            return [first[:-1] + chr(c) for c in range(ord(first[-1]), ord(last[-1]) + 1)]
+        raise ValueError(f"register {self.name}: cannot expand signal range {self.signal!r}")
 
 
 @dataclass(frozen=True)

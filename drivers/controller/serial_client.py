@@ -95,7 +95,7 @@ class _SerialTransport(LineTransport):
             if self.port is None:
                 raise LinkDown("not open")
             if left <= 0:
-                raise self.timeout_error("timed out")
+                raise self.timeout_error(self.buffer.timeout_text())
             try:
                 self.port.timeout = left
                 chunk = self.port.read(1)
@@ -107,7 +107,7 @@ class _SerialTransport(LineTransport):
             except (serial.SerialException, OSError) as exc:
                 raise LinkDown(f"reading {self.url} failed: {exc}") from None
             if not chunk:
-                raise self.timeout_error("timed out")
+                raise self.timeout_error(self.buffer.timeout_text())
             self.buffer.feed(chunk)
 
 

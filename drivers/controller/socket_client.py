@@ -92,12 +92,12 @@ class _TcpTransport(LineTransport):
             if left <= 0 or self.sock is None:
                 if self.sock is None:
                     raise LinkDown("not connected")
-                raise self.timeout_error("timed out")
+                raise self.timeout_error(self.buffer.timeout_text())
             try:
                 self.sock.settimeout(left)
                 chunk = self.sock.recv(4096)
             except socket.timeout:
-                raise self.timeout_error("timed out") from None
+                raise self.timeout_error(self.buffer.timeout_text()) from None
             except OSError as exc:
                 raise LinkDown(f"receiving failed: {exc.strerror or exc}") from None
             if not chunk:

@@ -8,6 +8,7 @@ raises :class:`InvalidRequest` naming the offending value.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -229,7 +230,7 @@ def check_joints(joints_deg, robot: str = "IRB1400", what: str = "posture") -> n
 
 def check_posture_index(k, count: int | None = None) -> int:
     """A 1-based posture index as an int (no bool, no NaN, no fraction), within ``1..count`` if known."""
-    if isinstance(k, (bool, np.bool_)):
+    if isinstance(k, (bool, np.bool_)) or not isinstance(k, numbers.Real):
         raise InvalidRequest(f"posture index must be an integer >= 1; got {k!r}")
     if isinstance(k, (float, np.floating)):
         if not math.isfinite(k) or k != int(k):

@@ -3,6 +3,7 @@
 Set attributes from a test (or the station's demo) and the next requests feel them::
 
     server.faults.drop_next = 1        # close the connection instead of answering the next request
+    server.faults.drop_after = 2       # answer 2 more requests, then close instead of answering
     server.faults.delay_s = 0.2        # answer every request 0.2 s late
     server.faults.garbage_next = 1     # answer the next request with garbage bytes
     server.faults.silent = True        # read requests and never answer (a hung controller)
@@ -33,6 +34,7 @@ class Faults:
         """Switch every fault off."""
         self.delay_s = 0.0
         self.drop_next = 0
+        self.drop_after = 0
         self.garbage_next = 0
         self.garbage = DEFAULT_GARBAGE
         self.silent = False
@@ -48,6 +50,20 @@ class Faults:
             left = getattr(self, name)
             if left > 0:
                 setattr(self, name, left - 1)
+                return True
+            return False
+
+    def should_drop(self) -> bool:
+        """True when this request is to be answered by closing the connection (drop_next / drop_after)."""
+        with self._lock:
+            if self.drop_after > 0:
+                self.drop_after -= 1
+                if self.drop_after == 0:
+                    self.drop_next += 1
+                return False
+            if self.drop_next > 0:
+                self.drop_next -= 1
+                self.fired["drop"] = self.fired.get("drop", 0) + 1
                 return True
             return False
 

@@ -238,8 +238,7 @@ class _LineServer:
         if faults.silent:
             faults.note("silent")
             return ""
-        if faults.take("drop_next"):
-            faults.note("drop")
+        if faults.should_drop():
             return "close"
         try:
             request = P.parse_request(line)

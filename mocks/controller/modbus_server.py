@@ -39,8 +39,7 @@ def _server_classes():
             if faults.silent:
                 faults.note("silent")
                 return len(data)
-            if faults.take("drop_next"):
-                faults.note("drop")
+            if faults.should_drop():
                 self.close()
                 return len(data)
             return super().callback_data(data, addr)
