@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import importlib
 import logging
+import threading
 import time
 from abc import ABC, abstractmethod
 
@@ -32,6 +33,7 @@ from .types import (
     check_posture_index,
     check_timeout,
     check_tooldata,
+    robot_model,
 )
 
 __all__ = ["Controller", "Deadline", "LinkDown", "BACKENDS", "open_controller", "read_robot_state"]
@@ -100,13 +102,19 @@ class Controller(ABC):
                  postures=None, max_tool_mass_kg: float = 5.0):
         self.timeout = check_timeout("timeout", timeout)
         self.motion_timeout = check_timeout("motion_timeout", motion_timeout)
-        if isinstance(retries, bool) or int(retries) != retries or retries < 0:
+        if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
             raise InvalidRequest(f"retries must be an integer >= 0; got {retries!r}")
-        self.retries = int(retries)
+        self.retries = retries
         self.backoff_s = check_timeout("backoff_s", backoff_s)
         self.backoff_max_s = check_timeout("backoff_max_s", backoff_max_s)
+        try:
+            robot_model(robot)
+        except ValueError as exc:
+            raise InvalidRequest(str(exc)) from None
         self.robot = robot
-        self.max_tool_mass_kg = check_timeout("max_tool_mass_kg", max_tool_mass_kg)
+        if not isinstance(max_tool_mass_kg, (int, float)) or not 0 < max_tool_mass_kg < float("inf"):
+            raise InvalidRequest(f"max_tool_mass_kg must be a positive number of kg; got {max_tool_mass_kg!r}")
+        self.max_tool_mass_kg = float(max_tool_mass_kg)
         self.postures = None
         if postures is not None:
             plan = np.asarray(postures, dtype=float)
@@ -114,6 +122,7 @@ class Controller(ABC):
                 raise InvalidRequest(f"postures must be a list of joint-angle rows; got shape {plan.shape}")
             self.postures = np.array([check_joints(row, robot, f"planned posture {i}") for i, row in enumerate(plan, 1)])
         self._info: ControllerInfo | None = None
+        self._lock = threading.RLock()  # one exchange at a time when threads share a controller
         #: Counters for diagnostics and tests.
         self.reconnects = 0
 
@@ -171,6 +180,10 @@ class Controller(ABC):
     def _call(self, what: str, operation, timeout=None, deadline: Deadline | None = None):
         """Run ``operation(deadline)``; reconnect with back-off if the link drops, within the budget."""
         deadline = deadline or self._budget(timeout)
+        with self._lock:
+            return self._retry(what, operation, deadline)
+
+    def _retry(self, what: str, operation, deadline: Deadline):
         delay = self.backoff_s
         failures = 0
         while True:
@@ -255,9 +268,10 @@ class Controller(ABC):
             The program refused (busy: the previous posture is not acknowledged).
         """
         k = self.check_posture(k, expected_joints)  # before anything is sent
-        self.connect(timeout)
-        k = self.check_posture(k)  # against the program's posture count, read at connect
         budget = self._budget(timeout if timeout is not None else (self.motion_timeout if wait else None))
+        if not self.is_connected:
+            self._call("connect", lambda d: None, deadline=budget)
+        k = self.check_posture(k)  # against the program's posture count, read at connect
         self._request_posture(k, budget)
         if not wait:
             return None

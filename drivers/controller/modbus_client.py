@@ -37,6 +37,10 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
+# pymodbus logs connection failures at ERROR level; without a handler Python's last-resort handler
+# would print them on stderr beside our own one-line error. A NullHandler keeps them out of the
+# terminal while an application that configures logging still receives them.
+logging.getLogger("pymodbus.logging").addHandler(logging.NullHandler())
 
 EXCEPTION_NAMES = {
     1: "illegal function", 2: "illegal data address", 3: "illegal data value", 4: "server device failure",

@@ -33,6 +33,7 @@ __all__ = [
     "check_posture_index",
     "check_tooldata",
     "check_timeout",
+    "robot_model",
     "MAX_TOOL_TRANSLATION_MM",
     "QUATERNION_NORM_TOLERANCE",
 ]
@@ -204,7 +205,8 @@ def check_finite(name: str, values) -> np.ndarray:
 
 
 @lru_cache(maxsize=None)
-def _robot(name: str):
+def robot_model(name: str):
+    """The kinematics model (joint limits) of a robot by name; ValueError if unknown."""
     from ...calibration.kinematics import load_robot
 
     return load_robot(name)
@@ -219,7 +221,7 @@ def check_joints(joints_deg, robot: str = "IRB1400", what: str = "posture") -> n
         Naming each axis outside its limits (from ``RobotModel.limit_violations``).
     """
     arr = check_finite(f"{what} joint angles", joints_deg)
-    model = _robot(robot)
+    model = robot_model(robot)
     if arr.shape != (model.dof,):
         raise InvalidRequest(f"{what} needs {model.dof} joint angles; got shape {arr.shape}")
     problems = model.limit_violations(arr)

@@ -40,13 +40,14 @@ def test_robot_status_text(server, capsys):
     assert "12 approved postures" in capsys.readouterr().out
 
 
-def test_robot_unreachable_is_one_line_without_traceback(capsys):
+@pytest.mark.parametrize("link", ["socket", "modbus"])
+def test_robot_unreachable_is_one_line_without_traceback(capsys, link):
     import socket
 
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
-    assert main(["robot", "joints", "--port", str(port), "--timeout", "0.5"]) == 1
+    assert main(["robot", "joints", "--protocol", link, "--port", str(port), "--timeout", "0.5"]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Traceback" not in err and str(port) in err
 

@@ -94,6 +94,9 @@ def test_valid_tool_is_normalised():
     {"name": "socket", "timeout": math.nan},
     {"name": "socket", "timeout": -1},
     {"name": "socket", "retries": -1},
+    {"name": "socket", "retries": "3"},
+    {"name": "socket", "robot": "IRB9999"},
+    {"name": "socket", "max_tool_mass_kg": 0},
     {"name": "serial", "url": ""},
     {"name": "modbus", "colour": "red"},
 ])

@@ -200,3 +200,16 @@ def test_bad_station_configs_are_refused(tmp_path, text, message):
 def test_missing_config_names_what_to_do(tmp_path):
     with pytest.raises(StationConfigError, match="not found.*--config"):
         load_station(tmp_path / "nope.yaml")
+
+
+def test_rapid_literals():
+    from handeye.rapid.literals import jointtarget_literal, speeddata_literal, tooldata_literal
+
+    assert tooldata_literal(np.eye(4), 0.5) == "[TRUE,[[0,0,0],[1,0,0,0]],[0.5,[0,0,0],[1,0,0,0],0,0,0]]"
+    assert jointtarget_literal([1, -2.00004, 3.12345, 0, 0, -300]) == \
+        "[[1,-2,3.1235,0,0,-300],[9E9,9E9,9E9,9E9,9E9,9E9]]"
+    assert speeddata_literal(200, 100) == "[200,100,5000,1000]"
+    with pytest.raises(ValueError, match="mass"):
+        tooldata_literal(np.eye(4), 0.0)
+    with pytest.raises(ValueError):
+        jointtarget_literal([0, 0, 0])
