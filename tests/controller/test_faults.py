@@ -178,3 +178,13 @@ def test_modbus_robot_program_that_stops_is_detected_by_its_heartbeat(server, co
             c.goto_posture(5, timeout=10.0)
         assert within_budget(time.monotonic() - start, 0.3)
         assert server.robot.moves == 0
+
+
+def test_serial_line_that_echoes_is_not_taken_for_a_controller():
+    # pyserial's loop:// hands every request back: our own "1 VERSION" is not a reply
+    from handeye.drivers.controller.serial_client import SerialProtocolError
+
+    start = time.monotonic()
+    with pytest.raises(SerialProtocolError, match="not a reply"):
+        open_controller("serial", url="loop://", timeout=TIMEOUT)
+    assert within_budget(time.monotonic() - start, TIMEOUT)
