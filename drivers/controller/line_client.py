@@ -1,0 +1,246 @@
+"""The line protocol over a byte stream: shared by the socket and the serial back ends.
+
+A back end supplies a :class:`LineTransport` (open, write, read one line before a deadline, close);
+this module does the rest: request ids, skipping late replies to requests that timed out, turning
+``ERR`` replies into :class:`ControllerRefused`, multi-message operations (the flange pose, the tool
+data) repeated as a whole when the link dropped half-way.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+from . import protocol as P
+from .errors import InvalidRequest
+from .interface import Controller, Deadline, LinkDown
+from .types import AT, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_posture_index
+
+__all__ = ["LineTransport", "LineController"]
+
+log = logging.getLogger(__name__)
+
+#: How often ``wait_at_rest`` asks again while the program reports MOVING.
+POLL_S = 0.005
+
+
+class LineTransport(ABC):
+    """A byte stream to the controller. Errors: LinkDown (dropped), the controller's timeout class."""
+
+    @abstractmethod
+    def open(self, deadline: Deadline) -> None: ...
+
+    @abstractmethod
+    def close(self) -> None: ...
+
+    @property
+    @abstractmethod
+    def is_open(self) -> bool: ...
+
+    @abstractmethod
+    def write(self, data: bytes, deadline: Deadline) -> None: ...
+
+    @abstractmethod
+    def read_line(self, deadline: Deadline) -> bytes:
+        """Bytes up to and including LF; raise the timeout error when the deadline passes first."""
+
+
+class LineBuffer:
+    """Accumulates received bytes and cuts lines; too long a run without LF is garbage."""
+
+    def __init__(self, protocol_error):
+        self.data = bytearray()
+        self.protocol_error = protocol_error
+
+    def feed(self, chunk: bytes) -> None:
+        self.data += chunk
+
+    def take_line(self) -> bytes | None:
+        end = self.data.find(b"\n")
+        if end < 0:
+            if len(self.data) > P.MAX_MESSAGE + 1:
+                sample = bytes(self.data[:40])
+                self.data.clear()
+                raise self.protocol_error(f"garbage from the controller: {len(sample)}+ bytes without a line end "
+                                          f"({sample!r}...)")
+            return None
+        line = bytes(self.data[:end + 1])
+        del self.data[:end + 1]
+        return line
+
+    def clear(self) -> None:
+        self.data.clear()
+
+    def timeout_text(self) -> str:
+        """What a timeout message says about bytes received without a line end."""
+        if not self.data:
+            return "timed out"
+        return f"timed out with {len(self.data)} bytes of an unfinished line (garbage?): {bytes(self.data[:40])!r}"
+
+
+class LineController(Controller):
+    """A :class:`Controller` speaking the handeye line protocol over a :class:`LineTransport`."""
+
+    def __init__(self, **options):
+        super().__init__(**options)
+        self._transport: LineTransport | None = None
+        self._last_id = 0
+        #: Late replies skipped (to requests that had timed out).
+        self.stale_replies = 0
+
+    # ------------------------------------------------------------------ link
+    @abstractmethod
+    def _make_transport(self) -> LineTransport: ...
+
+    @property
+    def is_connected(self) -> bool:
+        return self._transport is not None and self._transport.is_open
+
+    def _open(self, deadline: Deadline) -> None:
+        transport = self._make_transport()
+        transport.open(deadline)
+        self._transport = transport
+        try:
+            (version, program), (count,) = self._exchange([("VERSION", ()), ("COUNT", ())], deadline)
+        except BaseException:
+            self._drop()
+            raise
+        if version != P.PROTOCOL_VERSION:
+            self._drop()
+            raise self.protocol_error(
+                f"the controller at {self.address} speaks handeye protocol {version}, this PC speaks "
+                f"{P.PROTOCOL_VERSION}: regenerate and load the RAPID modules with `handeye rapid generate`")
+        self._info = ControllerInfo(version, program, count)
+
+    def _drop(self) -> None:
+        if self._transport is not None:
+            transport, self._transport = self._transport, None
+            transport.close()
+
+    def _goodbye(self) -> None:
+        deadline = Deadline(min(self.timeout, 0.5))
+        self._exchange([("BYE", ())], deadline)
+
+    # ------------------------------------------------------------------ requests
+    def _next_id(self) -> int:
+        self._last_id = self._last_id % P.MAX_ID + 1
+        return self._last_id
+
+    def _exchange(self, steps, deadline: Deadline) -> list[tuple]:
+        """Send each ``(command, args)`` in turn and return the typed values of each OK reply."""
+        results = []
+        for command, args in steps:
+            request_id = self._next_id()
+            try:
+                data = P.encode_request(request_id, command, *args)
+            except ValueError as exc:
+                raise InvalidRequest(f"{command}: {exc}; nothing was sent") from None
+            if self._transport is None:
+                raise LinkDown("not connected")
+            self._transport.write(data, deadline)
+            reply = self._read_reply(request_id, command, deadline)
+            if not reply.ok:
+                meaning = P.ERROR_CODES.get(reply.code, "unknown error")
+                raise self.refused_error(
+                    f"controller at {self.address} refused {command}: {reply.message or meaning} (error {reply.code}: {meaning})",
+                    reply.code)
+            try:
+                results.append(P.decode_values(command, reply))
+            except P.ProtocolError as exc:
+                raise self.protocol_error(f"bad {command} reply from {self.address}: {exc}") from None
+        return results
+
+    def _read_reply(self, request_id: int, command: str, deadline: Deadline) -> P.Reply:
+        while True:
+            try:
+                raw = self._transport.read_line(deadline)
+            except P.ProtocolError as exc:
+                raise self.protocol_error(f"{command}: {exc}") from None
+            except self.timeout_error as exc:
+                raise self.timeout_error(f"{command}: no reply from the controller at {self.address} within "
+                                         f"{deadline.seconds:g} s ({exc})") from None
+            try:
+                reply = P.parse_reply(raw)
+            except P.ProtocolError as exc:
+                raise self.protocol_error(f"garbage from the controller at {self.address} after {command}: {exc}") from None
+            if reply.id == request_id:
+                return reply
+            if reply.id == 0 and not reply.ok:
+                raise self.protocol_error(f"the controller at {self.address} could not read our {command} request "
+                                          f"(ERR {reply.code} {reply.message}); check line noise / settings")
+            self.stale_replies += 1
+            log.debug("skipping late reply %r while waiting for id %d", raw, request_id)
+
+    def _run(self, what: str, steps, timeout=None, deadline=None) -> list[tuple]:
+        return self._call(what, lambda d: self._exchange(steps, d), timeout, deadline)
+
+    # ------------------------------------------------------------------ reading
+    def ping(self, timeout=None) -> float:
+        start = time.perf_counter()
+        self._run("ping", [("PING", ())], timeout)
+        return time.perf_counter() - start
+
+    def read_joints(self, timeout=None) -> np.ndarray:
+        (values,) = self._run("read joints", [("JOINTS", ())], timeout)
+        return np.array(values, dtype=float)
+
+    def read_tool0_pose(self, timeout=None) -> FlangePose:
+        position, quaternion = self._run("read flange pose", [("POSE", ()), ("QUAT", ())], timeout)
+        q = np.array(quaternion, dtype=float)
+        norm = float(np.linalg.norm(q))
+        if abs(norm - 1.0) > 1e-4:
+            raise self.protocol_error(f"flange quaternion from {self.address} is not unit (norm {norm:.6g})")
+        q = q / norm
+        return FlangePose(np.array(position, dtype=float), -q if q[0] < 0 else q)
+
+    def status(self, timeout=None) -> ControllerStatus:
+        return self._status(self._budget(timeout))
+
+    def _status(self, deadline: Deadline) -> ControllerStatus:
+        ((state, posture),) = self._run("read status", [("STATUS", ())], deadline=deadline)
+        return ControllerStatus(state, posture)
+
+    # ------------------------------------------------------------------ motion
+    def _request_posture(self, k: int, deadline: Deadline) -> None:
+        ((echo,),) = self._run(f"go to posture {k}", [("GOTO", (k,))], deadline=deadline)
+        if echo != k:
+            raise self.protocol_error(f"controller accepted posture {echo} when asked for {k}")
+
+    def wait_at_rest(self, k=None, timeout=None, *, deadline=None) -> ControllerStatus:
+        # A single-task RAPID program answers STATUS only after MoveAbsJ ... fine returned, so one
+        # STATUS may take the whole move: it gets the whole remaining budget.
+        deadline = deadline or Deadline(self.motion_timeout if timeout is None else timeout)
+        while True:
+            status = self._status(deadline)
+            if status.state != MOVING:
+                if k is not None and not status.at_posture(k):
+                    raise self.refused_error(f"robot is {status.state} at posture {status.posture}, not at posture {k}")
+                return status
+            if deadline.remaining() <= POLL_S:
+                raise self.timeout_error(f"robot still moving to posture {status.posture} after {deadline.seconds:g} s")
+            time.sleep(POLL_S)
+
+    def acknowledge(self, k: int, timeout=None) -> ControllerStatus:
+        k = check_posture_index(k)
+        deadline = self._budget(timeout)
+        ((echo,),) = self._run(f"acknowledge posture {k}", [("ACK", (k,))], deadline=deadline)
+        if echo != k:
+            raise self.protocol_error(f"controller acknowledged posture {echo} when told {k}")
+        return self._status(deadline)
+
+    # ------------------------------------------------------------------ tool data
+    def _write_tool(self, tool: ToolData, deadline: Deadline) -> None:
+        p, q, m, c = tool.as_arrays()
+        steps = [("TOOLPOS", tuple(p)), ("TOOLROT", tuple(q)), ("TOOLLOAD", (m, *c)), ("TOOLSAVE", ())]
+        self._run("write tool data", steps, deadline=deadline)
+
+    def read_tool(self, timeout=None) -> ToolData:
+        p, q, load = self._run("read tool data", [("GETTOOLPOS", ()), ("GETTOOLROT", ()), ("GETTOOLLOAD", ())], timeout)
+        return ToolData(tuple(p), tuple(q), load[0], tuple(load[1:]))
+
+
+# States a STATUS reply may report over the line protocol.
+LINE_STATES = (READY, MOVING, AT, LATE)

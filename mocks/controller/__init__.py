@@ -1,0 +1,87 @@
+"""Mock ABB controller: real servers on 127.0.0.1 behaving like the generated RAPID program.
+
+``start_mock_controller("socket" | "serial" | "modbus")`` builds a simulated IRB 1400
+(:class:`~handeye.mocks.robot.SimulatedRobot`), the program's state machine
+(:class:`RapidProgram`) and the server of that protocol, starts it and returns it. Use it as a
+context manager so threads and sockets are released::
+
+    with start_mock_controller("socket", time_scale=0.01) as server:
+        with open_controller("socket", **server.client_options()) as robot:
+            robot.goto_posture(1)
+            assert np.allclose(robot.read_joints(), server.robot.current_joints, atol=1e-3)
+
+Every server has ``.robot`` (true state: ``current_joints``, ``tool0_pose()``, ``tool``,
+``arrival_hooks``), ``.program``, ``.faults`` (see :class:`Faults`), ``.host``, ``.port`` and
+``.client_options()`` (keyword arguments for ``open_controller``).
+"""
+
+from __future__ import annotations
+
+from ...rapid.station import default_station
+from ..robot import SimulatedRobot
+from .faults import Faults
+from .line_server import LineSession, SerialControllerServer, SocketControllerServer
+from .modbus_server import ModbusControllerServer
+from .program import ProgramRefusal, RapidProgram
+
+__all__ = [
+    "start_mock_controller",
+    "MOCK_PROTOCOLS",
+    "DEFAULT_PORTS",
+    "Faults",
+    "RapidProgram",
+    "ProgramRefusal",
+    "LineSession",
+    "SocketControllerServer",
+    "SerialControllerServer",
+    "ModbusControllerServer",
+]
+
+MOCK_PROTOCOLS = ("socket", "serial", "modbus")
+#: Ports of ``handeye mock controller`` when none is given (unprivileged).
+DEFAULT_PORTS = {"socket": 1025, "serial": 1026, "modbus": 5020}
+
+
+def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", port: int = 0, postures=None,
+                          robot: SimulatedRobot | None = None, time_scale: float = 1.0, speed_fraction: float = 0.25,
+                          ack_timeout_s: float | None = 30.0, allowed_client: str | None = None,
+                          register_map=None, faults: Faults | None = None, publish_period_s: float = 0.005,
+                          start: bool = True):
+    """A started mock controller server of ``protocol``.
+
+    Parameters
+    ----------
+    protocol : str
+        ``socket``, ``serial`` (TCP stream for pyserial's ``socket://`` URL) or ``modbus``.
+    host, port : str, int
+        Where to listen (port 0: a free port; read ``server.port``).
+    postures : array-like, shape (n, 6), optional
+        Approved postures (default: the built-in station's 12).
+    robot : SimulatedRobot, optional
+        An existing simulated robot (then ``postures``, ``time_scale``, ``speed_fraction`` are ignored).
+    time_scale : float
+        Wall-clock seconds per simulated second of motion (tests: 0.001-0.01).
+    ack_timeout_s : float or None
+        Posture acknowledgement timeout of the program (state LATE after it).
+    allowed_client : str, optional
+        Socket server only: the single client address accepted (the RAPID module's PC address).
+    register_map : path or RegisterMap, optional
+        Modbus only.
+    start : bool
+        Start the server (default); else call ``server.start()`` or use ``with``.
+    """
+    if protocol not in MOCK_PROTOCOLS:
+        raise ValueError(f"unknown mock protocol {protocol!r}; choose one of {', '.join(MOCK_PROTOCOLS)}")
+    if robot is None:
+        if postures is None:
+            postures = default_station().postures
+        robot = SimulatedRobot(postures, time_scale=time_scale, speed_fraction=speed_fraction)
+    program = RapidProgram(robot, ack_timeout_s=ack_timeout_s)
+    if protocol == "socket":
+        server = SocketControllerServer(program, host, port, faults, allowed_client)
+    elif protocol == "serial":
+        server = SerialControllerServer(program, host, port, faults)
+    else:
+        server = ModbusControllerServer(program, host, port, register_map, faults, publish_period_s)
+    server.protocol = protocol
+    return server.start() if start else server

@@ -1,0 +1,202 @@
+"""A simulated ABB IRB 1400 for the mock controller: limits, synchronised moves, kinematics, tool data.
+
+The arm moves between joint configurations with all axes starting and stopping together
+(a synchronised ``MoveAbsJ``): the move lasts ``max_i |Δq_i| / (speed_fraction * max_speed_i)``,
+axes interpolated linearly in time (no acceleration ramps, no path planning, no collisions). The
+flange pose comes from the kinematics model (``calibration.kinematics``: the parallel-arm coupling
+of axes 2 and 3 included). ``time_scale`` shrinks wall-clock motion time for tests (0.01 = 100x).
+
+Thread-safe: the controller servers move the robot from their threads while a test or the station
+reads ``current_joints`` from another.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from typing import Callable
+
+import numpy as np
+
+from ..calibration.kinematics import load_robot
+from ..drivers.controller.types import FlangePose, ToolData
+
+__all__ = ["SimulatedRobot", "DEFAULT_TOOL"]
+
+#: What a fresh PERS tooldata holds before calibration: tool0's frame, 1 kg at the flange.
+DEFAULT_TOOL = ToolData((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0), 1.0, (0.0, 0.0, 0.0))
+
+
+class SimulatedRobot:
+    """The simulated arm.
+
+    Parameters
+    ----------
+    postures : array-like, shape (n, 6)
+        Approved postures (controller angles, deg), 1-based for :meth:`start_posture`.
+    model : str
+        Robot model name or YAML path (default ``IRB1400``).
+    speed_fraction : float
+        Fraction of each axis' maximum speed used by moves (default 0.25).
+    time_scale : float
+        Wall-clock seconds per simulated second (default 1; tests use e.g. 0.001).
+    start_joints : array-like, shape (6,), optional
+        Initial configuration (default: all zero).
+    clock : callable
+        Monotonic time source in seconds (default ``time.monotonic``).
+
+    Attributes
+    ----------
+    arrival_hooks : list of callable
+        Each is called as ``hook(k, joints_deg)`` when a move to posture ``k`` ends.
+    """
+
+    def __init__(self, postures, model: str = "IRB1400", speed_fraction: float = 0.25, time_scale: float = 1.0,
+                 start_joints=None, clock: Callable[[], float] = time.monotonic):
+        self.model = load_robot(model)
+        self.postures = np.array(postures, dtype=float).reshape(-1, self.model.dof)
+        for i, row in enumerate(self.postures, start=1):
+            problems = self.model.limit_violations(row)
+            if problems:
+                raise ValueError(f"approved posture {i} is outside the {self.model.name} limits: {'; '.join(problems)}")
+        if not 0 < speed_fraction <= 1:
+            raise ValueError(f"speed_fraction must be in (0, 1]; got {speed_fraction}")
+        if not time_scale > 0:
+            raise ValueError(f"time_scale must be > 0; got {time_scale}")
+        self.speed_fraction = float(speed_fraction)
+        self.time_scale = float(time_scale)
+        self._clock = clock
+        start = np.zeros(self.model.dof) if start_joints is None else np.asarray(start_joints, dtype=float)
+        if self.model.limit_violations(start):
+            raise ValueError(f"start configuration outside limits: {self.model.limit_violations(start)}")
+        self._lock = threading.RLock()
+        self._from = start.copy()
+        self._to = start.copy()
+        self._t0 = self._clock()
+        self._duration = 0.0
+        self._target_posture = 0
+        self._arrived_posture = 0
+        self._arrival_reported = True
+        self._tool = DEFAULT_TOOL
+        self.arrival_hooks: list[Callable[[int, np.ndarray], None]] = []
+        #: Number of moves started (for tests).
+        self.moves = 0
+
+    # ------------------------------------------------------------------ motion
+    def motion_time(self, target_deg) -> float:
+        """Simulated seconds of a synchronised move from the current configuration to ``target_deg``."""
+        delta = np.abs(np.asarray(target_deg, dtype=float) - self.current_joints)
+        return float(np.max(delta / (self.speed_fraction * self.model.max_speed_deg_s)))
+
+    def start_move(self, target_deg, posture: int = 0) -> float:
+        """Start a synchronised move; returns its wall-clock duration in seconds.
+
+        Raises
+        ------
+        ValueError
+            If the target is outside the joint limits (the controller would refuse it too).
+        """
+        target = np.asarray(target_deg, dtype=float)
+        problems = self.model.limit_violations(target)
+        if problems:
+            raise ValueError(f"target outside the joint limits: {'; '.join(problems)}")
+        with self._lock:
+            self._settle()
+            now = self._clock()
+            start = self._joints_at(now)
+            delta = np.abs(target - start)
+            self._duration = float(np.max(delta / (self.speed_fraction * self.model.max_speed_deg_s))) * self.time_scale
+            self._from, self._to, self._t0 = start, target.copy(), now
+            self._target_posture = int(posture)
+            self._arrived_posture = 0
+            self._arrival_reported = False
+            self.moves += 1
+            return self._duration
+
+    def start_posture(self, k: int) -> float:
+        """Start the move to approved posture ``k`` (1-based); returns the wall-clock duration."""
+        if not 1 <= k <= len(self.postures):
+            raise ValueError(f"posture {k} is not one of the {len(self.postures)} approved postures")
+        return self.start_move(self.postures[k - 1], posture=k)
+
+    def _joints_at(self, now: float) -> np.ndarray:
+        if self._duration <= 0:
+            return self._to.copy()
+        s = min(max((now - self._t0) / self._duration, 0.0), 1.0)
+        return self._from + s * (self._to - self._from)
+
+    def _settle(self) -> None:
+        """Report the arrival of a finished move once (runs the hooks)."""
+        if self._arrival_reported or self._clock() < self._t0 + self._duration:
+            return
+        self._arrival_reported = True
+        self._arrived_posture = self._target_posture
+        if self._target_posture:
+            joints = self._to.copy()
+            for hook in list(self.arrival_hooks):
+                hook(self._target_posture, joints)
+
+    @property
+    def is_moving(self) -> bool:
+        with self._lock:
+            self._settle()
+            return not self._arrival_reported
+
+    def update(self) -> None:
+        """Advance bookkeeping (fires arrival hooks of a finished move)."""
+        with self._lock:
+            self._settle()
+
+    def time_to_arrival(self) -> float:
+        """Wall-clock seconds until the current move ends (0 when standing still)."""
+        with self._lock:
+            return max(0.0, self._t0 + self._duration - self._clock())
+
+    def wait_until_stopped(self, timeout: float | None = None, stop: threading.Event | None = None) -> bool:
+        """Block until the move ends (True), the timeout passes or ``stop`` is set (False)."""
+        end = None if timeout is None else time.monotonic() + timeout
+        while True:
+            left = self.time_to_arrival()
+            if left <= 0:
+                self.update()
+                return True
+            if end is not None:
+                left = min(left, end - time.monotonic())
+                if left <= 0:
+                    return False
+            if stop is not None:
+                if stop.wait(min(left, 0.05)):
+                    return False
+            else:
+                time.sleep(min(left, 0.05))
+
+    # ------------------------------------------------------------------ state
+    @property
+    def current_joints(self) -> np.ndarray:
+        """Controller axis angles now (deg), shape (6,)."""
+        with self._lock:
+            self._settle()
+            return self._joints_at(self._clock())
+
+    @property
+    def current_posture(self) -> int:
+        """The approved posture the robot stands at (0 while moving or elsewhere)."""
+        with self._lock:
+            self._settle()
+            return self._arrived_posture
+
+    def tool0_pose(self) -> FlangePose:
+        """tool0 in base from the kinematics of the current joints."""
+        p, q = self.model.forward(self.current_joints)
+        return FlangePose(np.asarray(p, dtype=float), np.asarray(q, dtype=float))
+
+    @property
+    def tool(self) -> ToolData:
+        """The PERS tooldata of the camera."""
+        with self._lock:
+            return self._tool
+
+    @tool.setter
+    def tool(self, value: ToolData) -> None:
+        with self._lock:
+            self._tool = value

@@ -1,0 +1,340 @@
+"""Checks of our own on generated RAPID, beside the grammar check of ``rapidchecker``.
+
+- every string literal holds at most 80 characters (RAPID's ``string`` limit);
+- every identifier has at most 32 characters;
+- every name is declared before it is used: data of a module before the routines that use it and
+  locals at the top of their routine; routines and global data of the other modules in any order;
+  what RAPID itself provides (instructions, functions, data types, ``tool0`` ...) is listed in
+  :data:`RAPID_BUILTINS`, I/O signals from the I/O configuration are passed in as ``external``;
+- motion: the only move instruction is ``MoveAbsJ``, always to a ``CONST jointtarget`` whose value
+  is one of the approved postures (and inside the joint limits), with zone ``fine`` and ``tool0``.
+
+The tokenizer understands what the generated modules use (comments, strings with ``""`` and
+``\\hh`` escapes, numbers like ``9E9``); it is not a full RAPID parser.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..calibration.kinematics import load_robot
+
+__all__ = ["Finding", "RAPID_KEYWORDS", "RAPID_BUILTINS", "MOVE_INSTRUCTIONS", "check_program", "string_length",
+           "tokenize"]
+
+MAX_STRING = 80
+MAX_IDENTIFIER = 32
+
+RAPID_KEYWORDS = {
+    "MODULE", "ENDMODULE", "VAR", "PERS", "CONST", "LOCAL", "TASK", "PROC", "ENDPROC", "FUNC", "ENDFUNC",
+    "TRAP", "ENDTRAP", "IF", "THEN", "ELSEIF", "ELSE", "ENDIF", "WHILE", "DO", "ENDWHILE", "FOR", "FROM", "TO",
+    "STEP", "ENDFOR", "TEST", "CASE", "DEFAULT", "ENDTEST", "RETURN", "ERROR", "UNDO", "BACKWARD", "RAISE",
+    "RETRY", "TRYNEXT", "EXIT", "CONNECT", "WITH", "AND", "OR", "XOR", "NOT", "DIV", "MOD", "TRUE", "FALSE",
+    "INOUT", "RECORD", "ENDRECORD", "GOTO",
+}
+_DATA_TYPES = {"num", "dnum", "bool", "string", "jointtarget", "robtarget", "tooldata", "wobjdata", "speeddata",
+               "zonedata", "socketdev", "iodev", "intnum", "clock", "pos", "orient", "pose", "loaddata", "robjoint",
+               "extjoint", "byte", "signaldi", "signaldo", "signalgi", "signalgo", "signalai", "signalao"}
+#: Names RAPID provides (RobotWare 5/6 instructions, functions, predefined data) used by the modules.
+RAPID_BUILTINS = _DATA_TYPES | {
+    # motion and positions
+    "MoveAbsJ", "CJointT", "CRobT", "tool0", "wobj0", "fine", "NOrient", "VectMagn",
+    # program flow and operator messages
+    "TPWrite", "Stop", "WaitUntil", "WaitDI", "WaitTime",
+    # strings and numbers
+    "StrFind", "StrPart", "StrLen", "StrMatch", "StrToVal", "NumToStr", "Round", "Sqrt", "Abs", "STR_DIGIT",
+    # sockets (PC Interface / Socket Messaging)
+    "SocketCreate", "SocketBind", "SocketListen", "SocketAccept", "SocketReceive", "SocketSend", "SocketClose",
+    "GetSysInfo", "WAIT_MAX",
+    # serial channels
+    "Open", "Close", "ReadStr", "WriteStrBin",
+    # I/O and interrupts
+    "SetGO", "SetDO", "SetAO", "GInput", "DInput", "AInput", "IDelete", "ITimer",
+    # clocks
+    "ClkReset", "ClkStart", "ClkRead",
+    # error handling
+    "ERRNO", "ERR_SOCK_TIMEOUT", "ERR_SOCK_CLOSED", "ERR_DEV_MAXTIME",
+}
+#: Instructions that move the robot; only MoveAbsJ may appear, and only to approved targets.
+MOVE_INSTRUCTIONS = {"MoveAbsJ", "MoveJ", "MoveL", "MoveC", "MoveExtJ", "MoveAbsJDO", "MoveJDO", "MoveLDO",
+                     "MoveCDO", "MoveJSync", "MoveLSync", "MoveCSync", "MoveAbsJSync", "SearchL", "SearchC",
+                     "TriggJ", "TriggL", "TriggC", "MToolRotCalib", "MoveJAO", "MoveLAO"}
+_MOVE_LOWER = {name.lower() for name in MOVE_INSTRUCTIONS}
+_KEYWORDS_UPPER = {k.upper() for k in RAPID_KEYWORDS}
+_BUILTINS_LOWER = {b.lower() for b in RAPID_BUILTINS}
+
+
+@dataclass(frozen=True)
+class Finding:
+    module: str
+    line: int
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.module}:{self.line}: {self.message}"
+
+
+@dataclass(frozen=True)
+class Token:
+    kind: str  # "id", "num", "str", "op"
+    text: str
+    line: int
+
+
+_TOKEN = re.compile(r"""
+    (?P<ws>[ \t\r]+)
+  | (?P<comment>![^\n]*)
+  | (?P<nl>\n)
+  | (?P<str>"(?:[^"\n]|"")*")
+  | (?P<num>\d+(?:\.\d*)?(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)
+  | (?P<id>[A-Za-z_][A-Za-z0-9_]*)
+  | (?P<op>:=|<>|<=|>=|[-+*/=<>(){}\[\],;:.\\%])
+""", re.VERBOSE)
+
+
+def tokenize(text: str) -> list[Token]:
+    """Tokens of RAPID text (comments and blanks dropped). ValueError on a character it cannot read."""
+    tokens, line, pos = [], 1, 0
+    while pos < len(text):
+        m = _TOKEN.match(text, pos)
+        if m is None:
+            raise ValueError(f"line {line}: cannot read {text[pos:pos + 20]!r}")
+        kind = m.lastgroup
+        if kind == "nl":
+            line += 1
+        elif kind in ("str", "num", "id", "op"):
+            tokens.append(Token(kind, m.group(), line))
+        pos = m.end()
+    return tokens
+
+
+def string_length(literal: str) -> int:
+    """Characters a RAPID string literal holds: ``""`` is one quote, ``\\\\`` one backslash, ``\\hh`` one byte."""
+    body = literal[1:-1]
+    count, i = 0, 0
+    while i < len(body):
+        if body.startswith('""', i):
+            i += 2
+        elif body[i] == "\\" and i + 1 < len(body) and body[i + 1] == "\\":
+            i += 2
+        elif body[i] == "\\" and re.fullmatch(r"[0-9A-Fa-f]{2}", body[i + 1:i + 3] or ""):
+            i += 3
+        else:
+            i += 1
+        count += 1
+    return count
+
+
+def _parse_literal_numbers(tokens: list[Token], start: int) -> tuple[list[float], int]:
+    """Numbers of an aggregate literal starting at ``tokens[start] == '['``; returns (values, index after)."""
+    depth, values, i, sign = 0, [], start, 1.0
+    while i < len(tokens):
+        t = tokens[i]
+        if t.text == "[":
+            depth += 1
+        elif t.text == "]":
+            depth -= 1
+            if depth == 0:
+                return values, i + 1
+        elif t.text == "-":
+            sign = -1.0
+        elif t.kind == "num":
+            values.append(sign * float(t.text))
+            sign = 1.0
+        i += 1
+    return values, i
+
+
+def _collect_globals(modules) -> tuple[dict, dict]:
+    """Global data and routine names of every module: name -> module."""
+    data, routines = {}, {}
+    for name, text in modules:
+        tokens = tokenize(text)
+        depth = 0
+        for i, t in enumerate(tokens):
+            upper = t.text.upper() if t.kind == "id" else ""
+            if upper in ("PROC", "FUNC", "TRAP"):
+                j = i + (2 if upper == "FUNC" else 1)
+                if j < len(tokens):
+                    routines[tokens[j].text.lower()] = name
+                depth += 1
+            elif upper in ("ENDPROC", "ENDFUNC", "ENDTRAP"):
+                depth -= 1
+            elif upper in ("VAR", "PERS", "CONST") and depth == 0:
+                local = i > 0 and tokens[i - 1].text.upper() == "LOCAL"
+                if i + 2 < len(tokens) and not local:
+                    data[tokens[i + 2].text.lower()] = name
+    return data, routines
+
+
+def check_program(modules, approved=None, robot: str = "IRB1400", external=()) -> list[Finding]:
+    """Findings of the checks on a set of modules (empty: all pass).
+
+    Parameters
+    ----------
+    modules : sequence of (name, text)
+        The modules loaded together into one task.
+    approved : array-like, shape (n, 6), optional
+        The approved postures; when given every ``CONST jointtarget`` must be one of them.
+    robot : str
+        Robot model for the joint-limit check of the jointtargets.
+    external : iterable of str
+        Names declared outside RAPID code (I/O signals of the I/O configuration).
+    """
+    modules = [(str(n), str(t)) for n, t in modules]
+    findings: list[Finding] = []
+    model = load_robot(robot)
+    approved_arr = None if approved is None else np.asarray(approved, dtype=float).reshape(-1, model.dof)
+    try:
+        global_data, routines = _collect_globals(modules)
+    except ValueError as exc:
+        return [Finding("?", 0, str(exc))]
+    known_external = {e.lower() for e in external}
+    for name, text in modules:
+        try:
+            tokens = tokenize(text)
+        except ValueError as exc:
+            findings.append(Finding(name, 0, str(exc)))
+            continue
+        findings += _check_module(name, tokens, global_data, routines, known_external, approved_arr, model)
+    return findings
+
+
+def _check_module(module, tokens, global_data, routines, external, approved, model) -> list[Finding]:
+    out: list[Finding] = []
+    module_scope: set = set()
+    local_scope: set | None = None
+    jointtargets: dict = {}  # CONST jointtarget name -> values
+    in_routine = False
+    i = 0
+    n = len(tokens)
+
+    def known(word: str) -> bool:
+        w = word.lower()
+        if local_scope is not None and w in local_scope:
+            return True
+        if w in module_scope or w in routines or w in _BUILTINS_LOWER or w in external:
+            return True
+        return w in global_data and global_data[w] != module
+
+    while i < n:
+        t = tokens[i]
+        if t.kind == "str":
+            length = string_length(t.text)
+            if length > MAX_STRING:
+                out.append(Finding(module, t.line, f"string literal of {length} characters (RAPID holds {MAX_STRING})"))
+            i += 1
+            continue
+        if t.kind != "id":
+            i += 1
+            continue
+        if len(t.text) > MAX_IDENTIFIER:
+            out.append(Finding(module, t.line, f"identifier {t.text!r} has {len(t.text)} characters (limit {MAX_IDENTIFIER})"))
+        upper = t.text.upper()
+        prev = tokens[i - 1].text if i > 0 else ""
+        if upper == "MODULE":
+            i += 2
+            continue
+        if upper in ("PROC", "FUNC", "TRAP"):
+            in_routine, local_scope = True, set()
+            i += 3 if upper == "FUNC" else 2
+            if upper != "TRAP" and i < n and tokens[i].text == "(":  # parameters: [\][INOUT|VAR|PERS] type name [{*}]
+                i += 1
+                while i < n and tokens[i].text != ")":
+                    if tokens[i].kind == "id" and tokens[i].text.upper() not in ("INOUT", "VAR", "PERS"):
+                        if tokens[i].text.lower() not in _DATA_TYPES:
+                            out.append(Finding(module, tokens[i].line, f"unknown data type {tokens[i].text!r}"))
+                        if i + 1 < n and tokens[i + 1].kind == "id":
+                            local_scope.add(tokens[i + 1].text.lower())
+                            i += 1
+                    i += 1
+                i += 1
+            continue
+        if upper in ("ENDPROC", "ENDFUNC", "ENDTRAP"):
+            in_routine, local_scope = False, None
+            i += 1
+            continue
+        if upper in ("VAR", "PERS", "CONST"):
+            if i + 2 >= n:
+                break
+            dtype, var = tokens[i + 1], tokens[i + 2]
+            if dtype.text.lower() not in _DATA_TYPES:
+                out.append(Finding(module, dtype.line, f"unknown data type {dtype.text!r}"))
+            scope = local_scope if in_routine else module_scope
+            if var.text.lower() in scope:
+                out.append(Finding(module, var.line, f"{var.text!r} declared twice"))
+            if len(var.text) > MAX_IDENTIFIER:
+                out.append(Finding(module, var.line, f"identifier {var.text!r} has {len(var.text)} characters (limit {MAX_IDENTIFIER})"))
+            if upper == "CONST" and dtype.text.lower() == "jointtarget" and i + 4 < n and tokens[i + 3].text == ":=":
+                values, _ = _parse_literal_numbers(tokens, i + 4)
+                jointtargets[var.text.lower()] = (var.text, var.line, values)
+            i += 3
+            scope.add(var.text.lower())  # declared from here on (its initial value may not use itself)
+            continue
+        if upper == "FOR" and i + 1 < n and local_scope is not None:
+            local_scope.add(tokens[i + 1].text.lower())
+            i += 2
+            continue
+        if upper in _KEYWORDS_UPPER:
+            i += 1
+            continue
+        if prev in (".", "\\"):  # record component or optional argument name
+            i += 1
+            continue
+        if t.text.lower() in _MOVE_LOWER:
+            out += _check_move(module, tokens, i, jointtargets)
+        if not known(t.text):
+            out.append(Finding(module, t.line, f"{t.text!r} is used before it is declared (or never declared)"))
+        i += 1
+    for key, (name, line, values) in jointtargets.items():
+        out += _check_jointtarget(module, name, line, values, approved, model)
+    return out
+
+
+def _check_move(module, tokens, i, jointtargets) -> list[Finding]:
+    t = tokens[i]
+    if t.text != "MoveAbsJ":
+        return [Finding(module, t.line, f"{t.text} is not allowed: the robot moves only with MoveAbsJ to approved postures")]
+    args, depth, current, j = [], 0, [], i + 1
+    while j < len(tokens) and not (depth == 0 and tokens[j].text == ";"):
+        tok = tokens[j]
+        if tok.text in "([{":
+            depth += 1
+        elif tok.text in ")]}":
+            depth -= 1
+        if depth == 0 and tok.text == ",":
+            args.append(current)
+            current = []
+        else:
+            current.append(tok)
+        j += 1
+    args.append(current)
+    out = []
+    target = args[0] if args else []
+    if len(target) != 1 or target[0].kind != "id" or target[0].text.lower() not in jointtargets:
+        text = " ".join(x.text for x in target)
+        out.append(Finding(module, t.line, f"MoveAbsJ to {text!r}: only CONST jointtargets of the approved postures "
+                                           "declared in this module may be targets"))
+    if len(args) < 4 or [x.text for x in args[2]] != ["fine"]:
+        out.append(Finding(module, t.line, "MoveAbsJ must stop exactly at the posture: zone 'fine'"))
+    if len(args) < 4 or not args[3] or args[3][0].text != "tool0":
+        out.append(Finding(module, t.line, "MoveAbsJ must use tool0 (the postures are flange configurations)"))
+    return out
+
+
+def _check_jointtarget(module, name, line, values, approved, model) -> list[Finding]:
+    out = []
+    if len(values) != 12:
+        return [Finding(module, line, f"jointtarget {name} must hold 6 robot and 6 external axes; got {len(values)} values")]
+    joints = np.array(values[:6])
+    problems = model.limit_violations(joints)
+    if problems:
+        out.append(Finding(module, line, f"jointtarget {name} outside the {model.name} limits: {'; '.join(problems)}"))
+    if any(v != 9e9 for v in values[6:]):
+        out.append(Finding(module, line, f"jointtarget {name}: external axes must be 9E9 (unused)"))
+    if approved is not None and not np.any(np.all(np.abs(approved - joints) <= 5e-5, axis=1)):
+        out.append(Finding(module, line, f"jointtarget {name} = {joints.tolist()} is not an approved posture"))
+    return out

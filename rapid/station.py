@@ -1,0 +1,222 @@
+"""The station settings the RAPID modules are rendered from, read from a YAML file or built in.
+
+Station YAML (the keys ``handeye rapid generate`` reads; other top-level sections are left for the
+rest of the station and ignored here)::
+
+    robot: IRB1400                     # robot model (joint limits for the checks)
+    controller:
+      protocol: socket                 # socket | serial | modbus: which link module to generate
+      pc_address: 192.168.125.10       # the only client the socket server accepts
+      controller_address: auto         # address the socket server binds: auto = GetSysInfo(\\LanIp)
+      port: 1025                       # TCP port of the socket server
+      serial_channel: "sio1:"          # serial channel of the serial variant
+      ack_timeout_s: 30                # warn (state LATE) when the PC has not acknowledged a posture
+    motion:
+      speed_tcp_mm_s: 200              # speeddata of the posture moves: TCP speed
+      speed_ori_deg_s: 100             #   and reorientation speed
+    tool:
+      name: tHeCamera                  # PERS tooldata holding the camera frame
+      mass_kg: 1.0
+      cog_mm: [0, 0, 60]
+    postures:                          # approved postures, controller axis angles in degrees
+      - [25.13, -38.52, -10.33, -11.31, 89.6, -102.64]
+      - ...
+
+Every key is optional; a missing key takes the built-in station's value (``default_station.yaml``:
+the mock controller on 127.0.0.1).
+"""
+
+from __future__ import annotations
+
+import ipaddress
+import math
+import re
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from ..calibration.kinematics import load_robot
+from .errors import StationConfigError
+
+__all__ = ["PROTOCOLS", "RapidStation", "default_station", "load_station", "station_from_dict", "check_postures",
+           "DEFAULT_STATION_FILE", "RAPID_IDENTIFIER"]
+
+PROTOCOLS = ("socket", "serial", "modbus")
+DEFAULT_STATION_FILE = Path(__file__).with_name("default_station.yaml")
+RAPID_IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
+
+_SECTIONS = {
+    "controller": {"protocol", "pc_address", "controller_address", "port", "serial_channel", "ack_timeout_s"},
+    "motion": {"speed_tcp_mm_s", "speed_ori_deg_s"},
+    "tool": {"name", "mass_kg", "cog_mm"},
+}
+
+
+@dataclass(frozen=True)
+class RapidStation:
+    """Settings of the generated RAPID program (see the module docstring for the YAML keys)."""
+
+    robot: str = "IRB1400"
+    protocol: str = "socket"
+    pc_address: str = "127.0.0.1"
+    controller_address: str = "127.0.0.1"
+    port: int = 1025
+    serial_channel: str = "sio1:"
+    ack_timeout_s: float = 30.0
+    speed_tcp_mm_s: float = 200.0
+    speed_ori_deg_s: float = 100.0
+    tool_name: str = "tHeCamera"
+    tool_mass_kg: float = 1.0
+    tool_cog_mm: tuple = (0.0, 0.0, 0.0)
+    postures: tuple = field(default_factory=tuple)
+    source: str = "built-in"
+
+    @property
+    def postures_array(self) -> np.ndarray:
+        return np.array(self.postures, dtype=float).reshape(-1, 6)
+
+    def with_(self, **changes) -> "RapidStation":
+        """A copy with some settings changed, checked again."""
+        return _checked(replace(self, **changes))
+
+
+def check_postures(postures, robot: str = "IRB1400", source: str = "postures") -> np.ndarray:
+    """Approved postures as an (n, 6) array; refused if empty, NaN, or outside the joint limits.
+
+    Raises
+    ------
+    StationConfigError
+        Naming every bad posture (1-based) and axis.
+    """
+    model = load_robot(robot)
+    try:
+        arr = np.array(postures, dtype=float)
+    except (TypeError, ValueError):
+        raise StationConfigError(f"{source}: postures must be lists of {model.dof} numbers") from None
+    if arr.ndim != 2 or arr.shape[1] != model.dof or len(arr) == 0:
+        raise StationConfigError(f"{source}: postures must be a non-empty list of {model.dof} joint angles each; "
+                                 f"got shape {arr.shape}")
+    if len(arr) > 255:
+        raise StationConfigError(f"{source}: at most 255 postures fit the protocol; got {len(arr)}")
+    problems = []
+    for i, row in enumerate(arr, start=1):
+        violations = model.limit_violations(row)
+        if violations:
+            problems.append(f"posture {i}: {', '.join(violations)}")
+    if problems:
+        raise StationConfigError(f"{source}: postures outside the {model.name} joint limits (nothing written): "
+                                 + "; ".join(problems))
+    return arr
+
+
+def _number(value, name: str, source: str, low: float, high: float) -> float:
+    if isinstance(value, bool):
+        raise StationConfigError(f"{source}: {name} must be a number; got {value!r}")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise StationConfigError(f"{source}: {name} must be a number; got {value!r}") from None
+    if not math.isfinite(v) or not low < v <= high:
+        raise StationConfigError(f"{source}: {name} must be in ({low:g}, {high:g}]; got {value!r}")
+    return v
+
+
+def _ipv4(value, name: str, source: str, allow_auto: bool = False) -> str:
+    text = str(value)
+    if allow_auto and text == "auto":
+        return text
+    try:
+        return str(ipaddress.IPv4Address(text))
+    except ValueError:
+        extra = " or 'auto'" if allow_auto else ""
+        raise StationConfigError(f"{source}: {name} must be an IPv4 address{extra}; got {value!r}") from None
+
+
+def _checked(station: RapidStation) -> RapidStation:
+    src = station.source
+    try:
+        load_robot(station.robot)
+    except ValueError as exc:
+        raise StationConfigError(f"{src}: {exc}") from None
+    if station.protocol not in PROTOCOLS:
+        raise StationConfigError(f"{src}: controller.protocol must be one of {', '.join(PROTOCOLS)}; got {station.protocol!r}")
+    pc = _ipv4(station.pc_address, "controller.pc_address", src)
+    ctrl = _ipv4(station.controller_address, "controller.controller_address", src, allow_auto=True)
+    port = station.port
+    if isinstance(port, bool) or not isinstance(port, int) or not 0 < port < 65536:
+        raise StationConfigError(f"{src}: controller.port must be an integer 1..65535; got {port!r}")
+    if not re.fullmatch(r"[A-Za-z0-9_]{1,15}:", str(station.serial_channel)):
+        raise StationConfigError(f"{src}: controller.serial_channel must look like 'sio1:' or 'com1:'; "
+                                 f"got {station.serial_channel!r}")
+    ack = _number(station.ack_timeout_s, "controller.ack_timeout_s", src, 0.0, 3600.0)
+    tcp = _number(station.speed_tcp_mm_s, "motion.speed_tcp_mm_s", src, 0.0, 7000.0)
+    ori = _number(station.speed_ori_deg_s, "motion.speed_ori_deg_s", src, 0.0, 1000.0)
+    name = str(station.tool_name)
+    if not RAPID_IDENTIFIER.fullmatch(name) or name.lower() in ("tool0", "tooldata"):
+        raise StationConfigError(f"{src}: tool.name must be a RAPID identifier (letter first, letters/digits/_, "
+                                 f"at most 32) other than tool0; got {name!r}")
+    mass = _number(station.tool_mass_kg, "tool.mass_kg", src, 0.0, 100.0)
+    try:
+        cog = tuple(float(v) for v in station.tool_cog_mm)
+    except (TypeError, ValueError):
+        raise StationConfigError(f"{src}: tool.cog_mm must be three numbers (mm)") from None
+    if len(cog) != 3 or not all(math.isfinite(v) and abs(v) <= 1000 for v in cog):
+        raise StationConfigError(f"{src}: tool.cog_mm must be three finite numbers within 1000 mm; got {station.tool_cog_mm!r}")
+    postures = check_postures(station.postures, station.robot, src)
+    return replace(station, pc_address=pc, controller_address=ctrl, ack_timeout_s=ack, speed_tcp_mm_s=tcp,
+                   speed_ori_deg_s=ori, tool_name=name, tool_mass_kg=mass, tool_cog_mm=cog,
+                   postures=tuple(tuple(float(v) for v in row) for row in postures))
+
+
+def station_from_dict(data: dict, source: str = "station config", base: RapidStation | None = None) -> RapidStation:
+    """A checked station from the YAML structure; missing keys come from ``base`` (default: built-in)."""
+    if not isinstance(data, dict):
+        raise StationConfigError(f"{source}: expected a mapping of sections (controller, motion, tool, postures)")
+    station = base or default_station()
+    changes = {"source": source}
+    for section, keys in _SECTIONS.items():
+        values = data.get(section, {}) or {}
+        if not isinstance(values, dict):
+            raise StationConfigError(f"{source}: '{section}' must be a mapping")
+        unknown = set(values) - keys
+        if unknown:
+            raise StationConfigError(f"{source}: unknown key(s) in '{section}': {', '.join(sorted(unknown))}; "
+                                     f"known: {', '.join(sorted(keys))}")
+        prefix = {"tool": "tool_"}.get(section, "")
+        for key, value in values.items():
+            target = "tool_name" if (section == "tool" and key == "name") else prefix + key
+            changes[target] = value
+    if "robot" in data:
+        changes["robot"] = data["robot"]
+    if "postures" in data:
+        changes["postures"] = data["postures"]
+    return _checked(replace(station, **changes))
+
+
+def load_station(path) -> RapidStation:
+    """Read a station YAML file (see the module docstring)."""
+    file = Path(path)
+    try:
+        data = yaml.safe_load(file.read_text())
+    except FileNotFoundError:
+        raise StationConfigError(f"station config {file} not found; write one (see `handeye rapid generate --help`) "
+                                 "or leave --config out to use the built-in mock station") from None
+    except OSError as exc:
+        raise StationConfigError(f"cannot read station config {file}: {exc.strerror}") from None
+    except yaml.YAMLError as exc:
+        raise StationConfigError(f"station config {file} is not valid YAML: {exc}") from None
+    return station_from_dict(data or {}, str(file))
+
+
+_DEFAULT: RapidStation | None = None
+
+
+def default_station() -> RapidStation:
+    """The built-in station: the mock controller on 127.0.0.1 with 12 approved postures."""
+    global _DEFAULT
+    if _DEFAULT is None:
+        data = yaml.safe_load(DEFAULT_STATION_FILE.read_text())
+        _DEFAULT = station_from_dict(data, "built-in station", base=RapidStation())
+    return _DEFAULT

@@ -1,0 +1,60 @@
+"""``handeye rapid generate``: the RAPID modules of the station (posture sequencing, PC link, camera tool)."""
+
+from __future__ import annotations
+
+import argparse
+
+HELP = "write the RAPID modules for the robot controller"
+
+GENERATE_HELP = "render the RAPID program of a station (default: the built-in mock station) into a folder"
+
+GENERATE_EPILOG = """\
+Writes three modules to load together into the robot task:
+  HeMain.mod     main routine; the approved postures as CONST jointtargets (the robot goes only
+                 there, MoveAbsJ ... fine, at the configured speed); waits for the PC's ACK at each
+  HeSocket.mod   line-protocol server over TCP, accepting only the PC's address  (protocol socket)
+  HeSerial.mod   the same protocol on a serial channel                              (protocol serial)
+  HeIo.mod       I/O handshake for a Modbus TCP gateway (SetGO/SetDO/WaitDI)       (protocol modbus)
+  HeTool.mod     PERS tooldata of the camera (identity frame until calibrated)
+Postures outside the joint limits are refused; every module is checked before it is written.
+The protocol is documented in rapid/PROTOCOL.md.
+
+Station config (YAML; every key optional, missing ones from the built-in station):
+  robot: IRB1400
+  controller: {protocol: socket, pc_address: 192.168.125.10, controller_address: auto,
+               port: 1025, serial_channel: "sio1:", ack_timeout_s: 30}
+  motion: {speed_tcp_mm_s: 200, speed_ori_deg_s: 100}
+  tool: {name: tHeCamera, mass_kg: 1.0, cog_mm: [0, 0, 60]}
+  postures: [[a1, a2, a3, a4, a5, a6], ...]        # controller axis angles, degrees
+controller_address auto binds to GetSysInfo(\\LanIp); a virtual controller needs 127.0.0.1.
+
+Example:
+  handeye rapid generate --config station.yaml -o rapid_out
+"""
+
+
+def add_parser(sub):
+    p = sub.add_parser("rapid", help=HELP, description=HELP)
+    what = p.add_subparsers(dest="rapid_command", metavar="COMMAND")
+    g = what.add_parser("generate", help=GENERATE_HELP, description=GENERATE_HELP, epilog=GENERATE_EPILOG,
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    g.add_argument("--config", metavar="STATION.yaml", help="station config (default: the built-in mock station)")
+    g.add_argument("-o", "--output", required=True, metavar="DIR", help="folder for the .mod files (created)")
+    g.add_argument("--protocol", choices=("socket", "serial", "modbus"),
+                   help="link module to write (default: controller.protocol of the config)")
+    p.set_defaults(_rapid_parser=p)
+    return p
+
+
+def run(args) -> int:
+    if getattr(args, "rapid_command", None) != "generate":
+        args._rapid_parser.print_help()
+        return 2
+    from ...rapid.generate import generate_station_modules
+
+    paths = generate_station_modules(args.output, args.config, args.protocol)
+    for path in paths:
+        print(path)
+    names = ", ".join(p.name for p in paths)
+    print(f"load {names} into the robot task (e.g. T_ROB1), then start main; protocol: rapid/PROTOCOL.md")
+    return 0
