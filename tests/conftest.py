@@ -3,21 +3,8 @@
 from __future__ import annotations
 
 import threading
-from pathlib import Path
 
 import pytest
-
-REPO = Path(__file__).resolve().parents[1]
-SHARED = REPO.parent / "shared"
-DATASETS = SHARED / "datasets"
-
-
-def shared_dataset(name: str) -> Path:
-    """Path of a data set in ../shared/datasets, or skip the test with the reason."""
-    path = DATASETS / name
-    if not path.is_dir():
-        pytest.skip(f"data set {name} not available: ../shared/datasets is only beside a development checkout")
-    return path
 
 
 @pytest.fixture

@@ -3,9 +3,25 @@
 from __future__ import annotations
 
 from functools import lru_cache
+from pathlib import Path
+
+import pytest
 
 from handeye.calibration.solve import problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session
+
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED = REPO.parent / "shared"
+DATASETS = SHARED / "datasets"
+
+
+def shared_dataset(name: str) -> Path:
+    """Path of a data set in ../shared/datasets, or skip the test with the reason."""
+    path = DATASETS / name
+    if not path.is_dir():
+        pytest.skip(f"data set {name} not available: ../shared/datasets is only beside a development checkout")
+    return path
 
 
 @lru_cache(maxsize=None)

@@ -15,7 +15,7 @@ import pytest
 import yaml
 from scipy.spatial.transform import Rotation
 
-from conftest import shared_dataset
+from helpers import shared_dataset
 from handeye.calibration.classic import CLASSIC_METHODS
 from handeye.calibration.classic.common import (
     MAX_DEFAULT_PAIRS,

@@ -10,7 +10,7 @@ import pytest
 import yaml
 from scipy.spatial.transform import Rotation
 
-from conftest import shared_dataset
+from helpers import shared_dataset
 from handeye.calibration import diagnostics
 from handeye.calibration.errors import SessionError
 from handeye.calibration.session import read_session

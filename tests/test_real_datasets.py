@@ -12,7 +12,7 @@ from handeye.calibration.solve import calibrate, problem_from_session
 from handeye.calibration.transforms import transform_from_rotation_translation
 from handeye.station.importers import read_any
 
-from conftest import shared_dataset
+from helpers import shared_dataset
 
 cv2 = pytest.importorskip("cv2")
 if not hasattr(cv2, "calibrateHandEye"):  # pragma: no cover

@@ -17,7 +17,7 @@ import pytest
 import yaml
 from scipy.spatial.transform import Rotation
 
-from conftest import shared_dataset
+from helpers import shared_dataset
 from handeye.calibration.compact_points import BoardGeometry
 from handeye.calibration.session import Posture, Session
 from handeye.calibration.solve import calibrate_session
