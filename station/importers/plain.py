@@ -30,7 +30,6 @@ Set-up: option, else the JSON's ``setup``, else detected from the data, else ``e
 from __future__ import annotations
 
 import csv
-import io
 import json
 
 import numpy as np

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 import pytest
 
 from handeye.drivers.controller import InvalidRequest, ToolData, open_controller
