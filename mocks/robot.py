@@ -82,6 +82,22 @@ class SimulatedRobot:
         #: Number of moves started (for tests).
         self.moves = 0
 
+    def load_program(self, postures) -> None:
+        """Replace the approved postures, as loading a newly generated RAPID program does.
+
+        Raises
+        ------
+        ValueError
+            If a posture is outside the joint limits (the program would not be approved).
+        """
+        plan = np.array(postures, dtype=float).reshape(-1, self.model.dof)
+        for i, row in enumerate(plan, start=1):
+            problems = self.model.limit_violations(row)
+            if problems:
+                raise ValueError(f"approved posture {i} is outside the {self.model.name} limits: {'; '.join(problems)}")
+        with self._lock:
+            self.postures = plan
+
     # ------------------------------------------------------------------ motion
     def motion_time(self, target_deg) -> float:
         """Simulated seconds of a synchronised move from the current configuration to ``target_deg``."""

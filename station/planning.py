@@ -20,18 +20,25 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..calibration.compact_points import board_corners
+from ..calibration.compact_points import BoardGeometry, board_corners
 from ..calibration.errors import HandEyeError
 from ..calibration.kinematics import RobotModel
 from ..calibration.rotations import quaternion_from_matrix
 from ..calibration.solve import calibrate, problem_from_session
 from ..calibration.synthetic import NoiseConfig, Scene, SceneConfig, sample_session
-from ..calibration.compact_points import BoardGeometry
 from ..calibration.transforms import invert_transforms
 from ..calibration.views import NOMINAL_XB3, ViewSampling, sample_eye_in_hand_postures
 
-__all__ = ["PlanningError", "PlanScore", "PosturePlan", "plan_postures", "motion_time_s", "order_for_short_motions",
-           "score_plan", "board_distance_and_tilt"]
+__all__ = [
+    "PlanScore",
+    "PlanningError",
+    "PosturePlan",
+    "board_distance_and_tilt",
+    "motion_time_s",
+    "order_for_short_motions",
+    "plan_postures",
+    "score_plan",
+]
 
 
 class PlanningError(HandEyeError):

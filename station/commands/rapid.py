@@ -19,7 +19,8 @@ Writes three modules to load together into the robot task:
 Postures outside the joint limits are refused; every module is checked before it is written.
 The protocol is documented in rapid/PROTOCOL.md.
 
-Station config (YAML; every key optional, missing ones from the built-in station):
+Station config: the station YAML (station/example_station.yaml documents every key). These keys
+shape the RAPID program; all are optional, missing ones come from the built-in station:
   robot: IRB1400
   controller: {protocol: socket, pc_address: 192.168.125.10, controller_address: auto,
                port: 1025, serial_channel: "sio1:", ack_timeout_s: 30}
@@ -27,6 +28,7 @@ Station config (YAML; every key optional, missing ones from the built-in station
   tool: {name: tHeCamera, mass_kg: 1.0, cog_mm: [0, 0, 60]}
   postures: [[a1, a2, a3, a4, a5, a6], ...]        # controller axis angles, degrees
 controller_address auto binds to GetSysInfo(\\LanIp); a virtual controller needs 127.0.0.1.
+(`handeye capture` plans the postures itself and writes its program into the session.)
 
 Example:
   handeye rapid generate --config station.yaml -o rapid_out
@@ -50,9 +52,17 @@ def run(args) -> int:
     if getattr(args, "rapid_command", None) != "generate":
         args._rapid_parser.print_help()
         return 2
-    from ...rapid.generate import generate_station_modules
+    from ...rapid.generate import render_program, write_modules
+    from ...rapid.station import default_station, station_from_dict
+    from ..config import load_config
 
-    paths = generate_station_modules(args.output, args.config, args.protocol)
+    if args.config:
+        config = load_config(args.config)
+        postures = config.postures if config.postures is not None else default_station().postures
+        station = station_from_dict(config.rapid_dict(postures), args.config)
+    else:
+        station = default_station()
+    paths = write_modules(render_program(station, protocol=args.protocol), args.output)
     for path in paths:
         print(path)
     names = ", ".join(p.name for p in paths)

@@ -1,0 +1,158 @@
+"""The embedded mock station: a simulated IRB 1400 behind a real controller server, and a simulated
+XB3 on its flange looking at a printed board, with a hidden true camera mount.
+
+What makes it honest:
+
+- The controller is a real server on 127.0.0.1 (socket, serial-over-TCP or Modbus TCP) driving the
+  simulated arm; the PC talks to it with the real drivers.
+- The camera renders real XB3 frames (``mocks.camera``) that go through the real decoding,
+  detection and triangulation.
+- The arm is not the nominal model: its true kinematics differ from the nominal DH table by small
+  link-length and joint-offset errors (a real arm is never exactly its datasheet). The controller
+  reports joints and the NOMINAL flange pose, like a real controller; the camera sees the board from
+  the TRUE flange pose. So the calibration meets the kind of systematic error a station meets.
+- The camera mount (``cam2tool0``) is hidden from the PC; only :attr:`MockStation.truth` holds it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..calibration.compact_points import BoardGeometry
+from ..calibration.kinematics import RobotModel, load_robot
+from ..calibration.transforms import transform_from_rotation_translation
+from ..drivers.camera.stereo import StereoModel, nominal_xb3_model
+from .camera import MockCamera, RenderOptions
+from .controller import start_mock_controller
+from .robot import SimulatedRobot
+from .world import PrintedBoard
+
+__all__ = ["DEFAULT_BOARD", "DEFAULT_MOUNT", "DEFAULT_START", "MockStation", "MockStationSpec", "perturbed_robot"]
+
+
+def _pose(rotvec_deg, translation) -> np.ndarray:
+    return transform_from_rotation_translation(Rotation.from_rotvec(np.radians(rotvec_deg)).as_matrix(), translation)
+
+
+#: The hidden true camera mount of the demo: XB3 beside the flange, optical axis near tool0 z.
+DEFAULT_MOUNT = _pose([1.8, -2.4, 90.6], [-118.0, 34.5, 92.0])
+#: The board on the inspection table: printed face up, centre at (900, 100, 60) mm in base.
+DEFAULT_BOARD = transform_from_rotation_translation(Rotation.from_euler("xyz", [180.0, 0.0, 8.0], degrees=True).as_matrix(),
+                                                    [900.0, 100.0, 60.0])
+DEFAULT_BOARD[:3, 3] -= DEFAULT_BOARD[:3, :3] @ np.array([180.0, 105.0, 0.0])  # centre of a 13x8, 30 mm grid
+#: A posture from which the default camera sees the default board (found by inverse kinematics).
+DEFAULT_START = (-1.46, -22.51, 2.22, -0.07, 74.58, -92.01)
+
+
+def perturbed_robot(nominal: RobotModel, length_mm: float, angle_deg: float, seed: int) -> RobotModel:
+    """The nominal robot with random DH errors: lengths ``N(0, length_mm)``, angles ``N(0, angle_deg)``."""
+    rng = np.random.default_rng(seed)
+    dh = nominal.dh.copy()
+    dh[:, 0] += rng.normal(0.0, length_mm, len(dh)) * (dh[:, 0] != 0)
+    dh[:, 1] += rng.normal(0.0, length_mm, len(dh)) * (dh[:, 1] != 0)
+    dh[:, 2] += rng.normal(0.0, angle_deg, len(dh))
+    dh[:, 3] += rng.normal(0.0, angle_deg, len(dh))
+    rows = [(i + 1, j + 1, c) for i in range(nominal.dof) for j in range(nominal.dof)
+            if i != j and nominal.coupling[i, j] != 0 for c in [nominal.coupling[i, j]]]
+    return RobotModel.from_dh(f"{nominal.name} (true arm)", dh, rows, nominal.joint_limits_deg, nominal.max_speed_deg_s)
+
+
+@dataclass(frozen=True)
+class MockStationSpec:
+    """What the embedded station looks like.
+
+    Attributes
+    ----------
+    protocol : str
+        Controller link: ``socket``, ``serial`` or ``modbus``.
+    cam2tool0 : ndarray, shape (4, 4)
+        The hidden true camera mount.
+    board2base : ndarray, shape (4, 4)
+        The board's target frame in base.
+    board : BoardGeometry
+    start_joints_deg : tuple
+        Where the arm stands at power-up (the camera sees the board from there).
+    kinematic_error_mm, kinematic_error_deg : float
+        Standard deviation of the true arm's DH errors against the nominal table.
+    time_scale : float
+        Wall-clock seconds per simulated second of motion.
+    speed_fraction : float
+        Fraction of the axis speeds used by the moves.
+    stereo : StereoModel or None
+        The simulated head's geometry (default: the nominal XB3 wide pair).
+    seed : int
+        Seeds the arm's errors and the sensor noise.
+    """
+
+    protocol: str = "socket"
+    cam2tool0: np.ndarray = field(default_factory=lambda: DEFAULT_MOUNT.copy())
+    board2base: np.ndarray = field(default_factory=lambda: DEFAULT_BOARD.copy())
+    board: BoardGeometry = BoardGeometry((13, 8), 30.0)
+    start_joints_deg: tuple = DEFAULT_START
+    kinematic_error_mm: float = 0.05
+    kinematic_error_deg: float = 0.002
+    time_scale: float = 0.02
+    speed_fraction: float = 0.5
+    stereo: StereoModel | None = None
+    render: RenderOptions | None = None
+    robot: str = "IRB1400"
+    seed: int = 7
+
+
+class MockStation:
+    """A running mock station (context manager: starts the server, stops it and its threads).
+
+    Attributes
+    ----------
+    server
+        The controller server (``.robot`` is the simulated arm).
+    camera : MockCamera
+    truth : dict
+        ``cam2tool0`` (hidden mount), ``board2base``, ``true_robot`` (the arm's real kinematics).
+    """
+
+    def __init__(self, spec: MockStationSpec = MockStationSpec()):
+        self.spec = spec
+        self.nominal = load_robot(spec.robot)
+        self.true_robot = perturbed_robot(self.nominal, spec.kinematic_error_mm, spec.kinematic_error_deg, spec.seed)
+        start = np.asarray(spec.start_joints_deg, float)
+        self.arm = SimulatedRobot([start], model=spec.robot, speed_fraction=spec.speed_fraction,
+                                  time_scale=spec.time_scale, start_joints=start)
+        self.server = None
+        mount = np.asarray(spec.cam2tool0, float)
+
+        def cam2base():
+            return self.true_robot.forward_transform(self.arm.current_joints) @ mount
+
+        model = spec.stereo if spec.stereo is not None else nominal_xb3_model()
+        self.camera = MockCamera(model=model, board=PrintedBoard(spec.board), target2base=spec.board2base,
+                                 cam2base=cam2base, options=spec.render, seed=spec.seed)
+        self.truth = {"cam2tool0": mount, "board2base": np.asarray(spec.board2base, float), "true_robot": self.true_robot}
+
+    def start(self) -> MockStation:
+        if self.server is None:
+            self.server = start_mock_controller(self.spec.protocol, robot=self.arm)
+        return self
+
+    def stop(self) -> None:
+        if self.server is not None:
+            self.server.stop()
+            self.server = None
+        self.camera.close()
+
+    def __enter__(self) -> MockStation:
+        return self.start()
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+    def controller_options(self) -> dict:
+        """Keyword arguments for ``drivers.controller.open_controller(spec.protocol, ...)``."""
+        return dict(self.server.client_options())
+
+    def load_program(self, postures) -> None:
+        """Load a generated program's approved postures into the simulated controller."""
+        self.arm.load_program(postures)

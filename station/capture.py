@@ -1,0 +1,339 @@
+"""Guided posture capture: plan, program the robot, visit every posture, measure, persist, resume.
+
+For each posture of the plan (1-based ``k`` on the controller, ``k - 1`` in the session):
+
+1. ask the RAPID program to move there (``MoveAbsJ ... fine``) and wait until the robot is at rest;
+2. read the joints and the flange pose, and cross-check the pose against our kinematics;
+3. grab a stereo frame, find the board, triangulate its corners, judge the quality (retrying the
+   grab a few times);
+4. write the posture file atomically (``postures/NNN.yaml``);
+5. acknowledge, so the program may take the next request.
+
+Interrupted anywhere (Ctrl-C, a kill, a lost link), running the same command again reads the
+session, skips the postures already on disk, acknowledges a posture the robot is still waiting at if
+its file was written, and goes on: every posture ends up on disk exactly once.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..calibration.compact_points import BoardGeometry, compact_points_from_corners
+from ..calibration.errors import HandEyeError
+from ..calibration.kinematics import load_robot
+from ..calibration.session import (
+    Posture,
+    Session,
+    create_session,
+    read_session,
+    write_posture,
+    write_yaml_atomic,
+)
+from ..calibration.transforms import pose_from_transform, rotation_error_deg, transform_from_pose, translation_error_mm
+from ..calibration.views import PinholeView, ViewSampling
+from ..drivers.camera.errors import CameraError
+from ..drivers.camera.triangulate import triangulate_images
+from .config import StationConfig
+from .planning import PosturePlan, plan_postures
+
+__all__ = ["CaptureError", "CaptureSummary", "PostureReport", "capture", "measure_board", "stereo_views"]
+
+
+class CaptureError(HandEyeError):
+    """The capture cannot go on (no board at the start, program not loaded, pose mismatch)."""
+
+
+@dataclass
+class PostureReport:
+    """What happened at one posture (for the progress display)."""
+
+    k: int
+    total: int
+    ok: bool
+    message: str
+    quality: dict = field(default_factory=dict)
+    attempts: int = 1
+    elapsed_s: float = 0.0
+
+
+@dataclass
+class CaptureSummary:
+    """Outcome of :func:`capture`.
+
+    Attributes
+    ----------
+    session : Path
+    planned : int
+    captured : list of int
+        Plan indices (1-based) written in this run.
+    already : list of int
+        Plan indices found on disk when the run started (resume).
+    skipped : dict
+        Plan index -> reason, for postures that failed quality in this run.
+    duration_s : float
+    plan_score : dict
+    """
+
+    session: Path
+    planned: int
+    captured: list
+    already: list
+    skipped: dict
+    duration_s: float
+    plan_score: dict
+
+    @property
+    def complete(self) -> bool:
+        return len(self.captured) + len(self.already) == self.planned
+
+
+def stereo_views(model) -> tuple[PinholeView, PinholeView]:
+    """Left and right pinhole views of a stereo model (for planning: distortion ignored)."""
+    w, h = model.image_size
+    k1, k2 = model.K1, model.K2
+    left = PinholeView(w, h, float(k1[0, 0]), float(k1[0, 2]), float(k1[1, 2]))
+    right_in_left = np.eye(4)
+    right_in_left[:3, :3] = np.asarray(model.R).T
+    right_in_left[:3, 3] = -np.asarray(model.R).T @ np.asarray(model.T).ravel()
+    right = PinholeView(w, h, float(k2[0, 0]), float(k2[0, 2]), float(k2[1, 2]), right_in_left)
+    return left, right
+
+
+def measure_board(camera, model, board: BoardGeometry, timeout_s: float = 2.0):
+    """Grab one frame and triangulate the board: ``TriangulationResult`` (raises CameraError)."""
+    frame = camera.grab(timeout_s)
+    return triangulate_images(frame.left, frame.right, board=f"{board.corners[0]}x{board.corners[1]}",
+                              square_mm=board.square_mm, model=model), frame
+
+
+def _quality_problem(result, config: StationConfig) -> str | None:
+    q = result.quality
+    c = config.capture
+    if q.get("row_disagreement_max_px", 0.0) > c.max_row_disagreement_px:
+        return (f"left/right rows disagree by {q['row_disagreement_max_px']:.2f} px (> {c.max_row_disagreement_px:g}): "
+                "check the stereo calibration file and that both images are from the same frame")
+    if q.get("plane_rms_mm", 0.0) > c.max_plane_rms_mm:
+        return f"board not flat in the measurement ({q['plane_rms_mm']:.2f} mm RMS > {c.max_plane_rms_mm:g}): glare or a bent board?"
+    lo, hi = c.distance_mm
+    if not lo <= q.get("distance_mm", lo) <= hi:
+        return f"board at {q['distance_mm']:.0f} mm, outside {lo:g}-{hi:g} mm"
+    return None
+
+
+def _session_record(session_dir: Path) -> Session | None:
+    if (session_dir / "session.yaml").exists():
+        return read_session(session_dir)
+    return None
+
+
+def _write_header(session_dir: Path, session: Session) -> None:
+    write_yaml_atomic(session_dir / "session.yaml", session.header())
+
+
+def _new_plan(config: StationConfig, controller, camera, model, progress) -> PosturePlan:
+    robot = load_robot(config.robot)
+    here = controller.read_joints()
+    start = np.asarray(config.plan.start_joints_deg, float) if config.plan.start_joints_deg is not None else here
+    if np.max(np.abs(start - here)) > 0.05:
+        raise CaptureError(f"the robot stands at {np.round(here, 2).tolist()}, not at plan.start_joints_deg "
+                           f"{np.round(start, 2).tolist()}: jog it there (board in view), then run capture again")
+    try:
+        measured, _ = measure_board(camera, model, config.target, config.camera.grab_timeout_s)
+    except CameraError as exc:
+        raise CaptureError(f"no board at the start posture ({exc}); point the camera at the board from about 0.9 m") from None
+    compact = compact_points_from_corners(measured.points_mm[None], config.target)
+    progress(f"board found at the start posture, {measured.quality['distance_mm']:.0f} mm away; planning "
+             f"{config.plan.postures} postures ...")
+    p = config.plan
+    sampling = ViewSampling(distance_mm=p.distance_mm, cone_deg=p.cone_deg, roll_deg=p.roll_deg, aim_mm=p.aim_mm,
+                            joint_margin_deg=p.joint_margin_deg)
+    # keep the camera on the robot's side of the board
+    board2base = robot.forward_transform(start) @ config.camera.nominal_mount_transform() @ compact.target2cam[0]
+    side = -np.array([board2base[0, 3], board2base[1, 3], 0.0])
+    if np.linalg.norm(side) > 1e-6:
+        sampling = ViewSampling(**{**sampling.__dict__, "side": tuple(side / np.linalg.norm(side))})
+    return plan_postures(robot, start, compact.target2cam[0], config.camera.nominal_mount_transform(), config.target,
+                         p.postures, sampling, stereo_views(model), p.seed)
+
+
+def capture(
+    config: StationConfig,
+    session_dir,
+    controller,
+    camera,
+    stereo_model,
+    load_program: Callable[[np.ndarray, Path], None] | None = None,
+    progress: Callable[[str], None] = lambda message: None,
+    on_posture: Callable[[PostureReport], None] = lambda report: None,
+    stop_after: int | None = None,
+) -> CaptureSummary:
+    """Run (or resume) a guided capture into ``session_dir``.
+
+    Parameters
+    ----------
+    config : StationConfig
+    session_dir : path
+        New or existing session (resumed when it holds a capture plan).
+    controller : drivers.controller.Controller
+        Connected.
+    camera : drivers.camera.Camera
+        Connected.
+    stereo_model : drivers.camera.stereo.StereoModel
+    load_program : callable, optional
+        ``load_program(postures, rapid_dir)``: puts the generated program on the controller (the mock
+        station does it directly). Without it, the operator loads ``rapid_dir/*.mod`` and the capture
+        waits until the controller reports the plan's posture count.
+    progress : callable
+        Receives one-line messages.
+    on_posture : callable
+        Receives a :class:`PostureReport` after each posture.
+    stop_after : int, optional
+        Stop after this many postures of this run (tests of the resume).
+
+    Raises
+    ------
+    CaptureError, ControllerError, CameraError
+    """
+    from ..rapid.generate import render_program, write_modules
+    from ..rapid.station import station_from_dict
+
+    started = time.monotonic()
+    session_dir = Path(session_dir)
+    session = _session_record(session_dir)
+    robot = load_robot(config.robot)
+    if session is not None and "capture" in session.extra:
+        record = session.extra["capture"]
+        plan_joints = np.array(record["plan_joints_deg"], float)
+        plan_score = record.get("plan_score", {})
+        progress(f"resuming {session_dir}: {len(session.postures)} of {len(plan_joints)} postures on disk")
+    elif session is not None:
+        raise CaptureError(f"{session_dir} holds a session that was not made by capture; choose a new folder")
+    else:
+        plan = _new_plan(config, controller, camera, stereo_model, progress)
+        plan_joints = plan.joints_deg
+        plan_score = {k: float(v) for k, v in plan.score.__dict__.items()}
+        for note in plan.notes:
+            progress(f"plan warning: {note}")
+        session = Session(setup="eye_in_hand", robot=config.robot, target=config.target, extra={"capture": {
+            "plan_joints_deg": [[round(float(v), 4) for v in row] for row in plan_joints],
+            "plan_score": plan_score,
+            "board_estimate": pose_from_transform(plan.board2base),
+            "nominal_mount": pose_from_transform(plan.cam2tool0),
+            "skipped": {},
+            "config": config.to_dict(),
+        }})
+        create_session(session_dir, session)
+        plan_joints = np.round(plan_joints, 4)  # as embedded in the RAPID program
+    rapid_dir = session_dir / "rapid"
+    if not rapid_dir.is_dir():
+        station = station_from_dict(config.rapid_dict(plan_joints), config.source)
+        write_modules(render_program(station, plan_joints), rapid_dir)
+        progress(f"RAPID program written to {rapid_dir}")
+    total = len(plan_joints)
+    if load_program is not None:
+        load_program(plan_joints, rapid_dir)
+        controller.close()  # the posture count is read at connect: read it again
+        controller.connect()
+    _wait_for_program(controller, total, rapid_dir, progress)
+    done = {p.index for p in session.postures}
+    already = sorted(k + 1 for k in done)
+    skipped: dict = {}
+    captured: list = []
+    record = session.extra["capture"]
+
+    # A robot still waiting at a posture (a run stopped between the grab and the ACK).
+    status = controller.status()
+    if status.moving:
+        status = controller.wait_at_rest()
+    if status.awaiting_ack and status.posture:
+        k = status.posture
+        if (k - 1) in done:
+            controller.acknowledge(k)
+            progress(f"posture {k} was already on disk: acknowledged")
+    remaining = [k for k in range(1, total + 1) if (k - 1) not in done]
+    for n, k in enumerate(remaining):
+        if stop_after is not None and n >= stop_after:
+            break
+        t0 = time.monotonic()
+        status = controller.status()
+        if not (status.awaiting_ack and status.posture == k):
+            controller.goto_posture(k, expected_joints=plan_joints[k - 1])
+        report = _capture_posture(config, session_dir, controller, camera, stereo_model, robot, k, total,
+                                  plan_joints[k - 1])
+        report.elapsed_s = time.monotonic() - t0
+        if report.ok:
+            captured.append(k)
+            record["skipped"].pop(str(k), None)
+        else:
+            skipped[k] = report.message
+            record["skipped"][str(k)] = report.message
+        session.extra["capture"] = record
+        _write_header(session_dir, session)
+        controller.acknowledge(k)
+        on_posture(report)
+    return CaptureSummary(session_dir, total, captured, already, skipped, time.monotonic() - started, plan_score)
+
+
+def _wait_for_program(controller, total: int, rapid_dir: Path, progress, timeout_s: float = 600.0) -> None:
+    info = controller.info()
+    if info.postures == total:
+        return
+    progress(f"the controller's program holds {info.postures} postures, the plan {total}: load the modules in "
+             f"{rapid_dir} into the robot task and start main (waiting up to {timeout_s / 60:.0f} min)")
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        time.sleep(2.0)
+        controller.close()
+        controller.connect()
+        if controller.info().postures == total:
+            return
+    raise CaptureError(f"the controller never reported the plan's {total} postures; load {rapid_dir}/*.mod and retry")
+
+
+def _capture_posture(config, session_dir, controller, camera, model, robot, k, total, planned) -> PostureReport:
+    joints = controller.read_joints()
+    pose = controller.read_tool0_pose()
+    tool02base = transform_from_pose(pose.position_mm, pose.quaternion_wxyz)
+    expected = robot.forward_transform(joints)
+    mismatch = float(translation_error_mm(expected, tool02base))
+    if mismatch > config.capture.max_pose_mismatch_mm or rotation_error_deg(expected, tool02base) > 0.05:
+        raise CaptureError(f"posture {k}: the controller's flange pose is {mismatch:.2f} mm from our {robot.name} "
+                           "kinematics of its joints: check the robot model, and that CRobT uses tool0 and wobj0")
+    if np.max(np.abs(joints - planned)) > 0.05:
+        raise CaptureError(f"posture {k}: the robot stands at {np.round(joints, 3).tolist()}, not at the planned "
+                           f"{np.round(planned, 3).tolist()}: is the right program loaded?")
+    problem = "no frame"
+    result = frame = None
+    attempts = 0
+    for attempts in range(1, config.capture.retries + 2):
+        try:
+            result, frame = measure_board(camera, model, config.target, config.camera.grab_timeout_s)
+        except CameraError as exc:
+            problem = str(exc)
+            continue
+        problem = _quality_problem(result, config)
+        if problem is None:
+            break
+    if problem is not None:
+        return PostureReport(k, total, False, f"posture {k} skipped after {attempts} attempt(s): {problem}",
+                             result.quality if result is not None else {}, attempts)
+    extra = {"quality": {key: (round(v, 4) if isinstance(v, float) else v) for key, v in result.quality.items()},
+             "plan_index": k, "captured_at": time.strftime("%Y-%m-%dT%H:%M:%S")}
+    if config.capture.save_images and frame is not None:
+        import cv2
+
+        images = session_dir / "images"
+        images.mkdir(exist_ok=True)
+        cv2.imwrite(str(images / f"{k - 1:03d}_left.png"), frame.left)
+        cv2.imwrite(str(images / f"{k - 1:03d}_right.png"), frame.right)
+        extra["images"] = [f"images/{k - 1:03d}_left.png", f"images/{k - 1:03d}_right.png"]
+    write_posture(session_dir, Posture(index=k - 1, tool0_in_base=tool02base, joints_deg=joints,
+                                       points_mm=result.points_mm, extra=extra))
+    q = result.quality
+    return PostureReport(k, total, True, f"posture {k}: {q['corners']} corners at {q['distance_mm']:.0f} mm, "
+                         f"rows {q['row_disagreement_max_px']:.2f} px, plane {q['plane_rms_mm']:.2f} mm", q, attempts)

@@ -1,0 +1,83 @@
+"""Opening the station's hardware, real or the embedded mock, behind one object."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from contextlib import contextmanager
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import StationConfig
+
+
+@dataclass
+class StationLink:
+    """A connected controller and camera, and what the capture needs to know about them.
+
+    Attributes
+    ----------
+    controller : drivers.controller.Controller
+    camera : drivers.camera.Camera
+    stereo_model : drivers.camera.stereo.StereoModel
+    load_program : callable or None
+        Puts a generated program on the controller (the mock can; a real controller is loaded by
+        the operator).
+    mock : mocks.station.MockStation or None
+        The embedded station, with its hidden truth.
+    """
+
+    controller: object
+    camera: object
+    stereo_model: object
+    load_program: Callable | None = None
+    mock: object = None
+
+    @property
+    def truth_cam2tool0(self) -> np.ndarray | None:
+        return None if self.mock is None else self.mock.truth["cam2tool0"]
+
+
+def _controller_options(config: StationConfig) -> dict:
+    c = config.controller
+    common = {"timeout": c.timeout_s, "motion_timeout": c.motion_timeout_s, "robot": config.robot}
+    if c.protocol == "socket":
+        return {"host": c.host, "port": c.port, **common}
+    if c.protocol == "serial":
+        return {"url": c.serial_url, **common}
+    options = {"host": c.host, "port": c.port, **common}
+    if c.modbus_map:
+        options["register_map"] = c.modbus_map
+    return options
+
+
+def mock_spec(config: StationConfig):
+    """The embedded mock station described by the configuration's ``mock`` section."""
+    from ..mocks.station import MockStationSpec
+
+    m = config.mock
+    return MockStationSpec(protocol=m.protocol, board=config.target, kinematic_error_mm=m.kinematic_error_mm,
+                           kinematic_error_deg=m.kinematic_error_deg, time_scale=m.time_scale, seed=m.seed)
+
+
+@contextmanager
+def open_station(config: StationConfig, mock: bool):
+    """Yield a :class:`StationLink`; everything is closed (and the mock stopped) on exit."""
+    from ..drivers.controller import open_controller
+
+    if mock:
+        from ..mocks.station import MockStation
+
+        with MockStation(mock_spec(config)) as station:
+            options = {**station.controller_options(), "timeout": config.controller.timeout_s,
+                       "motion_timeout": config.controller.motion_timeout_s, "robot": config.robot}
+            with open_controller(station.spec.protocol, **options) as controller, station.camera as camera:
+                yield StationLink(controller, camera, camera.model, lambda postures, _dir: station.load_program(postures),
+                                  station)
+        return
+    from ..drivers.camera import open_camera
+    from ..drivers.camera.stereo import load_stereo_model, nominal_xb3_model
+
+    model = load_stereo_model(config.camera.stereo_model) if config.camera.stereo_model else nominal_xb3_model()
+    with open_controller(config.controller.protocol, **_controller_options(config)) as controller, open_camera(config.camera.backend) as camera:
+        yield StationLink(controller, camera, model)
