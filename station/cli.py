@@ -15,7 +15,8 @@ from ..calibration.errors import HandEyeError
 
 #: Sub-commands in the order ``handeye --help`` lists them: a module name, or ``(command, module)``
 #: when the command's name cannot be a module's (``import`` is a Python keyword).
-COMMANDS = ("simulate", ("import", "import_"), "capture", "triangulate", "calibrate", "benchmark", "robot", "rapid", "mock")
+COMMANDS = ("demo", "capture", "calibrate", "writeback", "simulate", ("import", "import_"), "triangulate", "benchmark", "robot",
+            "rapid", "mock")
 
 DESCRIPTION = """\
 Hand-eye calibration of a stereo camera on an ABB robot flange (eye-in-hand) or beside the robot
