@@ -413,7 +413,9 @@ def verdict(result, problem: HandEyeProblem, thresholds: QualityThresholds | Non
         f"{len(outliers)} of {n} postures rejected ({outlier_text}): that many hints at a systematic problem; check "
         f"that each pose and image belong to the same posture, units (mm) and the board orientation, "
         f"then re-capture",
-        note=f"postures {outlier_text} were left out of the solution; check them (board partly hidden?)" if outliers else ""))
+        note=(f"{'posture' if len(outliers) == 1 else 'postures'} {outlier_text} "
+              f"{'was' if len(outliers) == 1 else 'were'} left out of the solution; check "
+              f"{'it' if len(outliers) == 1 else 'them'} (board partly hidden or misdetected?)") if outliers else ""))
     coverage = rotation_axis_coverage(problem.subset(inlier_mask)) if n_in >= 2 else None
     if coverage is None:
         checks.append(_check("min_rotation_axis_spread_deg", None, t.min_rotation_axis_spread_deg,

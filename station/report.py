@@ -153,22 +153,25 @@ def plot_residuals(result, problem: HandEyeProblem, limit_mm: float | None) -> b
     fig = _figure(10.5, 3.4)
     ax = fig.add_subplot()
     x = np.arange(len(ids))
-    ax.bar(x, values, color=colours, width=0.75)
     median = float(np.nanmedian(values))
+    used = np.array([i not in outliers for i in ids])
+    scale = max(float(np.nanmax(values[used])) if used.any() else 0.0, limit_mm or 0.0, median)
+    top = float(np.nanmax(values))
+    if top > 4.0 * scale > 0:  # a gross outlier would flatten the others: clip it and print its value
+        top = 2.5 * scale
+    ax.bar(x, np.minimum(values, top), color=colours, width=0.75)
     ax.axhline(median, color=_GREY, linestyle=":", linewidth=1.2, label=f"median {median:.2f} mm")
-    top = np.nanmax(values)
     if limit_mm is not None:
         ax.axhline(limit_mm, color=_RED, linestyle="--", linewidth=1.2, label=f"limit {limit_mm:g} mm")
-        top = max(top, limit_mm)
     for k, (i, v) in enumerate(zip(ids, values)):
-        if i in outliers:
-            ax.annotate(f"{v:.2f}", (k, v), ha="center", va="bottom", fontsize=8, color=_RED,
-                        xytext=(0, 2), textcoords="offset points")
+        if i in outliers or v > top:
+            ax.annotate(f"{v:.2f}" + (" (off scale)" if v > top else ""), (k, min(v, top)), ha="center", va="bottom",
+                        fontsize=8, color=_RED, xytext=(0, 2), textcoords="offset points")
     step = max(1, int(np.ceil(len(ids) / 40)))
     ax.set_xticks(x[::step])
     ax.set_xticklabels([str(i) for i in ids][::step], fontsize=8)
     ax.set_xlim(-0.7, len(ids) - 0.3)
-    ax.set_ylim(0, top * 1.15 if top > 0 else 1.0)
+    ax.set_ylim(0, top * 1.18 if top > 0 else 1.0)
     ax.set_xlabel("posture")
     ax.set_ylabel("residual (mm)")
     from matplotlib.patches import Patch
@@ -177,8 +180,8 @@ def plot_residuals(result, problem: HandEyeProblem, limit_mm: float | None) -> b
     if _ORANGE in colours:
         handles.append(Patch(color=_ORANGE, label="used, over the limit"))
     line_handles, _ = ax.get_legend_handles_labels()
-    ax.legend(handles=handles + line_handles, fontsize=8, loc="upper right", ncol=len(handles) + len(line_handles),
-              frameon=False)
+    ax.legend(handles=handles + line_handles, fontsize=8, loc="lower right", bbox_to_anchor=(1.0, 1.0),
+              ncol=len(handles) + len(line_handles), frameon=False)
     _style(ax)
     ax.grid(False, axis="x")
     return _png(fig)
