@@ -269,3 +269,12 @@ def test_comparison_skips_methods_that_cannot_solve(good_session):
     truth = scene(12)
     for r in results.values():
         assert np.linalg.norm(r.x[:3, 3] - truth.x_true[:3, 3]) < 2.0
+
+
+def test_shipped_thresholds_file_matches_the_defaults():
+    from pathlib import Path
+
+    import handeye.station
+
+    shipped = Path(handeye.station.__file__).parent / "quality_thresholds.yaml"
+    assert load_thresholds(shipped) == QualityThresholds()

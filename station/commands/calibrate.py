@@ -28,8 +28,9 @@ residual. --json FILE writes the machine-readable result ('-' for standard outpu
 no network needed) with a PASS/FAIL verdict against the quality thresholds, the tframe literal,
 uncertainty, outliers, per-posture residuals, rotation-axis coverage, a comparison with the methods
 robust, mcb, mc, park, tsai and daniilidis, and the repeatability of the board corners in base.
-Without FILE it is SESSION/report.html. The verdict uses the default thresholds, or those of
---thresholds FILE.yaml (lines 'key: number', or a station config's 'quality:' section); keys:
+Without FILE it is SESSION/report.html (then put --report after SESSION). The verdict uses the
+default thresholds, or those of --thresholds FILE.yaml (lines 'key: number', or a station config's
+'quality:' section; a commented example with the defaults: station/quality_thresholds.yaml); keys:
   max_d_org_mm (1.0)  max_posture_residual_mm (2.0)  max_sigma_translation_mm (0.2)
   max_sigma_rotation_deg (0.02)  min_inlier_postures (12)  max_outlier_fraction (0.2)
   min_rotation_axis_spread_deg (10)  min_median_rotation_deg (15)
