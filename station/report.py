@@ -18,7 +18,6 @@ import datetime as _dt
 import html
 import io
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -533,14 +532,16 @@ def _metrics_table(result) -> str:
 
 
 def _write_atomic(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    """Write through a temporary file in the same folder and rename it (created with the user's umask,
+    not mkstemp's 0600, so the report stays readable by others on a shared station PC)."""
+    tmp = path.parent / f".{path.name}.{os.getpid()}.tmp"
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+        with open(tmp, "w", encoding="utf-8") as handle:
             handle.write(text)
         os.replace(tmp, path)
     except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+        if tmp.exists():
+            tmp.unlink()
         raise
 
 
