@@ -24,8 +24,23 @@ Classic AX = XB solvers (calibration/classic/README.md says what each minimises)
 The text report gives the pose as a RAPID tframe literal, the quality figures and each posture's
 residual. --json FILE writes the machine-readable result ('-' for standard output).
 
-Example:
+--report [FILE] also writes the calibration report: one self-contained HTML file (plots embedded,
+no network needed) with a PASS/FAIL verdict against the quality thresholds, the tframe literal,
+uncertainty, outliers, per-posture residuals, rotation-axis coverage, a comparison with the methods
+robust, mcb, mc, park, tsai and daniilidis, and the repeatability of the board corners in base.
+Without FILE it is SESSION/report.html (then put --report after SESSION). The verdict uses the
+default thresholds, or those of --thresholds FILE.yaml (lines 'key: number', or a station config's
+'quality:' section; a commented example with the defaults: station/quality_thresholds.yaml); keys:
+  max_d_org_mm (1.0)  max_posture_residual_mm (2.0)  max_sigma_translation_mm (0.2)
+  max_sigma_rotation_deg (0.02)  min_inlier_postures (12)  max_outlier_fraction (0.2)
+  min_rotation_axis_spread_deg (10)  min_median_rotation_deg (15)
+With --report or --thresholds the JSON gains a "verdict" key. A failed verdict still exits 0 (the
+calibration itself succeeded); read "verdict.passed" in the JSON to act on it.
+
+Examples:
   handeye calibrate my_session --method mcb --json result.json
+  handeye calibrate my_session --report                      # writes my_session/report.html
+  handeye calibrate my_session --report out.html --thresholds station_quality.yaml
 """
 
 
@@ -36,17 +51,42 @@ def add_parser(sub):
     p.add_argument("--method", metavar="NAME", help="solver (see below); default: the recommended one")
     p.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' = stdout)")
     p.add_argument("--quiet", action="store_true", help="no text report (with --json FILE)")
+    p.add_argument("--report", metavar="FILE", nargs="?", const="",
+                   help="write the HTML calibration report (default FILE: SESSION/report.html)")
+    p.add_argument("--thresholds", metavar="FILE.yaml", help="quality thresholds for the verdict (default: built in)")
     return p
 
 
 def run(args) -> int:
-    from ..calibrate import calibrate_session_folder
-    from ..report_text import calibration_summary
-    from ..output import write_json
+    import sys
 
+    from ..calibrate import calibrate_session_folder, judge_calibration, report_calibration, report_path_for
+    from ..output import write_json
+    from ..report_text import calibration_summary
+
+    wants_report = args.report is not None
+    if args.thresholds:  # a bad thresholds file fails before any solving
+        from ..quality import load_thresholds
+
+        load_thresholds(args.thresholds)
+    report_path = report_path_for(args.session, args.report) if wants_report else None
+    if report_path is not None and not report_path.parent.is_dir():
+        from ...calibration.errors import HandEyeError
+
+        raise HandEyeError(f"cannot write the report {report_path}: folder {report_path.parent} does not exist")
     outcome = calibrate_session_folder(args.session, args.method)
+    verdict = judge_calibration(outcome, args.thresholds) if (wants_report or args.thresholds) else None
+    written = report_calibration(outcome, report_path, verdict=verdict).path if wants_report else None
     if args.json:
-        write_json(args.json, outcome.result.to_json())
+        data = outcome.result.to_json()
+        if verdict is not None:
+            data["verdict"] = verdict.to_json()
+        write_json(args.json, data)
+    stream = sys.stderr if args.json == "-" else sys.stdout
     if not args.quiet and args.json != "-":
         print(calibration_summary(outcome))
+    if not args.quiet and verdict is not None:
+        if written is not None:
+            print(f"\nReport written to {written}", file=stream)
+        print(verdict.line(), file=stream)
     return 0

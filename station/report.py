@@ -1,0 +1,689 @@
+"""The calibration report: one self-contained HTML file a station engineer reads offline.
+
+Everything is inside the file: CSS inline, plots as base64 PNG ``data:`` URIs, no scripts, no links
+to other files or the network, so it opens on a station PC without internet and can be mailed as is.
+
+Contents: the verdict (PASS/FAIL) with the camera pose as a RAPID literal, its uncertainty and the
+outliers; the quality checks with advice; five figures and tables (per-posture residuals,
+rotation-axis coverage, method comparison, repeatability of the board corners in the fixed frame,
+quality metrics and truth errors); the data checks made before solving.
+
+Plots use matplotlib's object API (``Figure`` + Agg canvas): no pyplot, no global backend change.
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime as _dt
+import html
+import io
+import os
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..calibration.errors import CalibrationError, HandEyeError
+from ..calibration.metrics import d_org, fixed_points
+from ..calibration.problem import EYE_IN_HAND, HandEyeProblem
+from ..calibration.transforms import rotation_error_deg
+from ..rapid.literals import pose_literal, rounded_pose
+from .quality import CHECK_LABELS, Verdict, direction_name, format_check_value, rotation_axis_coverage
+
+__all__ = ["COMPARISON_METHODS", "comparison_results", "method_comparison", "write_report"]
+
+#: Methods the report compares by default: the robust default, the paper's mcb and mc, three classics.
+COMPARISON_METHODS = ("robust", "mcb", "mc", "park", "tsai", "daniilidis")
+
+_BLUE, _RED, _ORANGE, _GREY = "#1f5fa8", "#c62828", "#ef8a17", "#8a8a8a"
+
+
+# --------------------------------------------------------------------------------------- numbers
+def comparison_results(problem: HandEyeProblem, methods=COMPARISON_METHODS, truth: dict | None = None,
+                       known: dict | None = None) -> dict:
+    """Solve ``problem`` with several methods: ``{method: CalibrationResult}``.
+
+    Methods that raise :class:`CalibrationError` on these data are left out.
+
+    Parameters
+    ----------
+    problem : HandEyeProblem
+    methods : sequence of str
+    truth : dict, optional
+        ``{'x', 'target2fixed'}`` of a synthetic session (fills ``truth_errors``).
+    known : dict, optional
+        Results already computed (``{method: result}``), reused instead of solving again.
+    """
+    from ..calibration.solve import calibrate
+
+    known = dict(known or {})
+    out = {}
+    for method in methods:
+        if method in known:
+            out[method] = known[method]
+            continue
+        try:
+            out[method] = calibrate(problem, method, truth)
+        except CalibrationError:
+            continue
+    for method, result in known.items():
+        out.setdefault(method, result)
+    return out
+
+
+def method_comparison(problem: HandEyeProblem, chosen, comparison: dict) -> list[dict]:
+    """One row per method: pose, differences from ``chosen`` and ``d_org`` on the same points.
+
+    ``d_org_all_mm`` is eq. 22 on the compact points of ALL postures (the same data for every method);
+    ``d_org_inliers_mm`` leaves out the chosen result's outliers (``None`` when it has none).
+    """
+    inliers = np.array([int(i) not in set(chosen.outliers) for i in problem.posture_ids], dtype=bool)
+    rows = []
+    for name, r in comparison.items():
+        fixed = fixed_points(problem.hand, r.x, problem.compact.points)
+        rows.append({
+            "method": name,
+            "position_mm": [float(v) for v in r.x[:3, 3]],
+            "d_position_mm": float(np.linalg.norm(r.x[:3, 3] - chosen.x[:3, 3])),
+            "d_rotation_deg": float(rotation_error_deg(r.x, chosen.x)),
+            "d_org_all_mm": d_org(fixed),
+            "d_org_inliers_mm": d_org(fixed[inliers]) if chosen.outliers and inliers.sum() >= 2 else None,
+            "outliers": [int(i) for i in r.outliers],
+            "runtime_s": float(r.runtime_s),
+            "truth_errors": r.truth_errors,
+            "chosen": r is chosen or (r.method == chosen.method and np.allclose(r.x, chosen.x)),
+        })
+    return rows
+
+
+def corner_repeatability(problem: HandEyeProblem, result) -> dict:
+    """Board points in the fixed frame, their deviations from the mean over the inliers, per-point RMS.
+
+    Returns
+    -------
+    dict
+        ``deviations`` (n, m, 3) mm, ``centre_deviation`` (n, 3) mm (mean of a posture's deviations =
+        deviation of the board centre), ``inliers`` (n,) bool, ``rms_per_point`` (m,) mm over the
+        inliers, ``mean_points`` (m, 3), ``frame`` (``base`` or ``tool0``).
+    """
+    fixed = fixed_points(problem.hand, result.x, problem.points_cam)
+    inliers = np.array([int(i) not in set(result.outliers) for i in problem.posture_ids], dtype=bool)
+    mean = fixed[inliers].mean(axis=0)
+    deviations = fixed - mean
+    rms = np.sqrt(np.mean(np.sum(deviations[inliers] ** 2, axis=-1), axis=0))
+    return {
+        "deviations": deviations,
+        "centre_deviation": deviations.mean(axis=1),
+        "inliers": inliers,
+        "rms_per_point": rms,
+        "mean_points": mean,
+        "frame": "base" if problem.setup == EYE_IN_HAND else "tool0",
+    }
+
+
+# ----------------------------------------------------------------------------------------- plots
+def _figure(width: float, height: float):
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height), dpi=100)
+    fig.patch.set_facecolor("white")
+    return fig
+
+
+def _png(fig) -> bytes:
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=100, bbox_inches="tight", facecolor="white")
+    return buffer.getvalue()
+
+
+def _style(ax):
+    ax.grid(True, alpha=0.25)
+    for side in ("top", "right"):
+        ax.spines[side].set_visible(False)
+
+
+def plot_residuals(result, problem: HandEyeProblem, limit_mm: float | None) -> bytes:
+    """Bar chart of each posture's residual (mm); outliers red, inliers over the limit orange."""
+    ids = [int(i) for i in problem.posture_ids]
+    values = np.array([result.residuals_mm.get(i, np.nan) for i in ids])
+    outliers = {int(i) for i in result.outliers}
+    colours = [_RED if i in outliers else (_ORANGE if limit_mm is not None and v > limit_mm else _BLUE)
+               for i, v in zip(ids, values)]
+    fig = _figure(10.5, 3.4)
+    ax = fig.add_subplot()
+    x = np.arange(len(ids))
+    median = float(np.nanmedian(values))
+    used = np.array([i not in outliers for i in ids])
+    scale = max(float(np.nanmax(values[used])) if used.any() else 0.0, limit_mm or 0.0, median)
+    top = float(np.nanmax(values))
+    if top > 4.0 * scale > 0:  # a gross outlier would flatten the others: clip it and print its value
+        top = 2.5 * scale
+    ax.bar(x, np.minimum(values, top), color=colours, width=0.75)
+    ax.axhline(median, color=_GREY, linestyle=":", linewidth=1.2, label=f"median {median:.2f} mm")
+    if limit_mm is not None:
+        ax.axhline(limit_mm, color=_RED, linestyle="--", linewidth=1.2, label=f"limit {limit_mm:g} mm")
+    for k, (i, v) in enumerate(zip(ids, values)):
+        if i in outliers or v > top:
+            ax.annotate(f"{v:.2f}" + (" (off scale)" if v > top else ""), (k, min(v, top)), ha="center", va="bottom",
+                        fontsize=8, color=_RED, xytext=(0, 2), textcoords="offset points")
+    step = max(1, int(np.ceil(len(ids) / 40)))
+    ax.set_xticks(x[::step])
+    ax.set_xticklabels([str(i) for i in ids][::step], fontsize=8)
+    ax.set_xlim(-0.7, len(ids) - 0.3)
+    ax.set_ylim(0, top * 1.18 if top > 0 else 1.0)
+    ax.set_xlabel("posture")
+    ax.set_ylabel("residual (mm)")
+    from matplotlib.patches import Patch
+
+    handles = [Patch(color=_BLUE, label="used"), Patch(color=_RED, label="outlier (left out)")]
+    if _ORANGE in colours:
+        handles.append(Patch(color=_ORANGE, label="used, over the limit"))
+    line_handles, _ = ax.get_legend_handles_labels()
+    ax.legend(handles=handles + line_handles, fontsize=8, loc="lower right", bbox_to_anchor=(1.0, 1.0),
+              ncol=len(handles) + len(line_handles), frameon=False)
+    _style(ax)
+    ax.grid(False, axis="x")
+    return _png(fig)
+
+
+def _hemisphere(ax, axes, angles, centre: int, frame: str, vmax: float, weakest):
+    """Orthographic view of the unit sphere looking along +``centre`` axis; axes and their opposites
+    are both drawn, so the visible hemisphere shows every axis once."""
+    import matplotlib.colors as mcolors
+
+    pts = np.concatenate([axes, -axes]) if len(axes) else np.zeros((0, 3))
+    ang = np.concatenate([angles, angles]) if len(angles) else np.zeros(0)
+    u_axis, v_axis = [(1, 2), (2, 0), (0, 1)][centre]  # right-handed screen axes for each view
+    visible = pts[:, centre] >= 0
+    theta = np.linspace(0, 2 * np.pi, 200)
+    ax.plot(np.cos(theta), np.sin(theta), color="black", linewidth=1.0)
+    for elevation in (30, 60):  # circles at 30 and 60 deg from the centre axis
+        r = np.sin(np.radians(elevation))
+        ax.plot(r * np.cos(theta), r * np.sin(theta), color=_GREY, linewidth=0.6, linestyle=":")
+    ax.plot([-1, 1], [0, 0], color=_GREY, linewidth=0.5)
+    ax.plot([0, 0], [-1, 1], color=_GREY, linewidth=0.5)
+    order = np.argsort(ang[visible])
+    sc = ax.scatter(pts[visible, u_axis][order], pts[visible, v_axis][order], c=ang[visible][order],
+                    s=10 + 40 * ang[visible][order] / max(vmax, 1e-9), cmap="viridis",
+                    norm=mcolors.Normalize(0, vmax), edgecolors="none", alpha=0.85, zorder=3)
+    names = "xyz"
+    ax.annotate(f"{frame} {names[u_axis]}", (1.0, 0), xytext=(4, 0), textcoords="offset points", va="center", fontsize=9)
+    ax.annotate(f"{frame} {names[v_axis]}", (0, 1.0), xytext=(0, 4), textcoords="offset points", ha="center",
+                va="bottom", fontsize=9)
+    ax.plot([0], [0], marker="+", color="black", markersize=9)
+    w = np.asarray(weakest, float) * (1 if weakest[centre] >= 0 else -1)
+    ax.scatter([w[u_axis]], [w[v_axis]], s=260, facecolors="none", edgecolors=_RED, linewidths=2.0, zorder=4)
+    ax.set_title(f"seen from {frame} +{names[centre]}\n(centre: turning about {names[centre]})", fontsize=10)
+    ax.set_xlim(-1.25, 1.35)
+    ax.set_ylim(-1.2, 1.25)
+    ax.set_aspect("equal")
+    ax.axis("off")
+    return sc
+
+
+def plot_axis_coverage(problem: HandEyeProblem, result) -> tuple[bytes, object]:
+    """Rotation axes of the relative flange motions (inlier postures) on two hemispheres, plus the RMS
+    rotation about each axis of the hand frame."""
+    inliers = np.array([int(i) not in set(result.outliers) for i in problem.posture_ids], dtype=bool)
+    coverage = rotation_axis_coverage(problem.subset(inliers))
+    vmax = max(90.0, float(coverage.angles_deg.max()) if coverage.angles_deg.size else 90.0)
+    fig = _figure(12.5, 4.9)
+    grid = fig.add_gridspec(2, 3, width_ratios=[1, 1, 0.8], height_ratios=[1, 0.045], wspace=0.3, hspace=0.12)
+    ax1, ax2 = fig.add_subplot(grid[0, 0]), fig.add_subplot(grid[0, 1])
+    sc = _hemisphere(ax1, coverage.axes, coverage.angles_deg, 2, coverage.frame, vmax, coverage.weakest_direction)
+    _hemisphere(ax2, coverage.axes, coverage.angles_deg, 0, coverage.frame, vmax, coverage.weakest_direction)
+    cax = fig.add_subplot(grid[1, 0:2])
+    bar = fig.colorbar(sc, cax=cax, orientation="horizontal")
+    bar.set_label("rotation angle between the two postures (deg)     red ring: least exercised direction", fontsize=9)
+    ax3 = fig.add_subplot(grid[0, 2])
+    ax3.bar(["x", "y", "z"], coverage.rms_about_axes_deg, color=_BLUE, width=0.6)
+    for k, v in enumerate(coverage.rms_about_axes_deg):
+        ax3.annotate(f"{v:.1f}", (k, v), ha="center", va="bottom", fontsize=9, xytext=(0, 2), textcoords="offset points")
+    ax3.set_title(f"rotation about each {coverage.frame} axis\n(RMS over posture pairs)", fontsize=10)
+    ax3.set_xlabel(f"{coverage.frame} axis")
+    ax3.set_ylabel("deg")
+    ax3.set_ylim(0, max(coverage.rms_about_axes_deg.max() * 1.2, 1.0))
+    _style(ax3)
+    ax3.grid(False, axis="x")
+    return _png(fig), coverage
+
+
+def plot_method_comparison(rows: list[dict]) -> bytes:
+    """Horizontal bars per method: position and rotation difference from the chosen result, d_org."""
+    names = [r["method"] + (" (chosen)" if r["chosen"] else "") for r in rows]
+    colours = [_BLUE if r["chosen"] else _GREY for r in rows]
+    panels = [("d_position_mm", "position difference\nfrom the chosen (mm)", "{:.3f}"),
+              ("d_rotation_deg", "rotation difference\nfrom the chosen (deg)", "{:.4f}"),
+              ("d_org_all_mm", "d_org, all postures\n(mm)", "{:.3f}")]
+    if any(r["d_org_inliers_mm"] is not None for r in rows):
+        panels.append(("d_org_inliers_mm", "d_org without the chosen\nresult's outliers (mm)", "{:.3f}"))
+    fig = _figure(12.5, 0.42 * len(rows) + 1.5)
+    y = np.arange(len(rows))[::-1]
+    for k, (key, title, fmt) in enumerate(panels):
+        ax = fig.add_subplot(1, len(panels), k + 1)
+        values = np.array([r[key] for r in rows])
+        ax.barh(y, values, color=colours, height=0.6)
+        top = values.max() if values.size and values.max() > 0 else 1.0
+        for yy, v in zip(y, values):
+            ax.annotate(fmt.format(v), (v, yy), xytext=(3, 0), textcoords="offset points", va="center", fontsize=8)
+        ax.set_xlim(0, top * 1.35)
+        ax.set_yticks(y)
+        ax.set_yticklabels(names if k == 0 else [""] * len(rows), fontsize=9)
+        ax.set_title(title, fontsize=10)
+        _style(ax)
+        ax.grid(False, axis="y")
+    fig.subplots_adjust(wspace=0.16)
+    return _png(fig)
+
+
+def _grid_shape(points_2d: np.ndarray):
+    """``(ny, nx)`` when the points form a full row-major grid (index = row * nx + col), else None."""
+    xs, ys = np.unique(np.round(points_2d[:, 0], 6)), np.unique(np.round(points_2d[:, 1], 6))
+    if len(xs) * len(ys) != len(points_2d) or len(xs) < 2 or len(ys) < 2:
+        return None
+    expected = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
+    return (len(ys), len(xs)) if np.allclose(expected, np.round(points_2d, 6)) else None
+
+
+def plot_repeatability(problem: HandEyeProblem, result, rep: dict) -> tuple[bytes, list]:
+    """Deviations of the board points from their mean in the fixed frame, top and side views.
+
+    Returns the PNG and the outlier postures whose board centre lies beyond the plotted frame.
+    """
+    dev, centre, inliers = rep["deviations"], rep["centre_deviation"], rep["inliers"]
+    ids = np.array([int(i) for i in problem.posture_ids])
+    frame = rep["frame"]
+    fig = _figure(11.0, 5.0)
+    limit = 1.15 * float(np.max(np.abs(dev[inliers]))) if inliers.any() else 1.0
+    limit = max(limit, 0.05)  # noise-free data: keep readable ticks
+    clipped = set()
+    for k, (a, b, view) in enumerate(((0, 1, "top view"), (0, 2, "side view"))):
+        ax = fig.add_subplot(1, 2, k + 1)
+        inl = dev[inliers].reshape(-1, 3)
+        ax.scatter(inl[:, a], inl[:, b], s=3, color=_GREY, alpha=0.35, edgecolors="none", label="corners, used postures")
+        ax.scatter(centre[inliers, a], centre[inliers, b], s=24, color=_BLUE, edgecolors="white", linewidths=0.5,
+                   label="board centre, one per posture", zorder=3)
+        if (~inliers).any():
+            out = dev[~inliers].reshape(-1, 3)
+            ax.scatter(out[:, a], out[:, b], s=3, color=_RED, alpha=0.35, edgecolors="none", label="corners, outliers")
+            ax.scatter(centre[~inliers, a], centre[~inliers, b], s=44, color=_RED, marker="X",
+                       label="board centre, outliers", zorder=4)
+            for i, c in zip(ids[~inliers], centre[~inliers]):
+                if max(abs(c[a]), abs(c[b])) > limit:
+                    clipped.add(int(i))
+                else:
+                    ax.annotate(str(i), (c[a], c[b]), xytext=(4, 2), textcoords="offset points", fontsize=8, color=_RED)
+        ax.axhline(0, color="black", linewidth=0.5)
+        ax.axvline(0, color="black", linewidth=0.5)
+        ax.set_xlim(-limit, limit)
+        ax.set_ylim(-limit, limit)
+        ax.set_aspect("equal")
+        ax.set_xlabel(f"{frame} {'xyz'[a]} deviation (mm)")
+        ax.set_ylabel(f"{frame} {'xyz'[b]} deviation (mm)")
+        ax.set_title(f"{view}: {frame} {'xyz'[a]} and {'xyz'[b]}", fontsize=10)
+        ax.locator_params(nbins=7)
+        _style(ax)
+        if k == 0:
+            handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8.5, frameon=False, markerscale=2,
+               bbox_to_anchor=(0.5, -0.02))
+    fig.subplots_adjust(bottom=0.2, wspace=0.3)
+    return _png(fig), sorted(clipped)
+
+
+def plot_point_rms(problem: HandEyeProblem, rep: dict) -> bytes:
+    """The RMS deviation of each board point over the used postures, laid out on the board (mm)."""
+    import matplotlib.colors as mcolors
+
+    target = problem.target_points if problem.target_points is not None else problem.compact.target_points
+    rms = rep["rms_per_point"]
+    norm = mcolors.Normalize(0, max(float(rms.max()), 0.01))
+    cmap = "Blues"
+    shape = _grid_shape(target[:, :2]) if target is not None and len(target) == len(rms) else None
+    if shape is not None:
+        ny, nx = shape
+        fig = _figure(min(11.0, 1.2 + 0.62 * nx), 0.9 + 0.55 * ny)
+        ax = fig.add_subplot()
+        image = ax.imshow(rms.reshape(ny, nx), cmap=cmap, norm=norm, origin="upper", aspect="equal")
+        if nx * ny <= 300:
+            for k, value in enumerate(rms):
+                ax.text(k % nx, k // nx, f"{value:.2f}", ha="center", va="center", fontsize=8,
+                        color="white" if norm(value) > 0.6 else "black")
+        ax.set_xticks(range(nx))
+        ax.set_yticks(range(ny))
+        ax.set_xlabel("board column (along target x)")
+        ax.set_ylabel("board row (along target y)")
+        ax.tick_params(labelsize=8)
+    else:
+        fig = _figure(6.0, 3.2)
+        ax = fig.add_subplot()
+        pts = target[:, :2] if target is not None and len(target) == len(rms) else np.c_[np.arange(len(rms)), 0 * rms]
+        image = ax.scatter(pts[:, 0], pts[:, 1], c=rms, cmap=cmap, norm=norm, s=300, marker="s", edgecolors="black")
+        for k, (px, py) in enumerate(pts):
+            ax.annotate(f"point {k}: {rms[k]:.2f}", (px, py), xytext=(0, 14), textcoords="offset points",
+                        ha="center", fontsize=8)
+        ax.set_xlabel("target x (mm)")
+        ax.set_ylabel("target y (mm)")
+        ax.margins(0.3)
+        ax.set_aspect("equal")
+    ax.set_title("RMS deviation of each board point over the used postures (mm)", fontsize=10, pad=8)
+    bar = fig.colorbar(image, ax=ax, fraction=0.04, pad=0.02)
+    bar.set_label("mm")
+    return _png(fig)
+
+
+# ------------------------------------------------------------------------------------------ HTML
+_CSS = """
+body{font-family:"Segoe UI",Arial,Helvetica,sans-serif;margin:0;background:#f3f4f6;color:#1b1b1b;font-size:15px}
+main{max-width:1280px;margin:0 auto;padding:18px 24px 40px}
+h1{font-size:24px;margin:6px 0 2px} h2{font-size:19px;margin:28px 0 8px;border-bottom:2px solid #d5d8dc;padding-bottom:4px}
+.sub{color:#555;font-size:13px;margin-bottom:14px}
+section{background:#fff;border-radius:6px;padding:12px 18px 16px;margin-bottom:16px;box-shadow:0 1px 2px rgba(0,0,0,.08)}
+.verdict{font-size:44px;font-weight:800;letter-spacing:2px;padding:10px 20px;border-radius:6px;color:#fff;display:inline-block}
+.pass{background:#2e7d32} .fail{background:#c62828} .none{background:#757575}
+.verdict-line{font-size:15px;margin:8px 0 4px}
+.grid{display:grid;grid-template-columns:repeat(auto-fit,minmax(330px,1fr));gap:6px 28px;margin-top:12px}
+.kv{display:grid;grid-template-columns:170px 1fr;gap:3px 10px;align-items:baseline;align-content:start}
+.kv div:nth-child(odd){color:#555}
+code,.literal{font-family:Consolas,"DejaVu Sans Mono",monospace}
+.literal{background:#f0f3f7;border:1px solid #ccd3dc;border-radius:4px;padding:8px 10px;font-size:16px;
+ display:block;margin:4px 0 10px;word-break:break-all;user-select:all}
+table{border-collapse:collapse;width:100%;font-size:14px;margin:6px 0}
+th,td{border-bottom:1px solid #e1e4e8;padding:5px 8px;text-align:left;vertical-align:top}
+th{background:#f6f7f9;font-weight:600} td.num{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}
+tr.bad td{background:#fdecea} tr.chosen td{background:#e8f0fb;font-weight:600}
+.ok{color:#2e7d32;font-weight:700} .ko{color:#c62828;font-weight:700}
+img{max-width:100%;height:auto;display:block;margin:8px auto}
+.how{color:#444;font-size:13.5px;margin:4px 0}
+.note{color:#555;font-size:13px}
+ul{margin:4px 0 4px 20px;padding:0}
+footer{color:#666;font-size:12.5px;margin-top:18px}
+"""
+
+
+def _e(text) -> str:
+    return html.escape(str(text), quote=True)
+
+
+def _img(png: bytes, alt: str) -> str:
+    return f'<img alt="{_e(alt)}" src="data:image/png;base64,{base64.b64encode(png).decode("ascii")}">'
+
+
+def _num(value, fmt="{:.3f}") -> str:
+    return "n/a" if value is None else fmt.format(value)
+
+
+def _kv(pairs) -> str:
+    return '<div class="kv">' + "".join(f"<div>{_e(k)}</div><div>{v}</div>" for k, v in pairs) + "</div>"
+
+
+def _summary(result, problem, verdict, tooldata_literal, session_path) -> str:
+    x = result.x
+    position, quaternion = rounded_pose(x)
+    euler = Rotation.from_matrix(x[:3, :3]).as_euler("ZYX", degrees=True)
+    eye_in_hand = result.setup == EYE_IN_HAND
+    n = problem.n
+    outliers = [int(i) for i in result.outliers]
+    if verdict is None:
+        banner = '<div class="verdict none">NO VERDICT</div><div class="verdict-line">no thresholds were applied</div>'
+    else:
+        cls, word = ("pass", "PASS") if verdict.passed else ("fail", "FAIL")
+        failed = verdict.failed
+        line = ("every quality check passed" if verdict.passed else
+                f"{len(failed)} of {len(verdict.checks)} checks failed: " + ", ".join(c.name for c in failed)
+                + " (see the advice below)")
+        banner = f'<div class="verdict {cls}">{word}</div><div class="verdict-line">{_e(line)}</div>'
+    literal_label = "tframe (camera in tool0)" if eye_in_hand else "camera pose in base"
+    parts = [banner, f'<div style="margin-top:10px">{_e(literal_label)}, RAPID literal:</div>',
+             f'<code class="literal">{_e(pose_literal(x))}</code>']
+    if tooldata_literal:
+        parts += ["<div>tooldata:</div>", f'<code class="literal">{_e(tooldata_literal)}</code>']
+    elif eye_in_hand:
+        parts.append('<div class="note">tooldata: the load (mass, centre of gravity) comes from the station '
+                     'configuration; <code>handeye writeback</code> writes the full tooldata with this tframe.</div>')
+    pose = [
+        ("position", f"x {position[0]:.3f} &nbsp; y {position[1]:.3f} &nbsp; z {position[2]:.3f} mm"),
+        ("quaternion q1..q4", " &nbsp; ".join(f"{v:.6f}" for v in quaternion)),
+        ("Euler ZYX", f"z {euler[0]:.4f} &nbsp; y {euler[1]:.4f} &nbsp; x {euler[2]:.4f} deg"),
+    ]
+    u = result.uncertainty
+    if u is not None:
+        pose += [("uncertainty, position", "&plusmn; " + " / ".join(f"{v:.3f}" for v in u["translation_mm"])
+                  + " mm (x / y / z, one sigma)"),
+                 ("uncertainty, rotation", "&plusmn; " + " / ".join(f"{v:.4f}" for v in u["rotation_deg"])
+                  + " deg (about x / y / z, one sigma)")]
+    else:
+        pose.append(("uncertainty", f"not estimated by method {_e(result.method)} (the robust default does)"))
+    residual_text = ", ".join(f"{i} ({result.residuals_mm.get(i, float('nan')):.2f} mm)" for i in outliers)
+    facts = [
+        ("session", f"<code>{_e(session_path)}</code>"),
+        ("set-up", _e(result.setup.replace("_", "-"))),
+        ("method", _e(result.method)),
+        ("postures", f"{n} captured, {n - len(outliers)} used, {len(outliers)} outlier{'s' if len(outliers) != 1 else ''}"),
+        ("outliers (residual)", _e(residual_text) if outliers else "none"),
+        ("d_org", f"{result.metrics['d_org_mm']:.3f} mm"),
+        ("solve time", f"{1000 * result.runtime_s:.1f} ms"),
+    ]
+    if result.truth_errors is not None:
+        errors = result.truth_errors
+        text = f"{errors['translation_error_mm']:.3f} mm, {errors['rotation_error_deg']:.4f} deg (synthetic session)"
+        facts.append(("error vs truth", text))
+    return ("<section>" + "".join(parts) + '<div class="grid">' + _kv(pose) + _kv(facts) + "</div></section>")
+
+
+def _checks_table(verdict: Verdict) -> str:
+    rows = []
+    for c in verdict.checks:
+        label = CHECK_LABELS.get(c.name, (c.name,))[0]
+        comparator = "&le;" if c.name.startswith("max_") else "&ge;"
+        status = '<span class="ok">pass</span>' if c.passed else '<span class="ko">FAIL</span>'
+        rows.append(
+            f'<tr class="{"" if c.passed else "bad"}"><td>{status}</td><td>{_e(label)}<br><code class="note">{_e(c.name)}'
+            f'</code></td><td class="num">{_e(format_check_value(c.name, c.value))}</td>'
+            f'<td class="num">{comparator} {_e(format_check_value(c.name, c.limit))}</td><td>{_e(c.advice)}</td></tr>')
+    return ("<table><tr><th></th><th>check (threshold key)</th><th>value</th><th>limit</th><th>what to do</th></tr>"
+            + "".join(rows) + "</table>")
+
+
+def _comparison_table(rows: list[dict]) -> str:
+    with_inliers = any(r["d_org_inliers_mm"] is not None for r in rows)
+    with_truth = any(r["truth_errors"] for r in rows)
+    head = ["method", "x (mm)", "y (mm)", "z (mm)", "&Delta; position (mm)", "&Delta; rotation (deg)", "d_org all (mm)"]
+    if with_inliers:
+        head.append("d_org w/o outliers (mm)")
+    if with_truth:
+        head += ["truth error (mm)", "truth error (deg)"]
+    head += ["outliers", "solve (ms)"]
+    out = ["<table><tr>" + "".join(f"<th>{h}</th>" for h in head) + "</tr>"]
+    for r in rows:
+        cells = [_e(r["method"] + (" (chosen)" if r["chosen"] else ""))]
+        cells += [f'<td class="num">{v:.3f}</td>' for v in r["position_mm"]]
+        cells += [f'<td class="num">{r["d_position_mm"]:.3f}</td>', f'<td class="num">{r["d_rotation_deg"]:.4f}</td>',
+                  f'<td class="num">{r["d_org_all_mm"]:.3f}</td>']
+        if with_inliers:
+            cells.append(f'<td class="num">{_num(r["d_org_inliers_mm"])}</td>')
+        if with_truth:
+            t = r["truth_errors"] or {}
+            cells += [f'<td class="num">{_num(t.get("translation_error_mm"))}</td>',
+                      f'<td class="num">{_num(t.get("rotation_error_deg"), "{:.4f}")}</td>']
+        cells += [f"<td>{_e(', '.join(map(str, r['outliers'])) or '-')}</td>",
+                  f'<td class="num">{1000 * r["runtime_s"]:.1f}</td>']
+        first = f"<td>{cells[0]}</td>"
+        out.append(f'<tr class="{"chosen" if r["chosen"] else ""}">' + first + "".join(cells[1:]) + "</tr>")
+    return "".join(out) + "</table>"
+
+
+def _metrics_table(result) -> str:
+    m = result.metrics
+    rows = [
+        ("d_org", f"{m['d_org_mm']:.3f} mm", "mean distance of a board point from its mean position in the fixed frame (eq. 22)"),
+        ("d_back", f"{m['d_back_mm']:.3f} mm", "mean distance between the same board point seen from two postures (eq. 23)"),
+        ("dR", f"{m['delta_r']:.5f}", "rotation residual of AX = XB, ||R_A R_X - R_X R_B||_F, RMS over posture pairs (eq. 16)"),
+        ("dt", f"{m['delta_t_mm']:.3f} mm", "translation residual of AX = XB, RMS over posture pairs (eq. 16)"),
+    ]
+    if result.truth_errors is not None:
+        rows += [("rotation error", f"{result.truth_errors['rotation_error_deg']:.4f} deg", "against the synthetic truth"),
+                 ("translation error", f"{result.truth_errors['translation_error_mm']:.3f} mm", "against the synthetic truth")]
+    points = "the board corners" if m.get("points") == "corners" else "three board points per posture"
+    used = f"{m.get('postures', '?')} postures" + (" (outliers left out)" if result.outliers else "")
+    body = "".join(f'<tr><td>{_e(a)}</td><td class="num">{_e(b)}</td><td>{_e(c)}</td></tr>' for a, b, c in rows)
+    return (f'<table><tr><th>metric</th><th>value</th><th>meaning</th></tr>{body}</table>'
+            f'<p class="note">Computed on {_e(points)} of {_e(used)}; lower is better.</p>')
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    """Write through a temporary file in the same folder and rename it (created with the user's umask,
+    not mkstemp's 0600, so the report stays readable by others on a shared station PC)."""
+    tmp = path.parent / f".{path.name}.{os.getpid()}.tmp"
+    try:
+        with open(tmp, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        if tmp.exists():
+            tmp.unlink()
+        raise
+
+
+def write_report(path_html, session_path, problem: HandEyeProblem, result, comparison: dict | None = None,
+                 verdict: Verdict | None = None, tooldata_literal: str | None = None,
+                 title: str = "Hand-eye calibration report", findings=None) -> Path:
+    """Write the calibration report as one self-contained HTML file.
+
+    Parameters
+    ----------
+    path_html : str or Path
+        The file to write (written atomically; its folder must exist).
+    session_path : str or Path
+        Shown in the report.
+    problem : HandEyeProblem
+        The data ``result`` was solved from.
+    result : CalibrationResult
+        The calibration to report (normally the robust default).
+    comparison : dict, optional
+        ``{method: CalibrationResult}`` on the same problem (see :func:`comparison_results`); adds the
+        method comparison.
+    verdict : Verdict, optional
+        From :func:`handeye.station.quality.verdict`; adds the PASS/FAIL banner and the checks.
+    tooldata_literal : str, optional
+        The full RAPID tooldata literal when the load data are known.
+    title : str
+    findings : list of Finding, optional
+        Data checks made before solving (``calibration.diagnostics.diagnose_session``).
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    HandEyeError
+        When the folder does not exist or the file cannot be written.
+    """
+    path = Path(path_html)
+    if not path.parent.is_dir():
+        raise HandEyeError(f"cannot write the report {path}: folder {path.parent} does not exist")
+    limit = verdict.thresholds.max_posture_residual_mm if verdict is not None else None
+    fixed_frame = "base" if problem.setup == EYE_IN_HAND else "tool0"
+    hand_frame = "tool0" if problem.setup == EYE_IN_HAND else "base"
+    now = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z")
+    subtitle = (f'<div class="sub">{_e(session_path)} &middot; {_e(result.setup.replace("_", "-"))} &middot; '
+                f"method {_e(result.method)} &middot; generated {_e(now)}</div>")
+    sections = [f"<h1>{_e(title)}</h1>", subtitle,
+                _summary(result, problem, verdict, tooldata_literal, session_path)]
+    if verdict is not None:
+        sections.append("<h2>Quality checks</h2><section>" + _checks_table(verdict)
+                        + '<p class="note">Thresholds: defaults of <code>handeye.station.quality.QualityThresholds</code>'
+                          " unless a thresholds file was given (handeye calibrate --thresholds FILE.yaml).</p></section>")
+
+    # 1 residuals
+    points_text = ("three board points (the fitted board's centre and one point along each board axis)"
+                   if result.method == "robust" else "board points")
+    outliers = [int(i) for i in result.outliers]
+    residual_note = ("Outliers (left out of the solution): "
+                     + ", ".join(f"posture {i}: {result.residuals_mm.get(i, float('nan')):.2f} mm" for i in outliers)
+                     if outliers else "No posture was left out as an outlier.")
+    sections.append(
+        "<h2>1. Per-posture residuals</h2><section>"
+        f'<p class="how">Each bar: the mean distance of that posture\'s {points_text}, carried into {fixed_frame} '
+        f"with the solved camera pose, from their mean positions. Bars should be about equal; a bar well above "
+        f"the others is a posture to check (board partly hidden or misdetected, robot not at rest)."
+        + (f" Dashed line: the limit max_posture_residual_mm = {limit:g} mm." if limit is not None else "") + "</p>"
+        + _img(plot_residuals(result, problem, limit), "per-posture residuals")
+        + f'<p class="note">{_e(residual_note)}</p></section>')
+
+    # 2 rotation-axis coverage
+    png, coverage = plot_axis_coverage(problem, result)
+    sections.append(
+        "<h2>2. Rotation-axis coverage</h2><section>"
+        f'<p class="how">Every dot is the rotation axis of the flange motion between two used postures, in {hand_frame} '
+        f"coordinates, drawn on a unit sphere seen from two sides (an axis and its opposite are the same, so each "
+        f"view shows every axis once); colour and size grow with the rotation angle. Regions without dots are "
+        f"directions the flange never turned about; the red ring marks the least exercised direction "
+        f"({_e(direction_name(coverage.weakest_direction, coverage.frame))}). Right: how much the flange turned "
+        f"about each {hand_frame} axis.</p>"
+        + _img(png, "rotation-axis coverage")
+        + f'<p class="note">{len(coverage.axes)} posture pairs with a usable axis; median rotation between two '
+          f"postures {coverage.median_angle_deg:.1f} deg; axis spread {coverage.spread_deg:.1f} deg "
+          f"(0 = all axes in one plane, 35.3 = even over the sphere).</p></section>")
+
+    # 3 method comparison
+    if comparison:
+        rows = method_comparison(problem, result, comparison)
+        sections.append(
+            "<h2>3. Method comparison</h2><section>"
+            '<p class="how">The same data solved by other methods. &Delta; = difference from the chosen result '
+            "(position distance, rotation angle). d_org (eq. 22) is computed for every method on the same points "
+            "(three board points of every posture, outliers included), so the columns compare like with like. "
+            "Methods that agree within a few tenths of a millimetre confirm the result; one far off is usually a "
+            "method thrown by outliers or weak geometry.</p>"
+            + _comparison_table(rows) + _img(plot_method_comparison(rows), "method comparison") + "</section>")
+    else:
+        sections.append('<h2>3. Method comparison</h2><section><p class="note">Not computed '
+                        "(no comparison results were given).</p></section>")
+
+    # 4 repeatability
+    rep = corner_repeatability(problem, result)
+    rms = rep["rms_per_point"]
+    radial = np.linalg.norm(rep["centre_deviation"][rep["inliers"]], axis=1)
+    scatter_png, clipped = plot_repeatability(problem, result, rep)
+    clipped_note = (f" Outlier postures whose board lies beyond the plotted frame: {', '.join(map(str, clipped))}."
+                    if clipped else "")
+    sections.append(
+        f"<h2>4. Repeatability of the board corners in {fixed_frame}</h2><section>"
+        f'<p class="how">The board does not move, so with the right camera pose every posture should put each board '
+        f"corner at the same place in {fixed_frame}. The plots show each corner's deviation from its mean position "
+        f"over the used postures (grey; outlier postures red) and each posture's board centre (blue), seen from "
+        f"above and from the side. A tight round cloud is noise; a posture's centre far from the rest is a posture "
+        f"to check; an elongated cloud points at a direction the calibration could not pin down.</p>"
+        + _img(scatter_png, "repeatability of the board corners, top and side views")
+        + f'<p class="note">Board centre over the used postures: RMS '
+          f"{float(np.sqrt(np.mean(radial ** 2))) if radial.size else 0.0:.3f} mm, largest "
+          f"{float(radial.max()) if radial.size else 0.0:.3f} mm.{_e(clipped_note)}</p>"
+        + '<p class="how">Per-corner RMS deviation, laid out as on the board (point 0 = the first corner, the '
+          "target origin): a uniform level is camera noise; a "
+          "gradient across the board points at a rotation error of the camera pose or a scale error of the stereo "
+          "model; single hot corners are detection problems.</p>"
+        + _img(plot_point_rms(problem, rep), "per-corner RMS deviation")
+        + f'<p class="note">Per-corner RMS: median {np.median(rms):.3f} mm, largest {rms.max():.3f} mm '
+          f"(point {int(np.argmax(rms))}).</p></section>")
+
+    # 5 metrics
+    sections.append("<h2>5. Quality metrics</h2><section>" + _metrics_table(result) + "</section>")
+
+    if findings is not None:
+        items = "".join(f"<li>{_e(f)}</li>" for f in findings)
+        body = f"<ul>{items}</ul>" if findings else '<p class="note">Nothing odd found in the poses.</p>'
+        sections.append("<h2>Data checks before solving</h2><section>" + body + "</section>")
+    sections.append(
+        "<footer>Units: mm and degrees; quaternions q1..q4 = (w, x, y, z), scalar first. The camera frame is the left "
+        "camera of the stereo head (x right, y down, z forward). Uncertainties are one sigma from the robust "
+        "refinement's covariance; with few postures they tend to be pessimistic. Report written by handeye.</footer>")
+    document = ("<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
+                f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"><title>{_e(title)}</title>"
+                f"<style>{_CSS}</style></head><body><main>" + "\n".join(sections) + "</main></body></html>\n")
+    try:
+        _write_atomic(path, document)
+    except OSError as exc:
+        raise HandEyeError(f"cannot write the report {path}: {exc.strerror or exc}") from None
+    return path
