@@ -41,6 +41,10 @@ __all__ = [
 OUTLIER_Z = 5.0
 #: ... and its residual must also exceed this multiple of the median residual.
 OUTLIER_RATIO = 2.0
+#: ... and these absolute floors (below them nothing is an outlier, whatever the spread): point
+#: residuals in mm, rotation-angle gaps in degrees.
+RESIDUAL_FLOOR_MM = 0.05
+ANGLE_GAP_FLOOR_DEG = 0.3
 
 
 @dataclass(frozen=True)
@@ -171,10 +175,11 @@ def angle_gaps_deg(motions: RelativeMotions) -> np.ndarray:
     return np.nanmedian(table, axis=1)
 
 
-def robust_outliers(values: np.ndarray, z: float = OUTLIER_Z, ratio: float = OUTLIER_RATIO) -> np.ndarray:
-    """Mask of values far above the rest: robust z-score above ``z`` and above ``ratio`` x median."""
+def robust_outliers(values: np.ndarray, floor: float = 0.0, z: float = OUTLIER_Z, ratio: float = OUTLIER_RATIO) -> np.ndarray:
+    """Mask of values far above the rest: robust z-score above ``z``, above ``ratio`` x median and
+    above ``floor`` (so noise-free or very clean data never produce outliers)."""
     values = np.asarray(values, float)
     median = float(np.median(values))
     mad = 1.4826 * float(np.median(np.abs(values - median)))
     score = (values - median) / max(mad, 1e-12 * max(median, 1e-12))
-    return (score > z) & (values > ratio * median)
+    return (score > z) & (values > ratio * median) & (values > floor)

@@ -33,6 +33,7 @@ __all__ = [
     "FORMAT",
     "Posture",
     "Session",
+    "write_text_atomic",
     "write_yaml_atomic",
     "create_session",
     "write_posture",
@@ -131,14 +132,19 @@ def _rounded_pose(transform) -> dict:
     }
 
 
-def write_yaml_atomic(path: Path, data: dict) -> None:
-    """Write ``data`` as YAML to ``path`` atomically (temporary file, fsync, rename)."""
+def write_text_atomic(path, text: str, encoding: str = "utf-8", newline: str | None = None) -> Path:
+    """Write ``text`` to ``path`` atomically: a temporary file in the same folder, flushed to disk,
+    renamed over the target (and the rename itself synced). The file gets the user's usual
+    permissions (umask), not a temporary file's 0600. Used for every file the package writes.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=120)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
-        with os.fdopen(fd, "w") as handle:
+        umask = os.umask(0)
+        os.umask(umask)
+        os.fchmod(fd, 0o666 & ~umask)
+        with os.fdopen(fd, "w", encoding=encoding, newline=newline) as handle:
             handle.write(text)
             handle.flush()
             os.fsync(handle.fileno())
@@ -155,6 +161,12 @@ def write_yaml_atomic(path: Path, data: dict) -> None:
             os.close(dir_fd)
     except OSError:
         pass
+    return path
+
+
+def write_yaml_atomic(path: Path, data: dict) -> None:
+    """Write ``data`` as YAML to ``path`` atomically (see :func:`write_text_atomic`)."""
+    write_text_atomic(path, yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=120))
 
 
 def create_session(path, session: Session, overwrite: bool = False) -> Path:

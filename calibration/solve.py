@@ -16,7 +16,14 @@ from .errors import CalibrationError
 from .kinematics import load_robot
 from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points, posture_residuals
 from .problem import EYE_IN_HAND, HandEyeProblem, hand_poses
-from .refine import angle_gaps_deg, posture_residuals_to, refine_point_consistency, robust_outliers
+from .refine import (
+    ANGLE_GAP_FLOOR_DEG,
+    RESIDUAL_FLOOR_MM,
+    angle_gaps_deg,
+    posture_residuals_to,
+    refine_point_consistency,
+    robust_outliers,
+)
 from .selection import CandidateScorer, select_candidate
 from .session import Session
 from .transforms import pose_from_transform, transform_from_pose
@@ -276,7 +283,7 @@ def _solve_robust(problem: HandEyeProblem, truth: dict | None):
     and outlier detection until the inlier set is stable; never drops more than half the postures."""
     n = problem.n
     gaps = angle_gaps_deg(relative_motions(problem))
-    gap_flags = robust_outliers(gaps)
+    gap_flags = robust_outliers(gaps, ANGLE_GAP_FLOOR_DEG)
     if n - gap_flags.sum() < max(MIN_POSTURES, (n + 1) // 2):
         gap_flags[:] = False
     start_problem = problem.subset(~gap_flags)
@@ -290,7 +297,7 @@ def _solve_robust(problem: HandEyeProblem, truth: dict | None):
         refinement = refine_point_consistency(problem.hand[keep], problem.compact.points[keep], x)
         x = refinement.x
         residuals = posture_residuals_to(problem.hand, x, problem.compact.points, refinement.fixed_points)
-        new_flags = robust_outliers(residuals) | gap_flags
+        new_flags = robust_outliers(residuals, RESIDUAL_FLOOR_MM) | gap_flags
         if new_flags.sum() > n // 2:  # keep the better half at least
             new_flags = residuals > np.sort(residuals)[n - n // 2 - 1]
         if n - new_flags.sum() < MIN_POSTURES or np.array_equal(new_flags, flags):

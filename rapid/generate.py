@@ -17,14 +17,13 @@ joint limits are refused.
 
 from __future__ import annotations
 
-import os
 import string
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..calibration.session import write_text_atomic
 from .checks import check_program
 from .errors import RapidError
 from .literals import format_num, jointtarget_literal, speeddata_literal, tooldata_literal
@@ -166,17 +165,7 @@ def write_modules(modules, directory) -> list[Path]:
         raise RapidError(f"cannot create output folder {folder}: {exc.strerror}") from None
     paths = []
     for module in modules:
-        path = folder / module.filename
-        fd, tmp = tempfile.mkstemp(prefix=f".{module.filename}.", suffix=".tmp", dir=folder)
-        try:
-            with os.fdopen(fd, "w", encoding="ascii", newline="\n") as handle:
-                handle.write(module.text)
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
-        paths.append(path)
+        paths.append(write_text_atomic(folder / module.filename, module.text, encoding="ascii", newline="\n"))
     return paths
 
 

@@ -68,12 +68,14 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
         result = calibrate(problem)
         progress(f"calibrated {problem.n} postures in {result.runtime_s * 1000:.0f} ms (robust default), "
                  f"outliers: {result.outliers or 'none'}")
-        verdict = _verdict(result, problem, config)
+        verdict = station_verdict(result, problem, config)
+        progress(verdict.line())
         report_path = None
         if options.report:
-            report_path = _report(session_dir, problem, result, verdict)
+            report_path = _report(session_dir, problem, result, verdict, config)
+            progress(f"report written to {report_path}")
         outcome = writeback(session_dir, config, result, link.controller,
-                            verdict_passed=verdict["passed"], verdict_reason=verdict["summary"], progress=progress)
+                            verdict_passed=verdict.passed, verdict_reason=verdict.line(), progress=progress)
         truth = link.truth_cam2tool0
     errors = {"rotation_error_deg": float(rotation_error_deg(result.x, truth)),
               "translation_error_mm": float(translation_error_mm(result.x, truth))}
@@ -86,7 +88,7 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
         "uncertainty": result.uncertainty,
         "outliers": result.outliers,
         "metrics": result.metrics,
-        "verdict": verdict,
+        "verdict": verdict.to_json(),
         "tooldata": outcome.literal,
         "session": str(session_dir),
         "report": str(report_path) if report_path else None,
@@ -98,23 +100,21 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
     }
 
 
-def _verdict(result, problem, config) -> dict:
-    """The quality verdict as a plain mapping (``passed``, ``summary``, ``checks``)."""
+def station_verdict(result, problem, config):
+    """The quality verdict against the configuration's thresholds (``station.quality``)."""
     from .quality import QualityThresholds, verdict
 
-    v = verdict(result, problem, QualityThresholds.from_dict(config.quality))
-    failed = [c for c in v.checks if not c.passed]
-    return {"passed": bool(v.passed),
-            "summary": "all checks passed" if not failed else "; ".join(f"{c.name} {c.value:.4g} > {c.limit:g}" for c in failed),
-            "checks": [{"name": c.name, "value": float(c.value), "limit": float(c.limit), "passed": bool(c.passed)}
-                       for c in v.checks]}
+    return verdict(result, problem, QualityThresholds.from_dict(config.quality))
 
 
-def _report(session_dir, problem, result, verdict_mapping):
+def _report(session_dir, problem, result, verdict, config):
+    from ..calibration.diagnostics import diagnose_session
+    from ..calibration.session import read_session
+    from ..rapid.literals import tooldata_literal
     from .report import comparison_results, write_report
-    from .quality import QualityThresholds, verdict
-    from ..rapid.literals import pose_literal
 
-    v = verdict(result, problem, QualityThresholds.from_dict({}))
-    return write_report(session_dir / "report.html", session_dir, problem, result, comparison_results(problem), v,
-                        pose_literal(result.x), title="handeye demo: mock station")
+    findings = diagnose_session(read_session(session_dir))
+    return write_report(session_dir / "report.html", session_dir, problem, result,
+                        comparison_results(problem, known={result.method: result}), verdict,
+                        tooldata_literal(result.x, config.tool.mass_kg, config.tool.cog_mm), title="handeye demo: mock station",
+                        findings=findings)

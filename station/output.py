@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import json
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 from ..calibration.errors import HandEyeError
+from ..calibration.session import write_text_atomic
 
 
 def write_json(target: str, data: dict) -> None:
@@ -20,12 +19,4 @@ def write_json(target: str, data: dict) -> None:
     path = Path(target)
     if path.parent and not path.parent.exists():
         raise HandEyeError(f"cannot write {path}: folder {path.parent} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent if str(path.parent) else ".")
-    try:
-        with os.fdopen(fd, "w") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    write_text_atomic(path, text)

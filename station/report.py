@@ -17,7 +17,6 @@ import base64
 import datetime as _dt
 import html
 import io
-import os
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +25,7 @@ from scipy.spatial.transform import Rotation
 from ..calibration.errors import CalibrationError, HandEyeError
 from ..calibration.metrics import d_org, fixed_points
 from ..calibration.problem import EYE_IN_HAND, HandEyeProblem
+from ..calibration.session import write_text_atomic
 from ..calibration.transforms import rotation_error_deg
 from ..rapid.literals import pose_literal, rounded_pose
 from .quality import CHECK_LABELS, Verdict, direction_name, format_check_value, rotation_axis_coverage
@@ -531,20 +531,6 @@ def _metrics_table(result) -> str:
             f'<p class="note">Computed on {_e(points)} of {_e(used)}; lower is better.</p>')
 
 
-def _write_atomic(path: Path, text: str) -> None:
-    """Write through a temporary file in the same folder and rename it (created with the user's umask,
-    not mkstemp's 0600, so the report stays readable by others on a shared station PC)."""
-    tmp = path.parent / f".{path.name}.{os.getpid()}.tmp"
-    try:
-        with open(tmp, "w", encoding="utf-8") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if tmp.exists():
-            tmp.unlink()
-        raise
-
-
 def write_report(path_html, session_path, problem: HandEyeProblem, result, comparison: dict | None = None,
                  verdict: Verdict | None = None, tooldata_literal: str | None = None,
                  title: str = "Hand-eye calibration report", findings=None) -> Path:
@@ -683,7 +669,7 @@ def write_report(path_html, session_path, problem: HandEyeProblem, result, compa
                 f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"><title>{_e(title)}</title>"
                 f"<style>{_CSS}</style></head><body><main>" + "\n".join(sections) + "</main></body></html>\n")
     try:
-        _write_atomic(path, document)
+        write_text_atomic(path, document)
     except OSError as exc:
         raise HandEyeError(f"cannot write the report {path}: {exc.strerror or exc}") from None
     return path

@@ -71,10 +71,9 @@ def _summary(r: dict) -> str:
     u = r.get("uncertainty") or {}
     lines = [
         "",
-        "Camera in tool0       x mm       y mm       z mm        q1         q2         q3         q4",
-        "  recovered  " + "".join(f"{v:11.3f}" for v in got["position_mm"]) + "".join(f"{v:11.6f}" for v in got["quaternion_wxyz"]),
-        "  hidden truth" + "".join(f"{v:10.3f} " for v in true["position_mm"]).rstrip().rjust(33)
-        + "".join(f"{v:11.6f}" for v in true["quaternion_wxyz"]),
+        "Camera in tool0    " + "".join(f"{h:>11s}" for h in ("x mm", "y mm", "z mm", "q1", "q2", "q3", "q4")),
+        "  recovered   " + "".join(f"{v:11.3f}" for v in got["position_mm"]) + "".join(f"{v:11.6f}" for v in got["quaternion_wxyz"]),
+        "  hidden truth" + "".join(f"{v:11.3f}" for v in true["position_mm"]) + "".join(f"{v:11.6f}" for v in true["quaternion_wxyz"]),
         f"  error: {e['translation_error_mm']:.3f} mm, {e['rotation_error_deg']:.4f} deg   (target <= 0.5 mm, <= 0.05 deg)",
     ]
     if u:
@@ -82,7 +81,7 @@ def _summary(r: dict) -> str:
                      + " mm; rotation " + ", ".join(f"{v:.4f}" for v in u["rotation_deg"]) + " deg")
     lines += [
         f"postures captured: {r['postures_captured']}; outliers: {r['outliers'] or 'none'}; verdict: "
-        + ("PASS" if r["verdict"]["passed"] else "FAIL (" + r["verdict"]["summary"] + ")"),
+        + ("PASS" if r["verdict"]["passed"] else "FAIL (" + ", ".join(c["name"] for c in r["verdict"]["checks"] if not c["passed"]) + ")"),
         f"written to the robot: {r['tooldata']}",
         f"read back: {'identical to the last digit' if r['readback_ok'] else 'DIFFERENT'}",
         f"session: {r['session']}" + (f"; report: {r['report']}" if r.get("report") else ""),

@@ -37,7 +37,7 @@ def run(args) -> int:
     from ...calibration.session import read_session
     from ...calibration.solve import calibrate, problem_from_session
     from ..config import default_config, load_config
-    from ..demo import _verdict
+    from ..demo import station_verdict
     from ..runtime import open_station
     from ..writeback import side_by_side, writeback
 
@@ -47,9 +47,9 @@ def run(args) -> int:
     session = read_session(args.session)
     problem = problem_from_session(session)
     result = calibrate(problem, args.method)
-    verdict = _verdict(result, problem, config)
-    print(f"calibration ({result.method}): verdict {'PASS' if verdict['passed'] else 'FAIL: ' + verdict['summary']}")
-    common = dict(verdict_passed=verdict["passed"], verdict_reason=verdict["summary"], force=args.force,
+    verdict = station_verdict(result, problem, config)
+    print(f"calibration ({result.method}): {verdict.line()}")
+    common = dict(verdict_passed=verdict.passed, verdict_reason=verdict.line(), force=args.force,
                   progress=lambda m: print(m, flush=True))
     if args.dry_run:
         outcome = writeback(args.session, config, result, None, dry_run=True, **common)
