@@ -179,6 +179,19 @@ class RobotModel:
         p, q = self.forward(joints_deg)
         return transform_from_rotation_translation(matrix_from_quaternion(q), p)
 
+    def may_reach(self, position_mm) -> bool:
+        """False when tool0 certainly cannot be at ``position_mm``: farther from the circle the second
+        axis sweeps about a vertical first axis than the rest of the arm is long. A quick test to
+        skip hopeless inverse kinematics; True when it cannot tell (first axis not vertical)."""
+        if not np.allclose(np.abs(self.axes[0]), [0.0, 0.0, 1.0]) or np.linalg.norm(self.base_offset[:2]) > 1e-9:
+            return True
+        shoulder = self.base_offset + self.links[0]
+        radius = np.linalg.norm(shoulder[:2])
+        reach = float(np.sum(np.linalg.norm(self.links[1:], axis=1)))
+        p = np.asarray(position_mm, float)
+        gap = np.hypot(np.linalg.norm(p[:2]) - radius, p[2] - shoulder[2])
+        return bool(gap <= reach)
+
     def within_limits(self, joints_deg, margin_deg: float = 0.0) -> np.ndarray:
         """True where every axis is inside its limits shrunk by ``margin_deg``; shape ``(...)``."""
         joints = np.asarray(joints_deg, dtype=float)
@@ -299,7 +312,7 @@ def inverse_kinematics(
     low = robot.joint_limits_deg[:, 0] + margin_deg
     high = robot.joint_limits_deg[:, 1] - margin_deg
     seed = np.clip(np.asarray(seed_deg, dtype=float), low + 1e-9, high - 1e-9)
-    fit = least_squares(residual, seed, bounds=(low, high), x_scale=1.0, xtol=1e-12, ftol=1e-12, gtol=1e-12)
+    fit = least_squares(residual, seed, bounds=(low, high), x_scale=1.0, xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=100)
     r = residual(fit.x)
     pos_err = float(np.linalg.norm(r[:3]))
     rot_err = float(np.degrees(np.linalg.norm(r[3:]) / lever_mm))

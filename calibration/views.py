@@ -213,6 +213,8 @@ def sample_eye_in_hand_postures(
             direction = direction - 2 * (lateral @ side) / (side @ side) * side
         cam2base = look_at(centre + distance * direction, centre + aim, roll + np.pi / 2, up=(1.0, 0.0, 0.0))
         tool02base = cam2base @ invert_transforms(x)
+        if not robot.may_reach(tool02base[:3, 3]):
+            continue
         if not board_visible(invert_transforms(cam2base) @ board, corners, views, sampling.margin_px):
             continue
         if anchor is None:

@@ -183,6 +183,7 @@ def plan_postures(
     views=NOMINAL_XB3,
     seed: int = 0,
     noise: NoiseConfig = NoiseConfig(0.005, 0.3, "gaussian"),
+    max_attempts: int | None = None,
 ) -> PosturePlan:
     """Plan ``count`` postures around the board seen from the start posture.
 
@@ -204,6 +205,8 @@ def plan_postures(
     seed : int
     noise : NoiseConfig
         Noise of the simulated sessions that predict the accuracy.
+    max_attempts : int, optional
+        View points to try before giving up (default ``200 * count``).
 
     Raises
     ------
@@ -222,7 +225,7 @@ def plan_postures(
     rng = np.random.default_rng(seed)
     try:
         joints = sample_eye_in_hand_postures(robot, cam2tool0_nominal, board2base, corners, count, rng, sampling, views,
-                                             seed_joints=start)
+                                             seed_joints=start, max_attempts=max_attempts)
     except RuntimeError as exc:
         raise PlanningError(f"{exc}; move the start posture so the board is centred at about 0.9 m") from None
     order = order_for_short_motions(robot, joints, start)

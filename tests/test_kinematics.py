@@ -73,3 +73,11 @@ def test_load_by_alias_and_path(tmp_path):
     assert np.allclose(p, [100.0, 50.0, 0.0], atol=1e-9)
     with pytest.raises(ValueError, match="unknown robot"):
         load_robot("KR16")
+
+
+def test_may_reach(robot):
+    rng = np.random.default_rng(5)
+    joints = rng.uniform(robot.joint_limits_deg[:, 0], robot.joint_limits_deg[:, 1], size=(200, 6))
+    positions, _ = robot.forward(joints)
+    assert all(robot.may_reach(p) for p in positions)  # never refuses a reachable point
+    assert not robot.may_reach([3000.0, 0.0, 500.0]) and not robot.may_reach([0.0, 0.0, 3500.0])
