@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .parallel import WORKERS, map_chunks
 from .rotations import canonical_quaternions, rotate_vectors
 
 __all__ = ["AbsoluteOrientation", "rotation_between_vectors", "absolute_orientation", "horn_matrix"]
@@ -79,8 +80,17 @@ def horn_matrix(source, target, weights=None) -> np.ndarray:
     return n
 
 
+#: Batches larger than this are split over threads (numpy's LAPACK loop releases the GIL).
+_THREAD_BATCH = 20000
+
+
 def _top_eigenvector(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    values, vectors = np.linalg.eigh(n)
+    if n.ndim == 3 and len(n) > _THREAD_BATCH:
+        parts = map_chunks(np.linalg.eigh, np.array_split(n, WORKERS))
+        values = np.concatenate([p[0] for p in parts])
+        vectors = np.concatenate([p[1] for p in parts])
+    else:
+        values, vectors = np.linalg.eigh(n)
     top = vectors[..., :, -1]
     scale = np.maximum(np.abs(values[..., -1]), np.finfo(float).tiny)
     gap = (values[..., -1] - values[..., -2]) / scale

@@ -219,9 +219,15 @@ def translation_from_pairs(terms: PairTerms, rotation_x: np.ndarray, pair_rows: 
     rcond : ndarray, shape (c,)
         ``det / (trace/3)^3`` of the normal matrix: 1 for a perfectly conditioned system, 0 singular.
     """
-    normal = terms.normal[pair_rows].sum(axis=1)
-    rhs = terms.h[pair_rows].sum(axis=1) + np.einsum("cij,cj->ci", terms.k[pair_rows].sum(axis=1),
-                                                     rotation_x.reshape(-1, 9))
+    normal = terms.normal[pair_rows[:, 0]]
+    h = terms.h[pair_rows[:, 0]]
+    k = terms.k[pair_rows[:, 0]]
+    for column in range(1, pair_rows.shape[1]):  # sums of gathered rows (cheaper than gather + reduce)
+        rows = pair_rows[:, column]
+        normal = normal + terms.normal[rows]
+        h = h + terms.h[rows]
+        k = k + terms.k[rows]
+    rhs = h + np.einsum("cij,cj->ci", k, rotation_x.reshape(-1, 9))
     return _solve_symmetric_3x3(normal, rhs)
 
 

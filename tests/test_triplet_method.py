@@ -74,8 +74,13 @@ def _brute_force(prob, cands, fn):
     return values
 
 
+@pytest.mark.parametrize("fast_screen", [False, True])
 @pytest.mark.parametrize("criterion, metric", [("mcb", d_back), ("mco", d_org)])
-def test_selection_is_the_exact_minimiser(criterion, metric):
+def test_selection_is_the_exact_minimiser(criterion, metric, fast_screen, monkeypatch):
+    from handeye.calibration import selection
+
+    if fast_screen:  # the single-precision screen of large problems, forced on a small one
+        monkeypatch.setattr(selection, "FAST_SCREEN_MIN", 0)
     prob, _, _ = problem(12, sigma_cam=5.0, seed=3)
     motions = relative_motions(prob)
     cands = triplet_candidates(prob, motions)
