@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import os
 from concurrent.futures import ThreadPoolExecutor
-from functools import lru_cache
 
 __all__ = ["WORKERS", "map_chunks"]
 
@@ -17,13 +16,13 @@ __all__ = ["WORKERS", "map_chunks"]
 WORKERS = max(1, min(4, os.cpu_count() or 1))
 
 
-@lru_cache(maxsize=1)
-def _pool() -> ThreadPoolExecutor:
-    return ThreadPoolExecutor(max_workers=WORKERS, thread_name_prefix="handeye-batch")
-
-
 def map_chunks(fn, items: list) -> list:
-    """``[fn(item) for item in items]``, in threads when there is more than one item."""
+    """``[fn(item) for item in items]``, in threads when there is more than one item.
+
+    The threads live for this call only (starting them costs well under a millisecond), so no
+    worker outlives the work or keeps a process from exiting.
+    """
     if WORKERS == 1 or len(items) < 2:
         return [fn(item) for item in items]
-    return list(_pool().map(fn, items))
+    with ThreadPoolExecutor(max_workers=min(WORKERS, len(items)), thread_name_prefix="handeye-batch") as pool:
+        return list(pool.map(fn, items))
