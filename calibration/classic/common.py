@@ -365,19 +365,23 @@ def skew(v) -> np.ndarray:
     return np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1), np.stack([-y, x, zero], -1)], -2)
 
 
-def left_matrix(q) -> np.ndarray:
-    """``L(q)`` with ``L(q) p = q * p`` (Hamilton product), for quaternions ``(..., 4)`` (w, x, y, z).
-
-    Horaud & Dornaika's ``Q(q)`` (appendix A).
-    """
+def _product_matrix(q, sign: float) -> np.ndarray:
     q = np.asarray(q, dtype=float)
     w, v = q[..., 0], q[..., 1:]
     out = np.empty(q.shape[:-1] + (4, 4))
     out[..., 0, 0] = w
     out[..., 0, 1:] = -v
     out[..., 1:, 0] = v
-    out[..., 1:, 1:] = w[..., None, None] * np.eye(3) + skew(v)
+    out[..., 1:, 1:] = w[..., None, None] * np.eye(3) + sign * skew(v)
     return out
+
+
+def left_matrix(q) -> np.ndarray:
+    """``L(q)`` with ``L(q) p = q * p`` (Hamilton product), for quaternions ``(..., 4)`` (w, x, y, z).
+
+    Horaud & Dornaika's ``Q(q)`` (appendix A).
+    """
+    return _product_matrix(q, 1.0)
 
 
 def right_matrix(q) -> np.ndarray:
@@ -385,14 +389,7 @@ def right_matrix(q) -> np.ndarray:
 
     Horaud & Dornaika's ``W(q)`` (appendix A).
     """
-    q = np.asarray(q, dtype=float)
-    w, v = q[..., 0], q[..., 1:]
-    out = np.empty(q.shape[:-1] + (4, 4))
-    out[..., 0, 0] = w
-    out[..., 0, 1:] = -v
-    out[..., 1:, 0] = v
-    out[..., 1:, 1:] = w[..., None, None] * np.eye(3) - skew(v)
-    return out
+    return _product_matrix(q, -1.0)
 
 
 def quaternions(rotation) -> np.ndarray:
