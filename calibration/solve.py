@@ -206,7 +206,7 @@ def check_motion(problem: HandEyeProblem) -> None:
         )
 
 
-def truth_from_dict(truth: dict | None, setup: str) -> dict | None:
+def truth_from_dict(truth: dict | None) -> dict | None:
     """``{'x': 4x4, 'target2fixed': 4x4}`` from a ``truth.yaml`` mapping, or ``None``."""
     if not truth:
         return None
@@ -278,7 +278,7 @@ def _warm_up_numerics() -> None:
 MAX_OUTLIER_ROUNDS = 5
 
 
-def _solve_robust(problem: HandEyeProblem, truth: dict | None):
+def _solve_robust(problem: HandEyeProblem):
     """mcb on the postures that keep the rotation-angle invariant, then alternate robust refinement
     and outlier detection until the inlier set is stable; never drops more than half the postures."""
     n = problem.n
@@ -303,6 +303,10 @@ def _solve_robust(problem: HandEyeProblem, truth: dict | None):
         if n - new_flags.sum() < MIN_POSTURES or np.array_equal(new_flags, flags):
             break
         flags = new_flags
+    else:  # the inlier set kept changing: the answer is the refinement over the last one
+        refinement = refine_point_consistency(problem.hand[~flags], problem.compact.points[~flags], x)
+        x = refinement.x
+        residuals = posture_residuals_to(problem.hand, x, problem.compact.points, refinement.fixed_points)
     details = {
         "start": {"method": "mcb", **start_details},
         "outlier_rounds": rounds,
@@ -312,7 +316,8 @@ def _solve_robust(problem: HandEyeProblem, truth: dict | None):
     uncertainty = {
         "translation_mm": [float(v) for v in refinement.sigma_translation_mm],
         "rotation_deg": [float(v) for v in refinement.sigma_rotation_deg],
-        "level": "one sigma, from the covariance of the refinement",
+        "level": "one sigma of the random errors (sandwich covariance of the refinement); "
+                 "systematic robot errors are not included",
     }
     return x, details, flags, residuals, uncertainty
 
@@ -343,7 +348,7 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
     start = time.perf_counter()
     outliers, uncertainty = [], None
     if method == ROBUST_METHOD:
-        x, details, flags, posture_res, uncertainty = _solve_robust(problem, truth)
+        x, details, flags, posture_res, uncertainty = _solve_robust(problem)
         runtime = time.perf_counter() - start
         metrics, _ = _summarise(problem.subset(~flags), x)
         residuals = {int(i): float(r) for i, r in zip(problem.posture_ids, posture_res)}

@@ -29,7 +29,7 @@ class CalibrationOutcome:
 def calibrate_session_folder(path, method: str | None = None) -> CalibrationOutcome:
     """Read, validate and solve a session; uses ``truth.yaml`` when present (synthetic sessions)."""
     session = read_session(path)
-    truth = truth_from_dict(read_truth(path), session.setup)
+    truth = truth_from_dict(read_truth(path))
     problem = problem_from_session(session)
     result = calibrate(problem, method, truth)
     return CalibrationOutcome(Path(path), result, truth is not None, session, problem, truth)
