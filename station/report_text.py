@@ -32,7 +32,8 @@ def calibration_summary(outcome: CalibrationOutcome) -> str:
     frame = "tool0 (RAPID tooldata.tframe)" if r.parent == "tool0" else "base (camera fixed beside the robot)"
     m = r.metrics
     lines = [
-        f"Session {outcome.session_path}: {m['postures']} postures, {r.setup}, method {r.method}",
+        f"Session {outcome.session_path}: {len(r.residuals_mm)} postures"
+        + (f" ({m['postures']} used)" if r.outliers else "") + f", {r.setup}, method {r.method}",
         "",
         f"Camera pose in {frame}:",
         f"  {pose_literal(r.x)}",
