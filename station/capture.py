@@ -217,6 +217,11 @@ def capture(
         plan = _new_plan(config, controller, camera, stereo_model, progress)
         plan_joints = plan.joints_deg
         plan_score = {k: float(v) for k, v in plan.score.__dict__.items()}
+        sc = plan.score
+        progress(f"plan: {len(plan_joints)} postures; rotation-axis spread {sc.axis_spread:.2f} (1 = even); rotation "
+                 f"between postures median {sc.median_pair_angle_deg:.0f} deg (min {sc.min_pair_angle_deg:.0f}); "
+                 f"motion {sc.motion_time_s:.0f} s at full speed; expected accuracy about {sc.predicted_sigma_mm:.2f} mm / "
+                 f"{sc.predicted_sigma_deg:.3f} deg (simulated)")
         for note in plan.notes:
             progress(f"plan warning: {note}")
         session = Session(setup="eye_in_hand", robot=config.robot, target=config.target, extra={"capture": {
