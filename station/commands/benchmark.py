@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from . import argtypes
+
 HELP = "compare every method over sweeps of robot noise, camera noise and posture count"
 
 EPILOG = """\
@@ -23,13 +25,6 @@ Examples:
 """
 
 
-def _floats(text):
-    try:
-        return tuple(float(v) for v in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated numbers; got {text!r}") from None
-
-
 def add_parser(sub):
     p = sub.add_parser("benchmark", help=HELP, description=HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -38,9 +33,9 @@ def add_parser(sub):
                    help="sweep to run (repeatable; default all)")
     p.add_argument("--trials", type=int, default=20, help="trials per cell (default 20)")
     p.add_argument("--methods", help="comma-separated method names (default: all, plus OpenCV's as opencv_<name>)")
-    p.add_argument("--sigma-cam", type=_floats, metavar="LIST", help="camera noise values, mm")
-    p.add_argument("--sigma-rob", type=_floats, metavar="LIST", help="joint noise values, deg")
-    p.add_argument("--postures", type=_floats, metavar="LIST", help="posture counts")
+    p.add_argument("--sigma-cam", type=argtypes.floats, metavar="LIST", help="camera noise values, mm")
+    p.add_argument("--sigma-rob", type=argtypes.floats, metavar="LIST", help="joint noise values, deg")
+    p.add_argument("--postures", type=argtypes.floats, metavar="LIST", help="posture counts")
     p.add_argument("--camera-noise", choices=("paper", "gaussian"), default="paper")
     p.add_argument("--no-opencv", action="store_true", help="leave OpenCV's methods out")
     p.add_argument("--no-plots", action="store_true")

@@ -7,6 +7,8 @@ name to it.
 from __future__ import annotations
 
 import argparse
+
+from . import argtypes
 import sys
 
 HELP = "turn MoveIt, ViSP, OpenCV/camodocal, easy_handeye, CSV stream or plain CSV/JSON samples into a session"
@@ -43,36 +45,6 @@ Examples:
 """
 
 
-def _corners(text: str) -> tuple[int, int]:
-    try:
-        a, b = (int(v) for v in text.lower().split("x"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"corners must look like 13x8; got {text!r}") from None
-    if a < 2 or b < 2:
-        raise argparse.ArgumentTypeError("a board needs at least 2x2 inner corners")
-    return max(a, b), min(a, b)
-
-
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number; got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be > 0; got {text}")
-    return value
-
-
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number; got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0; got {text}")
-    return value
-
-
 #: The importers' names (station.importers.FORMAT_NAMES; repeated here so that building the parser
 #: imports nothing heavy; a test keeps the two equal).
 FORMAT_NAMES = ("moveit", "visp", "opencv", "stream", "plain", "easy_handeye")
@@ -88,16 +60,16 @@ def add_parser(sub):
     p.add_argument("--units", choices=("m", "mm"), help="length unit of the input (default: detected)")
     p.add_argument("--quaternion-order", choices=("wxyz", "xyzw"),
                    help="quaternion order (stream: default xyzw; plain q1..q4 columns / JSON: default wxyz)")
-    p.add_argument("--board", type=_corners, metavar="NXxNY", help="target inner corners, e.g. 9x6 (optional)")
-    p.add_argument("--square-mm", type=_positive, metavar="MM", help="target square size in mm (with --board)")
+    p.add_argument("--board", type=argtypes.corners, metavar="NXxNY", help="target inner corners, e.g. 9x6 (optional)")
+    p.add_argument("--square-mm", type=argtypes.positive, metavar="MM", help="target square size in mm (with --board)")
     p.add_argument("--skip-invalid", action="store_true", help="drop malformed entries (reported) instead of stopping")
     p.add_argument("--overwrite", action="store_true", help="replace a session already in the folder")
     stream = p.add_argument_group("stream options")
-    stream.add_argument("--tolerance-ms", type=_positive, metavar="MS", help="largest stamp difference of a pair (default 30)")
-    stream.add_argument("--max-postures", type=_count, metavar="N",
+    stream.add_argument("--tolerance-ms", type=argtypes.positive, metavar="MS", help="largest stamp difference of a pair (default 30)")
+    stream.add_argument("--max-postures", type=argtypes.count, metavar="N",
                         help="keep the slowest pair in each of N time windows (default 40; 0 = keep all)")
-    stream.add_argument("--rest-mm-s", type=_positive, metavar="V", help="keep only pairs with the hand slower than V mm/s")
-    stream.add_argument("--rest-deg-s", type=_positive, metavar="W", help="keep only pairs with the hand turning slower than W deg/s")
+    stream.add_argument("--rest-mm-s", type=argtypes.positive, metavar="V", help="keep only pairs with the hand slower than V mm/s")
+    stream.add_argument("--rest-deg-s", type=argtypes.positive, metavar="W", help="keep only pairs with the hand turning slower than W deg/s")
     stream.add_argument("--camera-pose", choices=("camera_in_target", "target_in_camera"),
                         help="what the camera stream holds (default camera_in_target, the ETH layout)")
     opencv = p.add_argument_group("opencv options")

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from . import argtypes
+
 HELP = "run a mock (simulated IRB 1400 controller on 127.0.0.1) until Ctrl-C"
 
 CONTROLLER_HELP = "run the mock robot controller (socket, serial or Modbus TCP) until Ctrl-C"
@@ -26,40 +28,20 @@ Example:
 """
 
 
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number; got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be > 0; got {text}")
-    return value
-
-
-def _port(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a port number; got {text!r}") from None
-    if not 0 <= value < 65536:
-        raise argparse.ArgumentTypeError(f"port must be 0..65535; got {value}")
-    return value
-
-
 def add_parser(sub):
     p = sub.add_parser("mock", help=HELP, description=HELP)
     targets = p.add_subparsers(dest="mock_target", metavar="TARGET")
     c = targets.add_parser("controller", help=CONTROLLER_HELP, description=CONTROLLER_HELP, epilog=CONTROLLER_EPILOG,
                            formatter_class=argparse.RawDescriptionHelpFormatter)
     c.add_argument("--protocol", choices=("socket", "serial", "modbus"), default="socket", help="default socket")
-    c.add_argument("--port", type=_port, default=None, help="TCP port (defaults above; 0 = any free port)")
+    c.add_argument("--port", type=argtypes.port, default=None, help="TCP port (defaults above; 0 = any free port)")
     c.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     c.add_argument("--config", metavar="STATION.yaml", help="approved postures and ack timeout from a station config")
-    c.add_argument("--time-scale", type=_positive, default=1.0, metavar="X",
+    c.add_argument("--time-scale", type=argtypes.positive, default=1.0, metavar="X",
                    help="wall-clock seconds per simulated second of motion (default 1; 0.1 = 10x faster)")
     c.add_argument("--allow-client", metavar="IP", help="socket: accept only this client address, like the RAPID module")
     c.add_argument("--register-map", metavar="MAP.yaml", help="modbus: register map (default: the built-in one)")
-    c.add_argument("--duration", type=_positive, metavar="S", help="stop after S seconds (default: run until Ctrl-C)")
+    c.add_argument("--duration", type=argtypes.positive, metavar="S", help="stop after S seconds (default: run until Ctrl-C)")
     p.set_defaults(_mock_parser=p)
     return p
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from . import argtypes
+
 HELP = "read the robot through the controller link (joints, flange pose, status)"
 
 EPILOG = """\
@@ -20,16 +22,6 @@ prints {"joints_deg": [...], "tool0_in_base": {"position_mm": [...], "quaternion
 DEFAULT_PORTS = {"socket": 1025, "modbus": 502}
 
 
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number; got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be > 0; got {text}")
-    return value
-
-
 def _link_options(p) -> None:
     p.add_argument("--protocol", choices=("socket", "serial", "modbus"), default="socket", help="default socket")
     p.add_argument("--host", default="127.0.0.1", help="controller or gateway address (default 127.0.0.1)")
@@ -37,7 +29,7 @@ def _link_options(p) -> None:
     p.add_argument("--url", help="serial: device (/dev/ttyUSB0, COM3) or pyserial URL (socket://127.0.0.1:1026)")
     p.add_argument("--baudrate", type=int, default=9600, help="serial: baud rate (default 9600)")
     p.add_argument("--register-map", metavar="MAP.yaml", help="modbus: register map (default: the built-in one)")
-    p.add_argument("--timeout", type=_positive, default=2.0, metavar="S", help="seconds per call (default 2)")
+    p.add_argument("--timeout", type=argtypes.positive, default=2.0, metavar="S", help="seconds per call (default 2)")
 
 
 def add_parser(sub):

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from . import argtypes
+
 HELP = "write a synthetic session (IRB 1400, 8x13 board, chosen noise) with its truth"
 
 EPILOG = """\
@@ -20,45 +22,18 @@ Example:
 """
 
 
-def _corners(text: str) -> tuple[int, int]:
-    try:
-        a, b = (int(v) for v in text.lower().split("x"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"corners must look like 13x8; got {text!r}") from None
-    if a < 2 or b < 2:
-        raise argparse.ArgumentTypeError("a board needs at least 2x2 inner corners")
-    return max(a, b), min(a, b)
-
-
-def _floats6(text: str) -> tuple:
-    try:
-        values = tuple(float(v) for v in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected six comma-separated numbers; got {text!r}") from None
-    if len(values) != 6:
-        raise argparse.ArgumentTypeError(f"expected six comma-separated numbers; got {len(values)}")
-    return values
-
-
-def _non_negative(text: str) -> float:
-    value = float(text)
-    if not value >= 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0; got {text}")
-    return value
-
-
 def add_parser(sub):
     p = sub.add_parser("simulate", help=HELP, description=HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("-o", "--output", required=True, metavar="SESSION", help="session folder to create")
     p.add_argument("--postures", type=int, default=30, help="number of postures (default 30)")
-    p.add_argument("--sigma-rob", type=_non_negative, default=0.0, metavar="DEG", help="joint-angle noise, degrees (default 0)")
-    p.add_argument("--sigma-cam", type=_non_negative, default=0.0, metavar="MM", help="camera point noise, mm (default 0)")
+    p.add_argument("--sigma-rob", type=argtypes.non_negative, default=0.0, metavar="DEG", help="joint-angle noise, degrees (default 0)")
+    p.add_argument("--sigma-cam", type=argtypes.non_negative, default=0.0, metavar="MM", help="camera point noise, mm (default 0)")
     p.add_argument("--camera-noise", choices=("paper", "gaussian"), default="paper", help="camera noise model (default paper)")
-    p.add_argument("--joint-offset", type=_floats6, default=(0.0,) * 6, metavar="A1,..,A6",
+    p.add_argument("--joint-offset", type=argtypes.six_floats, default=(0.0,) * 6, metavar="A1,..,A6",
                    help="systematic offset added to every reported joint angle, degrees")
     p.add_argument("--setup", choices=("eye_in_hand", "eye_to_hand"), default="eye_in_hand")
-    p.add_argument("--corners", type=_corners, default=(13, 8), metavar="NXxNY", help="inner corners (default 13x8)")
+    p.add_argument("--corners", type=argtypes.corners, default=(13, 8), metavar="NXxNY", help="inner corners (default 13x8)")
     p.add_argument("--square-mm", type=float, default=30.0, help="square size in mm (default 30)")
     p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
     p.add_argument("--scene-seed", type=int, default=0, help="posture-set seed (default 0)")
