@@ -22,9 +22,13 @@ DESCRIPTION = """\
 Hand-eye calibration of a stereo camera on an ABB robot flange (eye-in-hand) or beside the robot
 (eye-to-hand), from posture capture to RAPID tooldata.
 
-Typical use:
-  handeye simulate -o demo_session --sigma-cam 5     # a synthetic session with its truth
-  handeye calibrate demo_session                      # camera pose in tool0 + quality figures
+At the station:
+  handeye capture --config station.yaml --session cal_01   # plan, move, measure (resumable)
+  handeye calibrate cal_01 --report                        # camera pose, quality, HTML report
+  handeye writeback cal_01 --config station.yaml           # into the robot's tooldata, read back
+Try it without hardware:
+  handeye demo                                             # the whole job on the mock station
+Every command explains itself: handeye COMMAND --help
 """
 
 
