@@ -23,6 +23,7 @@ from ..calibration.errors import CalibrationError, HandEyeError
 from ..calibration.metrics import d_back, d_org, errors_against_truth, fixed_points
 from ..calibration.solve import ALL_METHODS, calibrate, problem_from_session
 from ..calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session
+from .opencv_reference import OPENCV_METHODS, opencv_available, solve_opencv
 
 SWEEPS = ("sigma_cam", "sigma_rob", "postures")
 METRICS = (
@@ -33,7 +34,6 @@ METRICS = (
     ("d_org_mm", "d_org, eq. 22, all corners (mm)"),
     ("d_back_mm", "d_back, eq. 23, all corners (mm)"),
 )
-OPENCV_METHODS = ("tsai", "park", "horaud", "andreff", "daniilidis")
 
 
 @dataclass(frozen=True)
@@ -69,24 +69,6 @@ class BenchmarkOptions:
     extra: dict = field(default_factory=dict)
 
 
-def _opencv():
-    try:
-        import cv2
-    except ImportError:  # pragma: no cover
-        return None
-    return cv2 if hasattr(cv2, "calibrateHandEye") else None
-
-
-def _solve_opencv(cv2, problem, name):
-    from ..calibration.transforms import transform_from_rotation_translation
-
-    flag = getattr(cv2, f"CALIB_HAND_EYE_{name.upper()}")
-    h, b = problem.hand, problem.target2cam
-    start = time.perf_counter()
-    r, t = cv2.calibrateHandEye(h[:, :3, :3], h[:, :3, 3], b[:, :3, :3], b[:, :3, 3], method=flag)
-    return transform_from_rotation_translation(r, t.ravel()), time.perf_counter() - start
-
-
 def _cells(options: BenchmarkOptions):
     for sweep in options.sweeps:
         if sweep == "sigma_cam":
@@ -115,9 +97,9 @@ def _row(sweep, value, trial, method, x, truth, problem, runtime, outliers=0):
 def run_benchmark(options: BenchmarkOptions, progress=None) -> list[dict]:
     """Run the sweeps; returns one row per (cell, trial, method). ``progress(done, total, label)``."""
     ours = tuple(options.methods) if options.methods else ALL_METHODS
-    cv2 = _opencv() if options.opencv else None
-    ocv = [m[len("opencv_"):] for m in ours if m.startswith("opencv_")] if options.methods else (
-        list(OPENCV_METHODS) if cv2 is not None else [])
+    use_opencv = options.opencv and opencv_available()
+    ocv = [m[len("opencv_"):] for m in ours if m.startswith("opencv_")] if options.methods else list(OPENCV_METHODS)
+    ocv = ocv if use_opencv else []
     ours = tuple(m for m in ours if not m.startswith("opencv_"))
     cells = list(_cells(options))
     largest = max(c[3] for c in cells)
@@ -142,7 +124,9 @@ def run_benchmark(options: BenchmarkOptions, progress=None) -> list[dict]:
                     continue
                 rows.append(_row(sweep, value, trial, method, r.x, truth, problem, r.runtime_s, len(r.outliers)))
             for name in ocv:
-                x, runtime = _solve_opencv(cv2, problem, name)
+                start = time.perf_counter()
+                x = solve_opencv(problem.hand, problem.target2cam, name)
+                runtime = time.perf_counter() - start
                 if np.all(np.isfinite(x)):
                     rows.append(_row(sweep, value, trial, f"opencv_{name}", x, truth, problem, runtime))
             done += 1

@@ -310,13 +310,9 @@ def _opencv(hand, target2cam, method):
     cv2 = pytest.importorskip("cv2")
     if not hasattr(cv2, "calibrateHandEye"):
         pytest.skip("this OpenCV build has no calibrateHandEye (5.0 wheels dropped it)")
-    flag = getattr(cv2, f"CALIB_HAND_EYE_{method.upper()}")
-    rot, t = cv2.calibrateHandEye(list(hand[:, :3, :3]), list(hand[:, :3, 3]),
-                                  list(target2cam[:, :3, :3]), list(target2cam[:, :3, 3]), method=flag)
-    x = np.eye(4)
-    x[:3, :3] = rot
-    x[:3, 3] = np.ravel(t)
-    return x
+    from handeye.station.opencv_reference import solve_opencv
+
+    return solve_opencv(hand, target2cam, method)
 
 
 #: How far our answer may sit from OpenCV's on sigma = 2 mm data (deg, mm). Tsai and Park solve the

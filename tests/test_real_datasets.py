@@ -9,7 +9,7 @@ import pytest
 
 from handeye.calibration.metrics import d_org, fixed_points
 from handeye.calibration.solve import calibrate, problem_from_session
-from handeye.calibration.transforms import transform_from_rotation_translation
+from handeye.station.opencv_reference import OPENCV_METHODS, solve_opencv
 from handeye.station.importers import read_any
 
 from helpers import shared_dataset
@@ -18,7 +18,6 @@ cv2 = pytest.importorskip("cv2")
 if not hasattr(cv2, "calibrateHandEye"):  # pragma: no cover
     pytest.skip("this OpenCV build has no calibrateHandEye (5.0 wheels)", allow_module_level=True)
 
-OPENCV = ("TSAI", "PARK", "HORAUD", "ANDREFF", "DANIILIDIS")
 
 
 FILES = {"moveit-calibration": "pose_samples.json", "camodocal-ar-tag": "TransformPairsInput.yml", "visp-eye-in-hand": ""}
@@ -34,12 +33,9 @@ def _score(problem, x):
 
 
 def _best_opencv(problem):
-    h, b = problem.hand, problem.target2cam
     scores = []
-    for name in OPENCV:
-        r, t = cv2.calibrateHandEye(h[:, :3, :3], h[:, :3, 3], b[:, :3, :3], b[:, :3, 3],
-                                    method=getattr(cv2, f"CALIB_HAND_EYE_{name}"))
-        x = transform_from_rotation_translation(r, t.ravel())
+    for name in OPENCV_METHODS:
+        x = solve_opencv(problem.hand, problem.target2cam, name)
         if np.all(np.isfinite(x)):
             scores.append(_score(problem, x))
     return min(scores)

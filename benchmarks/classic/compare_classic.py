@@ -36,25 +36,12 @@ DATASETS = Path(__file__).resolve().parents[2].parent / "shared" / "datasets"
 
 def opencv_solvers():
     """OpenCV's five methods as ``name -> solve(hand, target2cam)``, or {} without calibrateHandEye."""
-    try:
-        import cv2
-    except ImportError:
-        return {}
-    if not hasattr(cv2, "calibrateHandEye"):
-        return {}
+    from handeye.station.opencv_reference import OPENCV_METHODS, opencv_available, solve_opencv
 
-    def make(flag):
-        def solve(hand, target2cam):
-            rot, t = cv2.calibrateHandEye(list(hand[:, :3, :3]), list(hand[:, :3, 3]),
-                                          list(target2cam[:, :3, :3]), list(target2cam[:, :3, 3]), method=flag)
-            x = np.eye(4)
-            x[:3, :3] = rot
-            x[:3, 3] = np.ravel(t)
-            return x
-        return solve
-
-    return {f"opencv-{name}": make(getattr(cv2, f"CALIB_HAND_EYE_{name.upper()}"))
-            for name in ("tsai", "park", "horaud", "andreff", "daniilidis")}
+    if not opencv_available():
+        return {}
+    return {f"opencv-{name}": (lambda hand, target2cam, name=name: solve_opencv(hand, target2cam, name))
+            for name in OPENCV_METHODS}
 
 
 def all_solvers():

@@ -21,23 +21,9 @@ import numpy as np
 from handeye.calibration.metrics import errors_against_truth
 from handeye.calibration.solve import PAPER_METHODS, calibrate, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session
-from handeye.calibration.transforms import transform_from_rotation_translation
+from handeye.station.opencv_reference import OPENCV_METHODS, opencv_available, solve_opencv
 
-try:
-    import cv2
-
-    OPENCV = {name: getattr(cv2, f"CALIB_HAND_EYE_{name.upper()}")
-              for name in ("tsai", "park", "horaud", "andreff", "daniilidis")}
-    if not hasattr(cv2, "calibrateHandEye"):
-        OPENCV = {}
-except ImportError:  # pragma: no cover
-    OPENCV = {}
-
-
-def opencv_solution(problem, flag):
-    h, b = problem.hand, problem.target2cam
-    r, t = cv2.calibrateHandEye(h[:, :3, :3], h[:, :3, 3], b[:, :3, :3], b[:, :3, 3], method=flag)
-    return transform_from_rotation_translation(r, t.ravel())
+OPENCV = OPENCV_METHODS if opencv_available() else ()
 
 
 def noise_free(seeds=(0, 1, 2)):
@@ -68,8 +54,8 @@ def camera_noise(trials: int, sigma_cam: float = 5.0, aim_mm: float | None = Non
             errors.setdefault(method, []).append([r.truth_errors["rotation_error_deg"], r.truth_errors["translation_error_mm"]])
             if method == "mcb":
                 runtimes.append(r.runtime_s)
-        for name, flag in OPENCV.items():
-            e = errors_against_truth(opencv_solution(problem, flag), scene.x_true)
+        for name in OPENCV:
+            e = errors_against_truth(solve_opencv(problem.hand, problem.target2cam, name), scene.x_true)
             errors.setdefault(f"opencv_{name}", []).append([e["rotation_error_deg"], e["translation_error_mm"]])
     medians = {k: np.median(np.array(v), axis=0).tolist() for k, v in errors.items()}
     return medians, runtimes
@@ -102,7 +88,7 @@ def main():
     times100, peak100, details100 = speed_100()
     results = {
         "machine": {"python": platform.python_version(), "processor": platform.processor() or platform.machine(),
-                    "numpy": np.__version__, "opencv": cv2.__version__ if OPENCV else None},
+                    "numpy": np.__version__, "opencv": __import__("cv2").__version__},
         "noise_free_worst": exact,
         "camera_noise_5mm_medians": medians,
         "camera_noise_5mm_centred_board_medians": centred,

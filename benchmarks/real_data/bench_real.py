@@ -20,7 +20,7 @@ from scipy.spatial.transform import Rotation
 from handeye.calibration.errors import CalibrationError
 from handeye.calibration.metrics import d_org, fixed_points
 from handeye.calibration.solve import ALL_METHODS, calibrate, problem_from_session
-from handeye.calibration.transforms import transform_from_rotation_translation
+from handeye.station.opencv_reference import OPENCV_METHODS, opencv_available, solve_opencv
 from handeye.station.importers import read_any
 
 DATASETS = Path(__file__).resolve().parents[2].parent / "shared" / "datasets"
@@ -38,22 +38,10 @@ REFERENCES = {  # published estimates (datasets/README.md): position in mm, rota
 
 
 def opencv_methods():
-    try:
-        import cv2
-    except ImportError:
+    """OpenCV's methods as ``opencv_<name> -> solve(problem)`` ({} without calibrateHandEye)."""
+    if not opencv_available():
         return {}
-    if not hasattr(cv2, "calibrateHandEye"):
-        return {}
-
-    def make(flag):
-        def solve(problem):
-            h, b = problem.hand, problem.target2cam
-            r, t = cv2.calibrateHandEye(h[:, :3, :3], h[:, :3, 3], b[:, :3, :3], b[:, :3, 3], method=flag)
-            return transform_from_rotation_translation(r, t.ravel())
-        return solve
-
-    return {f"opencv_{n}": make(getattr(cv2, f"CALIB_HAND_EYE_{n.upper()}"))
-            for n in ("tsai", "park", "horaud", "andreff", "daniilidis")}
+    return {f"opencv_{n}": (lambda problem, n=n: solve_opencv(problem.hand, problem.target2cam, n)) for n in OPENCV_METHODS}
 
 
 def main():

@@ -46,6 +46,7 @@ from handeye.drivers.camera.stereo import StereoModel, nominal_xb3_model, save_s
 from handeye.drivers.camera.triangulate import triangulate_files
 from handeye.mocks.camera import StereoRenderer
 from handeye.mocks.world import PrintedBoard, sample_board_views
+from handeye.station.opencv_reference import solve_opencv
 
 REPO = Path(__file__).resolve().parents[2]
 VISP = REPO.parent / "shared" / "datasets" / "visp-apps-eye-in-hand"
@@ -219,9 +220,9 @@ def visp_case() -> dict | None:
            "d_back_mm": result.metrics["d_back_mm"], "d_org_with_image_3_turned_mm": d_org_turned, "opencv": {}}
     hand = [p.tool0_in_base for p in postures]
     tgt = [p.target_in_camera for p in postures]
-    for name, method in (("tsai", cv2.CALIB_HAND_EYE_TSAI), ("park", cv2.CALIB_HAND_EYE_PARK)):
-        r, t = cv2.calibrateHandEye([h[:3, :3] for h in hand], [h[:3, 3] for h in hand],
-                                    [g[:3, :3] for g in tgt], [g[:3, 3] for g in tgt], method=method)
+    for name in ("tsai", "park"):
+        reference = solve_opencv(hand, tgt, name)
+        r, t = reference[:3, :3], reference[:3, 3]
         out["opencv"][name] = {"position_mm": t.ravel().tolist(), "theta_u_rad": Rotation.from_matrix(r).as_rotvec().tolist(),
                                "delta_mm": float(np.linalg.norm(t.ravel() - x[:3, 3])),
                                "delta_deg": float(np.degrees(Rotation.from_matrix(r.T @ x[:3, :3]).magnitude()))}
