@@ -33,6 +33,7 @@ __all__ = [
     "FORMAT",
     "Posture",
     "Session",
+    "parse_yaml",
     "write_text_atomic",
     "write_yaml_atomic",
     "create_session",
@@ -202,15 +203,22 @@ def write_posture(path, posture: Posture) -> Path:
     return target
 
 
-def _load_yaml(path: Path, what: str) -> dict:
+def parse_yaml(text: str, source, error=SessionError, hint: str = ""):
+    """``yaml.safe_load(text)``; malformed YAML raises ``error`` naming ``source`` and the line."""
     try:
-        data = yaml.safe_load(path.read_text())
-    except FileNotFoundError:
-        raise SessionError(f"{what} not found: {path}") from None
+        return yaml.safe_load(text)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" (line {mark.line + 1})" if mark is not None else ""
-        raise SessionError(f"{path} is not valid YAML{where}") from None
+        raise error(f"{source}: not valid YAML{where}{hint}") from None
+
+
+def _load_yaml(path: Path, what: str) -> dict:
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        raise SessionError(f"{what} not found: {path}") from None
+    data = parse_yaml(text, path)
     if not isinstance(data, dict):
         raise SessionError(f"{path} does not hold a YAML mapping")
     return data

@@ -30,11 +30,11 @@ from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from ..calibration.compact_points import BoardGeometry
 from ..calibration.errors import HandEyeError
 from ..calibration.kinematics import load_robot
+from ..calibration.session import parse_yaml
 from ..calibration.transforms import pose_from_transform, transform_from_pose
 
 __all__ = ["EXAMPLE_FILE", "ConfigError", "StationConfig", "config_from_dict", "default_config", "load_config"]
@@ -385,13 +385,10 @@ def load_config(path) -> StationConfig:
     """
     path = Path(path)
     try:
-        data = yaml.safe_load(path.read_text())
+        text = path.read_text()
     except FileNotFoundError:
         raise ConfigError(f"no station configuration at {path}; start from {EXAMPLE_FILE}") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" (line {mark.line + 1})" if mark is not None else ""
-        raise ConfigError(f"{path} is not valid YAML{where}") from None
+    data = parse_yaml(text, path, ConfigError)
     return config_from_dict(data or {}, str(path))
 
 

@@ -170,19 +170,16 @@ def load_thresholds(path) -> QualityThresholds:
     ThresholdError
         File missing or unreadable, not YAML, or a bad key or value (see :meth:`QualityThresholds.from_dict`).
     """
-    import yaml
+    from ..calibration.session import parse_yaml
 
     path = Path(path)
     try:
-        data = yaml.safe_load(path.read_text())
+        text = path.read_text()
     except FileNotFoundError:
         raise ThresholdError(f"thresholds file not found: {path}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise ThresholdError(f"cannot read thresholds file {path}: {exc}") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" (line {mark.line + 1})" if mark is not None else ""
-        raise ThresholdError(f"{path}: not valid YAML{where}; write 'key: number' lines") from None
+    data = parse_yaml(text, path, ThresholdError, "; write 'key: number' lines")
     if isinstance(data, dict) and isinstance(data.get("quality"), dict):
         return QualityThresholds.from_dict(data["quality"], f"{path} (quality)")
     return QualityThresholds.from_dict(data if data is not None else {}, str(path))

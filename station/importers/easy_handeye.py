@@ -22,10 +22,9 @@ base and the set-up comes from the data (else eye-in-hand).
 from __future__ import annotations
 
 import numpy as np
-import yaml
 
 from ...calibration.errors import SessionError
-from ...calibration.session import Session
+from ...calibration.session import Session, parse_yaml
 from ...calibration.transforms import invert_transforms
 from .common import Dropped, EntryErrors, build_session, read_text, transform_from_quaternion
 
@@ -63,12 +62,7 @@ def read_easy_handeye(path, *, setup=None, units=None, board=None, skip_invalid:
     SessionError
     """
     text = read_text(path)
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" (line {mark.line + 1})" if mark is not None else ""
-        raise SessionError(f"{path}: not valid YAML{where}") from None
+    data = parse_yaml(text, path)
     if not isinstance(data, dict) or not isinstance(data.get("samples"), list):
         raise SessionError(f"{path}: expected easy_handeye2 samples (a 'samples' list of robot/tracking transforms)")
     parameters = data.get("parameters") if isinstance(data.get("parameters"), dict) else {}

@@ -32,10 +32,9 @@ import re
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from ...calibration.errors import SessionError
-from ...calibration.session import Session
+from ...calibration.session import Session, parse_yaml
 from .common import Dropped, EntryErrors, build_session, read_text, transform_from_rotvec
 from .visp_images import find_images, measure_board_pose, read_chessboard_data, read_visp_camera
 
@@ -69,12 +68,7 @@ def read_pose_vector(path) -> np.ndarray:
     text = read_text(path)
     if text.startswith("%YAML"):  # OpenCV-style directive line that PyYAML rejects
         text = "\n" + text.split("\n", 1)[-1] if "\n" in text else ""
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" (line {mark.line + 1})" if mark is not None else ""
-        raise SessionError(f"{path}: not valid YAML{where}") from None
+    data = parse_yaml(text, path)
     if not isinstance(data, dict) or "data" not in data:
         raise SessionError(f"{path}: expected a ViSP pose vector (keys rows, cols, data)")
     try:
