@@ -15,6 +15,7 @@ from .compact_points import compact_points_from_corners, compact_points_from_pos
 from .errors import CalibrationError
 from .kinematics import load_robot
 from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points, posture_residuals
+from .plausibility import check_plausible
 from .problem import EYE_IN_HAND, HandEyeProblem, hand_poses
 from .refine import (
     ANGLE_GAP_FLOOR_DEG,
@@ -139,19 +140,32 @@ def _posture_tool0(session: Session) -> np.ndarray:
     return np.array(poses)
 
 
-def problem_from_session(session: Session) -> HandEyeProblem:
+def problem_from_session(session: Session, check_units: bool = True) -> HandEyeProblem:
     """Turn a validated session into arrays, checking what the solver needs.
+
+    Parameters
+    ----------
+    session : Session
+        Lengths in mm (convert first with ``plausibility.session_in_mm`` when they are not).
+    check_units : bool
+        Refuse lengths that are not plausible millimetres (``plausibility.check_plausible``;
+        default). Only tests of the solvers on deliberately odd data switch it off.
 
     Raises
     ------
     CalibrationError
         Too few postures, a posture with a different corner count, no usable board data.
+    UnitsError
+        Lengths that look like metres, a posture in another unit, a flange out of the robot's reach,
+        corners whose spacing does not match ``target.square_mm``.
     """
     postures = session.postures
     if len(postures) < MIN_POSTURES:
         raise CalibrationError(f"at least {MIN_POSTURES} postures are needed; got {len(postures)}")
     ids = np.array([p.index for p in postures])
     tool02base = _posture_tool0(session)
+    if check_units:
+        check_plausible(session, tool02base)
     hand = hand_poses(tool02base, session.setup)
     with_points = [p for p in postures if p.points_mm is not None]
     if len(with_points) == len(postures):

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..calibration.errors import HandEyeError
+from ..calibration.plausibility import session_in_mm
 from ..calibration.problem import HandEyeProblem
 from ..calibration.session import Session, read_session, read_truth
 from ..calibration.solve import CalibrationResult, calibrate, problem_from_session, truth_from_dict
@@ -26,9 +27,13 @@ class CalibrationOutcome:
     truth: dict | None = None
 
 
-def calibrate_session_folder(path, method: str | None = None) -> CalibrationOutcome:
-    """Read, validate and solve a session; uses ``truth.yaml`` when present (synthetic sessions)."""
-    session = read_session(path)
+def calibrate_session_folder(path, method: str | None = None, units: str = "mm") -> CalibrationOutcome:
+    """Read, validate and solve a session; uses ``truth.yaml`` when present (synthetic sessions).
+
+    ``units`` declares the session's length unit (``mm``, the format's own, or ``m``: converted on
+    reading); lengths that do not look like millimetres then are refused before solving.
+    """
+    session = session_in_mm(read_session(path), units)
     truth = truth_from_dict(read_truth(path))
     problem = problem_from_session(session)
     result = calibrate(problem, method, truth)

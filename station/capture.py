@@ -36,12 +36,16 @@ from ..calibration.session import (
 )
 from ..calibration.transforms import pose_from_transform, rotation_error_deg, transform_from_pose, translation_error_mm
 from ..calibration.views import PinholeView, ViewSampling
-from ..drivers.camera.errors import CameraError
+from ..drivers.camera.errors import CameraError, SquareSizeMismatch
 from ..drivers.camera.triangulate import triangulate_images
 from .config import StationConfig
+from .origin import MOCK, REAL, session_origin
 from .planning import PosturePlan, plan_postures
 
 __all__ = ["CaptureError", "CaptureSummary", "PostureReport", "capture", "measure_board", "stereo_views"]
+
+
+_STATION_NAMES = {MOCK: "embedded mock station", REAL: "real station"}
 
 
 class CaptureError(HandEyeError):
@@ -144,6 +148,8 @@ def _new_plan(config: StationConfig, controller, camera, model, progress) -> Pos
                            f"{np.round(start, 2).tolist()}: jog it there (board in view), then run capture again")
     try:
         measured, _ = measure_board(camera, model, config.target, config.camera.grab_timeout_s)
+    except SquareSizeMismatch as exc:
+        raise CaptureError(f"at the start posture: {exc}") from None
     except CameraError as exc:
         raise CaptureError(f"no board at the start posture ({exc}); point the camera at the board from about 0.9 m") from None
     compact = compact_points_from_corners(measured.points_mm[None], config.target)
@@ -206,8 +212,14 @@ def capture(
     session_dir = Path(session_dir)
     session = _session_record(session_dir)
     robot = load_robot(config.robot)
+    station_kind = MOCK if config.is_mock else REAL
     if session is not None and "capture" in session.extra:
         record = session.extra["capture"]
+        recorded = session_origin(session)
+        if recorded != station_kind:
+            raise CaptureError(f"{session_dir} was captured on the {_STATION_NAMES.get(recorded, recorded + ' data')}; resume it on the same "
+                               f"station ({'--mock' if recorded == MOCK else '--config STATION.yaml with the real hardware'}) "
+                               "or start a new session folder")
         plan_joints = np.array(record["plan_joints_deg"], float)
         plan_score = record.get("plan_score", {})
         progress(f"resuming {session_dir}: {len(session.postures)} of {len(plan_joints)} postures on disk")
@@ -225,6 +237,7 @@ def capture(
         for note in plan.notes:
             progress(f"plan warning: {note}")
         session = Session(setup="eye_in_hand", robot=config.robot, target=config.target, extra={"capture": {
+            "station": station_kind,
             "plan_joints_deg": [[round(float(v), 4) for v in row] for row in plan_joints],
             "plan_score": plan_score,
             "board_estimate": pose_from_transform(plan.board2base),

@@ -1,10 +1,12 @@
 """The station configuration: one YAML file, validated on load, with the mock station built in.
 
-Sections (every key optional; a missing key keeps the built-in value; ``station/example_station.yaml``
-documents each one):
+Sections (``station/example_station.yaml`` documents each one). A file must name its hardware:
+``controller.protocol`` and ``camera.backend`` are required, so a config never runs on the built-in
+mock station by accident; ``mock`` for both (or ``--mock`` on the command line) selects the embedded
+mock station, and every output then says MOCK. Every other key is optional and keeps the built-in value.
 
 ``robot``       model name or robot YAML path (joint limits, kinematics)
-``controller``  protocol (socket | serial | modbus), host, port, serial_url, modbus_map, timeout_s,
+``controller``  protocol (socket | serial | modbus | mock), host, port, serial_url, modbus_map, timeout_s,
                 motion_timeout_s, and for the generated RAPID: pc_address, controller_address,
                 serial_channel, ack_timeout_s
 ``camera``      backend (xb3 | mock), stereo_model (OpenCV FileStorage; none = nominal XB3 pair),
@@ -18,8 +20,8 @@ documents each one):
                 max_pose_mismatch_mm, retries, save_images
 ``quality``     thresholds of the calibration verdict (see ``station.quality``)
 ``output``      folder (where new sessions go)
-``mock``        the embedded mock station: protocol, seed, kinematic_error_mm, kinematic_error_deg,
-                time_scale (used by --mock and the demo)
+``mock``        the embedded mock station: protocol (its controller link), seed, kinematic_error_mm,
+                kinematic_error_deg, time_scale (used by --mock, a config whose back ends are mock, and the demo)
 ``postures``    optional fixed approved postures for ``handeye rapid generate`` (capture plans its own)
 """
 
@@ -46,9 +48,19 @@ class ConfigError(HandEyeError):
     """The station configuration file is missing, malformed, or holds a bad value (named by key)."""
 
 
+#: The back-end name that selects the embedded mock station (controller and camera alike).
+MOCK = "mock"
+#: Controller link protocols of a real station.
+CONTROLLER_PROTOCOLS = ("socket", "serial", "modbus")
+#: Camera back ends of a real station.
+CAMERA_BACKENDS = ("xb3",)
+#: Keys a station file must name: without them a config would silently run on the built-in mock.
+REQUIRED_KEYS = (("controller", "protocol", CONTROLLER_PROTOCOLS), ("camera", "backend", CAMERA_BACKENDS))
+
+
 @dataclass(frozen=True)
 class ControllerSettings:
-    protocol: str = "socket"
+    protocol: str = MOCK
     host: str = "127.0.0.1"
     port: int = 1025
     serial_url: str = "socket://127.0.0.1:1026"
@@ -63,7 +75,7 @@ class ControllerSettings:
 
 @dataclass(frozen=True)
 class CameraSettings:
-    backend: str = "mock"
+    backend: str = MOCK
     stereo_model: str | None = None
     nominal_mount: tuple = ((-115.0, 30.0, 95.0), (0.7071068, 0.0, 0.0, 0.7071068))
     grab_timeout_s: float = 2.0
@@ -134,12 +146,26 @@ class StationConfig:
     postures: tuple | None = None
     source: str = "built-in mock station"
 
+    @property
+    def is_mock(self) -> bool:
+        """True when this configuration runs the embedded mock station (both back ends are ``mock``)."""
+        return self.controller.protocol == MOCK
+
+    def as_mock(self) -> "StationConfig":
+        """The same settings on the embedded mock station (what ``--mock`` does to a config)."""
+        return replace(self, controller=replace(self.controller, protocol=MOCK), camera=replace(self.camera, backend=MOCK))
+
+    @property
+    def link_protocol(self) -> str:
+        """The controller link actually spoken: the mock station's own protocol when mocked."""
+        return self.mock.protocol if self.is_mock else self.controller.protocol
+
     def rapid_dict(self, postures) -> dict:
         """The mapping ``rapid.station.station_from_dict`` reads, with the given approved postures."""
         c = self.controller
         return {
             "robot": self.robot,
-            "controller": {"protocol": c.protocol, "pc_address": c.pc_address, "controller_address": c.controller_address,
+            "controller": {"protocol": self.link_protocol, "pc_address": c.pc_address, "controller_address": c.controller_address,
                            "port": c.port, "serial_channel": c.serial_channel, "ack_timeout_s": c.ack_timeout_s},
             "motion": {"speed_tcp_mm_s": self.motion.speed_tcp_mm_s, "speed_ori_deg_s": self.motion.speed_ori_deg_s},
             "tool": {"name": self.tool.name, "mass_kg": self.tool.mass_kg, "cog_mm": list(self.tool.cog_mm)},
@@ -252,7 +278,7 @@ def config_from_dict(data: dict, source: str = "configuration") -> StationConfig
 
     def controller_value(key, value, path):
         if key == "protocol":
-            return _text(value, path, ("socket", "serial", "modbus"))
+            return _text(value, path, CONTROLLER_PROTOCOLS + (MOCK,))
         if key == "port":
             return _number(value, path, 1, 65535, integer=True)
         if key in ("timeout_s", "motion_timeout_s", "ack_timeout_s"):
@@ -263,7 +289,7 @@ def config_from_dict(data: dict, source: str = "configuration") -> StationConfig
 
     def camera_value(key, value, path):
         if key == "backend":
-            return _text(value, path, ("xb3", "mock"))
+            return _text(value, path, CAMERA_BACKENDS + (MOCK,))
         if key == "stereo_model":
             return None if value is None else _text(value, path)
         if key == "nominal_mount":
@@ -317,7 +343,7 @@ def config_from_dict(data: dict, source: str = "configuration") -> StationConfig
 
     def mock_value(key, value, path):
         if key == "protocol":
-            return _text(value, path, ("socket", "serial", "modbus"))
+            return _text(value, path, CONTROLLER_PROTOCOLS)
         if key == "seed":
             return _number(value, path, 0, 2**31, integer=True)
         if key == "time_scale":
@@ -361,7 +387,19 @@ def config_from_dict(data: dict, source: str = "configuration") -> StationConfig
         changes["postures"] = tuple(checked)
     config = replace(base, **changes)
     _check_quality(config.quality)
+    _check_hardware_named(data, config)
     return config
+
+
+def _check_hardware_named(data: dict, config: StationConfig) -> None:
+    """Refuse a config that names no controller or camera, or mixes the mock with real hardware."""
+    for section, key, real in REQUIRED_KEYS:
+        if not isinstance(data.get(section), dict) or key not in data[section]:
+            raise ConfigError(f"{section}.{key} is missing: name the station's {section} ({' | '.join(real)}), "
+                              f"or {MOCK} for the embedded mock station")
+    if (config.controller.protocol == MOCK) != (config.camera.backend == MOCK):
+        raise ConfigError(f"controller.protocol is {config.controller.protocol} but camera.backend is {config.camera.backend}: "
+                          f"the mock camera only sees the mock robot; set both to {MOCK}, or neither")
 
 
 def _check_quality(quality: dict) -> None:

@@ -20,6 +20,7 @@ from ..calibration.solve import calibrate, problem_from_session
 from ..calibration.transforms import pose_from_transform, rotation_error_deg, translation_error_mm
 from .capture import capture
 from .config import StationConfig, default_config
+from .origin import MOCK
 from .runtime import open_station
 from .writeback import writeback
 
@@ -49,7 +50,8 @@ def _fresh_folder(path: Path) -> None:
 
 def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None = None,
              progress=lambda message: None, on_posture=lambda report: None) -> dict:
-    """Run the demo; returns the JSON mapping of ``handeye demo`` (conventions.md keys first)."""
+    """Run the demo; returns the JSON mapping of ``handeye demo`` (``mock: true``, then the
+    conventions.md keys)."""
     started = time.monotonic()
     config = config or default_config()
     config = replace(config, plan=replace(config.plan, postures=options.postures),
@@ -74,12 +76,13 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
         if options.report:
             report_path = _report(session_dir, problem, result, verdict, config)
             progress(f"report written to {report_path}")
-        outcome = writeback(session_dir, config, result, link.controller,
-                            verdict_passed=verdict.passed, verdict_reason=verdict.line(), progress=progress)
+        outcome = writeback(session_dir, config, result, link.controller, verdict_passed=verdict.passed,
+                            verdict_reason=verdict.line(), progress=progress, origin=MOCK, mock_controller=True)
         truth = link.truth_cam2tool0
     errors = {"rotation_error_deg": float(rotation_error_deg(result.x, truth)),
               "translation_error_mm": float(translation_error_mm(result.x, truth))}
     return {
+        "mock": True,
         "camera_pose": {"parent": "tool0", **pose_from_transform(result.x)},
         "truth_camera_pose": {"parent": "tool0", **pose_from_transform(truth)},
         "postures_captured": len(summary.captured) + len(summary.already),

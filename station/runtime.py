@@ -1,4 +1,9 @@
-"""Opening the station's hardware, real or the embedded mock, behind one object."""
+"""Opening the station's hardware, real or the embedded mock, behind one object.
+
+Which one is decided by the configuration alone (:attr:`StationConfig.is_mock`): a real config opens
+the real controller and camera, and when they cannot be reached the call fails; it never falls back
+to the mock. ``--mock`` on the command line turns a config into the mock one (``config.as_mock()``).
+"""
 
 from __future__ import annotations
 
@@ -28,10 +33,14 @@ class StationLink:
     """
 
     controller: object
-    camera: object
-    stereo_model: object
+    camera: object = None
+    stereo_model: object = None
     load_program: Callable | None = None
     mock: object = None
+
+    @property
+    def is_mock(self) -> bool:
+        return self.mock is not None
 
     @property
     def truth_cam2tool0(self) -> np.ndarray | None:
@@ -60,24 +69,60 @@ def mock_spec(config: StationConfig):
                            kinematic_error_deg=m.kinematic_error_deg, time_scale=m.time_scale, seed=m.seed)
 
 
+#: What every output says when the embedded mock station is in use.
+MOCK_BANNER = ("MOCK: the embedded mock station (a simulated IRB 1400 and XB3 on 127.0.0.1); nothing here moves, "
+               "measures or writes a real robot")
+
+
 @contextmanager
-def open_station(config: StationConfig, mock: bool):
-    """Yield a :class:`StationLink`; everything is closed (and the mock stopped) on exit."""
+def _mock_station(config: StationConfig):
     from ..drivers.controller import open_controller
+    from ..mocks.station import MockStation
 
+    with MockStation(mock_spec(config)) as station:
+        options = {**station.controller_options(), "timeout": config.controller.timeout_s,
+                   "motion_timeout": config.controller.motion_timeout_s, "robot": config.robot}
+        with open_controller(station.spec.protocol, **options) as controller:
+            yield station, controller
+
+
+@contextmanager
+def open_station(config: StationConfig, mock: bool = False):
+    """Yield a :class:`StationLink` with the controller and the camera of ``config`` (real, or the
+    embedded mock when ``config.is_mock`` or ``mock``); everything is closed (and the mock stopped)
+    on exit.
+
+    The controller is opened first, so a controller that is not there fails within its link timeout
+    before the camera is touched.
+    """
     if mock:
-        from ..mocks.station import MockStation
-
-        with MockStation(mock_spec(config)) as station:
-            options = {**station.controller_options(), "timeout": config.controller.timeout_s,
-                       "motion_timeout": config.controller.motion_timeout_s, "robot": config.robot}
-            with open_controller(station.spec.protocol, **options) as controller, station.camera as camera:
-                yield StationLink(controller, camera, camera.model, lambda postures, _dir: station.load_program(postures),
-                                  station)
+        config = config.as_mock()
+    if config.is_mock:
+        with _mock_station(config) as (station, controller), station.camera as camera:
+            yield StationLink(controller, camera, camera.model, lambda postures, _dir: station.load_program(postures),
+                              station)
         return
     from ..drivers.camera import open_camera
     from ..drivers.camera.stereo import load_stereo_model, nominal_xb3_model
+    from ..drivers.controller import open_controller
 
     model = load_stereo_model(config.camera.stereo_model) if config.camera.stereo_model else nominal_xb3_model()
     with open_controller(config.controller.protocol, **_controller_options(config)) as controller, open_camera(config.camera.backend) as camera:
         yield StationLink(controller, camera, model)
+
+
+@contextmanager
+def open_controller_link(config: StationConfig, mock: bool = False):
+    """Yield a :class:`StationLink` holding only the controller of ``config`` (real, or the embedded
+    mock station's when ``config.is_mock`` or ``mock``): what write-back needs, so it works without
+    the camera."""
+    if mock:
+        config = config.as_mock()
+    if config.is_mock:
+        with _mock_station(config) as (station, controller):
+            yield StationLink(controller, mock=station)
+        return
+    from ..drivers.controller import open_controller
+
+    with open_controller(config.controller.protocol, **_controller_options(config)) as controller:
+        yield StationLink(controller)

@@ -6,8 +6,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..calibration.errors import HandEyeError
-from ..calibration.session import create_session, write_posture, write_truth
-from ..calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session, truth_dict
+from .origin import SIMULATED
+
+#: Most postures a synthetic session may have (sampling takes about 0.05 s a posture; the triplet
+#: methods grow with the cube of the count; a calibration uses 15-60).
+MAX_POSTURES = 1000
 
 
 @dataclass(frozen=True)
@@ -28,14 +31,18 @@ class SimulateOptions:
 
 def simulate_session(options: SimulateOptions, progress=lambda message: None) -> Path:
     """Sample a scene, draw noise and write the session with ``truth.yaml``; returns the folder."""
-    if options.postures < 3:
-        raise HandEyeError(f"at least 3 postures are needed; got {options.postures}")
+    from ..calibration.session import create_session, write_posture, write_truth
+    from ..calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session, truth_dict
+
+    if not 3 <= options.postures <= MAX_POSTURES:
+        raise HandEyeError(f"postures must be between 3 and {MAX_POSTURES}; got {options.postures}")
     if options.square_mm <= 0:
         raise HandEyeError(f"--square-mm must be positive; got {options.square_mm}")
     path = Path(options.output)
     if (path / "session.yaml").exists() and not options.overwrite:
         raise HandEyeError(f"{path} already holds a session; choose another folder or pass --overwrite")
-    progress(f"planning {options.postures} reachable postures with the board in view ...")
+    progress(f"planning {options.postures} reachable postures with the board in view (about "
+             f"{max(1, round(0.05 * options.postures))} s) ...")
     try:
         scene = make_scene(SceneConfig(postures=options.postures, corners=tuple(options.corners),
                                        square_mm=options.square_mm, setup=options.setup, seed=options.scene_seed))
@@ -44,6 +51,7 @@ def simulate_session(options: SimulateOptions, progress=lambda message: None) ->
     noise = NoiseConfig(options.sigma_rob_deg, options.sigma_cam_mm, options.camera_noise,
                         tuple(options.joint_offset_deg), options.seed)
     session = sample_session(scene, noise)
+    session.extra["origin"] = SIMULATED
     create_session(path, session, overwrite=options.overwrite)
     write_truth(path, truth_dict(scene, noise))
     for posture in session.postures:

@@ -62,7 +62,13 @@ MAX_ROW_DISAGREEMENT_PX = 2.0
 
 
 def as_board(board, square_mm: float | None = None) -> BoardGeometry:
-    """A :class:`BoardGeometry` from a geometry, ``(nx, ny)`` or ``"13x8"``."""
+    """A :class:`BoardGeometry` from a geometry, ``(nx, ny)`` or ``"13x8"`` (long side first).
+
+    Raises
+    ------
+    CameraError
+        Not two counts, fewer than 2x2 corners, the short side first, a square size <= 0.
+    """
     if isinstance(board, BoardGeometry):
         if square_mm is not None and board.square_mm != square_mm:
             return BoardGeometry(board.corners, float(square_mm))
@@ -78,6 +84,9 @@ def as_board(board, square_mm: float | None = None) -> BoardGeometry:
     nx, ny = (int(v) for v in board)
     if nx < 2 or ny < 2:
         raise CameraError(f"a board needs at least 2x2 inner corners; got {nx}x{ny}")
+    if nx < ny:
+        raise CameraError(f"give the board's long side first: {ny}x{nx}, not {nx}x{ny} (x runs along the long side; "
+                          "the corner order follows it)")
     if square_mm is not None and not (np.isfinite(square_mm) and square_mm > 0):
         raise CameraError(f"square size must be a positive number of mm; got {square_mm}")
     return BoardGeometry((nx, ny), None if square_mm is None else float(square_mm))

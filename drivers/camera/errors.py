@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from ..errors import CameraError
 
-__all__ = ["CameraError", "FrameError", "BoardNotFound", "StereoModelError", "StereoMismatch"]
+__all__ = ["CameraError", "FrameError", "BoardNotFound", "StereoModelError", "StereoMismatch", "SquareSizeMismatch"]
 
 
 class FrameError(CameraError):
@@ -25,3 +25,8 @@ class StereoModelError(CameraError):
 
 class StereoMismatch(CameraError):
     """Left and right detections do not agree with the stereo model (swapped or unrelated images)."""
+
+
+class SquareSizeMismatch(CameraError):
+    """The measured corner spacing disagrees with the given square size (wrong size, or a stereo model
+    whose baseline is not in mm): a systematic error, not a bad view."""

@@ -20,9 +20,10 @@ import cv2
 import numpy as np
 
 from ...calibration.compact_points import BoardGeometry
+from ...calibration.plausibility import SQUARE_TOLERANCE
 from .checkerboard import as_board, observe_board
 from .decode import decode_xb3_frame, frame_bytes
-from .errors import FrameError
+from .errors import FrameError, SquareSizeMismatch
 from .stereo import StereoModel, load_stereo_model, nominal_xb3_model
 
 __all__ = [
@@ -118,6 +119,11 @@ def _result(obs, board: BoardGeometry, model: StereoModel, source: str, start: f
     quality = dict(obs.quality)
     if board.square_mm is not None:
         quality["square_error_mm"] = quality["square_mm_measured"] - float(board.square_mm)
+        if abs(quality["square_error_mm"]) > SQUARE_TOLERANCE * board.square_mm:
+            raise SquareSizeMismatch(
+                f"the board's corners measure {quality['square_mm_measured']:.4g} mm apart but the square size given is "
+                f"{board.square_mm:g} mm (more than {100 * SQUARE_TOLERANCE:.0f} % off): check the square size "
+                "(--square-mm, target.square_mm) and that the stereo model's T is in mm")
     return TriangulationResult(obs.points_mm, quality, runtime, board, model.name, source,
                                obs.left.corners_px, obs.right.corners_px)
 
@@ -128,7 +134,7 @@ def triangulate_images(left: np.ndarray, right: np.ndarray, board="13x8", square
 
     Raises
     ------
-    FrameError, BoardNotFound, StereoMismatch
+    FrameError, BoardNotFound, StereoMismatch, SquareSizeMismatch
     """
     model, board = _prepare(model, board, square_mm)
     start = time.perf_counter()
@@ -152,7 +158,7 @@ def triangulate_xb3_frame(buffer, board="13x8", square_mm: float | None = None, 
 
     Raises
     ------
-    FrameError, BoardNotFound, StereoMismatch
+    FrameError, BoardNotFound, StereoMismatch, SquareSizeMismatch
     """
     model, board = _prepare(model, board, square_mm)
     width = width or model.image_size[0]
@@ -180,7 +186,7 @@ def triangulate_files(*, left=None, right=None, xb3_raw=None, stereo=None, board
 
     Raises
     ------
-    FrameError, StereoModelError, BoardNotFound, StereoMismatch
+    FrameError, StereoModelError, BoardNotFound, StereoMismatch, SquareSizeMismatch
     """
     if (xb3_raw is None) == (left is None and right is None):
         raise FrameError("give either --left and --right images or one --xb3-raw frame")

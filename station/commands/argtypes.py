@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["corners", "positive", "non_negative", "count", "port", "floats", "six_floats"]
+__all__ = ["corners", "positive", "non_negative", "count", "whole_between", "port", "floats", "six_floats"]
 
 
 def _number(text: str, kind=float, what: str = "a number"):
@@ -16,14 +16,31 @@ def _number(text: str, kind=float, what: str = "a number"):
 
 
 def corners(text: str) -> tuple[int, int]:
-    """``13x8`` -> ``(13, 8)`` (the larger count first: x runs along the long side)."""
+    """``13x8`` -> ``(13, 8)``: inner corners along x, then along y; x runs along the long side, so
+    the long side comes first (``8x13`` would name another corner order and is refused)."""
     try:
-        a, b = (int(v) for v in text.lower().split("x"))
+        a, b = (int(v) for v in text.lower().replace("×", "x").split("x"))
     except ValueError:
         raise argparse.ArgumentTypeError(f"corners must look like 13x8; got {text!r}") from None
     if a < 2 or b < 2:
         raise argparse.ArgumentTypeError("a board needs at least 2x2 inner corners")
-    return max(a, b), min(a, b)
+    if a < b:
+        raise argparse.ArgumentTypeError(f"give the long side first: {b}x{a}, not {text} (x runs along the long side; "
+                                         "the corner order follows it)")
+    return a, b
+
+
+def whole_between(low: int, high: int, why: str = ""):
+    """A type for a whole number in ``low..high`` (``why`` explains the bound in the error)."""
+
+    def convert(text: str) -> int:
+        value = _number(text, int, "a whole number")
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"must be between {low} and {high}; got {value}{why}")
+        return value
+
+    convert.__name__ = f"whole number {low}..{high}"
+    return convert
 
 
 def positive(text: str) -> float:

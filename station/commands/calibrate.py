@@ -21,6 +21,11 @@ The paper's variants (Deniz & Cakir):
 Classic AX = XB solvers (calibration/classic/README.md says what each minimises):
   tsai, park, horaud, andreff, daniilidis, chou, lu, liang
 
+Before solving, the session's lengths are checked: a session that looks like metres, a posture in
+another unit, a flange beyond the robot's reach or corners whose spacing is not target.square_mm
+(within 5 %) is refused with the reason. A session really written in metres is converted only
+when asked: --units m.
+
 The text report gives the pose as a RAPID tframe literal, the quality figures and each posture's
 residual. --json FILE writes the machine-readable result ('-' for standard output).
 
@@ -54,6 +59,8 @@ def add_parser(sub):
     p.add_argument("--report", metavar="FILE", nargs="?", const="",
                    help="write the HTML calibration report (default FILE: SESSION/report.html)")
     p.add_argument("--thresholds", metavar="FILE.yaml", help="quality thresholds for the verdict (default: built in)")
+    p.add_argument("--units", choices=("mm", "m"), default="mm",
+                   help="length unit the session was written in (default mm, the format's; m converts on reading)")
     return p
 
 
@@ -74,7 +81,7 @@ def run(args) -> int:
         from ...calibration.errors import HandEyeError
 
         raise HandEyeError(f"cannot write the report {report_path}: folder {report_path.parent} does not exist")
-    outcome = calibrate_session_folder(args.session, args.method)
+    outcome = calibrate_session_folder(args.session, args.method, args.units)
     verdict = judge_calibration(outcome, args.thresholds) if (wants_report or args.thresholds) else None
     written = report_calibration(outcome, report_path, verdict=verdict).path if wants_report else None
     if args.json:

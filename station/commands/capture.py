@@ -18,8 +18,12 @@ file atomically, acknowledge.
 Interrupted (Ctrl-C, kill, lost link)? Run the same command again: it resumes, and every posture
 ends up on disk exactly once.
 
---mock runs the embedded mock station (a simulated IRB 1400 behind a real TCP/Modbus server and a
-simulated XB3 on its flange); a config whose camera backend is mock does the same.
+--config runs the real station it names (controller.protocol and camera.backend are required);
+when the controller or the camera cannot be reached, capture stops with the reason: it never falls
+back to the mock. --mock runs the embedded mock station (a simulated IRB 1400 behind a real
+TCP/Modbus server and a simulated XB3 on its flange), with the config's settings if one is given;
+so does a config whose controller.protocol and camera.backend are both mock. Every line it prints
+then starts with MOCK, and the session records that it came from the mock station.
 
 Examples:
   handeye capture --mock --session cal_2026_11_21
@@ -45,27 +49,32 @@ def run(args) -> int:
     from ..capture import capture
     from ..config import default_config, load_config
     from ..progress import progress_bar
-    from ..runtime import open_station
+    from ..runtime import MOCK_BANNER, open_station
 
     if not args.config and not args.mock:
         raise HandEyeError("give --config STATION.yaml for a real station or --mock for the embedded one")
     config = load_config(args.config) if args.config else default_config()
+    if args.mock:
+        config = config.as_mock()
     if args.postures is not None:
         if not 3 <= args.postures <= 255:
             raise HandEyeError(f"--postures must be between 3 and 255; got {args.postures}")
         config = replace(config, plan=replace(config.plan, postures=args.postures))
-    mock = args.mock or config.camera.backend == "mock"
-    with open_station(config, mock) as link, progress_bar("capture") as update:
+    tag = "MOCK " if config.is_mock else ""
+    say = lambda message: print(tag + message, flush=True)  # noqa: E731
+    if config.is_mock:
+        print(MOCK_BANNER, flush=True)
+    with open_station(config) as link, progress_bar("capture") as update:
         def on_posture(report):
-            print(("  ok    " if report.ok else "  SKIP  ") + report.message + f"  ({report.elapsed_s:.1f} s)", flush=True)
+            say(("  ok    " if report.ok else "  SKIP  ") + report.message + f"  ({report.elapsed_s:.1f} s)")
             update(report.k, report.total, f"posture {report.k}/{report.total}")
 
         summary = capture(config, args.session, link.controller, link.camera, link.stereo_model, link.load_program,
-                          progress=lambda m: print(m, flush=True), on_posture=on_posture)
+                          progress=say, on_posture=on_posture)
     have = len(summary.captured) + len(summary.already)
-    print(f"{have} of {summary.planned} postures in {summary.session} ({len(summary.captured)} this run, "
-          f"{summary.duration_s:.0f} s)")
+    say(f"{have} of {summary.planned} postures in {summary.session} ({len(summary.captured)} this run, "
+        f"{summary.duration_s:.0f} s)")
     if summary.skipped:
-        print(f"skipped: {', '.join(map(str, summary.skipped))}: run capture again to retry them")
-    print(f"next: handeye calibrate {summary.session} --report")
+        say(f"skipped: {', '.join(map(str, summary.skipped))}: run capture again to retry them")
+    say(f"next: handeye calibrate {summary.session} --report")
     return 0 if summary.complete or have >= 3 else 1

@@ -46,8 +46,11 @@ def run(args) -> int:
 
     if not 3 <= args.postures <= 255:
         raise HandEyeError(f"--postures must be between 3 and 255; got {args.postures}")
+    from ..runtime import MOCK_BANNER
+
     quiet = args.json == "-"
     say = (lambda m: None) if quiet else (lambda m: print(m, flush=True))
+    say(MOCK_BANNER)
     with progress_bar("demo capture") as update:
         def on_posture(report):
             if not quiet:
@@ -82,8 +85,8 @@ def _summary(r: dict) -> str:
     lines += [
         f"postures captured: {r['postures_captured']}; outliers: {r['outliers'] or 'none'}; verdict: "
         + ("PASS" if r["verdict"]["passed"] else "FAIL (" + ", ".join(c["name"] for c in r["verdict"]["checks"] if not c["passed"]) + ")"),
-        f"written to the robot: {r['tooldata']}",
-        f"read back: {'identical to the last digit' if r['readback_ok'] else 'DIFFERENT'}",
+        f"written to the MOCK robot: {r['tooldata']}",
+        f"MOCK read back: {'identical to the last digit' if r['readback_ok'] else 'DIFFERENT'}",
         f"session: {r['session']}" + (f"; report: {r['report']}" if r.get("report") else ""),
         f"done in {r['wall_s']:.0f} s",
     ]

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import argparse
 
+from ..simulate import MAX_POSTURES
 from . import argtypes
 
-HELP = "write a synthetic session (IRB 1400, 8x13 board, chosen noise) with its truth"
+HELP = "write a synthetic session (IRB 1400, 13x8 board, chosen noise) with its truth"
 
 EPILOG = """\
 The postures are reachable IRB 1400 configurations from which the camera sees the whole board at
@@ -22,11 +23,15 @@ Example:
 """
 
 
+WHY = " (a calibration uses 15-60 postures; sampling takes about 0.05 s each)"
+
+
 def add_parser(sub):
     p = sub.add_parser("simulate", help=HELP, description=HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("-o", "--output", required=True, metavar="SESSION", help="session folder to create")
-    p.add_argument("--postures", type=int, default=30, help="number of postures (default 30)")
+    p.add_argument("--postures", type=argtypes.whole_between(3, MAX_POSTURES, WHY), default=30,
+                   help=f"number of postures, 3..{MAX_POSTURES} (default 30)")
     p.add_argument("--sigma-rob", type=argtypes.non_negative, default=0.0, metavar="DEG", help="joint-angle noise, degrees (default 0)")
     p.add_argument("--sigma-cam", type=argtypes.non_negative, default=0.0, metavar="MM", help="camera point noise, mm (default 0)")
     p.add_argument("--camera-noise", choices=("paper", "gaussian"), default="paper", help="camera noise model (default paper)")

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from . import argtypes
+
 HELP = "board corners in mm (camera frame) from a stereo image pair or a raw XB3 frame"
 
 EPILOG = """\
@@ -19,7 +21,9 @@ R, T (stereoCalibrate meaning, T in mm; camera 1 = left). Without --stereo the n
 pair is used: f = 983 px, (cx, cy) = (643.6, 493.4), baseline 239.98 mm, no distortion (a
 factory-rectified 3.8 mm head at 1280x960); give your head's own file for real measurements.
 
---board is the number of INNER corners (long side first), e.g. 13x8 for a board of 14x9 squares.
+--board is the number of INNER corners, long side first, e.g. 13x8 for a board of 14x9 squares
+(8x13 is refused: it would name another corner order). --square-mm is checked against the
+measured corners: more than 5 % off (a wrong size, or a stereo model not in mm) is refused.
 The corners come out in the target frame's order (conventions.md): origin at a corner of the
 grid, x along the long side from the edge whose corner squares are black towards the edge whose
 corner squares are white, z into the board; index = row * 13 + col.
@@ -42,8 +46,10 @@ def add_parser(sub):
     p.add_argument("--right", metavar="R.png", help="right image (camera 2)")
     p.add_argument("--xb3-raw", metavar="FRAME", help="raw XB3 frame (3-sensor RGB8 layout)")
     p.add_argument("--stereo", metavar="STEREO.yaml", help="stereo model (default: nominal XB3 wide pair)")
-    p.add_argument("--board", metavar="NXxNY", default="13x8", help="inner corners, long side first (default 13x8)")
-    p.add_argument("--square-mm", metavar="MM", type=float, default=30.0, help="square size in mm (default 30)")
+    p.add_argument("--board", metavar="NXxNY", type=argtypes.corners, default=(13, 8),
+                   help="inner corners, long side first (default 13x8)")
+    p.add_argument("--square-mm", metavar="MM", type=argtypes.positive, default=30.0,
+                   help="square size in mm (default 30); corners measured more than 5%% apart from it are refused")
     p.add_argument("--mono", action="store_true", help="--xb3-raw frame of a mono head (planes are grey, not Bayer)")
     p.add_argument("--json", metavar="OUT", help="write the result as JSON ('-' = stdout)")
     return p

@@ -11,8 +11,15 @@ The session is calibrated (recommended default, or --method) and judged against 
 thresholds; a failed verdict is refused unless --force. The tool data (frame from the calibration,
 mass and centre of gravity from the config's tool section) is validated: unit quaternion, frame
 within 1 m of the flange, mass > 0. --dry-run prints the RAPID literal and stops. Otherwise the
-controller's current tool data is saved in the session (tooldata_backup_*.yaml), the new one is
-written, read back and compared to the last digit the controller keeps (0.001 mm, 1e-6).
+controller's current tool data is saved in the session (a new tooldata_backup_*.yaml each time,
+never overwritten), the new one is written, read back and compared to the last digit the
+controller keeps (0.001 mm, 1e-6).
+
+Only the controller is opened (the camera may be unplugged or on another PC). --config writes to
+the real controller it names and fails with the reason when it cannot be reached; --mock writes to
+the embedded mock station's controller, and the output says MOCK. A session captured on the mock
+station, or simulated, is never written to a real controller. If the link fails during the write,
+the controller may hold either value: run the same command again; it reads back and says which.
 
 Examples:
   handeye writeback my_session --config station.yaml --dry-run
@@ -29,35 +36,50 @@ def add_parser(sub):
     p.add_argument("--dry-run", action="store_true", help="print the RAPID literal only")
     p.add_argument("--force", action="store_true", help="write even when the quality verdict failed")
     p.add_argument("--method", metavar="NAME", help="calibration method (default: the recommended one)")
+    p.add_argument("--units", choices=("mm", "m"), default="mm",
+                   help="length unit the session was written in (default mm; m converts on reading)")
     return p
 
 
 def run(args) -> int:
     from ...calibration.errors import HandEyeError
+    from ...calibration.plausibility import session_in_mm
     from ...calibration.session import read_session
     from ...calibration.solve import calibrate, problem_from_session
     from ..config import default_config, load_config
     from ..demo import station_verdict
-    from ..runtime import open_station
-    from ..writeback import side_by_side, writeback
+    from ..origin import origin_banner, session_origin
+    from ..runtime import MOCK_BANNER, open_controller_link
+    from ..writeback import check_session_origin, side_by_side, writeback
 
     if not args.dry_run and not args.config and not args.mock:
         raise HandEyeError("give --config STATION.yaml (the real controller), --mock, or --dry-run")
     config = load_config(args.config) if args.config else default_config()
+    if args.mock:
+        config = config.as_mock()
     session = read_session(args.session)
+    origin = session_origin(session)
+    session = session_in_mm(session, args.units)
+    if not args.dry_run:
+        check_session_origin(origin, config.is_mock)
+    if origin_banner(origin):
+        print(origin_banner(origin))
     problem = problem_from_session(session)
     result = calibrate(problem, args.method)
     verdict = station_verdict(result, problem, config)
     print(f"calibration ({result.method}): {verdict.line()}")
-    common = dict(verdict_passed=verdict.passed, verdict_reason=verdict.line(), force=args.force,
+    common = dict(verdict_passed=verdict.passed, verdict_reason=verdict.line(), force=args.force, origin=origin,
                   progress=lambda m: print(m, flush=True))
     if args.dry_run:
         outcome = writeback(args.session, config, result, None, dry_run=True, **common)
         print(outcome.literal)
         return 0
-    with open_station(config, mock=args.mock or config.camera.backend == "mock") as link:
-        outcome = writeback(args.session, config, result, link.controller, **common)
+    if config.is_mock:
+        print(MOCK_BANNER, flush=True)
+    with open_controller_link(config) as link:
+        outcome = writeback(args.session, config, result, link.controller, mock_controller=link.is_mock, **common)
+    tag = "MOCK " if outcome.mock else ""
     print(side_by_side(outcome.old, outcome.new))
     print(outcome.literal)
-    print("read back: identical to the last digit the controller keeps" if outcome.readback_ok else "read back: DIFFERENT")
+    print(tag + ("read back: identical to the last digit the controller keeps" if outcome.readback_ok else "read back: DIFFERENT"))
     return 0
