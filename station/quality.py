@@ -92,6 +92,15 @@ class QualityThresholds:
     min_median_rotation_deg : float
         Smallest median rotation angle between two postures. Default 15 deg: small rotations leave the
         rotation axes (and so X) poorly determined; the method likes 20-45 deg.
+    min_camera_offset_mm : float
+        Eye-in-hand only: smallest distance of the camera frame (the left camera's optical centre)
+        from the flange origin, ``|t|`` of ``cam2tool0``. Default 20 mm: the optical centre cannot sit
+        inside the flange; a session whose lengths were written in metres solves to a frame a fraction
+        of a millimetre from the flange, with every other figure looking excellent.
+    max_camera_offset_mm : float
+        Eye-in-hand only: largest distance of the camera frame from the flange origin. Default 500 mm:
+        a stereo head on an IRB 1400 flange sits 100-300 mm from it; a frame further away points at
+        wrong units on one side, the wrong set-up, or a camera on a long bracket (then raise it).
     """
 
     max_d_org_mm: float = 1.0
@@ -102,10 +111,13 @@ class QualityThresholds:
     max_outlier_fraction: float = 0.2
     min_rotation_axis_spread_deg: float = 10.0
     min_median_rotation_deg: float = 15.0
+    min_camera_offset_mm: float = 20.0
+    max_camera_offset_mm: float = 500.0
 
     def __post_init__(self):
         for f in fields(self):
             _check_value(f.name, getattr(self, f.name))
+        _check_pair(self.min_camera_offset_mm, self.max_camera_offset_mm)
 
     @classmethod
     def from_dict(cls, mapping, source: str = "thresholds") -> QualityThresholds:
@@ -134,10 +146,18 @@ class QualityThresholds:
             if key not in known:
                 raise ThresholdError(f"{source}: unknown key {key!r}; known keys: {', '.join(known)}")
             values[key] = _check_value(key, value, source)
+        _check_pair(values.get("min_camera_offset_mm", cls.min_camera_offset_mm),
+                    values.get("max_camera_offset_mm", cls.max_camera_offset_mm), source)
         return cls(**values)
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+
+def _check_pair(low: float, high: float, source: str = "thresholds") -> None:
+    """The camera-offset range must not be empty."""
+    if low >= high:
+        raise ThresholdError(f"{source}: min_camera_offset_mm ({low:g}) must be below max_camera_offset_mm ({high:g})")
 
 
 def _check_value(key: str, value, source: str = "thresholds"):
@@ -280,6 +300,8 @@ CHECK_LABELS = {
     "max_outlier_fraction": ("share of postures rejected as outliers", "", "{:.0%}"),
     "min_rotation_axis_spread_deg": ("spread of the rotation axes about the least exercised direction", "deg", "{:.1f}"),
     "min_median_rotation_deg": ("median rotation between two postures", "deg", "{:.1f}"),
+    "min_camera_offset_mm": ("camera frame's distance from the flange (not inside it)", "mm", "{:.1f}"),
+    "max_camera_offset_mm": ("camera frame's distance from the flange (not far off)", "mm", "{:.1f}"),
 }
 
 
@@ -302,28 +324,35 @@ class Verdict:
         Every check passed.
     checks : list of Check
     thresholds : QualityThresholds
+    cause : str
+        What the failed checks have in common, when the data show it (lengths not in mm: what to fix);
+        '' otherwise. It leads the one-line verdict of a FAIL.
     """
 
     passed: bool
     checks: list
     thresholds: QualityThresholds = QualityThresholds()
+    cause: str = ""
 
     @property
     def failed(self) -> list:
         return [c for c in self.checks if not c.passed]
 
     def line(self) -> str:
-        """One line for the terminal: ``verdict: PASS (8 of 8 checks)`` or the failed checks."""
+        """One line for the terminal: ``verdict: PASS (10 of 10 checks)``, or FAIL with the cause (when
+        known) and the failed checks."""
         if self.passed:
             return f"verdict: PASS ({len(self.checks)} of {len(self.checks)} checks)"
         failed = "; ".join(
             f"{c.name} {format_check_value(c.name, c.value)} (limit {format_check_value(c.name, c.limit)})"
             for c in self.failed)
-        return f"verdict: FAIL ({len(self.failed)} of {len(self.checks)} checks failed: {failed})"
+        cause = f" - {self.cause}" if self.cause else ""
+        return f"verdict: FAIL{cause} ({len(self.failed)} of {len(self.checks)} checks failed: {failed})"
 
     def to_json(self) -> dict:
         return {
             "passed": self.passed,
+            "cause": self.cause,
             "checks": [{"name": c.name, "value": c.value, "limit": c.limit, "passed": c.passed, "advice": c.advice}
                        for c in self.checks],
             "thresholds": self.thresholds.to_dict(),
@@ -355,8 +384,13 @@ def verdict(result, problem: HandEyeProblem, thresholds: QualityThresholds | Non
     Returns
     -------
     Verdict
-        ``passed`` and one :class:`Check` per threshold, in the order of :class:`QualityThresholds`.
+        ``passed`` and one :class:`Check` per threshold, in the order of :class:`QualityThresholds`
+        (the camera-offset pair eye-in-hand only). When the poses' lengths do not look like millimetres
+        (``station.units_advice``) every failed check's advice, and the verdict's ``cause``, say which
+        units to fix instead of what to re-capture.
     """
+    from .units_advice import units_advice
+
     t = thresholds or QualityThresholds()
     ids = [int(i) for i in problem.posture_ids]
     outliers = [int(i) for i in result.outliers]
@@ -430,4 +464,34 @@ def verdict(result, problem: HandEyeProblem, thresholds: QualityThresholds | Non
             "min_median_rotation_deg", coverage.median_angle_deg, t.min_median_rotation_deg,
             f"postures differ by only {coverage.median_angle_deg:.1f} deg of rotation (median): turn the flange "
             f"by 20-45 deg between postures, keeping the board in view"))
-    return Verdict(all(c.passed for c in checks), checks, t)
+
+    # where the camera is
+    if problem.setup == EYE_IN_HAND:
+        offset = float(np.linalg.norm(result.x[:3, 3]))
+        checks.append(_check(
+            "min_camera_offset_mm", offset, t.min_camera_offset_mm,
+            f"the camera frame is {offset:.1f} mm from the flange, inside it: the session's lengths look like metres; "
+            f"lengths must be in mm (robot poses, board points and the stereo baseline)"))
+        checks.append(_check(
+            "max_camera_offset_mm", offset, t.max_camera_offset_mm,
+            f"the camera frame is {offset:.0f} mm from the flange, more than {t.max_camera_offset_mm:g} mm: check the "
+            f"session's units (mm on both sides) and set-up (eye-in-hand?), or raise max_camera_offset_mm if the "
+            f"camera really sits that far"))
+
+    passed = all(c.passed for c in checks)
+    units = units_advice(problem)
+    if units is None:
+        return Verdict(passed, checks, t)
+    checks = [_with_units(c, units, outliers) for c in checks]
+    return Verdict(passed, checks, t, cause="" if passed else units.text)
+
+
+def _with_units(check: Check, units, outliers) -> Check:
+    """A check whose advice names the units problem: instead of the advice when it failed on a figure
+    (a figure that is not available keeps its own advice); added to the note on outliers when the
+    postures in another unit were left out (the result may then be right)."""
+    if not check.passed and check.value is not None:
+        return check._replace(advice=units.text)
+    if check.name == "max_outlier_fraction" and units.postures and set(units.postures) <= set(outliers):
+        return check._replace(advice=f"{check.advice}; {units.text}" if check.advice else units.text)
+    return check

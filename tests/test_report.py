@@ -79,7 +79,7 @@ def test_cli_report_is_self_contained_with_pose_verdict_and_every_plot(good_sess
     report = good_session / "report.html"
     assert report.is_file()
     assert f"Report written to {report}" in printed
-    assert "verdict: PASS (8 of 8 checks)" in printed
+    assert "verdict: PASS (10 of 10 checks)" in printed
     page = report.read_text()
     sources = _assert_self_contained(page)
     assert len(sources) == len(PLOTS)

@@ -34,6 +34,8 @@ default thresholds, or those of --thresholds FILE.yaml (lines 'key: number', or 
   max_d_org_mm (1.0)  max_posture_residual_mm (2.0)  max_sigma_translation_mm (0.2)
   max_sigma_rotation_deg (0.02)  min_inlier_postures (12)  max_outlier_fraction (0.2)
   min_rotation_axis_spread_deg (10)  min_median_rotation_deg (15)
+  min_camera_offset_mm (20)  max_camera_offset_mm (500)   (eye-in-hand: camera frame's distance
+                                                          from the flange)
 With --report or --thresholds the JSON gains a "verdict" key. A failed verdict still exits 0 (the
 calibration itself succeeded); read "verdict.passed" in the JSON to act on it.
 
