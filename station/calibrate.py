@@ -16,7 +16,11 @@ DEFAULT_REPORT_NAME = "report.html"
 
 @dataclass(frozen=True)
 class CalibrationOutcome:
-    """A result with where it came from (the session, the problem it was solved from, the truth if any)."""
+    """A result with where it came from (the session, the problem it was solved from, the truth if any).
+
+    ``origin`` is where the data were captured: ``mock``, ``real``, ``simulated`` or ``unknown``
+    (``station.origin.session_origin``); the text summary, the report and the JSON key ``station`` show it.
+    """
 
     session_path: Path
     result: CalibrationResult
@@ -24,15 +28,19 @@ class CalibrationOutcome:
     session: Session | None = None
     problem: HandEyeProblem | None = None
     truth: dict | None = None
+    origin: str = "unknown"
 
 
 def calibrate_session_folder(path, method: str | None = None) -> CalibrationOutcome:
     """Read, validate and solve a session; uses ``truth.yaml`` when present (synthetic sessions)."""
+    from .origin import session_origin
+
     session = read_session(path)
     truth = truth_from_dict(read_truth(path))
     problem = problem_from_session(session)
     result = calibrate(problem, method, truth)
-    return CalibrationOutcome(Path(path), result, truth is not None, session, problem, truth)
+    return CalibrationOutcome(Path(path), result, truth is not None, session, problem, truth,
+                              session_origin(session, path))
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,9 @@ Classic AX = XB solvers (calibration/classic/README.md says what each minimises)
   tsai, park, horaud, andreff, daniilidis, chou, lu, liang
 
 The text report gives the pose as a RAPID tframe literal, the quality figures and each posture's
-residual. --json FILE writes the machine-readable result ('-' for standard output).
+residual. --json FILE writes the machine-readable result ('-' for standard output); its key
+"station" says where the data come from: "real", "mock" (the embedded mock station), "simulated"
+(truth.yaml beside the session) or "unknown" (imported or older sessions).
 
 --report [FILE] also writes the calibration report: one self-contained HTML file (plots embedded,
 no network needed) with a PASS/FAIL verdict against the quality thresholds, the tframe literal,
@@ -81,6 +83,7 @@ def run(args) -> int:
     written = report_calibration(outcome, report_path, verdict=verdict).path if wants_report else None
     if args.json:
         data = outcome.result.to_json()
+        data["station"] = outcome.origin  # mock | real | simulated | unknown
         if verdict is not None:
             data["verdict"] = verdict.to_json()
         write_json(args.json, data)
