@@ -109,5 +109,5 @@ def report_calibration(outcome: CalibrationOutcome, report_path, thresholds_file
             findings = None
     title = f"Hand-eye calibration report: {outcome.session_path.resolve().name}"
     written = write_report(path, outcome.session_path, outcome.problem, result, comparison, verdict,
-                           title=title, findings=findings)
+                           title=title, findings=findings, origin=outcome.origin)
     return ReportOutcome(written, verdict, comparison)
