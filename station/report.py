@@ -13,6 +13,7 @@ d_org is everywhere the one of ``station.quality.station_d_org``, and the header
 and points it is computed over.
 
 Plots use matplotlib's object API (``Figure`` + Agg canvas): no pyplot, no global backend change.
+No two texts of a figure may overlap (tests/test_report_figures.py checks every figure).
 """
 
 from __future__ import annotations
@@ -137,10 +138,10 @@ def corner_repeatability(problem: HandEyeProblem, result) -> dict:
 
 
 # ----------------------------------------------------------------------------------------- plots
-def _figure(width: float, height: float):
+def _figure(width: float, height: float, layout: str | None = None):
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(width, height), dpi=100)
+    fig = Figure(figsize=(width, height), dpi=100, layout=layout)
     fig.patch.set_facecolor("white")
     return fig
 
@@ -177,22 +178,29 @@ def plot_residuals(result, problem: HandEyeProblem, limit_mm: float | None) -> b
     ax.axhline(median, color=_GREY, linestyle=":", linewidth=1.2, label=f"median {median:.2f} mm")
     if limit_mm is not None:
         ax.axhline(limit_mm, color=_RED, linestyle="--", linewidth=1.2, label=f"limit {limit_mm:g} mm")
-    for k, (i, v) in enumerate(zip(ids, values)):
-        if i in outliers or v > top:
-            ax.annotate(f"{v:.2f}" + (" (off scale)" if v > top else ""), (k, min(v, top)), ha="center", va="bottom",
-                        fontsize=8, color=_RED, xytext=(0, 2), textcoords="offset points")
+    labelled = [(k, v) for k, (i, v) in enumerate(zip(ids, values)) if i in outliers or v > top]
+    off_scale = [(k, v) for k, v in labelled if v > top]
+    if off_scale:  # a clipped bar ends in an arrow head
+        ax.plot([k for k, _ in off_scale], [top] * len(off_scale), linestyle="none", marker="^", markersize=6,
+                color=_RED, clip_on=False)
+    for k, v in labelled:  # upright value labels: neighbouring outliers' labels cannot run into each other
+        ax.annotate(f"{v:.1f}" if v >= 100 else f"{v:.2f}", (k, min(v, top)), ha="center", va="bottom",
+                    rotation=90, fontsize=8, color=_RED, xytext=(0, 7 if v > top else 2), textcoords="offset points")
     step = max(1, int(np.ceil(len(ids) / 40)))
     ax.set_xticks(x[::step])
     ax.set_xticklabels([str(i) for i in ids][::step], fontsize=8)
     ax.set_xlim(-0.7, len(ids) - 0.3)
-    ax.set_ylim(0, top * 1.18 if top > 0 else 1.0)
+    ax.set_ylim(0, (top * (1.4 if labelled else 1.18)) if top > 0 else 1.0)
     ax.set_xlabel("posture")
     ax.set_ylabel("residual (mm)")
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     handles = [Patch(color=_BLUE, label="used"), Patch(color=_RED, label="outlier (left out)")]
     if _ORANGE in colours:
         handles.append(Patch(color=_ORANGE, label="used, over the limit"))
+    if off_scale:
+        handles.append(Line2D([], [], linestyle="none", marker="^", color=_RED, label="off scale (value printed)"))
     line_handles, _ = ax.get_legend_handles_labels()
     ax.legend(handles=handles + line_handles, fontsize=8, loc="lower right", bbox_to_anchor=(1.0, 1.0),
               ncol=len(handles) + len(line_handles), frameon=False)
@@ -263,8 +271,29 @@ def plot_axis_coverage(problem: HandEyeProblem, result) -> tuple[bytes, object]:
     return _png(fig), coverage
 
 
+def _readable_value_axis(axis, nbins: int = 4) -> None:
+    """Few ticks, plain numbers (no offset or 1e-5 factor, which lands on a neighbouring panel), each
+    with as many decimals as the step between ticks needs."""
+    from matplotlib.ticker import FuncFormatter, MaxNLocator
+
+    axis.set_major_locator(MaxNLocator(nbins=nbins, steps=[1, 2, 2.5, 5, 10], min_n_ticks=2))
+
+    def label(value, _position):
+        ticks = np.asarray(axis.get_majorticklocs(), float)
+        step = float(np.min(np.diff(ticks))) if len(ticks) > 1 else (abs(value) or 1.0)
+        decimals = next((d for d in range(9) if np.allclose(np.round(ticks, d), ticks, rtol=0, atol=1e-6 * step)), 8)
+        return f"{value:.{decimals}f}"
+
+    axis.set_major_formatter(FuncFormatter(label))
+
+
 def plot_method_comparison(rows: list[dict]) -> bytes:
     """Horizontal bars per method: position and rotation difference from the chosen result, d_org."""
+    return _png(method_comparison_figure(rows))
+
+
+def method_comparison_figure(rows: list[dict]):
+    """The figure of :func:`plot_method_comparison` (a matplotlib ``Figure``)."""
     names = [r["method"] + (" (chosen)" if r["chosen"] else "") for r in rows]
     colours = [_BLUE if r["chosen"] else _GREY for r in rows]
     panels = [("d_position_mm", "position difference\nfrom the chosen (mm)", "{:.3f}"),
@@ -272,23 +301,27 @@ def plot_method_comparison(rows: list[dict]) -> bytes:
               ("d_org_mm", "d_org\n(mm)", "{:.3f}")]
     if any(r["d_org_incl_outliers_mm"] is not None for r in rows):
         panels.append(("d_org_incl_outliers_mm", f"{D_ORG_ALL_NAME}\n(mm)", "{:.3f}"))
-    fig = _figure(12.5, 0.42 * len(rows) + 1.5)
+    fig = _figure(3.4 * len(panels) + 1.4, 0.42 * len(rows) + 1.9, layout="constrained")
     y = np.arange(len(rows))[::-1]
     for k, (key, title, fmt) in enumerate(panels):
         ax = fig.add_subplot(1, len(panels), k + 1)
-        values = np.array([r[key] for r in rows])
-        ax.barh(y, values, color=colours, height=0.6)
-        top = values.max() if values.size and values.max() > 0 else 1.0
+        values = np.array([np.nan if r[key] is None else r[key] for r in rows], dtype=float)
+        ax.barh(y, np.nan_to_num(values), color=colours, height=0.6)
+        finite = values[np.isfinite(values)]
+        resolution = 10.0 ** -len(fmt.format(0.0).split(".")[1])  # smaller values print as zero anyway
+        top = max(float(finite.max()) if finite.size else 0.0, 10 * resolution)
         for yy, v in zip(y, values):
-            ax.annotate(fmt.format(v), (v, yy), xytext=(3, 0), textcoords="offset points", va="center", fontsize=8)
-        ax.set_xlim(0, top * 1.35)
+            ax.annotate("n/a" if not np.isfinite(v) else fmt.format(v), (0 if not np.isfinite(v) else v, yy),
+                        xytext=(3, 0), textcoords="offset points", va="center", fontsize=8)
+        ax.set_xlim(0, top * 1.45)
+        _readable_value_axis(ax.xaxis)
+        ax.tick_params(axis="x", labelsize=8.5)
         ax.set_yticks(y)
         ax.set_yticklabels(names if k == 0 else [""] * len(rows), fontsize=9)
         ax.set_title(title, fontsize=10)
         _style(ax)
         ax.grid(False, axis="y")
-    fig.subplots_adjust(wspace=0.16)
-    return _png(fig)
+    return fig
 
 
 def _grid_shape(points_2d: np.ndarray):
