@@ -17,7 +17,11 @@ DEFAULT_REPORT_NAME = "report.html"
 
 @dataclass(frozen=True)
 class CalibrationOutcome:
-    """A result with where it came from (the session, the problem it was solved from, the truth if any)."""
+    """A result with where it came from (the session, the problem it was solved from, the truth if any).
+
+    ``origin`` is where the data were captured: ``mock``, ``real``, ``simulated`` or ``unknown``
+    (``station.origin.session_origin``); the text summary, the report and the JSON key ``station`` show it.
+    """
 
     session_path: Path
     result: CalibrationResult
@@ -25,6 +29,7 @@ class CalibrationOutcome:
     session: Session | None = None
     problem: HandEyeProblem | None = None
     truth: dict | None = None
+    origin: str = "unknown"
 
 
 def calibrate_session_folder(path, method: str | None = None, units: str = "mm") -> CalibrationOutcome:
@@ -33,11 +38,14 @@ def calibrate_session_folder(path, method: str | None = None, units: str = "mm")
     ``units`` declares the session's length unit (``mm``, the format's own, or ``m``: converted on
     reading); lengths that do not look like millimetres then are refused before solving.
     """
+    from .origin import session_origin
+
     session = session_in_mm(read_session(path), units)
     truth = truth_from_dict(read_truth(path))
     problem = problem_from_session(session)
     result = calibrate(problem, method, truth)
-    return CalibrationOutcome(Path(path), result, truth is not None, session, problem, truth)
+    return CalibrationOutcome(Path(path), result, truth is not None, session, problem, truth,
+                              session_origin(session, path))
 
 
 @dataclass(frozen=True)
@@ -106,5 +114,5 @@ def report_calibration(outcome: CalibrationOutcome, report_path, thresholds_file
             findings = None
     title = f"Hand-eye calibration report: {outcome.session_path.resolve().name}"
     written = write_report(path, outcome.session_path, outcome.problem, result, comparison, verdict,
-                           title=title, findings=findings)
+                           title=title, findings=findings, origin=outcome.origin)
     return ReportOutcome(written, verdict, comparison)

@@ -216,8 +216,8 @@ def capture(
     if session is not None and "capture" in session.extra:
         record = session.extra["capture"]
         recorded = session_origin(session)
-        if recorded != station_kind:
-            raise CaptureError(f"{session_dir} was captured on the {_STATION_NAMES.get(recorded, recorded + ' data')}; resume it on the same "
+        if recorded in (MOCK, REAL) and recorded != station_kind:
+            raise CaptureError(f"{session_dir} was captured on the {_STATION_NAMES[recorded]}; resume it on the same "
                                f"station ({'--mock' if recorded == MOCK else '--config STATION.yaml with the real hardware'}) "
                                "or start a new session folder")
         plan_joints = np.array(record["plan_joints_deg"], float)

@@ -1,59 +1,93 @@
-"""Where a session's data came from: a real station, the embedded mock station, or a simulation.
+"""Where a session's data came from: the real station, the embedded mock station, or a simulation.
 
-A calibration from the mock station or from a simulation is a test of the software, never a camera
-pose of a real robot; every output names the origin so that nobody takes one for the other, and
-write-back refuses to put such a pose into a real controller.
+A calibration of simulated data can look perfect; the report, the text summary and the JSON say so,
+so that nobody takes it for a calibration of the robot in front of them.
 
-The origin is read from the session itself: ``capture`` records ``capture.station`` (``real`` or
-``mock``) in ``session.yaml``; ``simulate`` records ``origin: simulated`` and writes ``truth.yaml``
-beside the postures; ``import`` records an ``import`` section.
+- ``mock``: captured on the embedded mock station (``handeye capture --mock``, ``handeye demo``):
+  ``session.yaml`` says ``capture: {station: mock}``. Sessions captured before that key existed are
+  recognised by their recorded station configuration (``capture.config.camera.backend: mock``).
+- ``real``: ``capture: {station: real}``, written by a capture on the real controller and camera.
+- ``simulated``: ``session.yaml`` says ``origin: simulated``, or ``truth.yaml`` lies beside it
+  (``handeye simulate``), and the capture record does not say otherwise.
+- ``unknown``: anything else (imported data sets, hand-written sessions).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["IMPORTED", "MOCK", "ORIGINS", "REAL", "SIMULATED", "UNKNOWN", "origin_banner", "session_origin"]
+__all__ = ["MOCK", "ORIGINS", "REAL", "SIMULATED", "UNKNOWN", "origin_banner", "origin_line", "session_origin"]
 
-REAL, MOCK, SIMULATED, IMPORTED, UNKNOWN = "real", "mock", "simulated", "imported", "unknown"
-ORIGINS = (REAL, MOCK, SIMULATED, IMPORTED, UNKNOWN)
+MOCK, REAL, SIMULATED, UNKNOWN = "mock", "real", "simulated", "unknown"
+#: Every value :func:`session_origin` returns.
+ORIGINS = (MOCK, REAL, SIMULATED, UNKNOWN)
 
 _BANNERS = {
-    MOCK: "MOCK SESSION: captured on the embedded mock station; not a calibration of a real robot",
-    SIMULATED: "SIMULATED SESSION: synthetic data; not a calibration of a real robot",
+    "mock": ("MOCK SESSION", "captured on the embedded mock station; not a calibration of a real robot"),
+    "simulated": ("SIMULATED SESSION", "synthetic data with a known truth (truth.yaml); not a calibration of a "
+                                       "real robot"),
 }
 
 
-def session_origin(session, path=None) -> str:
-    """``real``, ``mock``, ``simulated``, ``imported`` or ``unknown``.
+def _header(path) -> dict:
+    """``session.yaml`` of a folder as a mapping ({} when missing or unreadable)."""
+    from ..calibration.session import parse_yaml
+
+    try:
+        data = parse_yaml((Path(path) / "session.yaml").read_text(), Path(path) / "session.yaml", ValueError)
+    except (OSError, UnicodeDecodeError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def session_origin(session=None, path=None) -> str:
+    """``mock``, ``real``, ``simulated`` or ``unknown`` (see the module's description).
 
     Parameters
     ----------
-    session : calibration.session.Session
-    path : path, optional
-        The session folder (default ``session.path``): a ``truth.yaml`` there marks a simulation.
+    session : Session, optional
+        A session read from disk; its ``extra['capture']`` holds the capture record. When omitted,
+        ``session.yaml`` is read from ``path``.
+    path : str or Path, optional
+        The session folder (for ``truth.yaml``, and ``session.yaml`` when ``session`` is omitted);
+        ``session.path`` when omitted.
+
+    Returns
+    -------
+    str
+        One of :data:`ORIGINS`.
     """
-    extra = getattr(session, "extra", None) or {}
+    if path is None and session is not None:
+        path = getattr(session, "path", None)
+    if session is not None:
+        extra = getattr(session, "extra", None) or {}
+    elif path is not None:
+        extra = _header(path)
+    else:
+        return "unknown"
     capture = extra.get("capture")
-    if isinstance(capture, dict) and capture.get("station") in (REAL, MOCK):
-        return capture["station"]
-    folder = path if path is not None else getattr(session, "path", None)
-    if extra.get("origin") == SIMULATED or (folder is not None and (Path(folder) / "truth.yaml").is_file()):
-        return SIMULATED
-    if isinstance(extra.get("import"), dict):
-        return IMPORTED
-    if isinstance(capture, dict):
-        return MOCK if _old_mock_capture(capture) else REAL
-    return UNKNOWN
-
-
-def _old_mock_capture(capture: dict) -> bool:
-    """Captures recorded before ``capture.station`` existed: the stored config tells (camera backend)."""
+    capture = capture if isinstance(capture, dict) else {}
+    station = capture.get("station")
+    if isinstance(station, str) and station.strip().lower() in ("mock", "real"):
+        return station.strip().lower()
+    if extra.get("origin") == SIMULATED or (path is not None and (Path(path) / "truth.yaml").is_file()):
+        return "simulated"
     config = capture.get("config")
     camera = config.get("camera") if isinstance(config, dict) else None
-    return isinstance(camera, dict) and camera.get("backend") == MOCK
+    if isinstance(camera, dict) and camera.get("backend") == "mock":
+        return "mock"
+    return "unknown"
 
 
-def origin_banner(origin: str) -> str | None:
-    """The one-line warning every output carries for a mock or simulated session (None otherwise)."""
+def origin_banner(origin: str) -> tuple[str, str] | None:
+    """``(word, text)`` of the warning a report shows for ``mock`` and ``simulated`` sessions, else ``None``.
+
+    ``word`` is ``MOCK SESSION`` or ``SIMULATED SESSION``; ``text`` says what the data are.
+    """
     return _BANNERS.get(origin)
+
+
+def origin_line(origin: str) -> str | None:
+    """The banner of :func:`origin_banner` as one line (``MOCK SESSION: captured on ...``), else ``None``."""
+    banner = origin_banner(origin)
+    return None if banner is None else f"{banner[0]}: {banner[1]}"

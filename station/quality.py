@@ -1,12 +1,19 @@
 """Quality verdict of a calibration: thresholds, checks, and what to do when a check fails.
 
 The station's goal is the camera pose to about a tenth of a millimetre. Whether a calibration gets
-there shows in three kinds of figures, each checked against a threshold of :class:`QualityThresholds`:
+there shows in four kinds of figures, each checked against a threshold of :class:`QualityThresholds`:
 
 - **Consistency of the data** under the solved ``X``: the board points carried into the frame the
   board is fixed in (``base`` eye-in-hand) should sit on top of each other for every posture.
-  ``d_org`` (eq. 22 of the paper, mean distance of a point from its mean position, over the postures
-  the method kept) and each posture's residual (the same per posture) measure it.
+  ``d_org`` and each posture's residual (the same per posture) measure it. ``d_org`` has ONE
+  definition, :func:`station_d_org`, used by the verdict, the HTML report (header, method table and
+  chart, metrics) and the text summary alike: eq. 22 of the paper (mean distance of a point from its
+  mean position) over the postures the chosen result kept (its inliers), on the session's board
+  points (every board corner when the postures hold corners, else the three compact points of the
+  board poses), the same points and postures for every method compared. Over all postures, outliers
+  included, the same figure is called ``d_org incl. outliers``.
+- **Where the camera is**: eye-in-hand, the camera's optical centre cannot sit inside the flange
+  (a session written in metres solves to a frame a fraction of a millimetre from it) nor metres away.
 - **Precision of X**: the one-sigma uncertainty of the robust default method (translation per axis in
   mm, rotation about each axis of the camera frame in degrees).
 - **Motion that determines X**: enough consistent postures, few outliers, relative flange rotations
@@ -26,6 +33,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..calibration.errors import HandEyeError
+from ..calibration.metrics import d_org, fixed_points
 from ..calibration.problem import EYE_IN_HAND, HandEyeProblem
 from ..calibration.triplets import relative_motions
 
@@ -33,11 +41,15 @@ __all__ = [
     "CHECK_LABELS",
     "AxisCoverage",
     "Check",
+    "D_ORG_ALL_NAME",
+    "DOrg",
     "QualityThresholds",
     "ThresholdError",
     "Verdict",
+    "kept_postures",
     "load_thresholds",
     "rotation_axis_coverage",
+    "station_d_org",
     "verdict",
 ]
 
@@ -59,9 +71,10 @@ class QualityThresholds:
     Attributes
     ----------
     max_d_org_mm : float
-        Largest ``d_org`` (eq. 22): mean distance of a board point in ``base`` from its mean position,
-        over the postures the method kept. It adds up the camera's 3-D corner noise (~0.15-0.4 mm for
-        the XB3 wide pair at 1 m), the robot's repeatability and any kinematic or stereo calibration
+        Largest ``d_org`` (eq. 22, :func:`station_d_org`): mean distance of a board point in ``base``
+        from its mean position, over the postures the result kept, every board corner of each (the
+        three compact points when the session holds board poses only). It adds up the camera's 3-D
+        corner noise (~0.15-0.4 mm for the XB3 wide pair at 1 m), the robot's repeatability and any kinematic or stereo calibration
         error. Default 1.0 mm: above it something systematic is wrong (stereo model, robot not at rest,
         tool0 poses from the wrong frame).
     max_posture_residual_mm : float
@@ -92,6 +105,15 @@ class QualityThresholds:
     min_median_rotation_deg : float
         Smallest median rotation angle between two postures. Default 15 deg: small rotations leave the
         rotation axes (and so X) poorly determined; the method likes 20-45 deg.
+    min_camera_offset_mm : float
+        Eye-in-hand only: smallest distance of the camera frame (the left camera's optical centre)
+        from the flange origin, ``|t|`` of ``cam2tool0``. Default 20 mm: the optical centre cannot sit
+        inside the flange; a session whose lengths were written in metres solves to a frame a fraction
+        of a millimetre from the flange, with every other figure looking excellent.
+    max_camera_offset_mm : float
+        Eye-in-hand only: largest distance of the camera frame from the flange origin. Default 500 mm:
+        a stereo head on an IRB 1400 flange sits 100-300 mm from it; a frame further away points at
+        wrong units on one side, the wrong set-up, or a camera on a long bracket (then raise it).
     """
 
     max_d_org_mm: float = 1.0
@@ -102,10 +124,13 @@ class QualityThresholds:
     max_outlier_fraction: float = 0.2
     min_rotation_axis_spread_deg: float = 10.0
     min_median_rotation_deg: float = 15.0
+    min_camera_offset_mm: float = 20.0
+    max_camera_offset_mm: float = 500.0
 
     def __post_init__(self):
         for f in fields(self):
             _check_value(f.name, getattr(self, f.name))
+        _check_pair(self.min_camera_offset_mm, self.max_camera_offset_mm)
 
     @classmethod
     def from_dict(cls, mapping, source: str = "thresholds") -> QualityThresholds:
@@ -134,10 +159,18 @@ class QualityThresholds:
             if key not in known:
                 raise ThresholdError(f"{source}: unknown key {key!r}; known keys: {', '.join(known)}")
             values[key] = _check_value(key, value, source)
+        _check_pair(values.get("min_camera_offset_mm", cls.min_camera_offset_mm),
+                    values.get("max_camera_offset_mm", cls.max_camera_offset_mm), source)
         return cls(**values)
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+
+def _check_pair(low: float, high: float, source: str = "thresholds") -> None:
+    """The camera-offset range must not be empty."""
+    if low >= high:
+        raise ThresholdError(f"{source}: min_camera_offset_mm ({low:g}) must be below max_camera_offset_mm ({high:g})")
 
 
 def _check_value(key: str, value, source: str = "thresholds"):
@@ -246,6 +279,84 @@ def rotation_axis_coverage(problem: HandEyeProblem) -> AxisCoverage:
     return AxisCoverage(axes, angles[keep], angles, spread, weakest, rms, frame)
 
 
+#: The name of d_org over every posture, outliers included (the report's second figure).
+D_ORG_ALL_NAME = "d_org incl. outliers"
+
+
+def kept_postures(problem: HandEyeProblem, result) -> np.ndarray:
+    """Boolean mask ``(n,)`` of the postures ``result`` kept (all but its outliers)."""
+    outliers = {int(i) for i in result.outliers}
+    return np.array([int(i) not in outliers for i in problem.posture_ids], dtype=bool)
+
+
+@dataclass(frozen=True)
+class DOrg:
+    """``d_org`` as the station reports it (see :func:`station_d_org`).
+
+    Attributes
+    ----------
+    mm : float
+        Eq. 22 over the kept postures.
+    incl_outliers_mm : float or None
+        Eq. 22 over every posture (:data:`D_ORG_ALL_NAME`); ``None`` when no posture was left out.
+    postures : int
+        Postures it is computed over.
+    outliers : int
+        Postures left out.
+    points_per_posture : int
+        Board points per posture.
+    corners : bool
+        The points are the measured board corners (else the three compact points of the board poses).
+    """
+
+    mm: float
+    incl_outliers_mm: float | None
+    postures: int
+    outliers: int
+    points_per_posture: int
+    corners: bool
+
+    def basis(self) -> str:
+        """Which postures and points: ``over the 28 inlier postures (2 outliers left out), 104 board
+        corners per posture``."""
+        postures = (f"over the {self.postures} inlier postures ({self.outliers} outlier"
+                    f"{'s' if self.outliers != 1 else ''} left out)" if self.outliers else
+                    f"over all {self.postures} postures (no outliers)")
+        points = (f"{self.points_per_posture} board corners per posture" if self.corners else
+                  f"{self.points_per_posture} compact points per posture (board centre and one point along each "
+                  f"board axis, from the board poses)")
+        return f"{postures}, {points}"
+
+
+def station_d_org(problem: HandEyeProblem, result, x=None) -> DOrg:
+    """THE d_org of the station: eq. 22 over the postures ``result`` kept, on the session's board points.
+
+    Every place the operator reads d_org (verdict, HTML header, method table and chart, metrics table,
+    text summary) calls this, so they show the same number for the same result.
+
+    Parameters
+    ----------
+    problem : HandEyeProblem
+    result : CalibrationResult
+        The chosen result: its outliers decide the postures.
+    x : ndarray, shape (4, 4), optional
+        Another solution of the same problem (a compared method) to measure on the SAME postures and
+        points; ``result.x`` when omitted.
+
+    Returns
+    -------
+    DOrg
+    """
+    x = result.x if x is None else np.asarray(x, float)
+    kept = kept_postures(problem, result)
+    fixed = fixed_points(problem.hand, x, problem.points_cam)
+    n_kept = int(kept.sum())
+    value = d_org(fixed[kept]) if n_kept >= 1 else float("nan")
+    left_out = problem.n - n_kept
+    return DOrg(value, d_org(fixed) if left_out else None, n_kept, left_out, int(problem.points_cam.shape[1]),
+                bool(problem.points_cam.shape[1] > 3))
+
+
 def direction_name(direction, frame: str) -> str:
     """``'tool0 z'`` when a unit vector lies within 30 deg of a frame axis, else its components."""
     direction = np.asarray(direction, float)
@@ -280,6 +391,8 @@ CHECK_LABELS = {
     "max_outlier_fraction": ("share of postures rejected as outliers", "", "{:.0%}"),
     "min_rotation_axis_spread_deg": ("spread of the rotation axes about the least exercised direction", "deg", "{:.1f}"),
     "min_median_rotation_deg": ("median rotation between two postures", "deg", "{:.1f}"),
+    "min_camera_offset_mm": ("camera frame's distance from the flange (not inside it)", "mm", "{:.1f}"),
+    "max_camera_offset_mm": ("camera frame's distance from the flange (not far off)", "mm", "{:.1f}"),
 }
 
 
@@ -302,28 +415,35 @@ class Verdict:
         Every check passed.
     checks : list of Check
     thresholds : QualityThresholds
+    cause : str
+        What the failed checks have in common, when the data show it (lengths not in mm: what to fix);
+        '' otherwise. It leads the one-line verdict of a FAIL.
     """
 
     passed: bool
     checks: list
     thresholds: QualityThresholds = QualityThresholds()
+    cause: str = ""
 
     @property
     def failed(self) -> list:
         return [c for c in self.checks if not c.passed]
 
     def line(self) -> str:
-        """One line for the terminal: ``verdict: PASS (8 of 8 checks)`` or the failed checks."""
+        """One line for the terminal: ``verdict: PASS (10 of 10 checks)``, or FAIL with the cause (when
+        known) and the failed checks."""
         if self.passed:
             return f"verdict: PASS ({len(self.checks)} of {len(self.checks)} checks)"
         failed = "; ".join(
             f"{c.name} {format_check_value(c.name, c.value)} (limit {format_check_value(c.name, c.limit)})"
             for c in self.failed)
-        return f"verdict: FAIL ({len(self.failed)} of {len(self.checks)} checks failed: {failed})"
+        cause = f" - {self.cause}" if self.cause else ""
+        return f"verdict: FAIL{cause} ({len(self.failed)} of {len(self.checks)} checks failed: {failed})"
 
     def to_json(self) -> dict:
         return {
             "passed": self.passed,
+            "cause": self.cause,
             "checks": [{"name": c.name, "value": c.value, "limit": c.limit, "passed": c.passed, "advice": c.advice}
                        for c in self.checks],
             "thresholds": self.thresholds.to_dict(),
@@ -355,12 +475,17 @@ def verdict(result, problem: HandEyeProblem, thresholds: QualityThresholds | Non
     Returns
     -------
     Verdict
-        ``passed`` and one :class:`Check` per threshold, in the order of :class:`QualityThresholds`.
+        ``passed`` and one :class:`Check` per threshold, in the order of :class:`QualityThresholds`
+        (the camera-offset pair eye-in-hand only). When the poses' lengths do not look like millimetres
+        (``station.units_advice``) every failed check's advice, and the verdict's ``cause``, say which
+        units to fix instead of what to re-capture.
     """
+    from .units_advice import units_advice
+
     t = thresholds or QualityThresholds()
     ids = [int(i) for i in problem.posture_ids]
     outliers = [int(i) for i in result.outliers]
-    inlier_mask = np.array([i not in set(outliers) for i in ids], dtype=bool)
+    inlier_mask = kept_postures(problem, result)
     residuals = {int(k): float(v) for k, v in result.residuals_mm.items()}
     n, n_in = len(ids), int(inlier_mask.sum())
     checks = []
@@ -368,12 +493,14 @@ def verdict(result, problem: HandEyeProblem, thresholds: QualityThresholds | Non
     # consistency
     worst = sorted(((i, residuals[i]) for i in ids if i in residuals and i not in outliers), key=lambda item: -item[1])
     high = [(i, r) for i, r in worst if r > t.max_posture_residual_mm]
-    d_org_value = result.metrics.get("d_org_mm")
+    scatter = station_d_org(problem, result)
+    d_org_value = scatter.mm if math.isfinite(scatter.mm) else None
     blame = (f"postures {_postures_text(high[:5])} stand out: re-capture or remove them first" if high else
              "all postures share it: check the stereo calibration (STEREO.yaml, baseline in mm), that the robot "
              "stood still (fine point) at each capture, and that tool0 poses come from CRobT with tool0/wobj0")
     checks.append(_check("max_d_org_mm", d_org_value, t.max_d_org_mm,
-                         f"board points scatter {d_org_value or 0.0:.2f} mm in the fixed frame; {blame}"))
+                         f"board points scatter {d_org_value or 0.0:.2f} mm in the fixed frame "
+                         f"(d_org {scatter.basis()}); {blame}"))
     checks.append(_check(
         "max_posture_residual_mm", worst[0][1] if worst else 0.0, t.max_posture_residual_mm,
         f"check postures {_postures_text(high[:8])}: board partly hidden or misdetected, robot not at rest, "
@@ -430,4 +557,34 @@ def verdict(result, problem: HandEyeProblem, thresholds: QualityThresholds | Non
             "min_median_rotation_deg", coverage.median_angle_deg, t.min_median_rotation_deg,
             f"postures differ by only {coverage.median_angle_deg:.1f} deg of rotation (median): turn the flange "
             f"by 20-45 deg between postures, keeping the board in view"))
-    return Verdict(all(c.passed for c in checks), checks, t)
+
+    # where the camera is
+    if problem.setup == EYE_IN_HAND:
+        offset = float(np.linalg.norm(result.x[:3, 3]))
+        checks.append(_check(
+            "min_camera_offset_mm", offset, t.min_camera_offset_mm,
+            f"the camera frame is {offset:.1f} mm from the flange, inside it: the session's lengths look like metres; "
+            f"lengths must be in mm (robot poses, board points and the stereo baseline)"))
+        checks.append(_check(
+            "max_camera_offset_mm", offset, t.max_camera_offset_mm,
+            f"the camera frame is {offset:.0f} mm from the flange, more than {t.max_camera_offset_mm:g} mm: check the "
+            f"session's units (mm on both sides) and set-up (eye-in-hand?), or raise max_camera_offset_mm if the "
+            f"camera really sits that far"))
+
+    passed = all(c.passed for c in checks)
+    units = units_advice(problem)
+    if units is None:
+        return Verdict(passed, checks, t)
+    checks = [_with_units(c, units, outliers) for c in checks]
+    return Verdict(passed, checks, t, cause="" if passed else units.text)
+
+
+def _with_units(check: Check, units, outliers) -> Check:
+    """A check whose advice names the units problem: instead of the advice when it failed on a figure
+    (a figure that is not available keeps its own advice); added to the note on outliers when the
+    postures in another unit were left out (the result may then be right)."""
+    if not check.passed and check.value is not None:
+        return check._replace(advice=units.text)
+    if check.name == "max_outlier_fraction" and units.postures and set(units.postures) <= set(outliers):
+        return check._replace(advice=f"{check.advice}; {units.text}" if check.advice else units.text)
+    return check

@@ -3,12 +3,17 @@
 Everything is inside the file: CSS inline, plots as base64 PNG ``data:`` URIs, no scripts, no links
 to other files or the network, so it opens on a station PC without internet and can be mailed as is.
 
-Contents: the verdict (PASS/FAIL) with the camera pose as a RAPID literal, its uncertainty and the
-outliers; the quality checks with advice; five figures and tables (per-posture residuals,
-rotation-axis coverage, method comparison, repeatability of the board corners in the fixed frame,
-quality metrics and truth errors); the data checks made before solving.
+Contents: a banner when the data come from the embedded mock station or a simulation
+(``station.origin``); the verdict (PASS/FAIL) with the camera pose as a RAPID literal (copyable on a
+PASS; greyed out, struck through and not selectable under "FAIL - do not write this into the robot"
+on a FAIL), its uncertainty and the outliers; the quality checks with advice; five figures and
+tables (per-posture residuals, rotation-axis coverage, method comparison, repeatability of the board
+corners in the fixed frame, quality metrics and truth errors); the data checks made before solving.
+d_org is everywhere the one of ``station.quality.station_d_org``, and the header says which postures
+and points it is computed over.
 
 Plots use matplotlib's object API (``Figure`` + Agg canvas): no pyplot, no global backend change.
+No two texts of a figure may overlap (tests/test_report_figures.py checks every figure).
 """
 
 from __future__ import annotations
@@ -23,12 +28,22 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..calibration.errors import CalibrationError, HandEyeError
-from ..calibration.metrics import d_org, fixed_points
+from ..calibration.metrics import fixed_points
 from ..calibration.problem import EYE_IN_HAND, HandEyeProblem
 from ..calibration.session import write_text_atomic
 from ..calibration.transforms import rotation_error_deg
 from ..rapid.literals import pose_literal, rounded_pose
-from .quality import CHECK_LABELS, Verdict, direction_name, format_check_value, rotation_axis_coverage
+from .origin import origin_banner, session_origin
+from .quality import (
+    CHECK_LABELS,
+    D_ORG_ALL_NAME,
+    Verdict,
+    direction_name,
+    format_check_value,
+    kept_postures,
+    rotation_axis_coverage,
+    station_d_org,
+)
 
 __all__ = ["COMPARISON_METHODS", "comparison_results", "method_comparison", "write_report"]
 
@@ -72,22 +87,23 @@ def comparison_results(problem: HandEyeProblem, methods=COMPARISON_METHODS, trut
 
 
 def method_comparison(problem: HandEyeProblem, chosen, comparison: dict) -> list[dict]:
-    """One row per method: pose, differences from ``chosen`` and ``d_org`` on the same points.
+    """One row per method: pose, differences from ``chosen`` and ``d_org`` on the same data.
 
-    ``d_org_all_mm`` is eq. 22 on the compact points of ALL postures (the same data for every method);
-    ``d_org_inliers_mm`` leaves out the chosen result's outliers (``None`` when it has none).
+    ``d_org_mm`` is the station's d_org (``station.quality.station_d_org``) of each method's X over
+    the postures the CHOSEN result kept and the same board points, so the chosen method's row shows
+    the very figure of the report's header and the verdict. ``d_org_incl_outliers_mm`` is the same over
+    every posture (``None`` when the chosen result left none out).
     """
-    inliers = np.array([int(i) not in set(chosen.outliers) for i in problem.posture_ids], dtype=bool)
     rows = []
     for name, r in comparison.items():
-        fixed = fixed_points(problem.hand, r.x, problem.compact.points)
+        scatter = station_d_org(problem, chosen, r.x)
         rows.append({
             "method": name,
             "position_mm": [float(v) for v in r.x[:3, 3]],
             "d_position_mm": float(np.linalg.norm(r.x[:3, 3] - chosen.x[:3, 3])),
             "d_rotation_deg": float(rotation_error_deg(r.x, chosen.x)),
-            "d_org_all_mm": d_org(fixed),
-            "d_org_inliers_mm": d_org(fixed[inliers]) if chosen.outliers and inliers.sum() >= 2 else None,
+            "d_org_mm": scatter.mm,
+            "d_org_incl_outliers_mm": scatter.incl_outliers_mm,
             "outliers": [int(i) for i in r.outliers],
             "runtime_s": float(r.runtime_s),
             "truth_errors": r.truth_errors,
@@ -107,7 +123,7 @@ def corner_repeatability(problem: HandEyeProblem, result) -> dict:
         inliers, ``mean_points`` (m, 3), ``frame`` (``base`` or ``tool0``).
     """
     fixed = fixed_points(problem.hand, result.x, problem.points_cam)
-    inliers = np.array([int(i) not in set(result.outliers) for i in problem.posture_ids], dtype=bool)
+    inliers = kept_postures(problem, result)
     mean = fixed[inliers].mean(axis=0)
     deviations = fixed - mean
     rms = np.sqrt(np.mean(np.sum(deviations[inliers] ** 2, axis=-1), axis=0))
@@ -122,10 +138,10 @@ def corner_repeatability(problem: HandEyeProblem, result) -> dict:
 
 
 # ----------------------------------------------------------------------------------------- plots
-def _figure(width: float, height: float):
+def _figure(width: float, height: float, layout: str | None = None):
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(width, height), dpi=100)
+    fig = Figure(figsize=(width, height), dpi=100, layout=layout)
     fig.patch.set_facecolor("white")
     return fig
 
@@ -162,22 +178,29 @@ def plot_residuals(result, problem: HandEyeProblem, limit_mm: float | None) -> b
     ax.axhline(median, color=_GREY, linestyle=":", linewidth=1.2, label=f"median {median:.2f} mm")
     if limit_mm is not None:
         ax.axhline(limit_mm, color=_RED, linestyle="--", linewidth=1.2, label=f"limit {limit_mm:g} mm")
-    for k, (i, v) in enumerate(zip(ids, values)):
-        if i in outliers or v > top:
-            ax.annotate(f"{v:.2f}" + (" (off scale)" if v > top else ""), (k, min(v, top)), ha="center", va="bottom",
-                        fontsize=8, color=_RED, xytext=(0, 2), textcoords="offset points")
+    labelled = [(k, v) for k, (i, v) in enumerate(zip(ids, values)) if i in outliers or v > top]
+    off_scale = [(k, v) for k, v in labelled if v > top]
+    if off_scale:  # a clipped bar ends in an arrow head
+        ax.plot([k for k, _ in off_scale], [top] * len(off_scale), linestyle="none", marker="^", markersize=6,
+                color=_RED, clip_on=False)
+    for k, v in labelled:  # upright value labels: neighbouring outliers' labels cannot run into each other
+        ax.annotate(f"{v:.1f}" if v >= 100 else f"{v:.2f}", (k, min(v, top)), ha="center", va="bottom",
+                    rotation=90, fontsize=8, color=_RED, xytext=(0, 7 if v > top else 2), textcoords="offset points")
     step = max(1, int(np.ceil(len(ids) / 40)))
     ax.set_xticks(x[::step])
     ax.set_xticklabels([str(i) for i in ids][::step], fontsize=8)
     ax.set_xlim(-0.7, len(ids) - 0.3)
-    ax.set_ylim(0, top * 1.18 if top > 0 else 1.0)
+    ax.set_ylim(0, (top * (1.4 if labelled else 1.18)) if top > 0 else 1.0)
     ax.set_xlabel("posture")
     ax.set_ylabel("residual (mm)")
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     handles = [Patch(color=_BLUE, label="used"), Patch(color=_RED, label="outlier (left out)")]
     if _ORANGE in colours:
         handles.append(Patch(color=_ORANGE, label="used, over the limit"))
+    if off_scale:
+        handles.append(Line2D([], [], linestyle="none", marker="^", color=_RED, label="off scale (value printed)"))
     line_handles, _ = ax.get_legend_handles_labels()
     ax.legend(handles=handles + line_handles, fontsize=8, loc="lower right", bbox_to_anchor=(1.0, 1.0),
               ncol=len(handles) + len(line_handles), frameon=False)
@@ -224,7 +247,7 @@ def _hemisphere(ax, axes, angles, centre: int, frame: str, vmax: float, weakest)
 def plot_axis_coverage(problem: HandEyeProblem, result) -> tuple[bytes, object]:
     """Rotation axes of the relative flange motions (inlier postures) on two hemispheres, plus the RMS
     rotation about each axis of the hand frame."""
-    inliers = np.array([int(i) not in set(result.outliers) for i in problem.posture_ids], dtype=bool)
+    inliers = kept_postures(problem, result)
     coverage = rotation_axis_coverage(problem.subset(inliers))
     vmax = max(90.0, float(coverage.angles_deg.max()) if coverage.angles_deg.size else 90.0)
     fig = _figure(12.5, 4.9)
@@ -248,32 +271,57 @@ def plot_axis_coverage(problem: HandEyeProblem, result) -> tuple[bytes, object]:
     return _png(fig), coverage
 
 
+def _readable_value_axis(axis, nbins: int = 4) -> None:
+    """Few ticks, plain numbers (no offset or 1e-5 factor, which lands on a neighbouring panel), each
+    with as many decimals as the step between ticks needs."""
+    from matplotlib.ticker import FuncFormatter, MaxNLocator
+
+    axis.set_major_locator(MaxNLocator(nbins=nbins, steps=[1, 2, 2.5, 5, 10], min_n_ticks=2))
+
+    def label(value, _position):
+        ticks = np.asarray(axis.get_majorticklocs(), float)
+        step = float(np.min(np.diff(ticks))) if len(ticks) > 1 else (abs(value) or 1.0)
+        decimals = next((d for d in range(9) if np.allclose(np.round(ticks, d), ticks, rtol=0, atol=1e-6 * step)), 8)
+        return f"{value:.{decimals}f}"
+
+    axis.set_major_formatter(FuncFormatter(label))
+
+
 def plot_method_comparison(rows: list[dict]) -> bytes:
     """Horizontal bars per method: position and rotation difference from the chosen result, d_org."""
+    return _png(method_comparison_figure(rows))
+
+
+def method_comparison_figure(rows: list[dict]):
+    """The figure of :func:`plot_method_comparison` (a matplotlib ``Figure``)."""
     names = [r["method"] + (" (chosen)" if r["chosen"] else "") for r in rows]
     colours = [_BLUE if r["chosen"] else _GREY for r in rows]
     panels = [("d_position_mm", "position difference\nfrom the chosen (mm)", "{:.3f}"),
               ("d_rotation_deg", "rotation difference\nfrom the chosen (deg)", "{:.4f}"),
-              ("d_org_all_mm", "d_org, all postures\n(mm)", "{:.3f}")]
-    if any(r["d_org_inliers_mm"] is not None for r in rows):
-        panels.append(("d_org_inliers_mm", "d_org without the chosen\nresult's outliers (mm)", "{:.3f}"))
-    fig = _figure(12.5, 0.42 * len(rows) + 1.5)
+              ("d_org_mm", "d_org\n(mm)", "{:.3f}")]
+    if any(r["d_org_incl_outliers_mm"] is not None for r in rows):
+        panels.append(("d_org_incl_outliers_mm", f"{D_ORG_ALL_NAME}\n(mm)", "{:.3f}"))
+    fig = _figure(3.4 * len(panels) + 1.4, 0.42 * len(rows) + 1.9, layout="constrained")
     y = np.arange(len(rows))[::-1]
     for k, (key, title, fmt) in enumerate(panels):
         ax = fig.add_subplot(1, len(panels), k + 1)
-        values = np.array([r[key] for r in rows])
-        ax.barh(y, values, color=colours, height=0.6)
-        top = values.max() if values.size and values.max() > 0 else 1.0
+        values = np.array([np.nan if r[key] is None else r[key] for r in rows], dtype=float)
+        ax.barh(y, np.nan_to_num(values), color=colours, height=0.6)
+        finite = values[np.isfinite(values)]
+        resolution = 10.0 ** -len(fmt.format(0.0).split(".")[1])  # smaller values print as zero anyway
+        top = max(float(finite.max()) if finite.size else 0.0, 10 * resolution)
         for yy, v in zip(y, values):
-            ax.annotate(fmt.format(v), (v, yy), xytext=(3, 0), textcoords="offset points", va="center", fontsize=8)
-        ax.set_xlim(0, top * 1.35)
+            ax.annotate("n/a" if not np.isfinite(v) else fmt.format(v), (0 if not np.isfinite(v) else v, yy),
+                        xytext=(3, 0), textcoords="offset points", va="center", fontsize=8)
+        ax.set_xlim(0, top * 1.45)
+        _readable_value_axis(ax.xaxis)
+        ax.tick_params(axis="x", labelsize=8.5)
         ax.set_yticks(y)
         ax.set_yticklabels(names if k == 0 else [""] * len(rows), fontsize=9)
         ax.set_title(title, fontsize=10)
         _style(ax)
         ax.grid(False, axis="y")
-    fig.subplots_adjust(wspace=0.16)
-    return _png(fig)
+    return fig
 
 
 def _grid_shape(points_2d: np.ndarray):
@@ -398,6 +446,13 @@ img{max-width:100%;height:auto;display:block;margin:8px auto}
 .note{color:#555;font-size:13px}
 ul{margin:4px 0 4px 20px;padding:0}
 footer{color:#666;font-size:12.5px;margin-top:18px}
+.origin{background:#6a1b9a;color:#fff;font-size:18px;padding:10px 16px;border-radius:6px;margin:0 0 12px}
+.origin b{font-size:22px;letter-spacing:1px}
+.donotwrite{border:3px solid #c62828;border-radius:6px;padding:6px 12px 8px;margin:10px 0;background:#f5f5f5}
+.donotwrite-banner{color:#c62828;font-weight:800;font-size:18px;margin:2px 0 6px}
+.void{display:block;color:#9e9e9e;font-family:Consolas,"DejaVu Sans Mono",monospace;font-size:16px;
+ text-decoration:line-through;background:#ececec;border:1px dashed #bdbdbd;border-radius:4px;padding:8px 10px;
+ margin:4px 0 10px;word-break:break-all;user-select:none;-webkit-user-select:none}
 """
 
 
@@ -417,7 +472,40 @@ def _kv(pairs) -> str:
     return '<div class="kv">' + "".join(f"<div>{_e(k)}</div><div>{v}</div>" for k, v in pairs) + "</div>"
 
 
-def _summary(result, problem, verdict, tooldata_literal, session_path) -> str:
+#: What the report says about where the data come from (``station.origin``).
+_ORIGIN_FACTS = {
+    "real": "the real station (capture record in session.yaml)",
+    "mock": "the embedded mock station (simulated robot and camera)",
+    "simulated": "a simulation (truth.yaml beside the session)",
+    "unknown": "not recorded (imported or hand-written session)",
+}
+
+
+def _origin_banner(origin: str) -> str:
+    banner = origin_banner(origin)
+    if banner is None:
+        return ""
+    word, text = banner
+    return f'<div class="origin" data-origin="{_e(origin)}"><b>{_e(word)}</b> &ndash; {_e(text)}</div>'
+
+
+def _literals(x, tooldata_literal, label: str, verdict) -> list[str]:
+    """The RAPID literals: copyable unless the verdict failed; then greyed out, struck through, not
+    selectable, under a banner that says not to write them."""
+    literals = [(f"{label}, RAPID literal:", pose_literal(x))]
+    if tooldata_literal:
+        literals.append(("tooldata:", tooldata_literal))
+    if verdict is None or verdict.passed:
+        return [item for caption, text in literals for item in
+                (f'<div style="margin-top:10px">{_e(caption)}</div>', f'<code class="literal">{_e(text)}</code>')]
+    body = "".join(f'<div>{_e(caption)} (failed result, for reference only)</div><del class="void">{_e(text)}</del>'
+                   for caption, text in literals)
+    return ['<div class="donotwrite"><div class="donotwrite-banner">FAIL &ndash; do not write this into the robot'
+            "</div>" + body + '<div class="note">Act on the failed checks below, then calibrate again; '
+            "<code>handeye writeback</code> refuses a failed result.</div></div>"]
+
+
+def _summary(result, problem, verdict, tooldata_literal, session_path, origin: str = "unknown") -> str:
     x = result.x
     position, quaternion = rounded_pose(x)
     euler = Rotation.from_matrix(x[:3, :3]).as_euler("ZYX", degrees=True)
@@ -430,15 +518,13 @@ def _summary(result, problem, verdict, tooldata_literal, session_path) -> str:
         cls, word = ("pass", "PASS") if verdict.passed else ("fail", "FAIL")
         failed = verdict.failed
         line = ("every quality check passed" if verdict.passed else
-                f"{len(failed)} of {len(verdict.checks)} checks failed: " + ", ".join(c.name for c in failed)
+                (f"{verdict.cause}. " if verdict.cause else "")
+                + f"{len(failed)} of {len(verdict.checks)} checks failed: " + ", ".join(c.name for c in failed)
                 + " (see the advice below)")
         banner = f'<div class="verdict {cls}">{word}</div><div class="verdict-line">{_e(line)}</div>'
     literal_label = "tframe (camera in tool0)" if eye_in_hand else "camera pose in base"
-    parts = [banner, f'<div style="margin-top:10px">{_e(literal_label)}, RAPID literal:</div>',
-             f'<code class="literal">{_e(pose_literal(x))}</code>']
-    if tooldata_literal:
-        parts += ["<div>tooldata:</div>", f'<code class="literal">{_e(tooldata_literal)}</code>']
-    elif eye_in_hand:
+    parts = [_origin_banner(origin), banner] + _literals(x, tooldata_literal, literal_label, verdict)
+    if eye_in_hand and not tooldata_literal and (verdict is None or verdict.passed):
         parts.append('<div class="note">tooldata: the load (mass, centre of gravity) comes from the station '
                      'configuration; <code>handeye writeback</code> writes the full tooldata with this tframe.</div>')
     pose = [
@@ -455,19 +541,25 @@ def _summary(result, problem, verdict, tooldata_literal, session_path) -> str:
     else:
         pose.append(("uncertainty", f"not estimated by method {_e(result.method)} (the robust default does)"))
     residual_text = ", ".join(f"{i} ({result.residuals_mm.get(i, float('nan')):.2f} mm)" for i in outliers)
+    scatter = station_d_org(problem, result)
     facts = [
         ("session", f"<code>{_e(session_path)}</code>"),
+        ("data from", _e(_ORIGIN_FACTS.get(origin, origin))),
         ("set-up", _e(result.setup.replace("_", "-"))),
         ("method", _e(result.method)),
         ("postures", f"{n} captured, {n - len(outliers)} used, {len(outliers)} outlier{'s' if len(outliers) != 1 else ''}"),
         ("outliers (residual)", _e(residual_text) if outliers else "none"),
-        ("d_org", f"{result.metrics['d_org_mm']:.3f} mm"),
+        ("d_org", f'<span class="num" data-d-org="header">{scatter.mm:.3f} mm</span><br>'
+                  f'<span class="note">{_e(scatter.basis())} (eq. 22)</span>'),
         ("solve time", f"{1000 * result.runtime_s:.1f} ms"),
     ]
     if result.truth_errors is not None:
         errors = result.truth_errors
         text = f"{errors['translation_error_mm']:.3f} mm, {errors['rotation_error_deg']:.4f} deg (synthetic session)"
         facts.append(("error vs truth", text))
+    if scatter.incl_outliers_mm is not None:
+        facts.insert(facts.index(next(f for f in facts if f[0] == "d_org")) + 1,
+                     (D_ORG_ALL_NAME, f"{scatter.incl_outliers_mm:.3f} mm (the same over all {n} postures)"))
     return ("<section>" + "".join(parts) + '<div class="grid">' + _kv(pose) + _kv(facts) + "</div></section>")
 
 
@@ -486,11 +578,11 @@ def _checks_table(verdict: Verdict) -> str:
 
 
 def _comparison_table(rows: list[dict]) -> str:
-    with_inliers = any(r["d_org_inliers_mm"] is not None for r in rows)
+    with_all = any(r["d_org_incl_outliers_mm"] is not None for r in rows)
     with_truth = any(r["truth_errors"] for r in rows)
-    head = ["method", "x (mm)", "y (mm)", "z (mm)", "&Delta; position (mm)", "&Delta; rotation (deg)", "d_org all (mm)"]
-    if with_inliers:
-        head.append("d_org w/o outliers (mm)")
+    head = ["method", "x (mm)", "y (mm)", "z (mm)", "&Delta; position (mm)", "&Delta; rotation (deg)", "d_org (mm)"]
+    if with_all:
+        head.append(f"{_e(D_ORG_ALL_NAME)} (mm)")
     if with_truth:
         head += ["truth error (mm)", "truth error (deg)"]
     head += ["outliers", "solve (ms)"]
@@ -499,9 +591,9 @@ def _comparison_table(rows: list[dict]) -> str:
         cells = [_e(r["method"] + (" (chosen)" if r["chosen"] else ""))]
         cells += [f'<td class="num">{v:.3f}</td>' for v in r["position_mm"]]
         cells += [f'<td class="num">{r["d_position_mm"]:.3f}</td>', f'<td class="num">{r["d_rotation_deg"]:.4f}</td>',
-                  f'<td class="num">{r["d_org_all_mm"]:.3f}</td>']
-        if with_inliers:
-            cells.append(f'<td class="num">{_num(r["d_org_inliers_mm"])}</td>')
+                  f'<td class="num">{r["d_org_mm"]:.3f}</td>']
+        if with_all:
+            cells.append(f'<td class="num">{_num(r["d_org_incl_outliers_mm"])}</td>')
         if with_truth:
             t = r["truth_errors"] or {}
             cells += [f'<td class="num">{_num(t.get("translation_error_mm"))}</td>',
@@ -513,27 +605,30 @@ def _comparison_table(rows: list[dict]) -> str:
     return "".join(out) + "</table>"
 
 
-def _metrics_table(result) -> str:
+def _metrics_table(result, problem: HandEyeProblem) -> str:
     m = result.metrics
+    scatter = station_d_org(problem, result)
     rows = [
-        ("d_org", f"{m['d_org_mm']:.3f} mm", "mean distance of a board point from its mean position in the fixed frame (eq. 22)"),
+        ("d_org", f"{scatter.mm:.3f} mm", "mean distance of a board point from its mean position in the fixed frame (eq. 22)"),
         ("d_back", f"{m['d_back_mm']:.3f} mm", "mean distance between the same board point seen from two postures (eq. 23)"),
         ("dR", f"{m['delta_r']:.5f}", "rotation residual of AX = XB, ||R_A R_X - R_X R_B||_F, RMS over posture pairs (eq. 16)"),
         ("dt", f"{m['delta_t_mm']:.3f} mm", "translation residual of AX = XB, RMS over posture pairs (eq. 16)"),
     ]
+    if scatter.incl_outliers_mm is not None:
+        rows.insert(1, (D_ORG_ALL_NAME, f"{scatter.incl_outliers_mm:.3f} mm",
+                        f"d_org over all {problem.n} postures, the outliers included"))
     if result.truth_errors is not None:
         rows += [("rotation error", f"{result.truth_errors['rotation_error_deg']:.4f} deg", "against the synthetic truth"),
                  ("translation error", f"{result.truth_errors['translation_error_mm']:.3f} mm", "against the synthetic truth")]
-    points = "the board corners" if m.get("points") == "corners" else "three board points per posture"
-    used = f"{m.get('postures', '?')} postures" + (" (outliers left out)" if result.outliers else "")
     body = "".join(f'<tr><td>{_e(a)}</td><td class="num">{_e(b)}</td><td>{_e(c)}</td></tr>' for a, b, c in rows)
     return (f'<table><tr><th>metric</th><th>value</th><th>meaning</th></tr>{body}</table>'
-            f'<p class="note">Computed on {_e(points)} of {_e(used)}; lower is better.</p>')
+            f'<p class="note">d_org and d_back are computed {_e(scatter.basis())}; dR and dt over the pairs of the '
+            f'same postures. Lower is better.</p>')
 
 
 def write_report(path_html, session_path, problem: HandEyeProblem, result, comparison: dict | None = None,
                  verdict: Verdict | None = None, tooldata_literal: str | None = None,
-                 title: str = "Hand-eye calibration report", findings=None) -> Path:
+                 title: str = "Hand-eye calibration report", findings=None, origin: str | None = None) -> Path:
     """Write the calibration report as one self-contained HTML file.
 
     Parameters
@@ -556,6 +651,10 @@ def write_report(path_html, session_path, problem: HandEyeProblem, result, compa
     title : str
     findings : list of Finding, optional
         Data checks made before solving (``calibration.diagnostics.diagnose_session``).
+    origin : str, optional
+        Where the data come from: ``mock``, ``real``, ``simulated`` or ``unknown``
+        (``station.origin.session_origin``); read from the folder ``session_path`` when omitted. Mock
+        and simulated sessions get a banner saying they are not a calibration of a real robot.
 
     Returns
     -------
@@ -575,8 +674,10 @@ def write_report(path_html, session_path, problem: HandEyeProblem, result, compa
     now = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z")
     subtitle = (f'<div class="sub">{_e(session_path)} &middot; {_e(result.setup.replace("_", "-"))} &middot; '
                 f"method {_e(result.method)} &middot; generated {_e(now)}</div>")
+    if origin is None:
+        origin = session_origin(path=session_path)
     sections = [f"<h1>{_e(title)}</h1>", subtitle,
-                _summary(result, problem, verdict, tooldata_literal, session_path)]
+                _summary(result, problem, verdict, tooldata_literal, session_path, origin)]
     if verdict is not None:
         sections.append("<h2>Quality checks</h2><section>" + _checks_table(verdict)
                         + '<p class="note">Thresholds: defaults of <code>handeye.station.quality.QualityThresholds</code>'
@@ -619,9 +720,11 @@ def write_report(path_html, session_path, problem: HandEyeProblem, result, compa
         sections.append(
             "<h2>3. Method comparison</h2><section>"
             '<p class="how">The same data solved by other methods. &Delta; = difference from the chosen result '
-            "(position distance, rotation angle). d_org (eq. 22) is computed for every method on the same points "
-            "(three board points of every posture, outliers included), so the columns compare like with like. "
-            "Methods that agree within a few tenths of a millimetre confirm the result; one far off is usually a "
+            "(position distance, rotation angle). d_org (eq. 22) is computed for every method on the same data, "
+            f"{_e(station_d_org(problem, result).basis())}, as in the header and the verdict, so the column compares "
+            "like with like"
+            + (f"; {_e(D_ORG_ALL_NAME)}: the same over all {problem.n} postures. " if result.outliers else ". ")
+            + "Methods that agree within a few tenths of a millimetre confirm the result; one far off is usually a "
             "method thrown by outliers or weak geometry.</p>"
             + _comparison_table(rows) + _img(plot_method_comparison(rows), "method comparison") + "</section>")
     else:
@@ -655,7 +758,7 @@ def write_report(path_html, session_path, problem: HandEyeProblem, result, compa
           f"(point {int(np.argmax(rms))}).</p></section>")
 
     # 5 metrics
-    sections.append("<h2>5. Quality metrics</h2><section>" + _metrics_table(result) + "</section>")
+    sections.append("<h2>5. Quality metrics</h2><section>" + _metrics_table(result, problem) + "</section>")
 
     if findings is not None:
         items = "".join(f"<li>{_e(f)}</li>" for f in findings)

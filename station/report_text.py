@@ -7,6 +7,8 @@ from scipy.spatial.transform import Rotation
 
 from ..rapid.literals import pose_literal, rounded_pose
 from .calibrate import CalibrationOutcome
+from .origin import origin_banner
+from .quality import D_ORG_ALL_NAME, station_d_org
 
 _BAR = 30
 
@@ -24,29 +26,57 @@ def _residual_table(residuals: dict, outliers: list) -> list[str]:
     return lines
 
 
-def calibration_summary(outcome: CalibrationOutcome) -> str:
-    """Human-readable report of one calibration."""
+def _origin_lines(origin: str) -> list[str]:
+    banner = origin_banner(origin)
+    if banner is None:
+        return []
+    word, text = banner
+    return [f"*** {word} - {text} ***", ""]
+
+
+def calibration_summary(outcome: CalibrationOutcome, verdict=None) -> str:
+    """Human-readable report of one calibration.
+
+    Parameters
+    ----------
+    outcome : CalibrationOutcome
+    verdict : Verdict, optional
+        When given and failed, the tframe literal is marked as not to be written into the robot.
+    """
     r = outcome.result
     position, quaternion = rounded_pose(r.x)
     euler = Rotation.from_matrix(r.x[:3, :3]).as_euler("ZYX", degrees=True)
     frame = "tool0 (RAPID tooldata.tframe)" if r.parent == "tool0" else "base (camera fixed beside the robot)"
     m = r.metrics
-    lines = [
+    literal = pose_literal(r.x)
+    if verdict is not None and not verdict.passed:
+        literal = f"FAIL - do not write this into the robot (verdict below): {literal}"
+    lines = _origin_lines(outcome.origin) + [
         f"Session {outcome.session_path}: {len(r.residuals_mm)} postures"
         + (f" ({m['postures']} used)" if r.outliers else "") + f", {r.setup}, method {r.method}",
         "",
         f"Camera pose in {frame}:",
-        f"  {pose_literal(r.x)}",
+        f"  {literal}",
         f"  position  x {position[0]:.3f}  y {position[1]:.3f}  z {position[2]:.3f} mm",
         f"  rotation  q1..q4 {quaternion[0]:.6f} {quaternion[1]:.6f} {quaternion[2]:.6f} {quaternion[3]:.6f}"
         f"   (EulerZYX z {euler[0]:.4f}  y {euler[1]:.4f}  x {euler[2]:.4f} deg)",
         "",
         "Quality (lower is better):",
-        f"  d_org   {m['d_org_mm']:.3f} mm   mean distance of a board point from its mean position (eq. 22)",
+    ]
+    if outcome.problem is not None:
+        scatter = station_d_org(outcome.problem, r)
+        lines += [f"  d_org   {scatter.mm:.3f} mm   mean distance of a board point from its mean position (eq. 22)",
+                  f"          {scatter.basis()}"]
+        if scatter.incl_outliers_mm is not None:
+            lines.append(f"  {D_ORG_ALL_NAME}  {scatter.incl_outliers_mm:.3f} mm   the same over all "
+                         f"{outcome.problem.n} postures")
+    else:
+        lines.append(f"  d_org   {m['d_org_mm']:.3f} mm   mean distance of a board point from its mean position (eq. 22)")
+    lines += [
         f"  d_back  {m['d_back_mm']:.3f} mm   mean distance of a board point between two postures (eq. 23)",
         f"  dR      {m['delta_r']:.5f}     rotation residual of AX = XB, RMS over pairs (eq. 16)",
         f"  dt      {m['delta_t_mm']:.3f} mm   translation residual of AX = XB, RMS over pairs (eq. 16)",
-        f"  (computed on the {'board corners' if m['points'] == 'corners' else 'three board points'})",
+        "  (d_back, dR and dt over the same postures as d_org)",
     ]
     if r.uncertainty is not None:
         u = r.uncertainty

@@ -6,6 +6,7 @@ from __future__ import annotations
 import base64
 import json
 import re
+from html.parser import HTMLParser
 
 import numpy as np
 import pytest
@@ -79,7 +80,7 @@ def test_cli_report_is_self_contained_with_pose_verdict_and_every_plot(good_sess
     report = good_session / "report.html"
     assert report.is_file()
     assert f"Report written to {report}" in printed
-    assert "verdict: PASS (8 of 8 checks)" in printed
+    assert "verdict: PASS (10 of 10 checks)" in printed
     page = report.read_text()
     sources = _assert_self_contained(page)
     assert len(sources) == len(PLOTS)
@@ -129,7 +130,7 @@ def test_outlier_postures_are_listed_with_their_residuals_and_plotted_apart(tmp_
     _assert_self_contained(page)
     for index in (3, 8):
         assert f"posture {index}: {result.residuals_mm[index]:.2f} mm" in page
-    assert "d_org w/o outliers" in page
+    assert "d_org incl. outliers (mm)" in page
 
     # repeatability: the mean is over the inliers, so a shifted posture's board centre moves by the shift
     rep = corner_repeatability(problem, result)
@@ -278,3 +279,150 @@ def test_shipped_thresholds_file_matches_the_defaults():
 
     shipped = Path(handeye.station.__file__).parent / "quality_thresholds.yaml"
     assert load_thresholds(shipped) == QualityThresholds()
+
+
+# ------------------------------------------------------------------ issue 9: one d_org, FAIL literals, MOCK
+class _Tables(HTMLParser):
+    """Every <table> of a page as rows of cell texts (header cells included)."""
+
+    def __init__(self):
+        super().__init__()
+        self.tables, self._cell = [], None
+
+    def handle_starttag(self, tag, attrs):
+        if tag == "table":
+            self.tables.append([])
+        elif tag == "tr" and self.tables:
+            self.tables[-1].append([])
+        elif tag in ("td", "th"):
+            self._cell = []
+
+    def handle_endtag(self, tag):
+        if tag in ("td", "th") and self._cell is not None:
+            self.tables[-1][-1].append(" ".join("".join(self._cell).split()))
+            self._cell = None
+
+    def handle_data(self, data):
+        if self._cell is not None:
+            self._cell.append(data)
+
+
+def _tables(page):
+    parser = _Tables()
+    parser.feed(page)
+    return parser.tables
+
+
+def _header_d_org(page) -> float:
+    """The d_org the report's header (summary facts) shows."""
+    return float(re.search(r"<div>d_org</div><div>(?:<span[^>]*>)?([0-9.]+) mm", page).group(1))
+
+
+def _outlier_session(tmp_path):
+    sc = scene(12)
+    session = sample_session(sc, GOOD_NOISE)
+    for index in (3, 8):  # a board measured 8 mm off: misdetection
+        session.postures[index].points_mm = session.postures[index].points_mm + np.array([6.0, -4.0, 4.0])
+    return _write(tmp_path / "outliers", session)
+
+
+def test_d_org_is_one_figure_in_header_table_chart_verdict_text_and_json(tmp_path, capsys, monkeypatch):
+    """A session with outliers: the header's d_org is the chosen method's d_org in the comparison table
+    and chart, the verdict's max_d_org_mm value, the JSON metrics and the text summary (on main the
+    header showed the result's own metric and the table another definition under the same name)."""
+    import handeye.station.report as report_module
+
+    figures = []
+    original = report_module._png
+    monkeypatch.setattr(report_module, "_png", lambda fig: (figures.append(fig), original(fig))[1])
+    path = _outlier_session(tmp_path)
+    out = tmp_path / "r.json"
+    assert main(["calibrate", str(path), "--report", "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    data = json.loads(out.read_text())
+    assert data["outliers"] == [3, 8]
+    page = (path / "report.html").read_text()
+
+    header = _header_d_org(page)
+    table = next(t for t in _tables(page) if t[0][0] == "method")
+    d_org_columns = [k for k, name in enumerate(table[0]) if name.startswith("d_org") and "incl. outliers" not in name]
+    assert len(d_org_columns) == 1, table[0]  # one column called d_org; the all-postures one is named apart
+    chosen = next(row for row in table[1:] if row[0].endswith("(chosen)"))
+    assert float(chosen[d_org_columns[0]]) == header
+
+    # the header says which postures and points
+    assert "over the 10 inlier postures (2 outliers left out), 104 board corners per posture" in page
+    assert "d_org incl. outliers" in page
+
+    # the chart's d_org panel: the chosen method's bar (the top one) has the header's value
+    chart = figures[2]
+    panels = [ax for ax in chart.axes if ax.get_title().startswith("d_org") and "incl. outliers" not in ax.get_title()]
+    assert len(panels) == 1
+    bars = sorted(panels[0].patches, key=lambda bar: -bar.get_y())
+    assert round(bars[0].get_width(), 3) == header
+
+    check = next(c for c in data["verdict"]["checks"] if c["name"] == "max_d_org_mm")
+    assert round(check["value"], 3) == header
+    assert round(data["metrics"]["d_org_mm"], 3) == header
+    assert re.search(rf"d_org\s+{header:.3f} mm", printed)
+    assert "over the 10 inlier postures (2 outliers left out)" in printed
+
+    # the all-postures figure is larger (the outliers scatter) and carries its own name everywhere
+    all_column = next(k for k, name in enumerate(table[0]) if "incl. outliers" in name)
+    assert float(chosen[all_column]) > 3 * header
+    assert re.search(rf"d_org incl\. outliers\s+{float(chosen[all_column]):.3f} mm", printed)
+
+
+def test_a_failed_result_is_greyed_out_and_says_do_not_write(tmp_path):
+    sc = scene(8)
+    session = sample_session(sc, NoiseConfig(sigma_cam_mm=5.0, seed=3))
+    problem = problem_from_session(session)
+    result = calibrate(problem)
+    judged = verdict(result, problem)
+    assert not judged.passed
+    literal = pose_literal(result.x)
+    tool = "[TRUE,[[1,2,3],[1,0,0,0]],[1.8,[0,0,60],[1,0,0,0],0,0,0]]"
+    page = write_report(tmp_path / "fail.html", "s", problem, result, None, judged, tooldata_literal=tool).read_text()
+    assert "FAIL &ndash; do not write this into the robot" in page
+    # no copyable literal left: both are struck through, grey and not selectable
+    assert '<code class="literal">' not in page
+    assert f'<del class="void">{literal}</del>' in page and f'<del class="void">{tool}</del>' in page
+    style = re.search(r"\.void\{([^}]*)\}", page).group(1)
+    assert "line-through" in style and "user-select:none" in style and "#9e9e9e" in style
+    banner = page.index("do not write this into the robot")
+    assert banner < page.index(f'<del class="void">{literal}</del>')
+
+
+def test_a_passed_result_stays_copyable(good_session, tmp_path):
+    problem = problem_from_session(read_session(good_session))
+    result = calibrate(problem)
+    judged = verdict(result, problem)
+    assert judged.passed
+    page = write_report(tmp_path / "pass.html", good_session, problem, result, None, judged).read_text()
+    assert f'<code class="literal">{pose_literal(result.x)}</code>' in page
+    assert "do not write" not in page and 'class="void"' not in page and 'class="donotwrite"' not in page
+    style = re.search(r"\n\.literal\{([^}]*)\}", page).group(1)
+    assert "user-select:all" in style
+
+
+def test_cli_text_marks_a_failed_literal(tmp_path, capsys):
+    path = _write(tmp_path / "bad", sample_session(scene(8), NoiseConfig(sigma_cam_mm=5.0, seed=3)))
+    assert main(["calibrate", str(path), "--thresholds", str(_shipped_thresholds())]) == 0
+    printed = capsys.readouterr().out
+    assert "verdict: FAIL" in printed
+    line = next(line for line in printed.splitlines() if "[[" in line)
+    assert line.strip().startswith("FAIL - do not write this into the robot")
+
+
+def _shipped_thresholds():
+    from pathlib import Path
+
+    import handeye.station
+
+    return Path(handeye.station.__file__).parent / "quality_thresholds.yaml"
+
+
+def test_shipped_thresholds_file_lists_every_key_with_its_default():
+    import yaml
+
+    assert yaml.safe_load(_shipped_thresholds().read_text()) == QualityThresholds().to_dict()

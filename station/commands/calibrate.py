@@ -27,7 +27,10 @@ another unit, a flange beyond the robot's reach or corners whose spacing is not 
 when asked: --units m.
 
 The text report gives the pose as a RAPID tframe literal, the quality figures and each posture's
-residual. --json FILE writes the machine-readable result ('-' for standard output).
+residual. --json FILE writes the machine-readable result ('-' for standard output); its key
+"station" says where the data come from: "real", "mock" (the embedded mock station), "simulated"
+(truth.yaml beside the session) or "unknown" (imported or older sessions). Mock and simulated
+sessions are flagged in the text and the HTML report: they are not a calibration of a real robot.
 
 --report [FILE] also writes the calibration report: one self-contained HTML file (plots embedded,
 no network needed) with a PASS/FAIL verdict against the quality thresholds, the tframe literal,
@@ -39,6 +42,10 @@ default thresholds, or those of --thresholds FILE.yaml (lines 'key: number', or 
   max_d_org_mm (1.0)  max_posture_residual_mm (2.0)  max_sigma_translation_mm (0.2)
   max_sigma_rotation_deg (0.02)  min_inlier_postures (12)  max_outlier_fraction (0.2)
   min_rotation_axis_spread_deg (10)  min_median_rotation_deg (15)
+  min_camera_offset_mm (20)  max_camera_offset_mm (500)   (eye-in-hand: camera frame's distance
+                                                          from the flange)
+d_org is eq. 22 over the postures the result kept, on every board corner (the three compact points
+when the session holds board poses only), the same for every method the report compares.
 With --report or --thresholds the JSON gains a "verdict" key. A failed verdict still exits 0 (the
 calibration itself succeeded); read "verdict.passed" in the JSON to act on it.
 
@@ -86,12 +93,13 @@ def run(args) -> int:
     written = report_calibration(outcome, report_path, verdict=verdict).path if wants_report else None
     if args.json:
         data = outcome.result.to_json()
+        data["station"] = outcome.origin  # mock | real | simulated | unknown
         if verdict is not None:
             data["verdict"] = verdict.to_json()
         write_json(args.json, data)
     stream = sys.stderr if args.json == "-" else sys.stdout
     if not args.quiet and args.json != "-":
-        print(calibration_summary(outcome))
+        print(calibration_summary(outcome, verdict))
     if not args.quiet and verdict is not None:
         if written is not None:
             print(f"\nReport written to {written}", file=stream)

@@ -48,7 +48,7 @@ def run(args) -> int:
     from ...calibration.solve import calibrate, problem_from_session
     from ..config import default_config, load_config
     from ..demo import station_verdict
-    from ..origin import origin_banner, session_origin
+    from ..origin import origin_line, session_origin
     from ..runtime import MOCK_BANNER, open_controller_link
     from ..writeback import check_session_origin, side_by_side, writeback
 
@@ -62,8 +62,8 @@ def run(args) -> int:
     session = session_in_mm(session, args.units)
     if not args.dry_run:
         check_session_origin(origin, config.is_mock)
-    if origin_banner(origin):
-        print(origin_banner(origin))
+    if origin_line(origin):
+        print(origin_line(origin))
     problem = problem_from_session(session)
     result = calibrate(problem, args.method)
     verdict = station_verdict(result, problem, config)
