@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import hashlib
 import socket
+import time
 
 import pytest
 
@@ -161,8 +163,6 @@ def _raw_modbus(server):
 
 def _tool_command(server, client, code: int) -> int:
     """Write tool values with key ``code`` and a new tool_command; returns tool_error once acknowledged."""
-    import time
-
     m = server.map
     ack = server.register("tool_ack")[0]
     block = m.encode("tool_values", TOOL.values()) + m.encode("tool_key", code)
@@ -204,8 +204,7 @@ def test_key_code_parity_with_the_rapid_generator():
     for key in (KEY, WRONG, "a" * 32, "________"):
         assert write_key_code(key) == rapid_code(key)
         assert 0 < write_key_code(key) < 2**32
-    assert write_key_code("right-key_42") == int.from_bytes(
-        __import__("hashlib").sha256(b"right-key_42").digest()[:4], "big")
+    assert write_key_code("right-key_42") == int.from_bytes(hashlib.sha256(b"right-key_42").digest()[:4], "big")
 
 
 def test_key_request_codec_never_echoes_the_key():

@@ -1,7 +1,5 @@
 """The station's write key: configured once, used by the link, never printed, never in a session."""
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 import yaml
