@@ -16,6 +16,7 @@ What makes it honest:
 
 from __future__ import annotations
 
+import secrets
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -85,6 +86,11 @@ class MockStationSpec:
         The simulated head's geometry (default: the nominal XB3 wide pair).
     seed : int
         Seeds the arm's errors and the sensor noise.
+    idle_timeout_s : float
+        The controller link's idle timeout (``controller.idle_timeout_s``).
+    write_key : str, optional
+        The write key the controller expects for tool writes (``controller.write_key``); None: a
+        random key for this run, handed to the PC through :meth:`MockStation.controller_options`.
     """
 
     protocol: str = "socket"
@@ -100,6 +106,8 @@ class MockStationSpec:
     render: RenderOptions | None = None
     robot: str = "IRB1400"
     seed: int = 7
+    idle_timeout_s: float = 5.0
+    write_key: str | None = field(default=None, repr=False)
 
 
 class MockStation:
@@ -122,6 +130,8 @@ class MockStation:
         self.arm = SimulatedRobot([start], model=spec.robot, speed_fraction=spec.speed_fraction,
                                   time_scale=spec.time_scale, start_joints=start)
         self.server = None
+        # The station's key, or one made for this run: the server and the PC's options share it.
+        self._write_key = spec.write_key if spec.write_key is not None else secrets.token_hex(16)
         mount = np.asarray(spec.cam2tool0, float)
 
         def cam2base():
@@ -134,7 +144,8 @@ class MockStation:
 
     def start(self) -> MockStation:
         if self.server is None:
-            self.server = start_mock_controller(self.spec.protocol, robot=self.arm)
+            self.server = start_mock_controller(self.spec.protocol, robot=self.arm, idle_timeout_s=self.spec.idle_timeout_s,
+                                                write_key=self._write_key)
         return self
 
     def stop(self) -> None:
@@ -150,7 +161,7 @@ class MockStation:
         self.stop()
 
     def controller_options(self) -> dict:
-        """Keyword arguments for ``drivers.controller.open_controller(spec.protocol, ...)``."""
+        """Keyword arguments for ``drivers.controller.open_controller(spec.protocol, ...)`` (write key included)."""
         return dict(self.server.client_options())
 
     def load_program(self, postures) -> None:

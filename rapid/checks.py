@@ -2,6 +2,7 @@
 
 - every string literal holds at most 80 characters (RAPID's ``string`` limit);
 - every identifier has at most 32 characters;
+- module attributes (``MODULE HeKey(SYSMODULE, NOVIEW)``) are ones RAPID knows;
 - every name is declared before it is used: data of a module before the routines that use it and
   locals at the top of their routine; routines and global data of the other modules in any order;
   what RAPID itself provides (instructions, functions, data types, ``tool0`` ...) is listed in
@@ -22,8 +23,8 @@ import numpy as np
 
 from ..calibration.kinematics import load_robot
 
-__all__ = ["Finding", "RAPID_KEYWORDS", "RAPID_BUILTINS", "MOVE_INSTRUCTIONS", "check_program", "string_length",
-           "tokenize"]
+__all__ = ["Finding", "RAPID_KEYWORDS", "RAPID_BUILTINS", "MODULE_ATTRIBUTES", "MOVE_INSTRUCTIONS", "check_program",
+           "for_rapidchecker", "string_length", "tokenize"]
 
 MAX_STRING = 80
 MAX_IDENTIFIER = 32
@@ -50,14 +51,16 @@ RAPID_BUILTINS = _DATA_TYPES | {
     "SocketCreate", "SocketBind", "SocketListen", "SocketAccept", "SocketReceive", "SocketSend", "SocketClose",
     "GetSysInfo", "WAIT_MAX",
     # serial channels
-    "Open", "Close", "ReadStr", "WriteStrBin",
+    "Open", "Close", "ReadStr", "WriteStrBin", "ClearIOBuff",
     # I/O and interrupts
-    "SetGO", "SetDO", "SetAO", "GInput", "DInput", "AInput", "IDelete", "ITimer",
+    "SetGO", "SetDO", "SetAO", "GInput", "GInputDnum", "DInput", "AInput", "IDelete", "ITimer",
     # clocks
     "ClkReset", "ClkStart", "ClkRead",
     # error handling
     "ERRNO", "ERR_SOCK_TIMEOUT", "ERR_SOCK_CLOSED", "ERR_DEV_MAXTIME",
 }
+#: Module attributes RAPID knows (RobotWare manual; rapidchecker 0.1.x's grammar lacks NOVIEW).
+MODULE_ATTRIBUTES = {"SYSMODULE", "NOVIEW", "NOSTEPIN", "VIEWONLY", "READONLY"}
 #: Instructions that move the robot; only MoveAbsJ may appear, and only to approved targets.
 MOVE_INSTRUCTIONS = {"MoveAbsJ", "MoveJ", "MoveL", "MoveC", "MoveExtJ", "MoveAbsJDO", "MoveJDO", "MoveLDO",
                      "MoveCDO", "MoveJSync", "MoveLSync", "MoveCSync", "MoveAbsJSync", "SearchL", "SearchC",
@@ -109,6 +112,18 @@ def tokenize(text: str) -> list[Token]:
             tokens.append(Token(kind, m.group(), line))
         pos = m.end()
     return tokens
+
+
+def for_rapidchecker(text: str) -> str:
+    """``text`` as ``rapidchecker`` 0.1.x can parse it: its grammar lacks the NOVIEW module attribute.
+
+    Only the ``NOVIEW`` word of the ``MODULE`` line is removed (our own checks verify the module
+    attributes against :data:`MODULE_ATTRIBUTES`); everything else is checked as written.
+    """
+    first, newline, rest = text.partition("\n")
+    first = re.sub(r"\s*,\s*NOVIEW\b|\bNOVIEW\s*,\s*", "", first)
+    first = re.sub(r"\(\s*NOVIEW\s*\)", "", first)
+    return first + newline + rest
 
 
 def string_length(literal: str) -> int:
@@ -237,6 +252,17 @@ def _check_module(module, tokens, global_data, routines, external, approved, mod
         prev = tokens[i - 1].text if i > 0 else ""
         if upper == "MODULE":
             i += 2
+            if i < n and tokens[i].text == "(":  # module attributes: (SYSMODULE, NOVIEW, ...)
+                i += 1
+                while i < n and tokens[i].text != ")":
+                    word = tokens[i]
+                    if word.kind == "id" and word.text.upper() not in MODULE_ATTRIBUTES:
+                        out.append(Finding(module, word.line, f"unknown module attribute {word.text!r} "
+                                                              f"(RAPID knows {', '.join(sorted(MODULE_ATTRIBUTES))})"))
+                    elif word.kind != "id" and word.text != ",":
+                        out.append(Finding(module, word.line, f"unexpected {word.text!r} in the module attributes"))
+                    i += 1
+                i += 1
             continue
         if upper in ("PROC", "FUNC", "TRAP"):
             in_routine, local_scope = True, set()

@@ -10,6 +10,11 @@ loaded together into the robot task:
   gateway: ``SetGO``/``SetDO``/``WaitDI \\MaxTime``);
 - ``HeTool`` : ``PERS tooldata`` of the camera (identity frame until calibrated).
 
+A station with a write key (``controller.write_key``) also gets ``HeKey.sys`` (:func:`render_key`):
+a system module holding the key, loaded once on the controller and never part of the program
+that ``capture`` writes into a session (:func:`render_program` never includes it). Without a key
+the link modules refuse every tool write.
+
 Templates are ``templates/*.tmpl`` filled with :class:`string.Template`. Every rendered program is
 checked (:func:`handeye.rapid.checks.check_program`) before it is returned; postures outside the
 joint limits are refused.
@@ -17,7 +22,10 @@ joint limits are refused.
 
 from __future__ import annotations
 
+import hashlib
+import os
 import string
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -37,7 +45,11 @@ __all__ = [
     "render_main",
     "render_link",
     "render_tool",
+    "render_key",
     "render_program",
+    "write_key_code",
+    "KEY_ROUTINES",
+    "KEY_TRIES",
     "write_modules",
     "generate_station_modules",
 ]
@@ -49,13 +61,21 @@ LINK_MODULES = {"socket": "HeSocket", "serial": "HeSerial", "modbus": "HeIo"}
 #: Signals HeIo expects in the controller's I/O configuration.
 IO_SIGNALS = (
     ["goHeProtocol", "goHeCount", "goHeState", "goHePosture", "doHeAtPosture", "goHeError", "goHeBeat",
-     "goHeToolAck", "goHeToolErr", "giHeRequest", "diHeGrabbed", "giHeToolCmd",
+     "goHeToolAck", "goHeToolErr", "giHeRequest", "diHeGrabbed", "giHeToolCmd", "giHeToolKey",
      "aoHeX", "aoHeY", "aoHeZ"]
     + [f"aoHeJ{i}" for i in range(1, 7)] + [f"aoHeQ{i}" for i in range(1, 5)]
     + [f"aoHeT{i}" for i in range(1, 12)] + [f"aiHeT{i}" for i in range(1, 12)]
 )
 #: Publishing period of HeIo's timer interrupt (joints, pose, heartbeat), seconds.
 IO_PUBLISH_S = 0.1
+#: Routines of the HeKey system module the link modules call (declared outside the program).
+KEY_ROUTINES = ("HeKeyMatches", "HeCodeMatches")
+#: Wrong keys a session (line) or the program (I/O) may send before tool writes are refused
+#: (drivers/controller/protocol.py keeps the same number; a test checks they agree).
+KEY_TRIES = 3
+#: HeSocket: longest receive slice between looks at the listener, and the look itself (seconds).
+SOCKET_SLICE_S = 0.5
+SOCKET_ACCEPT_POLL_S = 0.05
 
 _TEMPLATES = Path(__file__).with_name("templates")
 
@@ -66,10 +86,11 @@ class RapidModule:
 
     name: str
     text: str
+    suffix: str = ".mod"
 
     @property
     def filename(self) -> str:
-        return f"{self.name}.mod"
+        return f"{self.name}{self.suffix}"
 
 
 def _template(name: str) -> string.Template:
@@ -104,18 +125,25 @@ def render_link(station: RapidStation, protocol: str | None = None) -> RapidModu
     protocol = protocol or station.protocol
     if protocol not in PROTOCOLS:
         raise RapidError(f"unknown protocol {protocol!r}; choose one of {', '.join(PROTOCOLS)}")
+    keyed = station.write_key is not None  # the key itself goes into HeKey.sys only
     common = {"header": _header(station), "ack_timeout": format_num(station.ack_timeout_s, 3),
-              "tool": station.tool_name, "protocol_version": RAPID_PROTOCOL_VERSION}
+              "tool": station.tool_name, "protocol_version": RAPID_PROTOCOL_VERSION, "key_tries": KEY_TRIES,
+              "idle_timeout": format_num(station.idle_timeout_s, 3)}
     if protocol == "modbus":
-        text = _template("HeIo.mod.tmpl").substitute(common, publish_period=format_num(IO_PUBLISH_S, 3))
+        gate = _template("key_io.tmpl" if keyed else "key_io_none.tmpl").template.rstrip("\n")
+        text = _template("HeIo.mod.tmpl").substitute(common, publish_period=format_num(IO_PUBLISH_S, 3),
+                                                     tool_key_check=gate)
         return RapidModule(LINK_MODULES[protocol], text)
     session = _template("session_data.tmpl").substitute(common).rstrip("\n")
-    dispatcher = _template("dispatcher.tmpl").substitute(common).rstrip("\n")
+    key_check = _template("key_check.tmpl" if keyed else "key_check_none.tmpl").template.rstrip("\n")
+    dispatcher = _template("dispatcher.tmpl").substitute(common, key_check=key_check).rstrip("\n")
     if protocol == "socket":
         bind = "GetSysInfo(\\LanIp)" if station.controller_address == "auto" else f'"{station.controller_address}"'
+        slice_s = max(SOCKET_ACCEPT_POLL_S, min(SOCKET_SLICE_S, station.idle_timeout_s / 2))
         text = _template("HeSocket.mod.tmpl").substitute(common, session_data=session, dispatcher=dispatcher,
                                                          pc_address=station.pc_address, port=station.port,
-                                                         bind_address=bind)
+                                                         bind_address=bind, slice=format_num(slice_s, 3),
+                                                         accept_poll=format_num(SOCKET_ACCEPT_POLL_S, 3))
     else:
         text = _template("HeSerial.mod.tmpl").substitute(common, session_data=session, dispatcher=dispatcher,
                                                          channel=station.serial_channel)
@@ -136,9 +164,43 @@ def render_tool(station: RapidStation, cam2tool0=None, comments=()) -> RapidModu
     return RapidModule("HeTool", text)
 
 
+def write_key_code(key: str) -> int:
+    """The 32-bit code of a write key (Modbus ``tool_key``): the first 4 bytes of SHA-256, big-endian; 0 -> 1.
+
+    ``drivers.controller.types.write_key_code`` computes the same (a test checks they agree).
+    """
+    code = int.from_bytes(hashlib.sha256(key.encode("ascii")).digest()[:4], "big")
+    return code or 1
+
+
+def render_key(station: RapidStation) -> RapidModule:
+    """``HeKey.sys``: the station's write key (a secret) as a system module, checked.
+
+    Load it once on the controller; it stays loaded when the program modules are replaced. It is
+    never part of :func:`render_program`, so never of what ``capture`` writes into a session.
+
+    Raises
+    ------
+    RapidError
+        The station has no write key, or the module fails a check.
+    """
+    if station.write_key is None:
+        raise RapidError("the station has no write key: set controller.write_key in the station config")
+    text = _template("HeKey.sys.tmpl").substitute(
+        header=_header(station), key=station.write_key, code=write_key_code(station.write_key))
+    module = RapidModule("HeKey", text, suffix=".sys")
+    findings = check_program([(module.name, module.text)])
+    if findings:
+        raise RapidError("generated HeKey failed its checks: " + "; ".join(map(str, findings[:5])))
+    return module
+
+
 def render_program(station: RapidStation | None = None, postures=None, protocol: str | None = None,
                    cam2tool0=None) -> list[RapidModule]:
     """``[HeMain, link module, HeTool]`` for the station (default: the built-in one), checked.
+
+    Never ``HeKey``: with a write key the link module calls its routines, which the controller
+    provides once the integrator loaded ``HeKey.sys`` (:func:`render_key`).
 
     Raises
     ------
@@ -150,7 +212,7 @@ def render_program(station: RapidStation | None = None, postures=None, protocol:
     approved = check_postures(postures, station.robot, "postures to render")
     modules = [render_main(station, approved), render_link(station, protocol), render_tool(station, cam2tool0)]
     findings = check_program([(m.name, m.text) for m in modules], approved=np.round(approved, 4),
-                             robot=station.robot, external=IO_SIGNALS)
+                             robot=station.robot, external=IO_SIGNALS + list(KEY_ROUTINES))
     if findings:
         raise RapidError("generated RAPID failed its checks: " + "; ".join(map(str, findings[:5])))
     return modules
@@ -165,11 +227,36 @@ def write_modules(modules, directory) -> list[Path]:
         raise RapidError(f"cannot create output folder {folder}: {exc.strerror}") from None
     paths = []
     for module in modules:
-        paths.append(write_text_atomic(folder / module.filename, module.text, encoding="ascii", newline="\n"))
+        if module.name == "HeKey":
+            paths.append(_write_secret(folder / module.filename, module.text))
+        else:
+            paths.append(write_text_atomic(folder / module.filename, module.text, encoding="ascii", newline="\n"))
     return paths
 
 
+def _write_secret(path: Path, text: str) -> Path:
+    """Write ``text`` atomically, readable by the owner only from the start (HeKey.sys holds the key)."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)  # mode 0600
+    try:
+        with os.fdopen(fd, "w", encoding="ascii", newline="\n") as handle:
+            handle.write(text)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
 def generate_station_modules(output, config=None, protocol: str | None = None) -> list[Path]:
-    """Render the station's program (``config``: a station YAML path; None: the built-in station) into ``output``."""
+    """Render the station's program (``config``: a station YAML path; None: the built-in station) into ``output``.
+
+    With a write key in the station, ``HeKey.sys`` is written beside the program modules.
+    """
     station = load_station(config) if config is not None else default_station()
-    return write_modules(render_program(station, protocol=protocol), output)
+    modules = render_program(station, protocol=protocol)
+    if station.write_key is not None:
+        modules.append(render_key(station))
+    return write_modules(modules, output)

@@ -11,6 +11,8 @@ rest of the station and ignored here)::
       port: 1025                       # TCP port of the socket server
       serial_channel: "sio1:"          # serial channel of the serial variant
       ack_timeout_s: 30                # warn (state LATE) when the PC has not acknowledged a posture
+      idle_timeout_s: 5                # drop a silent PC (socket) / forget its session (serial), 0.1..10 s
+      write_key: null                  # 8-32 letters/digits/_/-: tool writes need it (HeKey.sys; secret)
     motion:
       speed_tcp_mm_s: 200              # speeddata of the posture moves: TCP speed
       speed_ori_deg_s: 100             #   and reorientation speed
@@ -41,14 +43,19 @@ from ..calibration.kinematics import load_robot
 from .errors import StationConfigError
 
 __all__ = ["PROTOCOLS", "RapidStation", "default_station", "load_station", "station_from_dict", "check_postures",
-           "DEFAULT_STATION_FILE", "RAPID_IDENTIFIER"]
+           "DEFAULT_STATION_FILE", "RAPID_IDENTIFIER", "WRITE_KEY_PATTERN", "IDLE_TIMEOUT_RANGE"]
 
 PROTOCOLS = ("socket", "serial", "modbus")
 DEFAULT_STATION_FILE = Path(__file__).with_name("default_station.yaml")
 RAPID_IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
+#: The station's write key: one protocol word and a RAPID string (drivers/controller/types.py keeps the same).
+WRITE_KEY_PATTERN = re.compile(r"[A-Za-z0-9_-]{8,32}")
+#: Allowed range of controller.idle_timeout_s (seconds).
+IDLE_TIMEOUT_RANGE = (0.1, 10.0)
 
 _SECTIONS = {
-    "controller": {"protocol", "pc_address", "controller_address", "port", "serial_channel", "ack_timeout_s"},
+    "controller": {"protocol", "pc_address", "controller_address", "port", "serial_channel", "ack_timeout_s",
+                   "idle_timeout_s", "write_key"},
     "motion": {"speed_tcp_mm_s", "speed_ori_deg_s"},
     "tool": {"name", "mass_kg", "cog_mm"},
 }
@@ -65,6 +72,8 @@ class RapidStation:
     port: int = 1025
     serial_channel: str = "sio1:"
     ack_timeout_s: float = 30.0
+    idle_timeout_s: float = 5.0
+    write_key: str | None = field(default=None, repr=False)  # a secret: rendered into HeKey.sys only
     speed_tcp_mm_s: float = 200.0
     speed_ori_deg_s: float = 100.0
     tool_name: str = "tHeCamera"
@@ -151,6 +160,15 @@ def _checked(station: RapidStation) -> RapidStation:
         raise StationConfigError(f"{src}: controller.serial_channel must look like 'sio1:' or 'com1:'; "
                                  f"got {station.serial_channel!r}")
     ack = _number(station.ack_timeout_s, "controller.ack_timeout_s", src, 0.0, 3600.0)
+    idle = _number(station.idle_timeout_s, "controller.idle_timeout_s", src, 0.0, IDLE_TIMEOUT_RANGE[1])
+    if idle < IDLE_TIMEOUT_RANGE[0]:
+        raise StationConfigError(f"{src}: controller.idle_timeout_s must be {IDLE_TIMEOUT_RANGE[0]:g} to "
+                                 f"{IDLE_TIMEOUT_RANGE[1]:g} s; got {station.idle_timeout_s!r}")
+    key = station.write_key
+    if key is not None and not (isinstance(key, str) and WRITE_KEY_PATTERN.fullmatch(key)):
+        size = f"another value of {len(key)} characters" if isinstance(key, str) else f"a {type(key).__name__} (quote it in YAML)"
+        raise StationConfigError(f"{src}: controller.write_key must be 8 to 32 letters, digits, '_' or '-'; got {size} "
+                                 "(the key itself is never printed)")
     tcp = _number(station.speed_tcp_mm_s, "motion.speed_tcp_mm_s", src, 0.0, 7000.0)
     ori = _number(station.speed_ori_deg_s, "motion.speed_ori_deg_s", src, 0.0, 1000.0)
     name = str(station.tool_name)
@@ -165,7 +183,7 @@ def _checked(station: RapidStation) -> RapidStation:
     if len(cog) != 3 or not all(math.isfinite(v) and abs(v) <= 1000 for v in cog):
         raise StationConfigError(f"{src}: tool.cog_mm must be three finite numbers within 1000 mm; got {station.tool_cog_mm!r}")
     postures = check_postures(station.postures, station.robot, src)
-    return replace(station, pc_address=pc, controller_address=ctrl, ack_timeout_s=ack, speed_tcp_mm_s=tcp,
+    return replace(station, pc_address=pc, controller_address=ctrl, ack_timeout_s=ack, idle_timeout_s=idle, speed_tcp_mm_s=tcp,
                    speed_ori_deg_s=ori, tool_name=name, tool_mass_kg=mass, tool_cog_mm=cog,
                    postures=tuple(tuple(float(v) for v in row) for row in postures))
 

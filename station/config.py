@@ -8,7 +8,8 @@ mock station, and every output then says MOCK. Every other key is optional and k
 ``robot``       model name or robot YAML path (joint limits, kinematics)
 ``controller``  protocol (socket | serial | modbus | mock), host, port, serial_url, modbus_map, timeout_s,
                 motion_timeout_s, and for the generated RAPID: pc_address, controller_address,
-                serial_channel, ack_timeout_s
+                serial_channel, ack_timeout_s; for both: idle_timeout_s, write_key (a secret: never
+                printed, never stored in a session)
 ``camera``      backend (xb3 | mock), stereo_model (OpenCV FileStorage; none = nominal XB3 pair),
                 nominal_mount (camera in tool0 from the drawing, for planning only), grab_timeout_s
 ``target``      corners [nx, ny], square_mm
@@ -28,6 +29,7 @@ mock station, and every output then says MOCK. Every other key is optional and k
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
@@ -71,6 +73,8 @@ class ControllerSettings:
     controller_address: str = "127.0.0.1"
     serial_channel: str = "sio1:"
     ack_timeout_s: float = 30.0
+    idle_timeout_s: float = 5.0
+    write_key: str | None = field(default=None, repr=False)  # a secret: masked in to_dict, never printed
 
 
 @dataclass(frozen=True)
@@ -166,7 +170,8 @@ class StationConfig:
         return {
             "robot": self.robot,
             "controller": {"protocol": self.link_protocol, "pc_address": c.pc_address, "controller_address": c.controller_address,
-                           "port": c.port, "serial_channel": c.serial_channel, "ack_timeout_s": c.ack_timeout_s},
+                           "port": c.port, "serial_channel": c.serial_channel, "ack_timeout_s": c.ack_timeout_s,
+                           "idle_timeout_s": c.idle_timeout_s, "write_key": c.write_key},
             "motion": {"speed_tcp_mm_s": self.motion.speed_tcp_mm_s, "speed_ori_deg_s": self.motion.speed_ori_deg_s},
             "tool": {"name": self.tool.name, "mass_kg": self.tool.mass_kg, "cog_mm": list(self.tool.cog_mm)},
             "postures": [[round(float(v), 4) for v in row] for row in np.asarray(postures, float)],
@@ -179,6 +184,7 @@ class StationConfig:
         for name in ("controller", "camera", "plan", "motion", "tool", "capture", "mock"):
             section = {f.name: getattr(getattr(self, name), f.name) for f in fields(getattr(self, name))}
             out[name] = _plain(section)
+        out["controller"]["write_key"] = None if self.controller.write_key is None else "<set>"  # never the secret
         out["camera"]["nominal_mount"] = pose_from_transform(self.camera.nominal_mount_transform())
         return out
 
@@ -221,6 +227,19 @@ def _text(value, key: str, choices=None) -> str:
         raise ConfigError(f"{key} must be a text; got {value!r}")
     if choices and value not in choices:
         raise ConfigError(f"{key} must be one of {', '.join(choices)}; got {value!r}")
+    return value
+
+
+def _write_key(value, key: str) -> str | None:
+    """The write key, checked without ever echoing it (one protocol word, one RAPID string)."""
+    if value is None:
+        return None
+    if not isinstance(value, str):
+        raise ConfigError(f"{key} must be a text of 8 to 32 letters, digits, '_' or '-' (quote it in YAML); "
+                          f"got a {type(value).__name__}")
+    if not re.fullmatch(r"[A-Za-z0-9_-]{8,32}", value):
+        raise ConfigError(f"{key} must be 8 to 32 letters, digits, '_' or '-'; got another value of {len(value)} "
+                          "characters (the key itself is never printed)")
     return value
 
 
@@ -283,6 +302,10 @@ def config_from_dict(data: dict, source: str = "configuration") -> StationConfig
             return _number(value, path, 1, 65535, integer=True)
         if key in ("timeout_s", "motion_timeout_s", "ack_timeout_s"):
             return _number(value, path, 0.001, 3600)
+        if key == "idle_timeout_s":
+            return _number(value, path, 0.1, 10)
+        if key == "write_key":
+            return _write_key(value, path)
         if key == "modbus_map":
             return None if value is None else _text(value, path)
         return _text(value, path)

@@ -49,7 +49,8 @@ class StationLink:
 
 def _controller_options(config: StationConfig) -> dict:
     c = config.controller
-    common = {"timeout": c.timeout_s, "motion_timeout": c.motion_timeout_s, "robot": config.robot}
+    common = {"timeout": c.timeout_s, "motion_timeout": c.motion_timeout_s, "robot": config.robot,
+              "idle_timeout": c.idle_timeout_s, "write_key": c.write_key}
     if c.protocol == "socket":
         return {"host": c.host, "port": c.port, **common}
     if c.protocol == "serial":
@@ -66,7 +67,8 @@ def mock_spec(config: StationConfig):
 
     m = config.mock
     return MockStationSpec(protocol=m.protocol, board=config.target, kinematic_error_mm=m.kinematic_error_mm,
-                           kinematic_error_deg=m.kinematic_error_deg, time_scale=m.time_scale, seed=m.seed)
+                           kinematic_error_deg=m.kinematic_error_deg, time_scale=m.time_scale, seed=m.seed,
+                           idle_timeout_s=config.controller.idle_timeout_s, write_key=config.controller.write_key)
 
 
 #: What every output says when the embedded mock station is in use.

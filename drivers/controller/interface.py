@@ -2,8 +2,10 @@
 
 A back end is a class with a name (``socket``, ``serial``, ``modbus``); :func:`open_controller`
 builds it from keyword options and connects. All methods take an optional ``timeout`` (seconds)
-that bounds the whole call, reconnects included; every value is checked on the PC before anything
-is sent (:class:`InvalidRequest`).
+that bounds the whole call, reconnects included; a call that has to (re)connect first is allowed
+at least ``idle_timeout + timeout`` (the controller may still be freeing itself from a silent
+client). Every value is checked on the PC before anything is sent (:class:`InvalidRequest`).
+Tool writes need the station's ``write_key``.
 
 Example
 -------
@@ -33,6 +35,7 @@ from .types import (
     check_posture_index,
     check_timeout,
     check_tooldata,
+    check_write_key,
     robot_model,
 )
 
@@ -57,7 +60,15 @@ class Deadline:
 
     def __init__(self, seconds: float):
         self.seconds = float(seconds)
-        self.end = time.monotonic() + self.seconds
+        self.start = time.monotonic()
+        self.end = self.start + self.seconds
+
+    def extend(self, seconds: float) -> None:
+        """Leave at least ``seconds`` from now (never shortens the budget)."""
+        end = time.monotonic() + float(seconds)
+        if end > self.end:
+            self.end = end
+            self.seconds = end - self.start
 
     def remaining(self) -> float:
         return max(0.0, self.end - time.monotonic())
@@ -87,6 +98,13 @@ class Controller(ABC):
         checked against the joint limits at construction and before each move.
     max_tool_mass_kg : float
         Heaviest tool accepted by :meth:`set_tool` (default 5, the IRB 1400 payload).
+    idle_timeout : float
+        The controller's idle timeout (``controller.idle_timeout_s``, default 5 s): a server busy
+        with a silent client frees itself within it, so connecting may wait up to
+        ``idle_timeout + timeout`` for the first reply (the call's budget is stretched to that).
+    write_key : str, optional
+        The station's write key (``controller.write_key``; the one in ``HeKey.sys`` on the
+        controller). :meth:`set_tool` refuses to write without it. Never printed.
     """
 
     #: Back-end name; set by subclasses.
@@ -99,8 +117,10 @@ class Controller(ABC):
 
     def __init__(self, *, timeout: float = 2.0, motion_timeout: float = 120.0, retries: int = 3,
                  backoff_s: float = 0.05, backoff_max_s: float = 1.0, robot: str = "IRB1400",
-                 postures=None, max_tool_mass_kg: float = 5.0):
+                 postures=None, max_tool_mass_kg: float = 5.0, idle_timeout: float = 5.0, write_key: str | None = None):
         self.timeout = check_timeout("timeout", timeout)
+        self.idle_timeout = check_timeout("idle_timeout", idle_timeout)
+        self._write_key = check_write_key(write_key)
         self.motion_timeout = check_timeout("motion_timeout", motion_timeout)
         if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
             raise InvalidRequest(f"retries must be an integer >= 0; got {retries!r}")
@@ -189,6 +209,9 @@ class Controller(ABC):
         while True:
             try:
                 if not self.is_connected:
+                    # The request may wait in the server's backlog until its idle timeout frees it
+                    # from a silent client (a PC that lost power): allow for that when connecting.
+                    deadline.extend(self.idle_timeout + self.timeout)
                     self._open(deadline)
                 return operation(deadline)
             except LinkDown as exc:
@@ -298,14 +321,24 @@ class Controller(ABC):
         """Write the camera's tool data to the program's ``PERS tooldata`` and read it back.
 
         Returns the tool data read back. Refused before anything is sent: NaN, a non-unit quaternion,
-        a tool frame over 1 m from the flange, a mass <= 0 or above ``max_tool_mass_kg``.
+        a tool frame over 1 m from the flange, a mass <= 0 or above ``max_tool_mass_kg``, no
+        ``write_key``. The key goes first (``KEY`` request / ``tool_key`` register), in the same
+        exchange as the tool parts, so a retry after a dropped link repeats it too.
 
         Raises
         ------
+        InvalidRequest
+            Bad tool data, or no write key configured (nothing sent).
+        ControllerRefused
+            The controller refused the key (code 9) or the tool data (code 6).
         ControllerError
             When the value read back differs from the one written.
         """
         tool = check_tooldata(tool, self.max_tool_mass_kg)
+        if self._write_key is None:
+            raise InvalidRequest(f"cannot write tool data to {self.address} without the station's write key: set "
+                                 "controller.write_key in the station config and load HeKey.sys on the controller "
+                                 "(handeye rapid generate --config STATION.yaml -o DIR writes it); nothing was sent")
         deadline = self._budget(timeout)
         self._write_tool(tool, deadline)
         back = self.read_tool(timeout=max(deadline.remaining(), 1e-3))

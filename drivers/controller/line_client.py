@@ -15,7 +15,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from . import protocol as P
-from .errors import InvalidRequest
+from .errors import ControllerRefused, InvalidRequest
 from .interface import Controller, Deadline, LinkDown
 from .types import AT, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_posture_index
 
@@ -29,6 +29,9 @@ POLL_S = 0.005
 
 class LineTransport(ABC):
     """A byte stream to the controller. Errors: LinkDown (dropped), the controller's timeout class."""
+
+    #: True for a line without connections (serial): what an earlier PC left on it reaches us too.
+    shared_line = False
 
     @abstractmethod
     def open(self, deadline: Deadline) -> None: ...
@@ -90,6 +93,8 @@ class LineController(Controller):
         self._last_id = 0
         #: Late replies skipped (to requests that had timed out).
         self.stale_replies = 0
+        #: Replies dropped while flushing a shared (serial) line at connect.
+        self.flushed_replies = 0
 
     # ------------------------------------------------------------------ link
     @abstractmethod
@@ -104,6 +109,8 @@ class LineController(Controller):
         transport.open(deadline)
         self._transport = transport
         try:
+            if transport.shared_line:
+                self._flush_line(deadline)
             (version, program), (count,) = self._exchange([("VERSION", ()), ("COUNT", ())], deadline)
         except BaseException:
             self._drop()
@@ -114,6 +121,35 @@ class LineController(Controller):
                 f"the controller at {self.address} speaks handeye protocol {version}, this PC speaks "
                 f"{P.PROTOCOL_VERSION}: regenerate and load the RAPID modules with `handeye rapid generate`")
         self._info = ControllerInfo(version, program, count)
+
+    def _flush_line(self, deadline: Deadline) -> None:
+        """Start clean on a shared line: end whatever it holds with a line break, then PING.
+
+        A serial line may hold the unfinished request of a PC that died mid-line (the controller
+        would glue our first request to it) and late replies to an earlier PC. The line break ends
+        the unfinished request; every reply before the PING's own ``OK`` is dropped. A line that is
+        no reply at all (an echo, noise) is a protocol error, as everywhere.
+        """
+        request_id = self._next_id()
+        self._transport.write(b"\n" + P.encode_request(request_id, "PING"), deadline)
+        while True:
+            try:
+                raw = self._transport.read_line(deadline)
+            except P.ProtocolError as exc:
+                raise self.protocol_error(f"PING: {exc}") from None
+            except self.timeout_error as exc:
+                raise self.timeout_error(f"PING: no reply from the controller at {self.address} within "
+                                         f"{deadline.seconds:g} s ({exc})") from None
+            if not raw.strip(b"\r\n"):
+                continue  # our own line break, echoed
+            try:
+                reply = P.parse_reply(raw)
+            except P.ProtocolError as exc:
+                raise self.protocol_error(f"garbage from the controller at {self.address} after PING: {exc}") from None
+            if reply.id == request_id and reply.ok and not reply.tokens:
+                return
+            self.flushed_replies += 1
+            log.debug("dropping %r left on the line before our PING", raw)
 
     def _drop(self) -> None:
         if self._transport is not None:
@@ -144,9 +180,11 @@ class LineController(Controller):
             reply = self._read_reply(request_id, command, deadline)
             if not reply.ok:
                 meaning = P.ERROR_CODES.get(reply.code, "unknown error")
-                raise self.refused_error(
+                refused = self.refused_error(
                     f"controller at {self.address} refused {command}: {reply.message or meaning} (error {reply.code}: {meaning})",
                     reply.code)
+                refused.reason = reply.message or meaning
+                raise refused
             try:
                 results.append(P.decode_values(command, reply))
             except P.ProtocolError as exc:
@@ -234,8 +272,18 @@ class LineController(Controller):
     # ------------------------------------------------------------------ tool data
     def _write_tool(self, tool: ToolData, deadline: Deadline) -> None:
         p, q, m, c = tool.as_arrays()
-        steps = [("TOOLPOS", tuple(p)), ("TOOLROT", tuple(q)), ("TOOLLOAD", (m, *c)), ("TOOLSAVE", ())]
-        self._run("write tool data", steps, deadline=deadline)
+        steps = [("KEY", (self._write_key,)), ("TOOLPOS", tuple(p)), ("TOOLROT", tuple(q)), ("TOOLLOAD", (m, *c)),
+                 ("TOOLSAVE", ())]
+        try:
+            self._run("write tool data", steps, deadline=deadline)
+        except ControllerRefused as exc:
+            if exc.code != P.E_AUTH:
+                raise
+            reason = getattr(exc, "reason", "not authorised")
+            raise self.refused_error(
+                f"the controller at {self.address} refused to write tool data: {reason} (error {exc.code}); check "
+                "that controller.write_key in the station config is the key of the HeKey.sys loaded on the "
+                "controller (handeye rapid generate --config STATION.yaml -o DIR writes it)", exc.code) from None
 
     def read_tool(self, timeout=None) -> ToolData:
         p, q, load = self._run("read tool data", [("GETTOOLPOS", ()), ("GETTOOLROT", ()), ("GETTOOLLOAD", ())], timeout)

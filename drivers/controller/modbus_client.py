@@ -22,7 +22,7 @@ import numpy as np
 from .errors import ControllerConnectionError, ControllerError, ControllerRefused, ControllerTimeout, InvalidRequest, ProtocolError
 from .interface import Controller, Deadline, LinkDown
 from .modbus_map import STATE_NAMES, load_register_map
-from .protocol import E_BUSY, E_STATE, E_TOOL, ERROR_CODES, PROTOCOL_VERSION
+from .protocol import E_AUTH, E_BUSY, E_STATE, E_TOOL, ERROR_CODES, KEY_TRIES, PROTOCOL_VERSION, write_key_code
 from .types import ACKED, AT, ERROR, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_posture_index, check_timeout
 
 __all__ = [
@@ -354,7 +354,22 @@ class ModbusController(Controller):
                                      "tool data is taken only when it is READY: acknowledge the posture first", E_BUSY)
         (last,) = self._call("read tool_ack", lambda d: self._read_named(d, "tool_ack"), deadline=deadline)["tool_ack"]
         seq = last % 0xFFFF + 1
-        self._call("write tool values", lambda d: self._write_named(d, {"tool_values": tool.values()}), deadline=deadline)
+        code = write_key_code(self._write_key)
+        self._call("write tool values and key", lambda d: self._write_named(d, {"tool_values": tool.values(), "tool_key": code}),
+                   deadline=deadline)
+        code = self._await_tool_ack(seq, deadline)
+        self._clear_key(deadline)  # only once the robot took the command: a late pick-up still finds the key
+        if code == E_AUTH:
+            raise self.refused_error(
+                f"robot at {self.address} refused the tool data: wrong or missing key code (error {code}; after "
+                f"{KEY_TRIES} wrong codes it refuses tool data until the RAPID program restarts): check that "
+                "controller.write_key in the station config is the key of the HeKey.sys loaded on the controller", code)
+        if code:
+            raise self.refused_error(f"robot at {self.address} refused the tool data (error {code}: "
+                                     f"{ERROR_CODES.get(code, 'error')})", code or E_TOOL)
+
+    def _await_tool_ack(self, seq: int, deadline: Deadline) -> int:
+        """Send ``tool_command = seq``, wait for ``tool_ack == seq``; returns ``tool_error``."""
         self._call("write tool command", lambda d: self._write_named(d, {"tool_command": seq}), deadline=deadline)
         beat, beat_time = None, time.monotonic()
         while True:
@@ -371,10 +386,15 @@ class ModbusController(Controller):
             if deadline.remaining() <= self.poll_s:
                 raise self.timeout_error(f"write tool data: the robot did not take the tool data within {deadline.seconds:g} s")
             time.sleep(self.poll_s)
-        code = values["tool_error"][0]
-        if code:
-            raise self.refused_error(f"robot at {self.address} refused the tool data (error {code}: "
-                                     f"{ERROR_CODES.get(code, 'error')})", code or E_TOOL)
+        return values["tool_error"][0]
+
+    def _clear_key(self, deadline: Deadline) -> None:
+        """Zero ``tool_key`` after a tool command, so the code does not linger in the gateway (best effort)."""
+        try:
+            self._call("clear tool_key", lambda d: self._write_named(d, {"tool_key": 0}), deadline=Deadline(
+                max(deadline.remaining(), min(self.timeout, 0.5))))
+        except ControllerError as exc:
+            log.info("could not clear tool_key at %s: %s", self.address, exc)
 
     def read_tool(self, timeout=None) -> ToolData:
         values = self._call("read tool data", lambda d: self._read_named(d, "tool_readback"), timeout)["tool_readback"]

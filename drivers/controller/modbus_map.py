@@ -1,8 +1,8 @@
 """The Modbus register map (YAML) and the 32-bit float <-> register conversion, used by the client and the mock.
 
 A map names every register the handshake uses (see ``modbus_map.yaml``, the default): its 0-based
-holding-register address, type (``uint16`` or ``float32``), count, who writes it (``robot`` or
-``pc``) and the controller signal a gateway maps it to. Floats take two registers in the map's
+holding-register address, type (``uint16``, ``uint32`` or ``float32``), count, who writes it (``robot`` or
+``pc``) and the controller signal a gateway maps it to. Floats and 32-bit integers take two registers in the map's
 ``word_order``: ``big`` = high word first ("ABCD"), ``little`` = low word first ("CDAB").
 """
 
@@ -34,9 +34,9 @@ REQUIRED = {
     "tool_error": ("uint16", 1, "robot"), "joints": ("float32", 6, "robot"), "tool0_position": ("float32", 3, "robot"),
     "tool0_quaternion": ("float32", 4, "robot"), "tool_readback": ("float32", 11, "robot"),
     "request": ("uint16", 1, "pc"), "grabbed": ("uint16", 1, "pc"), "tool_command": ("uint16", 1, "pc"),
-    "tool_values": ("float32", 11, "pc"),
+    "tool_values": ("float32", 11, "pc"), "tool_key": ("uint32", 1, "pc"),
 }
-_WIDTH = {"uint16": 1, "float32": 2}
+_WIDTH = {"uint16": 1, "uint32": 2, "float32": 2}
 
 
 def floats_to_registers(values, word_order: str = "big") -> list[int]:
@@ -120,6 +120,12 @@ class RegisterMap:
             raise ValueError(f"register {name} holds {reg.count} values; got {len(values)}")
         if reg.type == "float32":
             return floats_to_registers(values, self.word_order)
+        if reg.type == "uint32":
+            out = []
+            for v in values:
+                high, low = (int(v) >> 16) & 0xFFFF, int(v) & 0xFFFF
+                out += [high, low] if self.word_order == "big" else [low, high]
+            return out
         return [int(v) & 0xFFFF for v in values]
 
     def decode(self, name: str, registers, start: int | None = None) -> list:
@@ -131,6 +137,9 @@ class RegisterMap:
             raise ValueError(f"block does not cover register {name}")
         if reg.type == "float32":
             return registers_to_floats(chunk, self.word_order)
+        if reg.type == "uint32":
+            pairs = [(chunk[i], chunk[i + 1]) for i in range(0, len(chunk), 2)]
+            return [((a << 16) | b) if self.word_order == "big" else ((b << 16) | a) for a, b in pairs]
         return chunk
 
 
@@ -178,7 +187,7 @@ def load_register_map(path=None) -> RegisterMap:
         if isinstance(address, bool) or not isinstance(address, int) or not 0 <= address <= 65535:
             raise _bad(source, f"register {name}: address must be 0..65535; got {address!r}")
         if kind not in _WIDTH:
-            raise _bad(source, f"register {name}: type must be uint16 or float32; got {kind!r}")
+            raise _bad(source, f"register {name}: type must be uint16, uint32 or float32; got {kind!r}")
         if isinstance(count, bool) or not isinstance(count, int) or count < 1:
             raise _bad(source, f"register {name}: count must be >= 1; got {count!r}")
         access = spec.get("access")

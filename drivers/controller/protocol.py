@@ -23,7 +23,7 @@ import re
 from dataclasses import dataclass
 
 from .errors import ProtocolError
-from .types import STATES
+from .types import STATES, WRITE_KEY_PATTERN, write_key_code
 
 __all__ = [
     "PROTOCOL_VERSION",
@@ -33,6 +33,7 @@ __all__ = [
     "NumField",
     "IntField",
     "WordField",
+    "KeyField",
     "CommandSpec",
     "SPECS",
     "Request",
@@ -46,6 +47,9 @@ __all__ = [
     "parse_reply",
     "decode_values",
     "format_number",
+    "write_key_code",
+    "E_AUTH",
+    "KEY_TRIES",
 ]
 
 PROTOCOL_VERSION = 1
@@ -53,7 +57,9 @@ PROTOCOL_VERSION = 1
 MAX_MESSAGE = 72
 MAX_ID = 999
 
-E_SYNTAX, E_UNKNOWN, E_ARGS, E_RANGE, E_BUSY, E_TOOL, E_STATE, E_FAULT = 1, 2, 3, 4, 5, 6, 7, 8
+E_SYNTAX, E_UNKNOWN, E_ARGS, E_RANGE, E_BUSY, E_TOOL, E_STATE, E_FAULT, E_AUTH = 1, 2, 3, 4, 5, 6, 7, 8, 9
+#: Wrong keys a session may send before the program refuses further KEY requests (socket: closes it).
+KEY_TRIES = 3
 #: Error codes of ``ERR`` replies.
 ERROR_CODES = {
     E_SYNTAX: "malformed request (no id, bad characters, too long)",
@@ -64,6 +70,7 @@ ERROR_CODES = {
     E_TOOL: "tool data invalid or incomplete",
     E_STATE: "request not valid now (QUAT without POSE, ACK of another posture)",
     E_FAULT: "robot fault (program stopped or motion error)",
+    E_AUTH: "not authorised: tool writes need KEY with the station's write key first",
 }
 
 _NUMBER = re.compile(r"-?\d{1,7}(\.\d{1,9})?([eE][-+]?\d{1,2})?")
@@ -155,6 +162,27 @@ class WordField:
         return token
 
 
+@dataclass(frozen=True)
+class KeyField:
+    """The station's write key: 8 to 32 letters, digits, ``_`` or ``-`` (one word, case kept).
+
+    Errors never echo the value: it is a secret.
+    """
+
+    name: str = "write key"
+
+    def format(self, value) -> str:
+        text = value if isinstance(value, str) else ""
+        if not WRITE_KEY_PATTERN.fullmatch(text):
+            raise ValueError(f"the {self.name} must be 8 to 32 letters, digits, '_' or '-'")
+        return text
+
+    def parse(self, token: str) -> str:
+        if not WRITE_KEY_PATTERN.fullmatch(token):
+            raise ProtocolError(f"the {self.name} must be 8 to 32 letters, digits, '_' or '-'")
+        return token
+
+
 ANGLE = NumField("joint angle (deg)", 4, 400.0)
 POSITION = NumField("position (mm)", 3, 4000.0)
 QUATERNION = NumField("quaternion component", 6, 1.0)
@@ -164,6 +192,7 @@ COUNT = IntField("posture count", 0, 255)
 VERSION = IntField("protocol version", 0, 999)
 STATE = WordField("state", STATES)
 PROGRAM = WordField("program name")
+KEY = KeyField()
 
 
 @dataclass(frozen=True)
@@ -188,6 +217,7 @@ SPECS = {spec.name: spec for spec in (
                 "accept a move to approved posture k (MoveAbsJ ... fine); the move starts after the reply"),
     CommandSpec("STATUS", (), (STATE, POSTURE), "program state and current posture"),
     CommandSpec("ACK", (POSTURE,), (POSTURE,), "the PC is done at posture k (images grabbed)"),
+    CommandSpec("KEY", (KEY,), (), "authorise tool writes for this session with the station's write key"),
     CommandSpec("TOOLPOS", (POSITION,) * 3, (), "stage the tool frame translation x y z (mm)"),
     CommandSpec("TOOLROT", (QUATERNION,) * 4, (), "stage the tool frame rotation q1..q4"),
     CommandSpec("TOOLLOAD", (MASS,) + (POSITION,) * 3, (), "stage the tool mass (kg) and centre of gravity (mm)"),

@@ -2,6 +2,9 @@
 
 Uses pyserial: ``url`` is a device (``/dev/ttyUSB0``, ``COM3``) or any pyserial URL, e.g.
 ``socket://127.0.0.1:1026`` for a serial-to-Ethernet converter or the mock controller.
+
+Opening the line starts with a line break and a PING whose reply ends the flush: whatever an
+earlier PC left on the line (an unfinished request, late replies) never mixes with ours.
 """
 
 from __future__ import annotations
@@ -41,6 +44,8 @@ class SerialRefused(SerialControllerError, ControllerRefused):
 
 
 class _SerialTransport(LineTransport):
+    shared_line = True  # a serial line has no connections: see LineController._flush_line
+
     def __init__(self, url: str, baudrate: int, timeout_error, protocol_error):
         self.url, self.baudrate = url, baudrate
         self.port = None

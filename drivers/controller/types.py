@@ -7,8 +7,10 @@ raises :class:`InvalidRequest` naming the offending value.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import numbers
+import re
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -33,6 +35,9 @@ __all__ = [
     "check_posture_index",
     "check_tooldata",
     "check_timeout",
+    "check_write_key",
+    "write_key_code",
+    "WRITE_KEY_PATTERN",
     "robot_model",
     "MAX_TOOL_TRANSLATION_MM",
     "QUATERNION_NORM_TOLERANCE",
@@ -41,6 +46,9 @@ __all__ = [
 #: States of the RAPID program as the PC sees them (STATUS reply, Modbus ``state`` register).
 READY, MOVING, AT, LATE, ACKED, ERROR = "READY", "MOVING", "AT", "LATE", "ACKED", "ERROR"
 STATES = (READY, MOVING, AT, LATE, ACKED, ERROR)
+
+#: The station's write key (``controller.write_key``): one protocol word and a RAPID string.
+WRITE_KEY_PATTERN = re.compile(r"[A-Za-z0-9_-]{8,32}")
 
 #: A tool frame farther than this from the flange is refused (a camera sits within centimetres).
 MAX_TOOL_TRANSLATION_MM = 1000.0
@@ -290,3 +298,31 @@ def check_timeout(name: str, value) -> float:
     if not math.isfinite(t) or t <= 0:
         raise InvalidRequest(f"{name} must be a positive number of seconds; got {value!r}")
     return t
+
+
+def check_write_key(value, name: str = "write_key") -> str | None:
+    """The station's write key (None: no key), checked without ever echoing it.
+
+    Raises
+    ------
+    InvalidRequest
+        Not 8 to 32 letters, digits, ``_`` or ``-``; the message gives the length, never the value.
+    """
+    if value is None:
+        return None
+    if not isinstance(value, str):
+        raise InvalidRequest(f"{name} must be a text of 8 to 32 letters, digits, '_' or '-'; got a {type(value).__name__}")
+    if not WRITE_KEY_PATTERN.fullmatch(value):
+        raise InvalidRequest(f"{name} must be 8 to 32 letters, digits, '_' or '-'; got another value of {len(value)} "
+                             "characters (the key itself is never printed)")
+    return value
+
+
+def write_key_code(key: str) -> int:
+    """The 32-bit code of a write key for the Modbus ``tool_key`` register.
+
+    The first 4 bytes of SHA-256 of the key (ASCII) as an unsigned big-endian integer; 0 becomes 1
+    so that a cleared register never matches. ``rapid.generate`` computes the same code for HeKey.
+    """
+    code = int.from_bytes(hashlib.sha256(key.encode("ascii")).digest()[:4], "big")
+    return code or 1

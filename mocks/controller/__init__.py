@@ -12,7 +12,8 @@ context manager so threads and sockets are released::
 
 Every server has ``.robot`` (true state: ``current_joints``, ``tool0_pose()``, ``tool``,
 ``arrival_hooks``), ``.program``, ``.faults`` (see :class:`Faults`), ``.host``, ``.port`` and
-``.client_options()`` (keyword arguments for ``open_controller``).
+``.client_options()`` (keyword arguments for ``open_controller``, the idle timeout and the write
+key included).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from __future__ import annotations
 from ...rapid.station import default_station
 from ..robot import SimulatedRobot
 from .faults import Faults
-from .line_server import LineSession, SerialControllerServer, SocketControllerServer
+from .line_server import DEFAULT_IDLE_TIMEOUT_S, LineSession, SerialControllerServer, SocketControllerServer
 from .modbus_server import ModbusControllerServer
 from .program import ProgramRefusal, RapidProgram
 
@@ -28,6 +29,7 @@ __all__ = [
     "start_mock_controller",
     "MOCK_PROTOCOLS",
     "DEFAULT_PORTS",
+    "DEFAULT_IDLE_TIMEOUT_S",
     "Faults",
     "RapidProgram",
     "ProgramRefusal",
@@ -46,6 +48,7 @@ def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", 
                           robot: SimulatedRobot | None = None, time_scale: float = 1.0, speed_fraction: float = 0.25,
                           ack_timeout_s: float | None = 30.0, allowed_client: str | None = None,
                           register_map=None, faults: Faults | None = None, publish_period_s: float = 0.005,
+                          idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None,
                           start: bool = True):
     """A started mock controller server of ``protocol``.
 
@@ -67,6 +70,11 @@ def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", 
         Socket server only: the single client address accepted (the RAPID module's PC address).
     register_map : path or RegisterMap, optional
         Modbus only.
+    idle_timeout_s : float
+        The link's idle timeout (``controller.idle_timeout_s``): socket closes a PC silent this
+        long, serial forgets the session, Modbus (the gateway) closes the silent connection.
+    write_key : str, optional
+        The station's write key: tool writes need it (``KEY`` / ``tool_key``); None refuses them.
     start : bool
         Start the server (default); else call ``server.start()`` or use ``with``.
     """
@@ -77,11 +85,12 @@ def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", 
             postures = default_station().postures
         robot = SimulatedRobot(postures, time_scale=time_scale, speed_fraction=speed_fraction)
     program = RapidProgram(robot, ack_timeout_s=ack_timeout_s)
+    link = {"idle_timeout_s": idle_timeout_s, "write_key": write_key}
     if protocol == "socket":
-        server = SocketControllerServer(program, host, port, faults, allowed_client)
+        server = SocketControllerServer(program, host, port, faults, allowed_client, **link)
     elif protocol == "serial":
-        server = SerialControllerServer(program, host, port, faults)
+        server = SerialControllerServer(program, host, port, faults, **link)
     else:
-        server = ModbusControllerServer(program, host, port, register_map, faults, publish_period_s)
+        server = ModbusControllerServer(program, host, port, register_map, faults, publish_period_s, **link)
     server.protocol = protocol
     return server.start() if start else server

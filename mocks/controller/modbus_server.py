@@ -9,6 +9,12 @@ AT -> grabbed -> ACKED -> cleared -> READY; tool_command -> tool data applied ->
 Faults (see :class:`Faults`): delayed responses, exception responses, garbage instead of a
 response, dropped connections, a gateway that stops answering (``silent``) and a RAPID program
 that stops while the gateway still answers (``robot_stalled``: the heartbeat freezes).
+
+The gateway serves several connections at once (a silent client blocks nobody) and closes a
+connection silent for ``idle_timeout_s``, as gateways commonly do, so a PC that vanished does not
+hold a connection slot. Tool data are applied only with the write key's code in ``tool_key``
+(``HeKey``); after :data:`~handeye.drivers.controller.protocol.KEY_TRIES` wrong codes every tool
+command is refused until the program restarts (a new mock).
 """
 
 from __future__ import annotations
@@ -16,11 +22,13 @@ from __future__ import annotations
 import asyncio
 import logging
 import threading
+import time
 
 from ...drivers.controller import protocol as P
 from ...drivers.controller.modbus_map import STATE_CODES, load_register_map
-from ...drivers.controller.types import ACKED, AT, ERROR, LATE, READY, ToolData
+from ...drivers.controller.types import ACKED, AT, ERROR, LATE, READY, ToolData, check_write_key, write_key_code
 from .faults import Faults
+from .line_server import DEFAULT_IDLE_TIMEOUT_S
 from .program import ProgramRefusal, RapidProgram
 
 __all__ = ["ModbusControllerServer"]
@@ -34,7 +42,12 @@ def _server_classes():
     from pymodbus.server.requesthandler import ServerRequestHandler
 
     class FaultyHandler(ServerRequestHandler):
+        def callback_connected(self) -> None:
+            self.last_activity = time.monotonic()
+            super().callback_connected()
+
         def callback_data(self, data: bytes, addr=None) -> int:
+            self.last_activity = time.monotonic()
             faults = self.server.faults
             if faults.silent:
                 faults.note("silent")
@@ -76,12 +89,26 @@ class ModbusControllerServer:
     faults : Faults, optional
     publish_period_s : float
         Period of the RAPID program's timer (joints, pose, heartbeat, handshake); default 0.005 s.
+    idle_timeout_s : float
+        The gateway closes a connection silent this long.
+    write_key : str, optional
+        The station's write key; tool commands need its code in ``tool_key`` (None: all refused).
     """
 
     kind = "modbus"
 
     def __init__(self, program: RapidProgram, host: str = "127.0.0.1", port: int = 0, register_map=None,
-                 faults: Faults | None = None, publish_period_s: float = 0.005):
+                 faults: Faults | None = None, publish_period_s: float = 0.005, *,
+                 idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None):
+        if not (isinstance(idle_timeout_s, (int, float)) and 0 < idle_timeout_s < float("inf")):
+            raise ValueError(f"idle_timeout_s must be a positive number of seconds; got {idle_timeout_s!r}")
+        self.idle_timeout_s = float(idle_timeout_s)
+        key = check_write_key(write_key)
+        self._write_key = key
+        self._write_code = None if key is None else write_key_code(key)
+        self._key_failures = 0
+        #: Connections closed for idleness (for tests).
+        self.idle_closes = 0
         self.program = program
         self.robot = program.robot
         self.host, self._requested_port, self._port = host, port, None
@@ -108,8 +135,16 @@ class ModbusControllerServer:
     def running(self) -> bool:
         return self._thread is not None and self._thread.is_alive()
 
+    @property
+    def has_write_key(self) -> bool:
+        """True when the mock was given a write key (tool writes possible with its code)."""
+        return self._write_code is not None
+
     def client_options(self) -> dict:
-        return {"host": self.host, "port": self.port, "register_map": self.map}
+        options = {"host": self.host, "port": self.port, "register_map": self.map, "idle_timeout": self.idle_timeout_s}
+        if self._write_code is not None:
+            options["write_key"] = self._write_key
+        return options
 
     def start(self):
         if self._thread is not None:
@@ -167,12 +202,14 @@ class ModbusControllerServer:
             self._port = server.transport.sockets[0].getsockname()[1]
             self._started.set()
             ticker = asyncio.create_task(self._robot_loop())
+            watchdog = asyncio.create_task(self._close_idle(server))
             await self._stop_event.wait()
-            ticker.cancel()
-            try:
-                await ticker
-            except asyncio.CancelledError:
-                pass
+            for task in (ticker, watchdog):
+                task.cancel()
+                try:
+                    await task
+                except asyncio.CancelledError:
+                    pass
         finally:
             await server.shutdown()
             await asyncio.sleep(0)
@@ -222,6 +259,17 @@ class ModbusControllerServer:
         return self._get(name)
 
     # ------------------------------------------------------------------ the RAPID program
+    async def _close_idle(self, server) -> None:
+        """Close connections silent for ``idle_timeout_s`` (the gateway's idle timeout)."""
+        while True:
+            await asyncio.sleep(min(0.1, self.idle_timeout_s / 4))
+            now = time.monotonic()
+            for handler in list(server.active_connections.values()):
+                if now - getattr(handler, "last_activity", now) > self.idle_timeout_s:
+                    self.idle_closes += 1
+                    log.info("mock Modbus gateway: connection silent for %.3g s closed", self.idle_timeout_s)
+                    handler.close()
+
     async def _robot_loop(self) -> None:
         while True:
             await asyncio.sleep(self.publish_period_s)
@@ -257,9 +305,21 @@ class ModbusControllerServer:
             if request == 0:
                 program.mark_ready()
 
+    def _key_accepted(self) -> bool:
+        """HeIo's key gate: the code in ``tool_key`` against HeKey's; KEY_TRIES wrong codes lock it."""
+        if self._write_code is None or self._key_failures >= P.KEY_TRIES:
+            return False
+        if self._get("tool_key")[0] == self._write_code:
+            return True
+        self._key_failures += 1
+        log.info("mock Modbus program: tool data with a wrong key code refused (%d)", self._key_failures)
+        return False
+
     def _apply_tool(self, command: int) -> None:
         values = self._get("tool_values")
         try:
+            if not self._key_accepted():
+                raise ProgramRefusal(P.E_AUTH, "wrong or missing key code")
             self.program.apply_tool(ToolData.from_values(values))
             error = 0
         except ProgramRefusal as refusal:

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import ipaddress
+import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
-from ...rapid.station import default_station, load_station
+from ...rapid.station import IDLE_TIMEOUT_RANGE, RapidStation, default_station, load_station
 from . import DEFAULT_PORTS, MOCK_PROTOCOLS, start_mock_controller
 
-__all__ = ["MockControllerOptions", "run_mock_controller"]
+__all__ = ["MockControllerOptions", "run_mock_controller", "is_loopback"]
 
 
 @dataclass(frozen=True)
@@ -23,7 +25,11 @@ class MockControllerOptions:
         None: the protocol's default (:data:`DEFAULT_PORTS`); 0: any free port.
     host : str
     config : str or None
-        Station YAML for the approved postures and the acknowledgement timeout (None: built-in).
+        Station YAML (the ``rapid generate`` keys) for the approved postures, the acknowledgement
+        and idle timeouts and the write key (None: built-in; ``station`` wins when given).
+    station : RapidStation or None
+        The station already read (``handeye mock controller --config`` reads the full station
+        config and passes it here).
     time_scale : float
         Wall-clock seconds per simulated second of motion.
     allowed_client : str or None
@@ -32,6 +38,11 @@ class MockControllerOptions:
         Modbus only: register map YAML.
     duration_s : float or None
         Stop after this long (None: until Ctrl-C).
+    idle_timeout_s : float or None
+        The link's idle timeout (None: the station's, default 5 s).
+    write_key : str or None
+        The key tool writes need (None: the station's; without any, tool writes are refused).
+        Never printed.
     """
 
     protocol: str = "socket"
@@ -42,37 +53,72 @@ class MockControllerOptions:
     allowed_client: str | None = None
     register_map: str | None = None
     duration_s: float | None = None
+    idle_timeout_s: float | None = None
+    write_key: str | None = field(default=None, repr=False)
+    station: RapidStation | None = None
 
 
-def _banner(server, options: MockControllerOptions, postures: int) -> str:
+def is_loopback(host: str) -> bool:
+    """True for 127.x.x.x, ::1 and ``localhost``: only this machine can reach a server bound there."""
+    if str(host).lower() == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(str(host)).is_loopback
+    except ValueError:
+        return False
+
+
+def _banner(server, options: MockControllerOptions, postures: int, idle_timeout_s: float) -> str:
     where = f"{server.host}:{server.port}"
     head = f"mock {options.protocol} controller (simulated IRB 1400, {postures} approved postures)"
+    if server.has_write_key:
+        writes = "tool writes need the write key (KEY / tool_key)"
+    else:
+        writes = "tool writes refused: no write key (start it with --write-key KEY or --config STATION.yaml)"
+    link = f"  idle timeout {idle_timeout_s:g} s; {writes}"
     if options.protocol == "serial":
-        return (f"{head}: serial line on pyserial URL {server.url}; stop with Ctrl-C\n"
+        return (f"{head}: serial line on pyserial URL {server.url}; stop with Ctrl-C\n{link}\n"
                 f"  try: handeye robot joints --protocol serial --url {server.url} --json")
-    return (f"{head} listening on {where}; stop with Ctrl-C\n"
+    return (f"{head} listening on {where}; stop with Ctrl-C\n{link}\n"
             f"  try: handeye robot joints --protocol {options.protocol} --host {server.host} --port {server.port} --json")
 
 
-def run_mock_controller(options: MockControllerOptions, announce=print) -> int:
-    """Start the mock, announce where it listens, serve until Ctrl-C (or ``duration_s``); returns 0."""
+def _warn(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
+def run_mock_controller(options: MockControllerOptions, announce=print, warn=_warn) -> int:
+    """Start the mock, announce where it listens, serve until Ctrl-C (or ``duration_s``); returns 0.
+
+    ``warn`` receives one line when the mock listens on an address other machines can reach.
+    """
     from ...drivers.controller.errors import InvalidRequest
+    from ...drivers.controller.types import check_write_key
 
     if options.protocol not in MOCK_PROTOCOLS:
         raise InvalidRequest(f"unknown protocol {options.protocol!r}; choose one of {', '.join(MOCK_PROTOCOLS)}")
     if not options.time_scale > 0:
         raise InvalidRequest(f"--time-scale must be > 0; got {options.time_scale}")
-    station = load_station(options.config) if options.config else default_station()
+    station = options.station or (load_station(options.config) if options.config else default_station())
+    idle = station.idle_timeout_s if options.idle_timeout_s is None else options.idle_timeout_s
+    low, high = IDLE_TIMEOUT_RANGE
+    if not low <= idle <= high:
+        raise InvalidRequest(f"--idle-timeout must be {low:g} to {high:g} s; got {idle:g}")
+    key = check_write_key(options.write_key if options.write_key is not None else station.write_key, "--write-key")
     port = DEFAULT_PORTS[options.protocol] if options.port is None else options.port
+    if not is_loopback(options.host):
+        warn(f"warning: the mock controller listens on {options.host}, not a loopback address: anyone on that network "
+             "can move the robot's mock and write its tool data; it is for testing only")
     try:
         server = start_mock_controller(options.protocol, host=options.host, port=port, postures=station.postures,
                                        time_scale=options.time_scale, ack_timeout_s=station.ack_timeout_s,
-                                       allowed_client=options.allowed_client, register_map=options.register_map)
+                                       allowed_client=options.allowed_client, register_map=options.register_map,
+                                       idle_timeout_s=idle, write_key=key)
     except OSError as exc:
         raise InvalidRequest(f"cannot listen on {options.host}:{port} ({exc}); pick another --port "
                              "(0 = any free port)") from None
     try:
-        announce(_banner(server, options, len(station.postures)))
+        announce(_banner(server, options, len(station.postures), idle))
         end = None if options.duration_s is None else time.monotonic() + options.duration_s
         while end is None or time.monotonic() < end:
             time.sleep(0.1 if end is None else max(0.0, min(0.1, end - time.monotonic())))

@@ -22,6 +22,13 @@ Protocols and default ports:
   modbus   Modbus TCP gateway with the I/O handshake (drivers/controller/modbus_map.yaml), port 5020
 --port 0 picks a free port; the line printed at start says where it listens.
 
+The link recovers as the RAPID modules do: a PC silent for --idle-timeout seconds (default: the
+config's controller.idle_timeout_s, else 5) is disconnected (socket) or its session forgotten
+(serial), and a new connection from the PC takes over at once. Tool writes need the station's
+write key (controller.write_key of --config, or --write-key); without one they are refused.
+The mock listens on 127.0.0.1: another --host lets anyone on that network drive it (a warning
+says so); it is for testing only.
+
 Example:
   handeye mock controller --protocol modbus --port 5020 &
   handeye robot joints --protocol modbus --host 127.0.0.1 --port 5020 --json
@@ -36,12 +43,19 @@ def add_parser(sub):
     c.add_argument("--protocol", choices=("socket", "serial", "modbus"), default="socket", help="default socket")
     c.add_argument("--port", type=argtypes.port, default=None, help="TCP port (defaults above; 0 = any free port)")
     c.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
-    c.add_argument("--config", metavar="STATION.yaml", help="approved postures and ack timeout from a station config")
+    c.add_argument("--config", metavar="STATION.yaml",
+                   help="station config: approved postures, ack and idle timeouts, write key (controller.write_key)")
     c.add_argument("--time-scale", type=argtypes.positive, default=1.0, metavar="X",
                    help="wall-clock seconds per simulated second of motion (default 1; 0.1 = 10x faster)")
     c.add_argument("--allow-client", metavar="IP", help="socket: accept only this client address, like the RAPID module")
     c.add_argument("--register-map", metavar="MAP.yaml", help="modbus: register map (default: the built-in one)")
     c.add_argument("--duration", type=argtypes.positive, metavar="S", help="stop after S seconds (default: run until Ctrl-C)")
+    c.add_argument("--idle-timeout", type=argtypes.positive, metavar="S",
+                   help="drop a silent PC (socket) / forget its session (serial) after S seconds, 0.1..10 "
+                        "(default: the config's, else 5)")
+    c.add_argument("--write-key", metavar="KEY",
+                   help="the key tool writes need (8-32 letters, digits, _ or -; default: the config's "
+                        "controller.write_key). Visible in the process list: prefer --config")
     p.set_defaults(_mock_parser=p)
     return p
 
@@ -50,9 +64,21 @@ def run(args) -> int:
     if getattr(args, "mock_target", None) != "controller":
         args._mock_parser.print_help()
         return 2
+    import sys
+
     from ...mocks.controller.service import MockControllerOptions, run_mock_controller
 
-    options = MockControllerOptions(protocol=args.protocol, port=args.port, host=args.host, config=args.config,
+    station = None
+    if args.config:
+        from ...rapid.station import default_station, station_from_dict
+        from ..config import load_config
+
+        config = load_config(args.config)
+        postures = config.postures if config.postures is not None else default_station().postures
+        station = station_from_dict(config.rapid_dict(postures), args.config)
+    options = MockControllerOptions(protocol=args.protocol, port=args.port, host=args.host, station=station,
                                     time_scale=args.time_scale, allowed_client=args.allow_client,
-                                    register_map=args.register_map, duration_s=args.duration)
-    return run_mock_controller(options, announce=lambda text: print(text, flush=True))
+                                    register_map=args.register_map, duration_s=args.duration,
+                                    idle_timeout_s=args.idle_timeout, write_key=args.write_key)
+    return run_mock_controller(options, announce=lambda text: print(text, flush=True),
+                               warn=lambda text: print(text, file=sys.stderr, flush=True))

@@ -16,6 +16,10 @@ Writes three modules to load together into the robot task:
   HeSerial.mod   the same protocol on a serial channel                              (protocol serial)
   HeIo.mod       I/O handshake for a Modbus TCP gateway (SetGO/SetDO/WaitDI)       (protocol modbus)
   HeTool.mod     PERS tooldata of the camera (identity frame until calibrated)
+  HeKey.sys      only with controller.write_key in --config: a system module holding the write
+                 key (a secret) that tool writes need. Load it ONCE on the controller (system
+                 modules stay loaded when the program modules are replaced); never copy it into
+                 sessions or version control. `handeye capture` never writes it.
 Postures outside the joint limits are refused; every module is checked before it is written.
 The protocol is documented in rapid/PROTOCOL.md.
 
@@ -23,7 +27,8 @@ Station config: the station YAML (station/example_station.yaml documents every k
 shape the RAPID program; all are optional, missing ones come from the built-in station:
   robot: IRB1400
   controller: {protocol: socket, pc_address: 192.168.125.10, controller_address: auto,
-               port: 1025, serial_channel: "sio1:", ack_timeout_s: 30}
+               port: 1025, serial_channel: "sio1:", ack_timeout_s: 30, idle_timeout_s: 5,
+               write_key: YOUR-SECRET-KEY}
   motion: {speed_tcp_mm_s: 200, speed_ori_deg_s: 100}
   tool: {name: tHeCamera, mass_kg: 1.0, cog_mm: [0, 0, 60]}
   postures: [[a1, a2, a3, a4, a5, a6], ...]        # controller axis angles, degrees
@@ -52,7 +57,7 @@ def run(args) -> int:
     if getattr(args, "rapid_command", None) != "generate":
         args._rapid_parser.print_help()
         return 2
-    from ...rapid.generate import render_program, write_modules
+    from ...rapid.generate import render_key, render_program, write_modules
     from ...rapid.station import default_station, station_from_dict
     from ..config import load_config
 
@@ -66,5 +71,14 @@ def run(args) -> int:
     for path in paths:
         print(path)
     names = ", ".join(p.name for p in paths)
+    if station.write_key is not None:
+        (key_path,) = write_modules([render_key(station)], args.output)
+        print(key_path)
+        print(f"{key_path.name} holds the station's write key (a secret, readable by you only): load it ONCE into the "
+              "robot task as a system module (it stays loaded when the program modules are replaced); never copy it "
+              "into sessions or version control")
+    else:
+        print("no controller.write_key in the config: these modules refuse every tool write (set one and regenerate "
+              "to write the calibrated tool data from the PC)")
     print(f"load {names} into the robot task (e.g. T_ROB1), then start main; protocol: rapid/PROTOCOL.md")
     return 0

@@ -30,6 +30,9 @@ def _link_options(p) -> None:
     p.add_argument("--baudrate", type=int, default=9600, help="serial: baud rate (default 9600)")
     p.add_argument("--register-map", metavar="MAP.yaml", help="modbus: register map (default: the built-in one)")
     p.add_argument("--timeout", type=argtypes.positive, default=2.0, metavar="S", help="seconds per call (default 2)")
+    p.add_argument("--idle-timeout", type=argtypes.positive, default=5.0, metavar="S",
+                   help="the controller's idle timeout (controller.idle_timeout_s, default 5): connecting may wait "
+                        "that long plus --timeout while the controller frees itself from a silent client")
 
 
 def add_parser(sub):
@@ -51,7 +54,7 @@ def add_parser(sub):
 def _options(args) -> dict:
     from ...drivers.controller.errors import InvalidRequest
 
-    options = {"timeout": args.timeout, "retries": 1}
+    options = {"timeout": args.timeout, "retries": 1, "idle_timeout": args.idle_timeout}
     if args.protocol == "serial":
         if not args.url:
             raise InvalidRequest("--protocol serial needs --url (a device like /dev/ttyUSB0 or socket://HOST:PORT)")

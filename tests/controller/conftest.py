@@ -13,6 +13,8 @@ from handeye.mocks.controller import start_mock_controller
 PROTOCOLS = ("socket", "serial", "modbus")
 #: Wall-clock seconds per simulated second of motion in tests (moves take a few ms).
 TIME_SCALE = 0.002
+#: The write key of the test servers (their client_options() carry it to the clients).
+TEST_KEY = "test-key_0123"
 
 
 def _open_sockets() -> set:
@@ -59,7 +61,7 @@ def protocol(request):
 @pytest.fixture
 def server(protocol):
     """A started mock controller of ``protocol`` (fast motion)."""
-    with start_mock_controller(protocol, time_scale=TIME_SCALE, ack_timeout_s=None) as srv:
+    with start_mock_controller(protocol, time_scale=TIME_SCALE, ack_timeout_s=None, write_key=TEST_KEY) as srv:
         yield srv
 
 

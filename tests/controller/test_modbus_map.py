@@ -64,7 +64,7 @@ def test_bad_maps_are_refused(tmp_path, change, message):
 
 def test_little_endian_gateway_end_to_end(tmp_path, connect_to):
     path = _write_map(tmp_path, lambda d: d.update(word_order="little"))
-    with start_mock_controller("modbus", time_scale=0.002, register_map=path) as server:
+    with start_mock_controller("modbus", time_scale=0.002, register_map=path, write_key="little-endian-key") as server:
         with connect_to(server) as c:
             c.goto_posture(5)
             assert np.allclose(c.read_joints(), server.robot.postures[4], atol=1e-4)

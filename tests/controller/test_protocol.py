@@ -37,6 +37,8 @@ def _worst_value(field):
         return -(field.limit - 10.0 ** -field.decimals * 0.3) if not field.positive else field.limit - 0.0004
     if isinstance(field, P.IntField):
         return field.high
+    if isinstance(field, P.KeyField):
+        return "k-" * 16
     return max(field.choices or ("ABCDEFGHIJKLMNOP",), key=len)
 
 
@@ -160,6 +162,8 @@ def test_roundtrip_of_every_command(command, request_id, data):
             return data.draw(st.floats(low, field.limit, allow_nan=False))
         if isinstance(field, P.IntField):
             return data.draw(st.integers(field.low, field.high))
+        if isinstance(field, P.KeyField):
+            return data.draw(st.from_regex(r"[A-Za-z0-9_-]{8,32}", fullmatch=True))
         return data.draw(st.sampled_from(field.choices or ("RAPID", "MOCK")))
 
     args = [draw(f) for f in spec.args]

@@ -38,8 +38,7 @@ def test_string_length_counts_rapid_escapes():
 
 
 @pytest.mark.parametrize("name, old, new, message", [
-    ("HeSocket", 'SocketSend heClient \\Str:="0 ERR 1 line too long\\0A";',
-     'SocketSend heClient \\Str:="' + "x" * 81 + '";', "string literal of 81"),
+    ("HeSocket", 'HeSendLine "0 ERR 1 line too long";', 'HeSendLine "' + "x" * 81 + '";', "string literal of 81"),
     ("HeMain", "VAR num heTarget := 0;", "VAR num heTargetWithAVeryLongNameIndeedMoreThan32 := 0;", "limit 32"),
     ("HeMain", "    heState := HE_READY;\n    hePosture := 0;", "    heState := HE_UNKNOWN;\n    hePosture := 0;",
      "'HE_UNKNOWN' is used before"),

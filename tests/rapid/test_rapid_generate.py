@@ -11,11 +11,13 @@ import pytest
 
 from handeye.drivers.controller import protocol as P
 from handeye.drivers.controller.modbus_map import load_register_map
-from handeye.rapid.checks import check_program, string_length
+from handeye.rapid.checks import check_program, for_rapidchecker, string_length
 from handeye.rapid.errors import RapidError, StationConfigError
 from handeye.rapid.generate import (
     IO_SIGNALS,
+    KEY_TRIES,
     RAPID_PROTOCOL_VERSION,
+    render_key,
     render_link,
     render_program,
     render_tool,
@@ -26,22 +28,39 @@ from handeye.rapid.station import default_station, load_station
 PROTOCOLS = ("socket", "serial", "modbus")
 
 
+KEY = "Cell7-key_2024"
+
+
 @pytest.fixture(scope="module")
 def programs():
     station = default_station()
     return {p: render_program(station, protocol=p) for p in PROTOCOLS}
 
 
-def test_every_module_passes_rapidchecker(programs, tmp_path):
+@pytest.fixture(scope="module")
+def keyed_programs():
+    """The programs of a station with a write key (their link modules call HeKey's routines)."""
+    station = default_station().with_(write_key=KEY)
+    return {p: render_program(station, protocol=p) for p in PROTOCOLS}
+
+
+def test_every_module_passes_rapidchecker(programs, keyed_programs, tmp_path):
     files = []
     for protocol, modules in programs.items():
         files += write_modules(modules, tmp_path / protocol)
+    for protocol, modules in keyed_programs.items():
+        files += write_modules(modules[1:2], tmp_path / f"keyed_{protocol}")
     auto = default_station().with_(controller_address="auto", pc_address="192.168.125.10", source="auto test")
     files += write_modules([render_link(auto, "socket")], tmp_path / "auto")
+    # HeKey.sys as rapidchecker 0.1.x can parse it (its grammar lacks NOVIEW; our checks cover that word)
+    key = render_key(default_station().with_(write_key=KEY))
+    (tmp_path / "key").mkdir()
+    files.append(tmp_path / "key" / "HeKey.sys")
+    files[-1].write_text(for_rapidchecker(key.text))
     result = subprocess.run([sys.executable, "-m", "rapidchecker", *map(str, files)], cwd=tmp_path,
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stdout + result.stderr
-    assert len(files) == 10
+    assert len(files) == 14
 
 
 def test_rapidchecker_is_not_vacuous(programs, tmp_path):
@@ -55,9 +74,16 @@ def test_rapidchecker_is_not_vacuous(programs, tmp_path):
 
 
 @pytest.mark.parametrize("protocol", PROTOCOLS)
-def test_own_checks_pass(programs, protocol):
+def test_own_checks_pass(programs, keyed_programs, protocol):
     modules = [(m.name, m.text) for m in programs[protocol]]
     assert check_program(modules, approved=default_station().postures_array, external=IO_SIGNALS) == []
+    # with a key: the program and HeKey.sys loaded together into one task
+    key = render_key(default_station().with_(write_key=KEY))
+    keyed = [(m.name, m.text) for m in keyed_programs[protocol]] + [(key.name, key.text)]
+    assert check_program(keyed, approved=default_station().postures_array, external=IO_SIGNALS) == []
+    # without HeKey the keyed link module does not resolve: HeKey.sys must be loaded
+    findings = check_program(keyed[:3], approved=default_station().postures_array, external=IO_SIGNALS)
+    assert findings and all("HeKeyMatches" in str(f) or "HeCodeMatches" in str(f) for f in findings)
 
 
 def test_module_files_and_names(programs):
@@ -118,27 +144,41 @@ def _dispatcher_cases(text):
         name = block.split('"', 1)[0]
         body = block.split("\n    CASE", 1)[0].split("\n    DEFAULT", 1)[0]
         m = re.search(r"HeArgs\((\d)\)", body)
-        cases[name] = int(m.group(1)) if m else None
+        words = re.search(r"IF heWordCount = (\d) THEN", body)  # word arguments (KEY)
+        cases[name] = int(m.group(1)) if m else (int(words.group(1)) - 2 if words else None)
     return cases
 
 
+@pytest.mark.parametrize("keyed", [False, True], ids=["no-key", "key"])
 @pytest.mark.parametrize("protocol", ["socket", "serial"])
-def test_dispatcher_handles_every_protocol_command_with_its_arguments(programs, protocol):
-    cases = _dispatcher_cases(programs[protocol][1].text)
+def test_dispatcher_handles_every_protocol_command_with_its_arguments(programs, keyed_programs, protocol, keyed):
+    text = (keyed_programs if keyed else programs)[protocol][1].text
+    cases = _dispatcher_cases(text)
     assert set(cases) == set(P.SPECS)
     for name, spec in P.SPECS.items():
         assert cases[name] == len(spec.args), name
+    # tool writes are refused with the codec's E_AUTH until KEY succeeded; reading stays open
+    bodies = {block.split('"', 1)[0]: block for block in re.split(r'\n    CASE "', text)[1:]}
+    for name in ("TOOLPOS", "TOOLROT", "TOOLLOAD", "TOOLSAVE"):
+        assert f'IF NOT heAuthorised THEN\n        heReply := id + " ERR {P.E_AUTH} not authorised: send KEY first";' \
+            in bodies[name], name
+    for name in ("GETTOOLPOS", "GETTOOLROT", "GETTOOLLOAD", "JOINTS", "GOTO"):
+        assert "heAuthorised" not in bodies[name].split("\n    CASE")[0], name
+    assert "HeCheckKey id, heWords{3};" in bodies["KEY"]
 
 
+@pytest.mark.parametrize("keyed", [False, True], ids=["no-key", "key"])
 @pytest.mark.parametrize("protocol", ["socket", "serial"])
-def test_rapid_replies_use_the_codec_error_codes_and_fit(programs, protocol):
-    text = programs[protocol][1].text
+def test_rapid_replies_use_the_codec_error_codes_and_fit(programs, keyed_programs, protocol, keyed):
+    text = (keyed_programs if keyed else programs)[protocol][1].text
     codes = {int(c) for c in re.findall(r'" ERR (\d+) ', text)} | {int(c) for c in re.findall(r'"0 ERR (\d+) ', text)}
     assert codes and codes <= set(P.ERROR_CODES)
+    assert P.E_AUTH in codes
     for literal in re.findall(r'"(?:[^"\n]|"")*"', text):
         assert string_length(literal) <= P.MAX_MESSAGE
     assert RAPID_PROTOCOL_VERSION == P.PROTOCOL_VERSION
     assert f'" OK {P.PROTOCOL_VERSION} RAPID"' in text
+    assert f"LOCAL CONST num HE_KEY_TRIES := {P.KEY_TRIES};" in text and KEY_TRIES == P.KEY_TRIES
 
 
 def test_io_module_uses_the_signals_of_the_register_map(programs):
