@@ -90,7 +90,9 @@ def test_raw_xb3_frame_with_the_default_stereo_model(scene, capsys):
         (["--left", "left.png"], "give both --left and --right"),
         (["--left", "left.png", "--right", "right.png", "--xb3-raw", "frame.raw"], "either"),
         (["--left", "left.png", "--right", "right.png", "--stereo", "left.png"], "not an OpenCV FileStorage"),
-        (["--left", "left.png", "--right", "right.png", "--board", "13"], "NXxNY"),
+        (["--left", "left.png", "--right", "right.png", "--square-mm", "3"],
+         "corners measure 30 mm apart but the square size given is 3 mm"),
+        (["--left", "left.png", "--right", "right.png", "--square-mm", "33"], "more than 5 % off"),
         (["--left", "stereo.yaml", "--right", "right.png"], "not an image"),
     ],
 )
@@ -103,6 +105,21 @@ def test_bad_input_is_one_line_and_exit_1(scene, capsys, monkeypatch, args, mess
     assert len(lines) == 1 and lines[0].startswith("handeye triangulate: error: "), err
     assert message in lines[0]
     assert "Traceback" not in err
+
+
+@pytest.mark.parametrize("board, message", [
+    ("13", "corners must look like 13x8"),
+    ("8x13", "give the long side first: 13x8, not 8x13"),
+    ("1x8", "at least 2x2"),
+])
+def test_a_board_written_another_way_is_a_usage_error(scene, capsys, monkeypatch, board, message):
+    folder, _ = scene
+    monkeypatch.chdir(folder)
+    with pytest.raises(SystemExit) as stop:
+        _run(capsys, "--left", "left.png", "--right", "right.png", "--board", board)
+    assert stop.value.code == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("handeye triangulate: error: ") and message in lines[0]
 
 
 def test_help_lists_the_command(capsys):

@@ -123,7 +123,7 @@ def test_idle_timeout_outside_its_range_is_refused(tmp_path, idle):
 
 def test_rapid_generate_writes_hekey_only_with_a_key(tmp_path, capsys):
     config = tmp_path / "station.yaml"
-    config.write_text(f"controller: {{write_key: {KEY}, idle_timeout_s: 3}}\n")
+    config.write_text(f"controller: {{protocol: socket, write_key: {KEY}, idle_timeout_s: 3}}\ncamera: {{backend: xb3}}\n")
     assert main(["rapid", "generate", "--config", str(config), "-o", str(tmp_path / "out")]) == 0
     out = capsys.readouterr().out
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["HeKey.sys", "HeMain.mod", "HeSocket.mod", "HeTool.mod"]

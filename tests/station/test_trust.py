@@ -129,8 +129,9 @@ def test_writeback_opens_only_the_controller(tmp_path, capsys, monkeypatch, no_l
 
     monkeypatch.setattr(camera_package, "open_camera", no_camera)
     session = _write(tmp_path / "s", _synthetic(20))
-    with start_mock_controller("socket", time_scale=0.002) as server:
-        config = _config_file(tmp_path, {"controller": {"protocol": "socket", "host": "127.0.0.1", "port": server.port},
+    with start_mock_controller("socket", time_scale=0.002, write_key="cell-7-writes") as server:
+        config = _config_file(tmp_path, {"controller": {"protocol": "socket", "host": "127.0.0.1", "port": server.port,
+                                                        "write_key": "cell-7-writes"},
                                          "camera": {"backend": "xb3"}})
         assert main(["writeback", str(session), "--config", str(config), "--force"]) == 0
         held = server.robot.tool

@@ -15,8 +15,14 @@ from handeye.station.runtime import _controller_options, open_station
 KEY = "Station-7_secret"
 
 
+def _config(**controller):
+    """A station config (the embedded mock station: both back ends named, as a file must)."""
+    return config_from_dict({"controller": {"protocol": "mock", **controller}, "camera": {"backend": "mock"},
+                             "plan": {"postures": 3}})
+
+
 def _keyed_config(**controller):
-    return config_from_dict({"controller": {"write_key": KEY, **controller}, "plan": {"postures": 3}})
+    return _config(write_key=KEY, **controller)
 
 
 def test_the_key_is_never_in_repr_or_to_dict():
@@ -34,16 +40,16 @@ def test_the_key_is_never_in_repr_or_to_dict():
 ])
 def test_bad_keys_are_refused_without_echo(value, message):
     with pytest.raises(ConfigError, match=f"controller.write_key .*{message}") as info:
-        config_from_dict({"controller": {"write_key": value}})
+        _config(write_key=value)
     assert str(value) not in str(info.value)
 
 
 @pytest.mark.parametrize("value", [0.05, 0, 11, "5"])
 def test_idle_timeout_must_be_a_tenth_to_ten_seconds(value):
     with pytest.raises(ConfigError, match="controller.idle_timeout_s"):
-        config_from_dict({"controller": {"idle_timeout_s": value}})
+        _config(idle_timeout_s=value)
     assert default_config().controller.idle_timeout_s == 5.0
-    assert config_from_dict({"controller": {"idle_timeout_s": 0.1}}).controller.idle_timeout_s == 0.1
+    assert _config(idle_timeout_s=0.1).controller.idle_timeout_s == 0.1
 
 
 def test_the_controller_options_carry_the_key_and_the_idle_timeout():
@@ -114,8 +120,9 @@ def test_writeback_without_a_key_says_what_to_do(tmp_path):
 
 def test_mock_controller_cli_takes_the_key_from_the_config(tmp_path, capsys):
     config = tmp_path / "station.yaml"
-    config.write_text(yaml.safe_dump({"controller": {"write_key": KEY, "idle_timeout_s": 1.5,
-                                                     "host": "192.168.125.1", "timeout_s": 2.0}}))
+    config.write_text(yaml.safe_dump({"controller": {"protocol": "socket", "write_key": KEY, "idle_timeout_s": 1.5,
+                                                     "host": "192.168.125.1", "timeout_s": 2.0},
+                                      "camera": {"backend": "xb3"}}))
     assert main(["mock", "controller", "--config", str(config), "--port", "0", "--duration", "0.2"]) == 0
     captured = capsys.readouterr()
     assert "idle timeout 1.5 s; tool writes need the write key" in captured.out
