@@ -5,7 +5,9 @@ Order of work, so nothing is lost and nothing wrong is written:
 1. refuse a calibration from the mock station or a simulation for a real controller, and one whose
    quality verdict failed (unless forced);
 2. build the tool data (frame from X, mass and centre of gravity from the config) and validate it:
-   unit quaternion, a frame within 1 m of the flange, mass > 0 (``drivers.controller.check_tooldata``);
+   unit quaternion, a frame within 1 m of the flange, mass > 0 (``drivers.controller.check_tooldata``),
+   and a camera frame within the config's ``min_camera_offset_mm`` .. ``max_camera_offset_mm`` of the
+   flange (a frame inside the flange means lengths in metres), whether forced or not;
 3. ``--dry-run`` stops here and prints the RAPID literal;
 4. read the controller's current tool data; when an earlier write-back of this session was cut off
    (``writeback_pending.yaml``), say which values that read shows in place; save the current values
@@ -23,6 +25,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from ..calibration.errors import HandEyeError
 from ..calibration.problem import EYE_IN_HAND
 from ..calibration.session import write_yaml_atomic
@@ -32,7 +36,7 @@ from ..rapid.literals import POSITION_DECIMALS, QUATERNION_DECIMALS, tooldata_li
 from .config import StationConfig
 from .origin import MOCK, SIMULATED
 
-__all__ = ["PENDING_FILE", "WritebackError", "check_session_origin", "WritebackOutcome", "side_by_side", "tooldata_from_result", "writeback"]
+__all__ = ["PENDING_FILE", "WritebackError", "check_camera_offset", "check_session_origin", "WritebackOutcome", "side_by_side", "tooldata_from_result", "writeback"]
 
 #: Written before the tool data is sent and removed once the outcome is known: its presence means an
 #: earlier write-back was cut off and the controller may hold either value.
@@ -125,6 +129,21 @@ def check_session_origin(origin: str | None, mock_controller: bool) -> None:
                          "real station (handeye capture --config STATION.yaml) and calibrate that one")
 
 
+def check_camera_offset(cam2tool0, config: StationConfig) -> None:
+    """Refuse a camera frame whose distance from the flange is outside the config's quality limits
+    (``min_camera_offset_mm``, ``max_camera_offset_mm``): checked before every write, ``--force`` or not."""
+    from .quality import QualityThresholds
+
+    limits = QualityThresholds.from_dict(config.quality)
+    offset = float(np.linalg.norm(np.asarray(cam2tool0, float)[:3, 3]))
+    if offset < limits.min_camera_offset_mm:
+        raise WritebackError(f"the camera frame is {offset:.2f} mm from the flange, inside it (quality.min_camera_offset_mm "
+                             f"{limits.min_camera_offset_mm:g}): the session's lengths look like metres; nothing was written")
+    if offset > limits.max_camera_offset_mm:
+        raise WritebackError(f"the camera frame is {offset:.0f} mm from the flange, beyond quality.max_camera_offset_mm "
+                             f"({limits.max_camera_offset_mm:g}): check the session's units and set-up; nothing was written")
+
+
 def _values(tool: ToolData) -> dict:
     return dict(zip(VALUE_NAMES, tool.values()))
 
@@ -207,6 +226,7 @@ def writeback(session_dir, config: StationConfig, result: CalibrationResult, con
         raise WritebackError(f"the calibration failed its quality verdict ({verdict_reason}); improve it (see the report) "
                              "or pass --force to write it anyway")
     new = tooldata_from_result(result, config)
+    check_camera_offset(result.x, config)
     literal = f"PERS tooldata {config.tool.name} := {tooldata_literal(result.x, new.mass_kg, new.cog_mm)};"
     if dry_run:
         return WritebackOutcome(literal, new, dry_run=True)

@@ -3,6 +3,7 @@ millimetres, write-back that needs only the controller and never loses the old t
 
 from __future__ import annotations
 
+import re
 import time
 from dataclasses import replace
 
@@ -291,3 +292,19 @@ def test_usage_errors_are_one_line_with_exit_code_2(argv, words, capsys):
     assert stop.value.code == 2
     _, err = _one_error_line(capsys)
     assert words in err and err.startswith(f"handeye {argv[0]}: error:")
+
+
+@pytest.mark.parametrize("offset_mm, quality, words", [
+    (0.12, {}, "inside it (quality.min_camera_offset_mm 20): the session's lengths look like metres"),
+    (600.0, {}, "beyond quality.max_camera_offset_mm (500)"),
+    (600.0, {"max_camera_offset_mm": 700}, None),
+])
+def test_the_camera_offset_is_checked_before_every_write_forced_or_not(tmp_path, offset_mm, quality, words):
+    result = calibrate(problem_from_session(_synthetic(12)))
+    result.x[:3, 3] *= offset_mm / np.linalg.norm(result.x[:3, 3])
+    config = replace(default_config(), quality=quality)
+    if words is None:
+        assert writeback(tmp_path, config, result, None, dry_run=True, force=True).literal.startswith("PERS tooldata")
+        return
+    with pytest.raises(WritebackError, match=re.escape(words)):
+        writeback(tmp_path, config, result, None, dry_run=True, force=True)
