@@ -221,7 +221,7 @@ class Controller(ABC):
                 if failures > self.retries or left <= delay:
                     raise self.connection_error(
                         f"{what}: no link to the controller at {self.address} ({exc}) after {failures} attempt(s) "
-                        f"in {deadline.seconds:g} s; check that the RAPID program runs and the address/port") from None
+                        f"in {time.monotonic() - deadline.start:.1f} s; check that the RAPID program runs and the address/port") from None
                 log.info("%s: link to %s down (%s); reconnecting in %.3f s", what, self.address, exc, delay)
                 time.sleep(delay)
                 delay = min(2 * delay, self.backoff_max_s)
