@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["HandEyeError", "SessionError", "CalibrationError"]
+__all__ = ["HandEyeError", "SessionError", "CalibrationError", "OutputError"]
 
 
 class HandEyeError(Exception):
@@ -15,3 +15,8 @@ class SessionError(HandEyeError):
 
 class CalibrationError(HandEyeError):
     """The data cannot be solved: too few postures, degenerate motion, inconsistent points."""
+
+
+class OutputError(HandEyeError):
+    """A file or folder cannot be written: permission denied, a read-only file system, a file where a
+    folder should be, a full disk. The message names the path, the reason and what to do."""
