@@ -26,6 +26,7 @@ documents each one):
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
@@ -33,6 +34,7 @@ import numpy as np
 
 from ..calibration.compact_points import BoardGeometry
 from ..calibration.errors import HandEyeError
+from ..calibration.files import read_text_file
 from ..calibration.kinematics import load_robot
 from ..calibration.session import parse_yaml
 from ..calibration.transforms import pose_from_transform, transform_from_pose
@@ -167,8 +169,13 @@ def _plain(value):
     return value
 
 
+#: Largest finite float: ``abs(v) <= _FLOAT_MAX`` is false for NaN, inf and integers too large for a
+#: float (where ``math.isfinite`` would raise OverflowError).
+_FLOAT_MAX = sys.float_info.max
+
+
 def _number(value, key: str, low: float = -math.inf, high: float = math.inf, integer: bool = False):
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not abs(value) <= _FLOAT_MAX:
         raise ConfigError(f"{key} must be a {'whole ' if integer else ''}number; got {value!r}")
     if integer and int(value) != value:
         raise ConfigError(f"{key} must be a whole number; got {value!r}")
@@ -202,7 +209,7 @@ def _section(data: dict, name: str, allowed) -> dict:
     section = data.get(name) or {}
     if not isinstance(section, dict):
         raise ConfigError(f"{name} must be a mapping of keys; got {section!r}")
-    unknown = sorted(set(section) - set(allowed))
+    unknown = sorted(set(section) - set(allowed), key=str)
     if unknown:
         raise ConfigError(f"unknown key {name}.{unknown[0]}; known keys of {name}: {', '.join(sorted(allowed))}")
     return section
@@ -232,7 +239,7 @@ def config_from_dict(data: dict, source: str = "configuration") -> StationConfig
     """
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: the file must hold a mapping of sections")
-    unknown = sorted(set(data) - TOP_LEVEL)
+    unknown = sorted(set(data) - TOP_LEVEL, key=str)
     if unknown:
         raise ConfigError(f"unknown section {unknown[0]!r}; known: {', '.join(sorted(TOP_LEVEL))}")
     base = StationConfig(source=source)
@@ -384,10 +391,8 @@ def load_config(path) -> StationConfig:
     ConfigError
     """
     path = Path(path)
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise ConfigError(f"no station configuration at {path}; start from {EXAMPLE_FILE}") from None
+    text = read_text_file(path, "station configuration", ConfigError,
+                          missing=f"no station configuration at {path}; start from {EXAMPLE_FILE}")
     data = parse_yaml(text, path, ConfigError)
     return config_from_dict(data or {}, str(path))
 

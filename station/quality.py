@@ -19,6 +19,7 @@ Every failed check carries advice on what to do next at the station.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import NamedTuple
@@ -143,7 +144,7 @@ class QualityThresholds:
 def _check_value(key: str, value, source: str = "thresholds"):
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ThresholdError(f"{source}: {key} must be a number; got {value!r}")
-    if not math.isfinite(value):
+    if not abs(value) <= sys.float_info.max:  # NaN, inf, or an int too large for a float (isfinite would raise)
         raise ThresholdError(f"{source}: {key} must be finite; got {value!r}")
     if key == "min_inlier_postures":
         if value != int(value) or value < 3:
@@ -170,15 +171,10 @@ def load_thresholds(path) -> QualityThresholds:
     ThresholdError
         File missing or unreadable, not YAML, or a bad key or value (see :meth:`QualityThresholds.from_dict`).
     """
-    from ..calibration.session import parse_yaml
+    from ..calibration.files import parse_yaml, read_text_file
 
     path = Path(path)
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise ThresholdError(f"thresholds file not found: {path}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ThresholdError(f"cannot read thresholds file {path}: {exc}") from None
+    text = read_text_file(path, "thresholds file", ThresholdError, missing=f"thresholds file not found: {path}")
     data = parse_yaml(text, path, ThresholdError, "; write 'key: number' lines")
     if isinstance(data, dict) and isinstance(data.get("quality"), dict):
         return QualityThresholds.from_dict(data["quality"], f"{path} (quality)")

@@ -89,7 +89,7 @@ def test_raw_xb3_frame_with_the_default_stereo_model(scene, capsys):
         (["--left", "nothere.png", "--right", "right.png"], "file not found"),
         (["--left", "left.png"], "give both --left and --right"),
         (["--left", "left.png", "--right", "right.png", "--xb3-raw", "frame.raw"], "either"),
-        (["--left", "left.png", "--right", "right.png", "--stereo", "left.png"], "not an OpenCV FileStorage"),
+        (["--left", "left.png", "--right", "right.png", "--stereo", "left.png"], "left.png is a binary file, not text"),
         (["--left", "left.png", "--right", "right.png", "--board", "13"], "NXxNY"),
         (["--left", "stereo.yaml", "--right", "right.png"], "not an image"),
     ],

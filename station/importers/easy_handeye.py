@@ -49,7 +49,7 @@ def _transform(value) -> np.ndarray:
         quaternion = [float(r[k]) for k in "xyzw"]
     except KeyError as exc:
         raise ValueError(f"lacks {exc.args[0]}") from None
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError("holds a value that is not a number") from None
     return transform_from_quaternion(position, quaternion, "xyzw")
 
