@@ -15,7 +15,6 @@ Reading validates every value and reports the first problem naming the posture a
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -307,8 +306,7 @@ def _parse_target(value) -> BoardGeometry | None:
         raise SessionError(f"session.yaml: target.corners must be two integers 2..{MAX_CORNERS}; got {_short(corners)}")
     square = value.get("square_mm")
     if square is not None:
-        if (not isinstance(square, (int, float)) or isinstance(square, bool) or not math.isfinite(square)
-                or not 0 < square <= MAX_LENGTH_MM):
+        if not isinstance(square, (int, float)) or isinstance(square, bool) or not 0 < square <= MAX_LENGTH_MM:
             raise SessionError(f"session.yaml: target.square_mm must be a positive number of mm within "
                                f"{MAX_LENGTH_WORDS}; got {_short(square)}")
         square = float(square)

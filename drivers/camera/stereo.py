@@ -37,6 +37,7 @@ __all__ = [
     "NOMINAL_XB3",
     "Rectification",
     "StereoModel",
+    "refuse_base64_filestorage",
     "Triangulation",
     "nominal_xb3_model",
     "load_stereo_model",
@@ -331,6 +332,19 @@ def _node_value(n):
     return None
 
 
+def refuse_base64_filestorage(text: str, path, error) -> None:
+    """Refuse FileStorage text holding a base64 (``!!binary``) value before cv2 parses it.
+
+    OpenCV 4's YAML reader loops forever (in C++, beyond any timeout or Ctrl-C of Python) on a damaged
+    ``!!binary`` value, e.g. ``data: !!binary AAAA 1.0, 2.0, ...``; intact ones cannot be told apart
+    cheaply, so base64 files are not read at all (OpenCV writes them only with ``FileStorage.BASE64``).
+    """
+    if "!!binary" in text:
+        line = text[:text.index("!!binary")].count("\n") + 1
+        raise error(f"{path}: line {line} holds a base64 (!!binary) value, which OpenCV's reader can loop "
+                    f"forever on; save the file without FileStorage.BASE64 (plain numbers)")
+
+
 def _open_filestorage(path: Path, text: str):
     """Open ``path`` (whose ``text`` was read and checked) with cv2.FileStorage; plain YAML without the
     ``%YAML:1.0`` line is accepted too."""
@@ -364,6 +378,7 @@ def load_stereo_model(path) -> StereoModel:
     """
     path = Path(path)
     text = read_text_file(path, "stereo model", StereoModelError, missing=f"stereo file not found: {path}")
+    refuse_base64_filestorage(text, path, StereoModelError)
     fs = _open_filestorage(path, text)
     try:
         def node(key, required=True):

@@ -78,8 +78,12 @@ def read_opencv(path, *, setup=None, units=None, board=None, skip_invalid: bool 
     """
     import cv2  # station-side only: the calibration core does not depend on OpenCV
 
+    from ...drivers.camera.stereo import refuse_base64_filestorage
+
     path = Path(path)
-    read_text(path)  # a regular UTF-8 file of sane size: cv2 would hang on a named pipe
+    # a regular UTF-8 file of sane size without base64 values: cv2 would hang on a named pipe or on a
+    # damaged !!binary value
+    refuse_base64_filestorage(read_text(path), path, SessionError)
     previous = cv2.utils.logging.getLogLevel()
     cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
     try:
