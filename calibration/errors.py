@@ -2,7 +2,20 @@
 
 from __future__ import annotations
 
-__all__ = ["HandEyeError", "SessionError", "CalibrationError", "OutputError"]
+import reprlib
+
+__all__ = ["HandEyeError", "SessionError", "CalibrationError", "OutputError", "brief"]
+
+_BRIEF = reprlib.Repr()
+_BRIEF.maxlevel, _BRIEF.maxlist, _BRIEF.maxtuple, _BRIEF.maxdict, _BRIEF.maxset = 3, 6, 6, 4, 6
+_BRIEF.maxstring = _BRIEF.maxother = 60
+_BRIEF.maxlong = 40
+
+
+def brief(value) -> str:
+    """A short ``repr`` of any value read from a file, for a one-line message: bounded in length and
+    in the work it takes (a YAML alias bomb, a list of lists of the same list ..., is not expanded)."""
+    return _BRIEF.repr(value)
 
 
 class HandEyeError(Exception):

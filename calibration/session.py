@@ -22,7 +22,7 @@ import numpy as np
 import yaml
 
 from .compact_points import BoardGeometry
-from .errors import SessionError
+from .errors import SessionError, brief
 from .files import make_folder, parse_yaml, read_text_file, write_failure, write_text_atomic
 from .problem import SETUPS
 from .transforms import pose_from_transform, transform_from_pose
@@ -211,13 +211,13 @@ def _nested_floats(value, shape_tail, what: str, want: str):
         # PyYAML reads 1e-3 (no dot) as a string: numeric strings are numbers; bool, dates, None are not
         if type(value) not in (int, float, str):
             raise ValueError(f"{what} must have shape {want}; got a deeper nesting" if isinstance(value, (list, dict))
-                             else f"{what} holds {_short(value)}, not a number")
+                             else f"{what} holds {brief(value)}, not a number")
         try:
             return float(value)
         except OverflowError:
             raise ValueError(f"{what} holds a number too large for a float") from None
         except ValueError:
-            raise ValueError(f"{what} holds {_short(value)}, not a number") from None
+            raise ValueError(f"{what} holds {brief(value)}, not a number") from None
     if not isinstance(value, list) or (shape_tail[0] is not None and len(value) != shape_tail[0]):
         raise ValueError(f"{what} must have shape {want}; got {_shape_of(value)}")
     return [_nested_floats(v, shape_tail[1:], what, want) for v in value]
@@ -266,15 +266,10 @@ def _posture_index(data: dict, file_index: int | None) -> int:
         raise ValueError("no index, and the file name is not NNN.yaml; add 'index: N' (0..9999)")
     index = data.get("index", file_index)
     if not isinstance(index, int) or isinstance(index, bool):
-        raise ValueError(f"index must be an integer; got {_short(index)}")
+        raise ValueError(f"index must be an integer; got {brief(index)}")
     if not 0 <= index <= MAX_POSTURE_INDEX:
-        raise ValueError(f"index must be 0..{MAX_POSTURE_INDEX} (the NNN of postures/NNN.yaml); got {_short(index)}")
+        raise ValueError(f"index must be 0..{MAX_POSTURE_INDEX} (the NNN of postures/NNN.yaml); got {brief(index)}")
     return index
-
-
-def _short(value, limit: int = 60) -> str:
-    text = repr(value)
-    return text if len(text) <= limit else text[:limit] + "..."
 
 
 def _parse_posture(data: dict, file_index: int | None) -> Posture:
@@ -303,12 +298,12 @@ def _parse_target(value) -> BoardGeometry | None:
     corners = value["corners"]
     if (not isinstance(corners, (list, tuple)) or len(corners) != 2
             or not all(isinstance(c, int) and not isinstance(c, bool) and 2 <= c <= MAX_CORNERS for c in corners)):
-        raise SessionError(f"session.yaml: target.corners must be two integers 2..{MAX_CORNERS}; got {_short(corners)}")
+        raise SessionError(f"session.yaml: target.corners must be two integers 2..{MAX_CORNERS}; got {brief(corners)}")
     square = value.get("square_mm")
     if square is not None:
         if not isinstance(square, (int, float)) or isinstance(square, bool) or not 0 < square <= MAX_LENGTH_MM:
             raise SessionError(f"session.yaml: target.square_mm must be a positive number of mm within "
-                               f"{MAX_LENGTH_WORDS}; got {_short(square)}")
+                               f"{MAX_LENGTH_WORDS}; got {brief(square)}")
         square = float(square)
     return BoardGeometry((int(corners[0]), int(corners[1])), square)
 
@@ -327,13 +322,13 @@ def read_session(path) -> Session:
     header = _load_yaml(path / "session.yaml", "session file")
     fmt = header.get("format")
     if fmt != FORMAT:
-        raise SessionError(f"{path / 'session.yaml'}: format must be {FORMAT!r}; got {_short(fmt)}")
+        raise SessionError(f"{path / 'session.yaml'}: format must be {FORMAT!r}; got {brief(fmt)}")
     setup = header.get("setup", "eye_in_hand")
     if setup not in SETUPS:
-        raise SessionError(f"{path / 'session.yaml'}: setup must be one of {', '.join(SETUPS)}; got {_short(setup)}")
+        raise SessionError(f"{path / 'session.yaml'}: setup must be one of {', '.join(SETUPS)}; got {brief(setup)}")
     robot = header.get("robot")
     if robot is not None and (not isinstance(robot, str) or not robot.strip()):
-        raise SessionError(f"{path / 'session.yaml'}: robot must be a model name like IRB1400; got {_short(robot)}")
+        raise SessionError(f"{path / 'session.yaml'}: robot must be a model name like IRB1400; got {brief(robot)}")
     target = _parse_target(header.get("target"))
     extra = {k: v for k, v in header.items() if k not in {"format", "setup", "robot", "target"}}
     folder = path / "postures"

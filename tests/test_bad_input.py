@@ -297,6 +297,24 @@ def test_implausible_values_are_refused_at_read_time_naming_posture_and_key(edit
     one_line_error(capsys, ["calibrate", session], pattern)
 
 
+#: 9 ** 8 = 43 million references to one list of 9 numbers, in 300 bytes of YAML.
+ALIAS_BOMB = "a: &a [1, 2, 3, 4, 5, 6, 7, 8, 9]\n" + "".join(
+    f"{c}: &{c} [{', '.join(['*' + p] * 9)}]\n" for p, c in zip("abcdefg", "bcdefgh"))
+
+
+@pytest.mark.parametrize("key, pattern", [
+    ("points_mm", r"posture 1 \(postures/001.yaml\): points_mm must have shape m x 3; got 9 x 9 x 9"),
+    ("index", r"postures/001.yaml: index must be an integer; got \[\[\[\[...\]"),
+    ("joints_deg", r"posture 1 \(postures/001.yaml\): joints_deg must have shape m; got a deeper nesting"),
+])
+def test_a_yaml_alias_bomb_is_refused_without_being_expanded(key, pattern, session, capsys, no_hang):
+    file = session / "postures" / "001.yaml"
+    data = yaml.safe_load(file.read_text())
+    data.pop(key)
+    file.write_text(ALIAS_BOMB + yaml.safe_dump(data) + f"{key}: *h\n")
+    one_line_error(capsys, ["calibrate", session], pattern)
+
+
 def test_a_posture_file_without_index_needs_an_nnn_name(session, capsys):
     data = yaml.safe_load((session / "postures" / "001.yaml").read_text())
     del data["index"]

@@ -18,7 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from ...calibration.compact_points import BoardGeometry
 from ...calibration.diagnostics import DiagnosticLimits, hand_eye_fit, setup_rotation_residuals
-from ...calibration.errors import SessionError
+from ...calibration.errors import SessionError, brief
 from ...calibration.files import read_text_file
 from ...calibration.problem import SETUPS
 from ...calibration.session import MAX_LENGTH_MM, MAX_LENGTH_WORDS, Posture, Session
@@ -187,11 +187,11 @@ def flat_numbers(value, count: int) -> np.ndarray:
         if len(out) == count:
             raise ValueError("got more")
         if type(item) not in (int, float, str):
-            raise ValueError(f"{str(item)[:20]!r} is not a number")
+            raise ValueError(f"{brief(item)} is not a number")
         try:
             out.append(float(item))
         except (ValueError, OverflowError):
-            raise ValueError(f"{str(item)[:20]!r} is not a number") from None
+            raise ValueError(f"{brief(item)} is not a number") from None
     if len(out) != count:
         raise ValueError(f"got {len(out)}")
     return np.array(out)
