@@ -26,7 +26,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..calibration.errors import HandEyeError
+from ..calibration.errors import HandEyeError, brief
 from ..calibration.problem import EYE_IN_HAND, HandEyeProblem
 from ..calibration.triplets import relative_motions
 
@@ -133,7 +133,7 @@ class QualityThresholds:
         values = {}
         for key, value in mapping.items():
             if key not in known:
-                raise ThresholdError(f"{source}: unknown key {key!r}; known keys: {', '.join(known)}")
+                raise ThresholdError(f"{source}: unknown key {brief(key)}; known keys: {', '.join(known)}")
             values[key] = _check_value(key, value, source)
         return cls(**values)
 
@@ -143,22 +143,22 @@ class QualityThresholds:
 
 def _check_value(key: str, value, source: str = "thresholds"):
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ThresholdError(f"{source}: {key} must be a number; got {value!r}")
+        raise ThresholdError(f"{source}: {key} must be a number; got {brief(value)}")
     if not abs(value) <= sys.float_info.max:  # NaN, inf, or an int too large for a float (isfinite would raise)
-        raise ThresholdError(f"{source}: {key} must be finite; got {value!r}")
+        raise ThresholdError(f"{source}: {key} must be finite; got {brief(value)}")
     if key == "min_inlier_postures":
         if value != int(value) or value < 3:
-            raise ThresholdError(f"{source}: {key} must be a whole number >= 3; got {value!r}")
+            raise ThresholdError(f"{source}: {key} must be a whole number >= 3; got {brief(value)}")
         return int(value)
     if value <= 0:
-        raise ThresholdError(f"{source}: {key} must be positive; got {value!r}")
+        raise ThresholdError(f"{source}: {key} must be positive; got {brief(value)}")
     if key == "max_outlier_fraction" and value > 1:
-        raise ThresholdError(f"{source}: {key} is a fraction between 0 and 1; got {value!r}")
+        raise ThresholdError(f"{source}: {key} is a fraction between 0 and 1; got {brief(value)}")
     if key == "min_rotation_axis_spread_deg" and value > MAX_AXIS_SPREAD_DEG:
         raise ThresholdError(f"{source}: {key} cannot exceed {MAX_AXIS_SPREAD_DEG:.1f} deg (axes spread evenly "
-                             f"over the sphere); got {value!r}")
+                             f"over the sphere); got {brief(value)}")
     if key == "min_median_rotation_deg" and value >= 180:
-        raise ThresholdError(f"{source}: {key} must be below 180 deg; got {value!r}")
+        raise ThresholdError(f"{source}: {key} must be below 180 deg; got {brief(value)}")
     return float(value)
 
 

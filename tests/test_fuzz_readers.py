@@ -64,13 +64,18 @@ def test_the_fuzz_run_is_at_least_ten_thousand_cases():
     assert TOTAL_CASES >= 10_000
 
 
+#: Longest acceptable message: room for a long path and a 4000-digit number, not for an expanded alias bomb.
+MAX_MESSAGE = 10_000
+
+
 def expect_only_handeye_errors(read, *args, **kwargs):
-    """Call ``read``; a ``HandEyeError`` must carry one non-empty line, anything else fails the test."""
+    """Call ``read``; a ``HandEyeError`` must carry one non-empty line of sane length, anything else fails."""
     try:
         read(*args, **kwargs)
     except HandEyeError as exc:
         message = str(exc)
-        assert message and "\n" not in message and "\r" not in message, repr(message)
+        assert message and "\n" not in message and "\r" not in message, repr(message[:500])
+        assert len(message) <= MAX_MESSAGE, f"a message of {len(message)} characters: {message[:300]}"
 
 
 # --------------------------------------------------------------------------- values and documents
@@ -93,10 +98,20 @@ SCALARS = st.one_of(
     st.sampled_from(["1e-3", "nan", "inf", "1e400", "abc", "", "0x1f", "1_000", "²"]),
 )
 #: What a number in a document is most often replaced by: the values that break naive numeric code.
-#: (Only immutable values are sampled: the edits below change drawn lists in place.)
+#: (Only immutable values are sampled: the edits below change drawn lists in place.) ``BOMB`` becomes
+#: a YAML alias bomb in the YAML documents: 9 ** 8 references to one list in 200 bytes.
+BOMB = "__alias_bomb__"
 ODD_NUMBERS = st.one_of(HUGE_INTS, ODD_FLOATS,
-                        st.sampled_from([float("nan"), float("inf"), -float("inf"), True, "1e300", "nan", None]),
+                        st.sampled_from([float("nan"), float("inf"), -float("inf"), True, "1e300", "nan", None, BOMB]),
                         st.builds(list), st.builds(lambda: [1.0]))
+
+
+def alias_bomb(name: str, levels: int = 8) -> str:
+    """A flow sequence of ``9 ** levels`` references to one list, its anchors named ``<name><level>``."""
+    text = f"&{name}0 [1, 2, 3, 4, 5, 6, 7, 8, 9]"
+    for k in range(1, levels):
+        text = f"&{name}{k} [{text}, " + ", ".join([f"*{name}{k - 1}"] * 8) + "]"
+    return text
 KEYS = st.one_of(st.text(max_size=10), st.integers(-3, 3), st.sampled_from(["index", "data", "quality", "postures"]))
 VALUES = st.recursive(
     SCALARS,
@@ -202,7 +217,8 @@ _DUMPER = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
 
 
 def yaml_text(value) -> str:
-    return yaml.dump(value, Dumper=_DUMPER, sort_keys=False, allow_unicode=True, default_flow_style=None)
+    parts = yaml.dump(value, Dumper=_DUMPER, sort_keys=False, allow_unicode=True, default_flow_style=None).split(BOMB)
+    return parts[0] + "".join(alias_bomb(f"b{k}_") + part for k, part in enumerate(parts[1:]))
 
 
 def json_text(value) -> str:
