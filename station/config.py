@@ -211,7 +211,7 @@ def _section(data: dict, name: str, allowed) -> dict:
         raise ConfigError(f"{name} must be a mapping of keys; got {brief(section)}")
     unknown = sorted(set(section) - set(allowed), key=brief)
     if unknown:
-        key = unknown[0] if isinstance(unknown[0], str) else brief(unknown[0])
+        key = unknown[0] if isinstance(unknown[0], str) and unknown[0].isprintable() else brief(unknown[0])
         raise ConfigError(f"unknown key {name}.{key}; known keys of {name}: {', '.join(sorted(allowed))}")
     return section
 

@@ -34,7 +34,7 @@ import csv
 import numpy as np
 
 from ...calibration.compact_points import BoardGeometry
-from ...calibration.errors import SessionError
+from ...calibration.errors import SessionError, brief
 from ...calibration.problem import SETUPS
 from ...calibration.session import MAX_CORNERS, MAX_LENGTH_MM, Session
 from .common import (
@@ -177,7 +177,7 @@ def _json_pose(value, order: str) -> np.ndarray:
         except (TypeError, ValueError, OverflowError):
             raise ValueError("position and quaternion must be lists of numbers") from None
         return transform_from_quaternion(p, q, order)
-    raise ValueError(f"needs position + quaternion, or matrix; has {', '.join(sorted(value)) or 'nothing'}")
+    raise ValueError(f"needs position + quaternion, or matrix; has {', '.join(map(brief, sorted(value))) or 'nothing'}")
 
 
 def _json_board(value, path) -> BoardGeometry | None:
