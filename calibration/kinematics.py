@@ -23,6 +23,7 @@ import yaml
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
+from .files import parse_yaml, read_text_file
 from .rotations import (
     canonical_quaternions,
     matrix_from_quaternion,
@@ -232,7 +233,7 @@ def known_robots() -> list[str]:
 
 @lru_cache(maxsize=None)
 def _load_path(path: Path) -> RobotModel:
-    data = yaml.safe_load(Path(path).read_text())
+    data = parse_yaml(read_text_file(path, "robot file", ValueError), path, ValueError)
     try:
         return RobotModel.from_dh(
             data["name"],

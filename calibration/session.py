@@ -15,9 +15,6 @@ Reading validates every value and reports the first problem naming the posture a
 
 from __future__ import annotations
 
-import math
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -25,7 +22,8 @@ import numpy as np
 import yaml
 
 from .compact_points import BoardGeometry
-from .errors import SessionError
+from .errors import SessionError, brief
+from .files import make_folder, parse_yaml, read_text_file, write_failure, write_text_atomic
 from .problem import SETUPS
 from .transforms import pose_from_transform, transform_from_pose
 
@@ -133,38 +131,6 @@ def _rounded_pose(transform) -> dict:
     }
 
 
-def write_text_atomic(path, text: str, encoding: str = "utf-8", newline: str | None = None) -> Path:
-    """Write ``text`` to ``path`` atomically: a temporary file in the same folder, flushed to disk,
-    renamed over the target (and the rename itself synced). The file gets the user's usual
-    permissions (umask), not a temporary file's 0600. Used for every file the package writes.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        umask = os.umask(0)
-        os.umask(umask)
-        os.fchmod(fd, 0o666 & ~umask)
-        with os.fdopen(fd, "w", encoding=encoding, newline=newline) as handle:
-            handle.write(text)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    try:  # make the rename itself durable
-        dir_fd = os.open(path.parent, os.O_RDONLY)
-        try:
-            os.fsync(dir_fd)
-        finally:
-            os.close(dir_fd)
-    except OSError:
-        pass
-    return path
-
-
 def write_yaml_atomic(path: Path, data: dict) -> None:
     """Write ``data`` as YAML to ``path`` atomically (see :func:`write_text_atomic`)."""
     write_text_atomic(path, yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=120))
@@ -177,16 +143,21 @@ def create_session(path, session: Session, overwrite: bool = False) -> Path:
     ------
     SessionError
         If ``path`` already holds a session and ``overwrite`` is false (nothing is touched).
+    OutputError
+        The folder cannot be created or written (one line: the path, the reason, what to do).
     """
     path = Path(path)
     if (path / "session.yaml").exists() and not overwrite:
         raise SessionError(f"{path} already holds a session; choose another folder or pass --overwrite")
-    if overwrite and (path / "postures").is_dir():
-        for old in (path / "postures").glob("*.yaml"):
-            old.unlink()
     if session.setup not in SETUPS:
         raise SessionError(f"setup must be one of {', '.join(SETUPS)}; got {session.setup!r}")
-    (path / "postures").mkdir(parents=True, exist_ok=True)
+    if overwrite and (path / "postures").is_dir():
+        for old in (path / "postures").glob("*.yaml"):
+            try:
+                old.unlink()
+            except OSError as exc:
+                raise write_failure(old, exc, "remove") from None
+    make_folder(path / "postures")
     write_yaml_atomic(path / "session.yaml", session.header())
     session.path = path
     return path
@@ -203,45 +174,86 @@ def write_posture(path, posture: Posture) -> Path:
     return target
 
 
-def parse_yaml(text: str, source, error=SessionError, hint: str = ""):
-    """``yaml.safe_load(text)``; malformed YAML raises ``error`` naming ``source`` and the line."""
-    try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" (line {mark.line + 1})" if mark is not None else ""
-        raise error(f"{source}: not valid YAML{where}{hint}") from None
-
-
 def _load_yaml(path: Path, what: str) -> dict:
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise SessionError(f"{what} not found: {path}") from None
-    data = parse_yaml(text, path)
+    data = parse_yaml(read_text_file(path, what, SessionError), path)
     if not isinstance(data, dict):
         raise SessionError(f"{path} does not hold a YAML mapping")
     return data
 
 
-def _array(value, shape_tail, what: str) -> np.ndarray:
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{what} is not a list of numbers") from None
-    if arr.ndim != len(shape_tail) or any(s is not None and s != a for s, a in zip(shape_tail, arr.shape)):
-        want = " x ".join("m" if s is None else str(s) for s in shape_tail)
-        raise ValueError(f"{what} must have shape {want}; got {' x '.join(map(str, arr.shape)) or 'a scalar'}")
+#: Largest accepted length, mm (10 km): beyond it a value is a typing or unit error (or 1e300), not a
+#: measurement; a metre file misread as mm still passes here and is left to the units checks.
+MAX_LENGTH_MM = 1e7
+#: The same limit in words, for messages.
+MAX_LENGTH_WORDS = "±1e7 mm (10 km)"
+#: Largest accepted joint angle, degrees (two turns: beyond any axis of an industrial robot).
+MAX_JOINT_DEG = 720.0
+#: Posture indices: the NNN of ``postures/NNN.yaml`` (three digits, four from 1000 on).
+MAX_POSTURE_INDEX = 9999
+#: Largest inner-corner count along one side of a board.
+MAX_CORNERS = 1000
+
+
+def _shape_of(value) -> str:
+    if not isinstance(value, list):
+        return "a string" if isinstance(value, str) else f"a {type(value).__name__}"
+    shape = []
+    while isinstance(value, list) and len(shape) < 8:
+        shape.append(len(value))
+        value = value[0] if value else None
+    return " x ".join(map(str, shape))
+
+
+def _nested_floats(value, shape_tail, what: str, want: str):
+    """``value`` as nested lists of floats of the given shape, checked element by element (so that
+    a shared YAML alias cannot make a huge array before the shape is refused)."""
+    if not shape_tail:
+        # PyYAML reads 1e-3 (no dot) as a string: numeric strings are numbers; bool, dates, None are not
+        if type(value) not in (int, float, str):
+            raise ValueError(f"{what} must have shape {want}; got a deeper nesting" if isinstance(value, (list, dict))
+                             else f"{what} holds {brief(value)}, not a number")
+        try:
+            return float(value)
+        except OverflowError:
+            raise ValueError(f"{what} holds a number too large for a float") from None
+        except ValueError:
+            raise ValueError(f"{what} holds {brief(value)}, not a number") from None
+    if not isinstance(value, list) or (shape_tail[0] is not None and len(value) != shape_tail[0]):
+        raise ValueError(f"{what} must have shape {want}; got {_shape_of(value)}")
+    return [_nested_floats(v, shape_tail[1:], what, want) for v in value]
+
+
+def _array(value, shape_tail, what: str, limit: float | None = None, unit: str = "") -> np.ndarray:
+    """A float array of shape ``shape_tail`` (``None`` = any length) from YAML lists of numbers.
+
+    Raises
+    ------
+    ValueError
+        Not numbers, a wrong shape, NaN or inf, or a value beyond ``limit`` (naming the key and index).
+    """
+    want = " x ".join("m" if s is None else str(s) for s in shape_tail)
+    if not isinstance(value, list):
+        raise ValueError(f"{what} must have shape {want}; got {_shape_of(value) if value is not None else 'nothing'}")
+    arr = np.array(_nested_floats(value, tuple(shape_tail), what, want), dtype=float)
+    if arr.ndim != len(shape_tail):  # an empty list of rows
+        raise ValueError(f"{what} must have shape {want}; got {_shape_of(value)}")
     if not np.all(np.isfinite(arr)):
         bad = np.argwhere(~np.isfinite(arr))[0]
         raise ValueError(f"{what} holds {arr[tuple(bad)]} at {list(map(int, bad))}")
+    if limit is not None and arr.size and np.max(np.abs(arr)) > limit:
+        bad = np.unravel_index(np.argmax(np.abs(arr)), arr.shape)
+        raise ValueError(f"{what} holds {arr[bad]:g} at {list(map(int, bad))}; {unit}")
     return arr
+
+
+_LENGTH = f"lengths are millimetres within {MAX_LENGTH_WORDS}: is the unit right?"
+_JOINT = f"joint angles are degrees within ±{MAX_JOINT_DEG:g}"
 
 
 def _pose(value, what: str) -> np.ndarray:
     if not isinstance(value, dict) or "position_mm" not in value or "quaternion_wxyz" not in value:
         raise ValueError(f"{what} needs position_mm and quaternion_wxyz")
-    position = _array(value["position_mm"], (3,), f"{what}.position_mm")
+    position = _array(value["position_mm"], (3,), f"{what}.position_mm", MAX_LENGTH_MM, _LENGTH)
     quaternion = _array(value["quaternion_wxyz"], (4,), f"{what}.quaternion_wxyz")
     try:
         return transform_from_pose(position, quaternion)
@@ -249,17 +261,26 @@ def _pose(value, what: str) -> np.ndarray:
         raise ValueError(f"{what}: {exc}") from None
 
 
-def _parse_posture(data: dict, file_index: int) -> Posture:
+def _posture_index(data: dict, file_index: int | None) -> int:
+    if "index" not in data and file_index is None:
+        raise ValueError("no index, and the file name is not NNN.yaml; add 'index: N' (0..9999)")
     index = data.get("index", file_index)
     if not isinstance(index, int) or isinstance(index, bool):
-        raise ValueError(f"index must be an integer; got {index!r}")
+        raise ValueError(f"index must be an integer; got {brief(index)}")
+    if not 0 <= index <= MAX_POSTURE_INDEX:
+        raise ValueError(f"index must be 0..{MAX_POSTURE_INDEX} (the NNN of postures/NNN.yaml); got {brief(index)}")
+    return index
+
+
+def _parse_posture(data: dict, file_index: int | None) -> Posture:
+    index = _posture_index(data, file_index)
     posture = Posture(index=index, extra={k: v for k, v in data.items() if k not in _POSTURE_KEYS})
     if data.get("tool0_in_base") is not None:
         posture.tool0_in_base = _pose(data["tool0_in_base"], "tool0_in_base")
     if data.get("joints_deg") is not None:
-        posture.joints_deg = _array(data["joints_deg"], (None,), "joints_deg")
+        posture.joints_deg = _array(data["joints_deg"], (None,), "joints_deg", MAX_JOINT_DEG, _JOINT)
     if data.get("points_mm") is not None:
-        posture.points_mm = _array(data["points_mm"], (None, 3), "points_mm")
+        posture.points_mm = _array(data["points_mm"], (None, 3), "points_mm", MAX_LENGTH_MM, _LENGTH)
     if data.get("target_in_camera") is not None:
         posture.target_in_camera = _pose(data["target_in_camera"], "target_in_camera")
     if posture.tool0_in_base is None and posture.joints_deg is None:
@@ -276,12 +297,13 @@ def _parse_target(value) -> BoardGeometry | None:
         raise SessionError("session.yaml: target needs corners: [along x, along y]")
     corners = value["corners"]
     if (not isinstance(corners, (list, tuple)) or len(corners) != 2
-            or not all(isinstance(c, int) and not isinstance(c, bool) and c >= 2 for c in corners)):
-        raise SessionError(f"session.yaml: target.corners must be two integers >= 2; got {corners!r}")
+            or not all(isinstance(c, int) and not isinstance(c, bool) and 2 <= c <= MAX_CORNERS for c in corners)):
+        raise SessionError(f"session.yaml: target.corners must be two integers 2..{MAX_CORNERS}; got {brief(corners)}")
     square = value.get("square_mm")
     if square is not None:
-        if not isinstance(square, (int, float)) or isinstance(square, bool) or not math.isfinite(square) or square <= 0:
-            raise SessionError(f"session.yaml: target.square_mm must be a positive number; got {square!r}")
+        if not isinstance(square, (int, float)) or isinstance(square, bool) or not 0 < square <= MAX_LENGTH_MM:
+            raise SessionError(f"session.yaml: target.square_mm must be a positive number of mm within "
+                               f"{MAX_LENGTH_WORDS}; got {brief(square)}")
         square = float(square)
     return BoardGeometry((int(corners[0]), int(corners[1])), square)
 
@@ -297,27 +319,35 @@ def read_session(path) -> Session:
     path = Path(path)
     if not path.is_dir():
         raise SessionError(f"no session folder at {path}")
-    header = _load_yaml(path / "session.yaml", "session.yaml")
+    header = _load_yaml(path / "session.yaml", "session file")
     fmt = header.get("format")
     if fmt != FORMAT:
-        raise SessionError(f"{path / 'session.yaml'}: format must be {FORMAT!r}; got {fmt!r}")
+        raise SessionError(f"{path / 'session.yaml'}: format must be {FORMAT!r}; got {brief(fmt)}")
     setup = header.get("setup", "eye_in_hand")
     if setup not in SETUPS:
-        raise SessionError(f"{path / 'session.yaml'}: setup must be one of {', '.join(SETUPS)}; got {setup!r}")
+        raise SessionError(f"{path / 'session.yaml'}: setup must be one of {', '.join(SETUPS)}; got {brief(setup)}")
     robot = header.get("robot")
+    if robot is not None and (not isinstance(robot, str) or not robot.strip()):
+        raise SessionError(f"{path / 'session.yaml'}: robot must be a model name like IRB1400; got {brief(robot)}")
     target = _parse_target(header.get("target"))
     extra = {k: v for k, v in header.items() if k not in {"format", "setup", "robot", "target"}}
+    folder = path / "postures"
+    if folder.exists() and not folder.is_dir():
+        raise SessionError(f"{folder} is a file; the postures belong in a folder of NNN.yaml files")
     postures = []
     seen: dict[int, Path] = {}
-    for file in sorted((path / "postures").glob("*.yaml")):
+    for file in sorted(folder.glob("*.yaml")):
         stem = file.stem
-        file_index = int(stem) if stem.isdigit() else -1
+        file_index = int(stem) if stem.isascii() and stem.isdigit() else None
         data = _load_yaml(file, "posture file")
         try:
             posture = _parse_posture(data, file_index)
         except ValueError as exc:
-            label = data.get("index", file_index)
-            raise SessionError(f"posture {label} ({file.relative_to(path)}): {exc}") from None
+            index = data.get("index", file_index)
+            where = file.relative_to(path)
+            if type(index) is int and 0 <= index <= MAX_POSTURE_INDEX:
+                where = f"posture {index} ({where})"
+            raise SessionError(f"{where}: {exc}") from None
         if posture.index in seen:
             raise SessionError(f"posture {posture.index} appears twice: {seen[posture.index].name} and {file.name}")
         seen[posture.index] = file
@@ -336,4 +366,4 @@ def read_truth(path) -> dict | None:
     file = Path(path) / "truth.yaml"
     if not file.exists():
         return None
-    return _load_yaml(file, "truth.yaml")
+    return _load_yaml(file, "truth file")

@@ -228,7 +228,7 @@ def truth_from_dict(truth: dict | None) -> dict | None:
         camera, board = truth["camera_pose"], truth["target_pose"]
         x = transform_from_pose(camera["position_mm"], camera["quaternion_wxyz"])
         target = transform_from_pose(board["position_mm"], board["quaternion_wxyz"])
-    except (KeyError, TypeError, ValueError):
+    except (KeyError, TypeError, ValueError, OverflowError):
         return None
     return {"x": x, "target2fixed": target}
 
@@ -351,7 +351,24 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
     Raises
     ------
     CalibrationError
+        Also when a solver fails inside numpy or scipy (``ValueError``, ``LinAlgError``) or returns a
+        pose that is not finite: one line, never a traceback and never a NaN answer.
     """
+    try:
+        with np.errstate(all="ignore"):  # what goes wrong is reported below, not as warnings
+            result = _calibrate(problem, method, truth)
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+        reason = (str(exc).splitlines() or [type(exc).__name__])[0]
+        raise CalibrationError(f"the {method or DEFAULT_METHOD} solver failed on these data ({reason}); check the "
+                               f"session's values: lengths in mm, distinct finite poses, the whole board seen") from None
+    if not np.all(np.isfinite(result.x)):
+        raise CalibrationError(f"the {result.method} solver found no finite camera pose; check the session's values: "
+                               f"lengths in mm, distinct finite poses, the whole board seen")
+    return result
+
+
+def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | None = None) -> CalibrationResult:
+    """:func:`calibrate` without its guard against numerical failures."""
     method = (method or DEFAULT_METHOD).lower()
     if method not in ALL_METHODS:
         raise CalibrationError(f"unknown method {method!r}; choose one of {', '.join(ALL_METHODS)}")

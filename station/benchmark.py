@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..calibration.errors import CalibrationError, HandEyeError
+from ..calibration.files import make_folder, write_text_atomic
 from ..calibration.metrics import d_back, d_org, errors_against_truth, fixed_points
 from ..calibration.solve import ALL_METHODS, calibrate, problem_from_session
 from ..calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session
@@ -220,14 +221,13 @@ def plot(table: dict, folder: Path) -> list[Path]:
 
 def benchmark(options: BenchmarkOptions, progress=None) -> dict:
     """Run, then write ``results.csv``, ``summary.md`` and plots into ``options.output``."""
-    folder = Path(options.output)
-    folder.mkdir(parents=True, exist_ok=True)
+    folder = make_folder(options.output)  # fails before the long run, not after
     started = time.time()
     rows = run_benchmark(options, progress)
     if not rows:
         raise HandEyeError("the benchmark produced no results")
     table = medians(rows)
     write_csv(rows, folder / "results.csv")
-    (folder / "summary.md").write_text(markdown(table, options))
+    write_text_atomic(folder / "summary.md", markdown(table, options))
     plots = plot(table, folder) if options.plots else []
     return {"rows": len(rows), "folder": str(folder), "plots": [str(p) for p in plots], "wall_s": time.time() - started}

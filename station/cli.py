@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 
 from ..calibration.errors import HandEyeError
 
@@ -59,7 +60,11 @@ def main(argv=None) -> int:
         parser.print_help()
         return 2
     try:
-        return int(args._module.run(args) or 0)
+        with warnings.catch_warnings():
+            # numeric noise (0/0 in a degenerate data set) is not for the operator: what it leads to is
+            # reported as one line below
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return int(args._module.run(args) or 0)
     except HandEyeError as exc:
         print(f"handeye {args.command}: error: {exc}", file=sys.stderr)
         return 1
@@ -68,6 +73,11 @@ def main(argv=None) -> int:
         return 130
     except BrokenPipeError:
         return 0
+    except OSError as exc:  # safety net: every reader and writer reports its own OSErrors as HandEyeError
+        where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
+        print(f"handeye {args.command}: error: {(exc.strerror or str(exc) or type(exc).__name__).lower()}{where}",
+              file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -30,13 +30,15 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 import numpy as np
 
 from ..calibration.compact_points import BoardGeometry
-from ..calibration.errors import HandEyeError
+from ..calibration.errors import HandEyeError, brief
+from ..calibration.files import read_text_file
 from ..calibration.kinematics import load_robot
 from ..calibration.session import parse_yaml
 from ..calibration.transforms import pose_from_transform, transform_from_pose
@@ -199,19 +201,24 @@ def _plain(value):
     return value
 
 
+#: Largest finite float: ``abs(v) <= _FLOAT_MAX`` is false for NaN, inf and integers too large for a
+#: float (where ``math.isfinite`` would raise OverflowError).
+_FLOAT_MAX = sys.float_info.max
+
+
 def _number(value, key: str, low: float = -math.inf, high: float = math.inf, integer: bool = False):
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ConfigError(f"{key} must be a {'whole ' if integer else ''}number; got {value!r}")
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not abs(value) <= _FLOAT_MAX:
+        raise ConfigError(f"{key} must be a {'whole ' if integer else ''}number; got {brief(value)}")
     if integer and int(value) != value:
-        raise ConfigError(f"{key} must be a whole number; got {value!r}")
+        raise ConfigError(f"{key} must be a whole number; got {brief(value)}")
     if not low <= value <= high:
-        raise ConfigError(f"{key} must be between {low:g} and {high:g}; got {value!r}")
+        raise ConfigError(f"{key} must be between {low:g} and {high:g}; got {brief(value)}")
     return int(value) if integer else float(value)
 
 
 def _numbers(value, key: str, count: int, low=-math.inf, high=math.inf) -> tuple:
     if not isinstance(value, (list, tuple)) or len(value) != count:
-        raise ConfigError(f"{key} must be a list of {count} numbers; got {value!r}")
+        raise ConfigError(f"{key} must be a list of {count} numbers; got {brief(value)}")
     return tuple(_number(v, f"{key}[{i}]", low, high) for i, v in enumerate(value))
 
 
@@ -224,9 +231,9 @@ def _range(value, key: str, low=0.0, high=math.inf) -> tuple:
 
 def _text(value, key: str, choices=None) -> str:
     if not isinstance(value, str) or not value:
-        raise ConfigError(f"{key} must be a text; got {value!r}")
+        raise ConfigError(f"{key} must be a text; got {brief(value)}")
     if choices and value not in choices:
-        raise ConfigError(f"{key} must be one of {', '.join(choices)}; got {value!r}")
+        raise ConfigError(f"{key} must be one of {', '.join(choices)}; got {brief(value)}")
     return value
 
 
@@ -246,10 +253,11 @@ def _write_key(value, key: str) -> str | None:
 def _section(data: dict, name: str, allowed) -> dict:
     section = data.get(name) or {}
     if not isinstance(section, dict):
-        raise ConfigError(f"{name} must be a mapping of keys; got {section!r}")
-    unknown = sorted(set(section) - set(allowed))
+        raise ConfigError(f"{name} must be a mapping of keys; got {brief(section)}")
+    unknown = sorted(set(section) - set(allowed), key=brief)
     if unknown:
-        raise ConfigError(f"unknown key {name}.{unknown[0]}; known keys of {name}: {', '.join(sorted(allowed))}")
+        key = unknown[0] if isinstance(unknown[0], str) and unknown[0].isprintable() else brief(unknown[0])
+        raise ConfigError(f"unknown key {name}.{key}; known keys of {name}: {', '.join(sorted(allowed))}")
     return section
 
 
@@ -277,9 +285,9 @@ def config_from_dict(data: dict, source: str = "configuration") -> StationConfig
     """
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: the file must hold a mapping of sections")
-    unknown = sorted(set(data) - TOP_LEVEL)
+    unknown = sorted(set(data) - TOP_LEVEL, key=brief)
     if unknown:
-        raise ConfigError(f"unknown section {unknown[0]!r}; known: {', '.join(sorted(TOP_LEVEL))}")
+        raise ConfigError(f"unknown section {brief(unknown[0])}; known: {', '.join(sorted(TOP_LEVEL))}")
     base = StationConfig(source=source)
     changes: dict = {}
     if "robot" in data:
@@ -360,7 +368,7 @@ def config_from_dict(data: dict, source: str = "configuration") -> StationConfig
             return _number(value, path, 0, 10, integer=True)
         if key == "save_images":
             if not isinstance(value, bool):
-                raise ConfigError(f"{path} must be true or false; got {value!r}")
+                raise ConfigError(f"{path} must be true or false; got {brief(value)}")
             return value
         return _number(value, path, 0, 1000)
 
@@ -385,13 +393,13 @@ def config_from_dict(data: dict, source: str = "configuration") -> StationConfig
         corners = target.get("corners", list(base.target.corners))
         if (not isinstance(corners, list) or len(corners) != 2
                 or not all(isinstance(c, int) and not isinstance(c, bool) and c >= 2 for c in corners)):
-            raise ConfigError(f"target.corners must be two whole numbers >= 2; got {corners!r}")
+            raise ConfigError(f"target.corners must be two whole numbers >= 2; got {brief(corners)}")
         square = _number(target.get("square_mm", base.target.square_mm), "target.square_mm", 1, 500)
         changes["target"] = BoardGeometry((max(corners), min(corners)), square)
     if "quality" in data:
         quality = data["quality"] or {}
         if not isinstance(quality, dict):
-            raise ConfigError(f"quality must be a mapping of thresholds; got {quality!r}")
+            raise ConfigError(f"quality must be a mapping of thresholds; got {brief(quality)}")
         changes["quality"] = dict(quality)
     if "output" in data:
         changes["output"] = _text(data["output"], "output")
@@ -445,10 +453,8 @@ def load_config(path) -> StationConfig:
     ConfigError
     """
     path = Path(path)
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise ConfigError(f"no station configuration at {path}; start from {EXAMPLE_FILE}") from None
+    text = read_text_file(path, "station configuration", ConfigError,
+                          missing=f"no station configuration at {path}; start from {EXAMPLE_FILE}")
     data = parse_yaml(text, path, ConfigError)
     return config_from_dict(data or {}, str(path))
 

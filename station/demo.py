@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..calibration.errors import HandEyeError
+from ..calibration.files import make_folder, write_failure, write_text_atomic
 from ..calibration.session import read_session
 from ..calibration.solve import calibrate, problem_from_session
 from ..calibration.transforms import pose_from_transform, rotation_error_deg, translation_error_mm
@@ -40,12 +41,16 @@ class DemoOptions:
 
 
 def _fresh_folder(path: Path) -> None:
+    """An empty demo folder at ``path``: created, or a previous demo's replaced (anything else is refused)."""
     if path.exists():
         if not (path / DEMO_MARKER).exists():
             raise HandEyeError(f"{path} exists and is not a demo folder; choose another with --session")
-        shutil.rmtree(path)
-    path.mkdir(parents=True)
-    (path / DEMO_MARKER).write_text("created by handeye demo; the next demo run replaces this folder\n")
+        try:
+            shutil.rmtree(path)
+        except OSError as exc:
+            raise write_failure(path, exc, "replace the demo folder") from None
+    make_folder(path)
+    write_text_atomic(path / DEMO_MARKER, "created by handeye demo; the next demo run replaces this folder\n")
 
 
 def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None = None,

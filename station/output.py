@@ -3,11 +3,33 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 
-from ..calibration.errors import HandEyeError
+from ..calibration.errors import OutputError
 from ..calibration.session import write_text_atomic
+
+
+def check_output_file(target: str) -> None:
+    """Refuse an output file that cannot be written, before the work that produces it ('-' = stdout).
+
+    Raises
+    ------
+    OutputError
+        ``target`` is a folder, its folder does not exist or is a file, or is not writable.
+    """
+    if target == "-":
+        return
+    path = Path(target)
+    if path.is_dir():
+        raise OutputError(f"cannot write {path}: it is a folder; give a file name")
+    if not path.parent.exists():
+        raise OutputError(f"cannot write {path}: folder {path.parent} does not exist")
+    if not path.parent.is_dir():
+        raise OutputError(f"cannot write {path}: {path.parent} is a file, not a folder; choose a writable folder")
+    if not os.access(path.parent, os.W_OK):
+        raise OutputError(f"cannot write {path}: permission denied; choose a writable folder")
 
 
 def write_json(target: str, data: dict) -> None:
@@ -16,7 +38,5 @@ def write_json(target: str, data: dict) -> None:
     if target == "-":
         sys.stdout.write(text)
         return
-    path = Path(target)
-    if path.parent and not path.parent.exists():
-        raise HandEyeError(f"cannot write {path}: folder {path.parent} does not exist")
-    write_text_atomic(path, text)
+    check_output_file(target)
+    write_text_atomic(Path(target), text)

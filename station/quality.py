@@ -26,13 +26,14 @@ Every failed check carries advice on what to do next at the station.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
-from ..calibration.errors import HandEyeError
+from ..calibration.errors import HandEyeError, brief
 from ..calibration.metrics import d_org, fixed_points
 from ..calibration.problem import EYE_IN_HAND, HandEyeProblem
 from ..calibration.triplets import relative_motions
@@ -157,7 +158,7 @@ class QualityThresholds:
         values = {}
         for key, value in mapping.items():
             if key not in known:
-                raise ThresholdError(f"{source}: unknown key {key!r}; known keys: {', '.join(known)}")
+                raise ThresholdError(f"{source}: unknown key {brief(key)}; known keys: {', '.join(known)}")
             values[key] = _check_value(key, value, source)
         _check_pair(values.get("min_camera_offset_mm", cls.min_camera_offset_mm),
                     values.get("max_camera_offset_mm", cls.max_camera_offset_mm), source)
@@ -175,22 +176,22 @@ def _check_pair(low: float, high: float, source: str = "thresholds") -> None:
 
 def _check_value(key: str, value, source: str = "thresholds"):
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ThresholdError(f"{source}: {key} must be a number; got {value!r}")
-    if not math.isfinite(value):
-        raise ThresholdError(f"{source}: {key} must be finite; got {value!r}")
+        raise ThresholdError(f"{source}: {key} must be a number; got {brief(value)}")
+    if not abs(value) <= sys.float_info.max:  # NaN, inf, or an int too large for a float (isfinite would raise)
+        raise ThresholdError(f"{source}: {key} must be finite; got {brief(value)}")
     if key == "min_inlier_postures":
         if value != int(value) or value < 3:
-            raise ThresholdError(f"{source}: {key} must be a whole number >= 3; got {value!r}")
+            raise ThresholdError(f"{source}: {key} must be a whole number >= 3; got {brief(value)}")
         return int(value)
     if value <= 0:
-        raise ThresholdError(f"{source}: {key} must be positive; got {value!r}")
+        raise ThresholdError(f"{source}: {key} must be positive; got {brief(value)}")
     if key == "max_outlier_fraction" and value > 1:
-        raise ThresholdError(f"{source}: {key} is a fraction between 0 and 1; got {value!r}")
+        raise ThresholdError(f"{source}: {key} is a fraction between 0 and 1; got {brief(value)}")
     if key == "min_rotation_axis_spread_deg" and value > MAX_AXIS_SPREAD_DEG:
         raise ThresholdError(f"{source}: {key} cannot exceed {MAX_AXIS_SPREAD_DEG:.1f} deg (axes spread evenly "
-                             f"over the sphere); got {value!r}")
+                             f"over the sphere); got {brief(value)}")
     if key == "min_median_rotation_deg" and value >= 180:
-        raise ThresholdError(f"{source}: {key} must be below 180 deg; got {value!r}")
+        raise ThresholdError(f"{source}: {key} must be below 180 deg; got {brief(value)}")
     return float(value)
 
 
@@ -203,15 +204,10 @@ def load_thresholds(path) -> QualityThresholds:
     ThresholdError
         File missing or unreadable, not YAML, or a bad key or value (see :meth:`QualityThresholds.from_dict`).
     """
-    from ..calibration.session import parse_yaml
+    from ..calibration.files import parse_yaml, read_text_file
 
     path = Path(path)
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise ThresholdError(f"thresholds file not found: {path}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ThresholdError(f"cannot read thresholds file {path}: {exc}") from None
+    text = read_text_file(path, "thresholds file", ThresholdError, missing=f"thresholds file not found: {path}")
     data = parse_yaml(text, path, ThresholdError, "; write 'key: number' lines")
     if isinstance(data, dict) and isinstance(data.get("quality"), dict):
         return QualityThresholds.from_dict(data["quality"], f"{path} (quality)")

@@ -145,5 +145,5 @@ def test_missing_and_foreign_files(tmp_path):
         load_stereo_model(tmp_path / "nothere.yaml")
     junk = tmp_path / "junk.png"
     junk.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(range(256)))
-    with pytest.raises(StereoModelError, match="not an OpenCV FileStorage"):
+    with pytest.raises(StereoModelError, match="junk.png is a binary file, not text"):
         load_stereo_model(junk)

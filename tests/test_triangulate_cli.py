@@ -89,7 +89,7 @@ def test_raw_xb3_frame_with_the_default_stereo_model(scene, capsys):
         (["--left", "nothere.png", "--right", "right.png"], "file not found"),
         (["--left", "left.png"], "give both --left and --right"),
         (["--left", "left.png", "--right", "right.png", "--xb3-raw", "frame.raw"], "either"),
-        (["--left", "left.png", "--right", "right.png", "--stereo", "left.png"], "not an OpenCV FileStorage"),
+        (["--left", "left.png", "--right", "right.png", "--stereo", "left.png"], "left.png is a binary file, not text"),
         (["--left", "left.png", "--right", "right.png", "--square-mm", "3"],
          "corners measure 30 mm apart but the square size given is 3 mm"),
         (["--left", "left.png", "--right", "right.png", "--square-mm", "33"], "more than 5 % off"),

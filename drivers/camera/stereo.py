@@ -30,12 +30,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from ...calibration.files import read_text_file
 from .errors import StereoMismatch, StereoModelError
 
 __all__ = [
     "NOMINAL_XB3",
     "Rectification",
     "StereoModel",
+    "refuse_base64_filestorage",
     "Triangulation",
     "nominal_xb3_model",
     "load_stereo_model",
@@ -330,8 +332,22 @@ def _node_value(n):
     return None
 
 
-def _open_filestorage(path: Path):
-    """Open ``path`` with cv2.FileStorage; plain YAML without the ``%YAML:1.0`` line is accepted too."""
+def refuse_base64_filestorage(text: str, path, error) -> None:
+    """Refuse FileStorage text holding a base64 (``!!binary``) value before cv2 parses it.
+
+    OpenCV 4's YAML reader loops forever (in C++, beyond any timeout or Ctrl-C of Python) on a damaged
+    ``!!binary`` value, e.g. ``data: !!binary AAAA 1.0, 2.0, ...``; intact ones cannot be told apart
+    cheaply, so base64 files are not read at all (OpenCV writes them only with ``FileStorage.BASE64``).
+    """
+    if "!!binary" in text:
+        line = text[:text.index("!!binary")].count("\n") + 1
+        raise error(f"{path}: line {line} holds a base64 (!!binary) value, which OpenCV's reader can loop "
+                    f"forever on; save the file without FileStorage.BASE64 (plain numbers)")
+
+
+def _open_filestorage(path: Path, text: str):
+    """Open ``path`` (whose ``text`` was read and checked) with cv2.FileStorage; plain YAML without the
+    ``%YAML:1.0`` line is accepted too."""
     def attempt(source, flags):
         try:
             fs = cv2.FileStorage(source, flags)
@@ -341,11 +357,7 @@ def _open_filestorage(path: Path):
 
     fs = attempt(str(path), cv2.FILE_STORAGE_READ)
     if fs is None:
-        try:
-            text = path.read_text()
-        except (OSError, UnicodeDecodeError):
-            text = None
-        if text is not None and not text.lstrip().startswith(("%YAML", "<?xml")):
+        if not text.lstrip().startswith(("%YAML", "<?xml")):
             fs = attempt("%YAML:1.0\n---\n" + text, cv2.FILE_STORAGE_READ | cv2.FILE_STORAGE_MEMORY)
     if fs is None:
         raise StereoModelError(
@@ -362,12 +374,12 @@ def load_stereo_model(path) -> StereoModel:
     Raises
     ------
     StereoModelError
-        Missing file, unreadable file, missing or malformed entries.
+        Missing file, not a regular file, not UTF-8 text, over 64 MB, missing or malformed entries.
     """
     path = Path(path)
-    if not path.is_file():
-        raise StereoModelError(f"stereo file not found: {path}")
-    fs = _open_filestorage(path)
+    text = read_text_file(path, "stereo model", StereoModelError, missing=f"stereo file not found: {path}")
+    refuse_base64_filestorage(text, path, StereoModelError)
+    fs = _open_filestorage(path, text)
     try:
         def node(key, required=True):
             n = fs.getNode(key)

@@ -20,6 +20,7 @@ import cv2
 import numpy as np
 
 from ...calibration.compact_points import BoardGeometry
+from ...calibration.files import read_file_bytes
 from ...calibration.plausibility import SQUARE_TOLERANCE
 from .checkerboard import as_board, observe_board
 from .decode import decode_xb3_frame, frame_bytes
@@ -82,15 +83,14 @@ class TriangulationResult:
         }
 
 
+#: Largest image or raw frame file read (an XB3 raw frame is 3.7 MB, a 16-bit TIFF pair some tens).
+MAX_IMAGE_BYTES = 512 * 1024 * 1024
+
+
 def read_image_bytes(path) -> bytes:
     """The bytes of an image or frame file; :class:`FrameError` naming the file when it cannot be read."""
     path = Path(path)
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise FrameError(f"file not found: {path}") from None
-    except OSError as exc:
-        raise FrameError(f"cannot read {path}: {exc.strerror or exc}") from None
+    data = read_file_bytes(path, "image", FrameError, missing=f"file not found: {path}", max_bytes=MAX_IMAGE_BYTES)
     if not data:
         raise FrameError(f"{path} is empty")
     return data

@@ -75,9 +75,11 @@ def run(args) -> int:
     import sys
 
     from ..calibrate import calibrate_session_folder, judge_calibration, report_calibration, report_path_for
-    from ..output import write_json
+    from ..output import check_output_file, write_json
     from ..report_text import calibration_summary
 
+    if args.json:  # an unwritable --json fails before any solving
+        check_output_file(args.json)
     wants_report = args.report is not None
     if args.thresholds:  # a bad thresholds file fails before any solving
         from ..quality import load_thresholds

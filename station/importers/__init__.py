@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Callable
 
 from ...calibration.errors import SessionError
+from ...calibration.files import read_file_bytes
 from ...calibration.session import Session
 from .easy_handeye import looks_like_easy_handeye, read_easy_handeye
 from .moveit import looks_like_moveit, read_moveit
@@ -83,11 +84,9 @@ FORMAT_NAMES = tuple(IMPORTERS)
 
 
 def _head(path: Path, size: int = 4096) -> str:
-    try:
-        with open(path, "rb") as handle:
-            return handle.read(size).decode("utf-8", errors="replace")
-    except OSError as exc:
-        raise SessionError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    """The first ``size`` bytes of an input as text (a folder, named pipe or device is refused)."""
+    data = read_file_bytes(path, "input file", SessionError, missing=f"{path}: no such file", head=size)
+    return data.decode("utf-8", errors="replace")
 
 
 def _formats_hint() -> str:

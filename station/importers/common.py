@@ -9,6 +9,7 @@ converts to millimetres, chooses the set-up and records how everything was decid
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -17,9 +18,10 @@ from scipy.spatial.transform import Rotation
 
 from ...calibration.compact_points import BoardGeometry
 from ...calibration.diagnostics import DiagnosticLimits, hand_eye_fit, setup_rotation_residuals
-from ...calibration.errors import SessionError
+from ...calibration.errors import SessionError, brief
+from ...calibration.files import read_text_file
 from ...calibration.problem import SETUPS
-from ...calibration.session import Posture, Session
+from ...calibration.session import MAX_LENGTH_MM, MAX_LENGTH_WORDS, Posture, Session
 
 __all__ = [
     "UNITS",
@@ -30,11 +32,13 @@ __all__ = [
     "transform_from_quaternion",
     "transform_from_rotvec",
     "detect_unit",
+    "flat_numbers",
     "check_setup",
     "check_units",
     "check_quaternion_order",
     "build_session",
     "read_text",
+    "parse_json",
     "EntryErrors",
 ]
 
@@ -97,7 +101,7 @@ def rigid_transform(value) -> np.ndarray:
     """
     try:
         m = np.array(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError("is not a 4x4 matrix of numbers") from None
     if m.shape == (16,):
         m = m.reshape(4, 4)
@@ -126,8 +130,11 @@ def transform_from_quaternion(position, quaternion, order: str) -> np.ndarray:
     ValueError
         Not 3 + 4 finite numbers, or the quaternion's norm is off 1 by more than 1e-3.
     """
-    p = np.asarray(position, dtype=float)
-    q = np.asarray(quaternion, dtype=float)
+    try:
+        p = np.asarray(position, dtype=float)
+        q = np.asarray(quaternion, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError("needs a position (3 numbers) and a quaternion (4 numbers)") from None
     if p.shape != (3,) or q.shape != (4,):
         raise ValueError("needs a position (3 numbers) and a quaternion (4 numbers)")
     if not (np.all(np.isfinite(p)) and np.all(np.isfinite(q))):
@@ -143,8 +150,11 @@ def transform_from_quaternion(position, quaternion, order: str) -> np.ndarray:
 
 def transform_from_rotvec(position, rotvec) -> np.ndarray:
     """4x4 transform from a position and a rotation vector (axis x angle, radians)."""
-    p = np.asarray(position, dtype=float)
-    v = np.asarray(rotvec, dtype=float)
+    try:
+        p = np.asarray(position, dtype=float)
+        v = np.asarray(rotvec, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError("needs 3 translation and 3 rotation values") from None
     if p.shape != (3,) or v.shape != (3,):
         raise ValueError("needs 3 translation and 3 rotation values")
     if not (np.all(np.isfinite(p)) and np.all(np.isfinite(v))):
@@ -153,6 +163,38 @@ def transform_from_rotvec(position, rotvec) -> np.ndarray:
     m[:3, :3] = Rotation.from_rotvec(v).as_matrix()
     m[:3, 3] = p
     return m
+
+
+def flat_numbers(value, count: int) -> np.ndarray:
+    """Exactly ``count`` numbers from a number or nested lists of them, in reading order.
+
+    Walks the lists depth first and stops at the ``count + 1``-th number, so a YAML alias bomb (a
+    list of lists of the same list ...) is refused without being expanded. Numeric strings count as
+    numbers (PyYAML reads ``1e-05`` as a string); ``true``/``false`` do not.
+
+    Raises
+    ------
+    ValueError
+        Saying what is wrong: ``got 5``, ``got more``, ``'abc' is not a number``.
+    """
+    out = []
+    stack = [value]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, list):
+            stack.extend(reversed(item))
+            continue
+        if len(out) == count:
+            raise ValueError("got more")
+        if type(item) not in (int, float, str):
+            raise ValueError(f"{brief(item)} is not a number")
+        try:
+            out.append(float(item))
+        except (ValueError, OverflowError):
+            raise ValueError(f"{brief(item)} is not a number") from None
+    if len(out) != count:
+        raise ValueError(f"got {len(out)}")
+    return np.array(out)
 
 
 def detect_unit(poses) -> tuple[str, float]:
@@ -274,6 +316,12 @@ def build_session(
     camera_mm = camera.copy()
     robot_mm[:, :3, 3] *= _SCALE[unit_info["robot"]]
     camera_mm[:, :3, 3] *= _SCALE[unit_info["camera"]]
+    for part, poses in (("robot", robot_mm), ("camera", camera_mm)):
+        farthest = np.max(np.abs(poses[:, :3, 3]), axis=1)
+        k = int(np.argmax(farthest))
+        if not farthest[k] <= MAX_LENGTH_MM:
+            raise SessionError(f"{where}: {labels[k]}: the {part} translation reaches {farthest[k]:g} mm, beyond "
+                               f"{MAX_LENGTH_WORDS}: is the unit right? (--units)")
     chosen, setup_how = _resolve_setup(robot_mm, camera_mm, setup, declared_setup, default_setup, notes)
     postures = [
         Posture(index=k, tool0_in_base=robot_mm[k], target_in_camera=camera_mm[k], extra={"source": str(labels[k])})
@@ -296,18 +344,21 @@ def build_session(
 
 
 def read_text(path) -> str:
-    """The text of ``path``, or a one-line :class:`SessionError` (missing, a folder, not text)."""
-    path = Path(path)
+    """The UTF-8 text of ``path``, or a one-line :class:`SessionError` (missing, a folder, a named pipe,
+    unreadable, over 64 MB, not UTF-8; see ``calibration.files.read_text_file``)."""
+    return read_text_file(Path(path), "input file", SessionError, missing=f"{path}: no such file")
+
+
+def parse_json(text: str, path):
+    """``json.loads(text)``, or a one-line :class:`SessionError` naming the file (and line)."""
     try:
-        return path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SessionError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise SessionError(f"{path} is a folder; give the file itself") from None
-    except UnicodeDecodeError:
-        raise SessionError(f"{path}: not a text file (binary or unknown encoding)") from None
-    except OSError as exc:
-        raise SessionError(f"{path}: cannot read ({exc.strerror or exc})") from None
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise SessionError(f"{path}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
+    except RecursionError:
+        raise SessionError(f"{path}: nested too deeply to be read as JSON") from None
+    except ValueError as exc:  # an integer of more than 4300 digits
+        raise SessionError(f"{path}: not valid JSON: a value cannot be read ({str(exc)[:100]})") from None
 
 
 class EntryErrors:

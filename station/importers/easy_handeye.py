@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...calibration.errors import SessionError
+from ...calibration.errors import SessionError, brief
 from ...calibration.session import Session, parse_yaml
 from ...calibration.transforms import invert_transforms
 from .common import Dropped, EntryErrors, build_session, read_text, transform_from_quaternion
@@ -49,7 +49,7 @@ def _transform(value) -> np.ndarray:
         quaternion = [float(r[k]) for k in "xyzw"]
     except KeyError as exc:
         raise ValueError(f"lacks {exc.args[0]}") from None
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError("holds a value that is not a number") from None
     return transform_from_quaternion(position, quaternion, "xyzw")
 
@@ -66,9 +66,10 @@ def read_easy_handeye(path, *, setup=None, units=None, board=None, skip_invalid:
     if not isinstance(data, dict) or not isinstance(data.get("samples"), list):
         raise SessionError(f"{path}: expected easy_handeye2 samples (a 'samples' list of robot/tracking transforms)")
     parameters = data.get("parameters") if isinstance(data.get("parameters"), dict) else {}
-    kind = str(parameters.get("calibration_type") or "").strip()
-    if kind and kind not in _TYPES:
-        raise SessionError(f"{path}: parameters.calibration_type {kind!r} is neither eye_in_hand nor eye_on_base")
+    kind = parameters.get("calibration_type") or ""
+    if not isinstance(kind, str) or kind.strip() not in ("", *_TYPES):
+        raise SessionError(f"{path}: parameters.calibration_type {brief(kind)} is neither eye_in_hand nor eye_on_base")
+    kind = kind.strip()
     declared = _TYPES.get(kind)
     dropped = Dropped()
     errors = EntryErrors(path, skip_invalid, dropped)

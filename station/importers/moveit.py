@@ -12,13 +12,11 @@ decide it clearly, else the default ``eye_to_hand`` (the data set in shared/data
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 
 from ...calibration.errors import SessionError
 from ...calibration.session import Session
-from .common import Dropped, EntryErrors, build_session, read_text, rigid_transform
+from .common import Dropped, EntryErrors, build_session, parse_json, read_text, rigid_transform
 
 __all__ = ["FORMAT", "DEFAULT_SETUP", "read_moveit", "looks_like_moveit"]
 
@@ -52,10 +50,7 @@ def read_moveit(path, *, setup=None, units=None, board=None, skip_invalid: bool 
         One line naming the file and the entry at fault.
     """
     text = read_text(path)
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise SessionError(f"{path}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
+    data = parse_json(text, path)
     if not isinstance(data, list):
         raise SessionError(f"{path}: expected a JSON list of [T_base_eef, T_cam_target] pairs; got a {type(data).__name__}")
     dropped = Dropped()

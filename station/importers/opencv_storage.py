@@ -19,6 +19,7 @@ with ``cv2.FileStorage``. Default set-up: detected from the data when they decid
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
@@ -26,7 +27,7 @@ import numpy as np
 
 from ...calibration.errors import SessionError
 from ...calibration.session import Session
-from .common import Dropped, EntryErrors, build_session, rigid_transform
+from .common import Dropped, EntryErrors, build_session, read_text, rigid_transform
 
 __all__ = ["FORMAT", "DEFAULT_SETUP", "read_opencv", "looks_like_opencv"]
 
@@ -77,11 +78,12 @@ def read_opencv(path, *, setup=None, units=None, board=None, skip_invalid: bool 
     """
     import cv2  # station-side only: the calibration core does not depend on OpenCV
 
+    from ...drivers.camera.stereo import refuse_base64_filestorage
+
     path = Path(path)
-    if not path.exists():
-        raise SessionError(f"{path}: no such file")
-    if path.is_dir():
-        raise SessionError(f"{path} is a folder; give the FileStorage file itself")
+    # a regular UTF-8 file of sane size without base64 values: cv2 would hang on a named pipe or on a
+    # damaged !!binary value
+    refuse_base64_filestorage(read_text(path), path, SessionError)
     previous = cv2.utils.logging.getLogLevel()
     cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
     try:
@@ -93,6 +95,8 @@ def read_opencv(path, *, setup=None, units=None, board=None, skip_invalid: bool 
             raise SessionError(f"{path}: not a readable OpenCV FileStorage file")
         try:
             return _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, camera_prefix)
+        except (cv2.error, SystemError) as exc:
+            raise SessionError(f"{path}: not a readable OpenCV FileStorage file ({_cv_message(exc)})") from None
         finally:
             storage.release()
     finally:
@@ -118,14 +122,18 @@ def _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, 
     import cv2
 
     indices = set()
-    for name in storage.root().keys():
+    root = storage.root()
+    for name in (root.keys() if root.isMap() else []):
         found = _KEY.match(name)
         if found and found.group(1) in (robot_prefix, camera_prefix):
             indices.add(int(found.group(2)))
     if not indices:
         raise SessionError(f"{path}: no {robot_prefix}_<i> / {camera_prefix}_<i> matrices (camodocal TransformPairsInput layout)")
     count_node = storage.getNode("frameCount")
-    declared = None if count_node.isNone() else int(count_node.real())
+    declared = None
+    if count_node.isInt() or count_node.isReal():
+        count = count_node.real()
+        declared = int(count) if math.isfinite(count) else None
     dropped = Dropped()
     errors = EntryErrors(path, skip_invalid, dropped)
     robot, camera, labels = [], [], []

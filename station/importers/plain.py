@@ -30,14 +30,13 @@ Set-up: option, else the JSON's ``setup``, else detected from the data, else ``e
 from __future__ import annotations
 
 import csv
-import json
 
 import numpy as np
 
 from ...calibration.compact_points import BoardGeometry
-from ...calibration.errors import SessionError
+from ...calibration.errors import SessionError, brief
 from ...calibration.problem import SETUPS
-from ...calibration.session import Session
+from ...calibration.session import MAX_CORNERS, MAX_LENGTH_MM, Session
 from .common import (
     QUATERNION_ORDERS,
     UNITS,
@@ -45,6 +44,7 @@ from .common import (
     EntryErrors,
     build_session,
     check_quaternion_order,
+    parse_json,
     read_text,
     rigid_transform,
     transform_from_quaternion,
@@ -174,10 +174,10 @@ def _json_pose(value, order: str) -> np.ndarray:
         try:
             p = np.asarray(value["position"], dtype=float)
             q = np.asarray(value["quaternion"], dtype=float)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise ValueError("position and quaternion must be lists of numbers") from None
         return transform_from_quaternion(p, q, order)
-    raise ValueError(f"needs position + quaternion, or matrix; has {', '.join(sorted(value)) or 'nothing'}")
+    raise ValueError(f"needs position + quaternion, or matrix; has {', '.join(map(brief, sorted(value))) or 'nothing'}")
 
 
 def _json_board(value, path) -> BoardGeometry | None:
@@ -186,10 +186,11 @@ def _json_board(value, path) -> BoardGeometry | None:
     corners = value.get("corners") if isinstance(value, dict) else None
     square = value.get("square_mm") if isinstance(value, dict) else None
     if (not isinstance(corners, list) or len(corners) != 2
-            or not all(isinstance(c, int) and not isinstance(c, bool) and c >= 2 for c in corners)):
-        raise SessionError(f"{path}: target.corners must be two integers >= 2, e.g. [13, 8]")
-    if square is not None and (not isinstance(square, (int, float)) or isinstance(square, bool) or not square > 0):
-        raise SessionError(f"{path}: target.square_mm must be a positive number")
+            or not all(isinstance(c, int) and not isinstance(c, bool) and 2 <= c <= MAX_CORNERS for c in corners)):
+        raise SessionError(f"{path}: target.corners must be two integers 2..{MAX_CORNERS}, e.g. [13, 8]")
+    if square is not None and (not isinstance(square, (int, float)) or isinstance(square, bool)
+                               or not 0 < square <= MAX_LENGTH_MM):
+        raise SessionError(f"{path}: target.square_mm must be a positive number of mm (within 10 km)")
     return BoardGeometry((int(corners[0]), int(corners[1])), None if square is None else float(square))
 
 
@@ -204,10 +205,7 @@ def read_plain_json(path, *, setup=None, units=None, board=None, skip_invalid: b
     SessionError
     """
     text = read_text(path)
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise SessionError(f"{path}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
+    data = parse_json(text, path)
     if isinstance(data, list):
         data = {"postures": data}
     if not isinstance(data, dict) or not isinstance(data.get("postures"), list):

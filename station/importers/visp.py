@@ -35,7 +35,7 @@ import numpy as np
 
 from ...calibration.errors import SessionError
 from ...calibration.session import Session, parse_yaml
-from .common import Dropped, EntryErrors, build_session, read_text, transform_from_rotvec
+from .common import Dropped, EntryErrors, build_session, flat_numbers, read_text, transform_from_rotvec
 from .visp_images import find_images, measure_board_pose, read_chessboard_data, read_visp_camera
 
 __all__ = ["FORMAT", "DEFAULT_SETUP", "read_visp", "read_pose_vector", "looks_like_visp", "ROBOT_PATTERN", "CAMERA_PATTERN"]
@@ -72,12 +72,9 @@ def read_pose_vector(path) -> np.ndarray:
     if not isinstance(data, dict) or "data" not in data:
         raise SessionError(f"{path}: expected a ViSP pose vector (keys rows, cols, data)")
     try:
-        values = np.asarray(data["data"], dtype=float).ravel()
-    except (TypeError, ValueError):
-        raise SessionError(f"{path}: data must hold six numbers [tx, ty, tz, θux, θuy, θuz]") from None
-    if values.size != 6:
-        raise SessionError(f"{path}: data must hold six numbers [tx, ty, tz, θux, θuy, θuz]; got {values.size}")
-    return values
+        return flat_numbers(data["data"], 6)
+    except ValueError as exc:
+        raise SessionError(f"{path}: data must hold six numbers [tx, ty, tz, θux, θuy, θuz]; {exc}") from None
 
 
 def _collect(paths) -> tuple[dict, dict, list]:

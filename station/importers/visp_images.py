@@ -23,6 +23,8 @@ import numpy as np
 
 from ...calibration.compact_points import BoardGeometry, board_corners
 from ...calibration.errors import SessionError
+from ...calibration.files import check_regular_file, read_file_bytes, read_text_file
+from ...calibration.session import MAX_CORNERS, MAX_LENGTH_MM
 
 __all__ = ["IMAGE_PATTERN", "CameraIntrinsics", "read_visp_camera", "read_chessboard_data", "find_images",
            "canonical_corner_order", "measure_board_pose"]
@@ -55,10 +57,9 @@ def read_visp_camera(path) -> CameraIntrinsics:
     ------
     SessionError
     """
+    data = read_file_bytes(path, "camera file", SessionError, missing=f"{path}: no such file")
     try:
-        root = ET.parse(path).getroot()
-    except FileNotFoundError:
-        raise SessionError(f"{path}: no such file") from None
+        root = ET.fromstring(data)
     except ET.ParseError as exc:
         line = exc.position[0] if getattr(exc, "position", None) else "?"
         raise SessionError(f"{path}: not valid XML (line {line})") from None
@@ -84,13 +85,20 @@ def read_visp_camera(path) -> CameraIntrinsics:
 
 def read_chessboard_data(path) -> BoardGeometry:
     """``chessboard-data.txt`` of ViSP's app: ``9 x 6`` inner corners and ``square size: 0.0236 m``."""
-    text = Path(path).read_text(encoding="utf-8", errors="replace")
-    corners = re.search(r"(\d+)\s*[xX]\s*(\d+)", text)
+    text = read_text_file(path, "chessboard file", SessionError, missing=f"{path}: no such file")
+    corners = re.search(r"(\d{1,4})\s*[xX]\s*(\d{1,4})", text)
     square = re.search(r"square\s*size\s*:?\s*([0-9.eE+-]+)\s*(mm|m)?", text, re.IGNORECASE)
+    expected = f"{path}: expected '<nx> x <ny>' and 'square size: <value> m'; pass --board and --square-mm"
     if not corners or not square:
-        raise SessionError(f"{path}: expected '<nx> x <ny>' and 'square size: <value> m'; pass --board and --square-mm")
+        raise SessionError(expected)
     nx, ny = int(corners.group(1)), int(corners.group(2))
-    size = float(square.group(1)) * (1000.0 if (square.group(2) or "m").lower() == "m" else 1.0)
+    try:
+        size = float(square.group(1)) * (1000.0 if (square.group(2) or "m").lower() == "m" else 1.0)
+    except ValueError:
+        raise SessionError(expected) from None
+    if not (2 <= min(nx, ny) and max(nx, ny) <= MAX_CORNERS and 0 < size <= MAX_LENGTH_MM):
+        raise SessionError(f"{path}: a board of {nx} x {ny} inner corners with {size:g} mm squares is not plausible "
+                           f"(2..{MAX_CORNERS} corners, squares within 10 km); pass --board and --square-mm")
     return BoardGeometry((max(nx, ny), min(nx, ny)), size)
 
 
@@ -162,6 +170,7 @@ def measure_board_pose(image_path, board: BoardGeometry, camera: CameraIntrinsic
     """
     import cv2
 
+    check_regular_file(image_path, "image", ValueError, max_bytes=None)
     image = cv2.imread(str(image_path), cv2.IMREAD_GRAYSCALE)
     if image is None:
         raise ValueError("cannot read the image")

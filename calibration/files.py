@@ -1,0 +1,334 @@
+"""Reading and writing files safely: every way a path can be wrong becomes one line that says what to do.
+
+Reading (:func:`read_text_file`, :func:`read_file_bytes`, :func:`check_regular_file`): the path must
+name a regular file (not a folder, a named pipe, a device or a socket), be readable, be no larger
+than a limit (64 MB by default; no input of the package comes near it) and, for text, hold UTF-8.
+The path is checked with ``os.stat`` before it is opened, and opened with ``O_NONBLOCK`` and checked
+again on the open descriptor, so a named pipe can never hang a reader. :func:`parse_yaml` turns
+everything PyYAML can raise into the same kind of one-line error.
+
+Writing (:func:`write_text_atomic`, :func:`make_folder`): a temporary file in the target's folder,
+flushed, renamed over the target. Any ``OSError`` (permission denied, a read-only file system, a file
+where a folder should be, a full disk) becomes an :class:`~.errors.OutputError` naming the path, the
+reason and the next step, and no temporary file is left behind.
+
+Every reader and writer of the package goes through here; callers pass the error class of their
+room (``SessionError``, ``ConfigError``, ...) so the message reaches the operator as one line.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import stat
+import tempfile
+from pathlib import Path
+
+import yaml
+
+from .errors import OutputError, SessionError
+
+__all__ = [
+    "MAX_FILE_BYTES",
+    "check_regular_file",
+    "read_file_bytes",
+    "read_text_file",
+    "parse_yaml",
+    "write_failure",
+    "make_folder",
+    "write_text_atomic",
+]
+
+#: Largest file a reader accepts unless told otherwise (sessions, configs, imports are kilobytes).
+MAX_FILE_BYTES = 64 * 1024 * 1024
+_UTF8_BOM = b"\xef\xbb\xbf"
+_UTF16_BOMS = (b"\xff\xfe", b"\xfe\xff")
+
+
+def _kind(mode: int) -> str | None:
+    """What a non-regular file is, in words (``None`` for a regular file)."""
+    if stat.S_ISREG(mode):
+        return None
+    if stat.S_ISDIR(mode):
+        return "a folder"
+    if stat.S_ISFIFO(mode):
+        return "a named pipe (FIFO)"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "not a regular file"
+
+
+def _megabytes(size: int) -> str:
+    return f"{size / 2**20:.0f} MB" if size >= 2**20 else f"{size} bytes"
+
+
+def _describe(what: str, path) -> str:
+    return f"{what} {path}" if what else str(path)
+
+
+def _read_failure(exc: OSError, what: str, path, error, missing: str | None) -> Exception:
+    """The one-line error for an ``OSError`` raised while looking at or opening an input."""
+    if exc.errno == errno.ENOENT:
+        return error(missing or f"{_describe(what, path)} not found")
+    if exc.errno == errno.ENOTDIR:
+        return error(missing or f"{_describe(what, path)} not found (a part of the path is a file, not a folder)")
+    if exc.errno in (errno.EACCES, errno.EPERM):
+        return error(f"cannot read {_describe(what, path)}: permission denied; make it readable or copy it somewhere "
+                     f"readable")
+    if exc.errno == errno.EISDIR:
+        return error(f"{_describe(what, path)} is a folder, not a file; give the file itself")
+    if exc.errno == errno.ENAMETOOLONG:
+        return error(f"cannot read {_describe(what, path)}: the name is too long")
+    return error(f"cannot read {_describe(what, path)}: {(exc.strerror or str(exc)).lower()}")
+
+
+def check_regular_file(path, what: str = "file", error=SessionError, *, missing: str | None = None,
+                       max_bytes: int | None = MAX_FILE_BYTES) -> os.stat_result:
+    """Refuse anything but an existing regular file of at most ``max_bytes`` (``None``: no limit).
+
+    Parameters
+    ----------
+    path : str or Path
+    what : str
+        What the file is, for the message (``"posture file"``, ``"station configuration"``).
+    error : type
+        Exception class raised (one of the package's ``HandEyeError`` subclasses, or ``ValueError``
+        where the caller turns it into one).
+    missing : str, optional
+        The whole message when the file does not exist (default ``"<what> <path> not found"``).
+    max_bytes : int or None
+
+    Returns
+    -------
+    os.stat_result
+
+    Raises
+    ------
+    error
+        Missing, a folder, a named pipe / device / socket, unreadable, or too large.
+    """
+    try:
+        info = os.stat(path)
+    except OSError as exc:
+        raise _read_failure(exc, what, path, error, missing) from None
+    except ValueError:  # an embedded NUL character
+        raise error(f"{_describe(what, repr(str(path)))} is not a valid file name") from None
+    _check_stat(info, what, path, error, max_bytes)
+    return info
+
+
+def _check_stat(info: os.stat_result, what: str, path, error, max_bytes: int | None) -> None:
+    kind = _kind(info.st_mode)
+    if kind == "a folder":
+        raise error(f"{_describe(what, path)} is a folder, not a file; give the file itself")
+    if kind is not None:
+        raise error(f"{_describe(what, path)} is {kind}, not a regular file; give a regular file")
+    if max_bytes is not None and info.st_size > max_bytes:
+        raise error(f"{_describe(what, path)} is {_megabytes(info.st_size)}; files over {_megabytes(max_bytes)} are "
+                    f"refused: is it the right file?")
+
+
+def read_file_bytes(path, what: str = "file", error=SessionError, *, missing: str | None = None,
+                    max_bytes: int | None = MAX_FILE_BYTES, head: int | None = None) -> bytes:
+    """The bytes of a regular file (all of them, or the first ``head``), or a one-line ``error``.
+
+    The path is checked (:func:`check_regular_file`) before it is opened; it is opened without
+    blocking and checked again on the descriptor, so a path swapped for a named pipe cannot hang.
+    With ``head`` the size limit does not apply (only ``head`` bytes are read).
+    """
+    limit = None if head is not None else max_bytes
+    check_regular_file(path, what, error, missing=missing, max_bytes=limit)
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
+    try:
+        fd = os.open(path, flags)
+    except OSError as exc:
+        raise _read_failure(exc, what, path, error, missing) from None
+    try:
+        _check_stat(os.fstat(fd), what, path, error, limit)
+        wanted = head if head is not None else (max_bytes + 1 if max_bytes is not None else -1)
+        with os.fdopen(fd, "rb", closefd=False) as handle:
+            data = handle.read(wanted)
+    except OSError as exc:
+        raise _read_failure(exc, what, path, error, missing) from None
+    finally:
+        os.close(fd)
+    if head is None and max_bytes is not None and len(data) > max_bytes:  # grew while being read
+        raise error(f"{_describe(what, path)} is over {_megabytes(max_bytes)}: is it the right file?")
+    return data
+
+
+def read_text_file(path, what: str = "file", error=SessionError, *, missing: str | None = None,
+                   max_bytes: int | None = MAX_FILE_BYTES) -> str:
+    """The UTF-8 text of a regular file (a leading byte-order mark dropped), or a one-line ``error``.
+
+    Parameters
+    ----------
+    path : str or Path
+    what : str
+        What the file is, for the messages.
+    error : type
+        Exception class raised.
+    missing : str, optional
+        The whole message when the file does not exist.
+    max_bytes : int or None
+        Largest accepted size (default :data:`MAX_FILE_BYTES`).
+
+    Raises
+    ------
+    error
+        Everything :func:`read_file_bytes` refuses, and text that is not UTF-8 (the message names the
+        first bad byte and its offset, and tells UTF-16 text and binary files apart).
+    """
+    data = read_file_bytes(path, what, error, missing=missing, max_bytes=max_bytes)
+    start = len(_UTF8_BOM) if data.startswith(_UTF8_BOM) else 0
+    try:
+        return data[start:].decode("utf-8")
+    except UnicodeDecodeError as exc:
+        offset = start + exc.start
+        where = f"byte 0x{data[offset]:02x} at offset {offset}"
+        if data.startswith(_UTF16_BOMS):
+            message = "is UTF-16 text: save it as UTF-8"
+        elif b"\0" in data[:8192]:
+            message = f"is a binary file, not text ({where}): give the text file itself"
+        else:
+            message = f"is not UTF-8 text ({where}): save it as UTF-8"
+        raise error(f"{_describe(what, path)} {message}") from None
+
+
+#: PyYAML's safe loader on libyaml when it is built in: many times faster, linear in the nesting depth
+#: and limited to 1000 levels (the pure-Python scanner is quadratic in the depth of ``[[[[...``).
+_SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
+def parse_yaml(text: str, source, error=SessionError, hint: str = ""):
+    """``yaml.safe_load(text)``; text that cannot be loaded raises ``error`` naming ``source``.
+
+    Besides malformed YAML (named with its line) this covers what PyYAML's constructors raise as other
+    exceptions: impossible dates (``2020-13-45``), integers of more than 4300 digits, explicit tags
+    whose value has the wrong form (``!!float abc`` raises ValueError, ``!!timestamp x``
+    AttributeError), and nesting too deep for the parser.
+    """
+    try:
+        return yaml.load(text, Loader=_SAFE_LOADER)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" (line {mark.line + 1})" if mark is not None else ""
+        raise error(f"{source}: not valid YAML{where}{hint}") from None
+    except RecursionError:
+        raise error(f"{source}: nested too deeply to be read as YAML{hint}") from None
+    except (ValueError, OverflowError) as exc:
+        reason = str(exc).splitlines()[0][:120] if str(exc) else type(exc).__name__
+        raise error(f"{source}: not valid YAML: a value cannot be read ({reason}){hint}") from None
+    except Exception:  # noqa: BLE001 - PyYAML's safe constructors raise assorted types on tagged values
+        raise error(f"{source}: not valid YAML: a tagged value (such as !!timestamp) has the wrong form{hint}") from None
+
+
+# --------------------------------------------------------------------------- writing
+
+
+def _first_existing(path: Path) -> Path | None:
+    for candidate in (path, *path.parents):
+        try:
+            os.stat(candidate)
+        except OSError:
+            continue
+        return candidate
+    return None
+
+
+def write_failure(path, exc: OSError, action: str = "write") -> OutputError:
+    """An :class:`OutputError` for an ``OSError`` raised while writing ``path``: path, reason, what to do.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file or folder being written.
+    exc : OSError
+    action : str
+        The verb of the message: ``cannot <action> <path>: <reason>; <what to do>``; ``"write"``
+        for a file, ``"create folder"`` for a folder.
+    """
+    path = Path(path)
+    code = exc.errno
+    reason = (exc.strerror or str(exc)).lower()
+    todo = "choose a writable folder"
+    if code in (errno.EACCES, errno.EPERM):
+        reason = "permission denied"
+    elif code == errno.EROFS:
+        reason = "the file system is read-only"
+    elif code in (errno.ENOSPC, getattr(errno, "EDQUOT", -1)):
+        reason, todo = "no space left on the device", "free some space or choose another disk"
+    elif code == errno.ENAMETOOLONG:
+        reason, todo = "the name is too long", "choose a shorter name"
+    elif code == errno.EISDIR:
+        reason, todo = "it is a folder", "give a file name"
+    elif code in (errno.ENOTDIR, errno.EEXIST):
+        existing = _first_existing(path if action == "create folder" else path.parent)
+        if existing is not None and not existing.is_dir():
+            reason = f"{existing} is a file, not a folder"
+    elif code == errno.ENOENT:
+        reason = "a folder on the way does not exist"
+    return OutputError(f"cannot {action} {path}: {reason}; {todo}")
+
+
+def make_folder(path) -> Path:
+    """``mkdir -p path``, or an :class:`OutputError` naming the path, the reason and what to do."""
+    path = Path(path)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise write_failure(path, exc, "create folder") from None
+    return path
+
+
+def write_text_atomic(path, text: str, encoding: str = "utf-8", newline: str | None = None) -> Path:
+    """Write ``text`` to ``path`` atomically: a temporary file in the same folder, flushed to disk,
+    renamed over the target (and the rename itself synced). The file gets the user's usual
+    permissions (umask), not a temporary file's 0600. Used for every file the package writes.
+
+    Raises
+    ------
+    OutputError
+        The folder cannot be created or written (permission, read-only, a file in the way, full
+        disk), or ``path`` is a folder; one line naming the path. Nothing is left behind.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise OutputError(f"cannot write {path}: it is a folder; give a file name")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise write_failure(path, exc) from None
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        raise write_failure(path, exc) from None
+    try:
+        with os.fdopen(fd, "w", encoding=encoding, newline=newline) as handle:
+            umask = os.umask(0)
+            os.umask(umask)
+            os.fchmod(handle.fileno(), 0o666 & ~umask)
+            handle.write(text)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+    except BaseException as exc:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        if isinstance(exc, OSError):
+            raise write_failure(path, exc) from None
+        if isinstance(exc, UnicodeEncodeError):
+            raise OutputError(f"cannot write {path}: it would hold {exc.object[exc.start:exc.end]!r}, which "
+                              f"{encoding} cannot store; remove that character") from None
+        raise
+    try:  # make the rename itself durable
+        dir_fd = os.open(path.parent, os.O_RDONLY)
+        try:
+            os.fsync(dir_fd)
+        finally:
+            os.close(dir_fd)
+    except OSError:
+        pass
+    return path
