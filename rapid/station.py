@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from ..calibration.files import parse_yaml, read_text_file
 from ..calibration.kinematics import load_robot
 from .errors import StationConfigError
 
@@ -216,15 +217,10 @@ def station_from_dict(data: dict, source: str = "station config", base: RapidSta
 def load_station(path) -> RapidStation:
     """Read a station YAML file (see the module docstring)."""
     file = Path(path)
-    try:
-        data = yaml.safe_load(file.read_text())
-    except FileNotFoundError:
-        raise StationConfigError(f"station config {file} not found; write one (see `handeye rapid generate --help`) "
-                                 "or leave --config out to use the built-in mock station") from None
-    except OSError as exc:
-        raise StationConfigError(f"cannot read station config {file}: {exc.strerror}") from None
-    except yaml.YAMLError as exc:
-        raise StationConfigError(f"station config {file} is not valid YAML: {exc}") from None
+    text = read_text_file(file, "station config", StationConfigError,
+                          missing=f"station config {file} not found; write one (see `handeye rapid generate --help`) "
+                                  "or leave --config out to use the built-in mock station")
+    data = parse_yaml(text, file, StationConfigError)
     return station_from_dict(data or {}, str(file))
 
 

@@ -150,7 +150,6 @@ def _values(tool: ToolData) -> dict:
 
 def _new_backup(session_dir: Path, record: dict, stamp: str) -> Path:
     """Write the backup under a name no earlier backup holds (the name is reserved with O_EXCL)."""
-    from ..calibration.session import write_yaml_atomic
 
     for n in range(1, 10000):
         path = session_dir / (f"tooldata_backup_{stamp}.yaml" if n == 1 else f"tooldata_backup_{stamp}_{n}.yaml")
@@ -161,7 +160,11 @@ def _new_backup(session_dir: Path, record: dict, stamp: str) -> Path:
         except OSError as exc:
             raise WritebackError(f"cannot save the old tool data in {session_dir} ({exc.strerror or exc}); nothing was "
                                  "written to the controller; make the session folder writable and run again") from None
-        write_yaml_atomic(path, record)
+        try:
+            write_yaml_atomic(path, record)
+        except BaseException:
+            path.unlink(missing_ok=True)  # give the reserved name back: no empty backup is left behind
+            raise
         return path
     raise WritebackError(f"{session_dir} holds 9999 backups of {stamp}; nothing was written")
 
@@ -232,7 +235,6 @@ def writeback(session_dir, config: StationConfig, result: CalibrationResult, con
         return WritebackOutcome(literal, new, dry_run=True)
     if controller is None:
         raise WritebackError("no controller to write to (give --config or --mock, or use --dry-run)")
-    from ..calibration.session import write_yaml_atomic
     from ..drivers.controller.errors import (ControllerConnectionError, ControllerRefused, ControllerTimeout,
                                              InvalidRequest, ProtocolError)
 

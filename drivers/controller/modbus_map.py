@@ -13,8 +13,7 @@ import struct
 from dataclasses import dataclass
 from pathlib import Path
 
-import yaml
-
+from ...calibration.files import parse_yaml, read_text_file
 from .errors import InvalidRequest
 
 __all__ = ["Register", "RegisterMap", "load_register_map", "DEFAULT_MAP", "STATE_CODES", "STATE_NAMES",
@@ -159,12 +158,7 @@ def load_register_map(path=None) -> RegisterMap:
         return path
     file = Path(path) if path is not None else DEFAULT_MAP
     source = str(file) if path is not None else "built-in"
-    try:
-        data = yaml.safe_load(file.read_text())
-    except OSError as exc:
-        raise _bad(source, f"cannot read it ({exc.strerror})") from None
-    except yaml.YAMLError as exc:
-        raise _bad(source, f"not valid YAML ({exc})") from None
+    data = parse_yaml(read_text_file(file, "register map", InvalidRequest), f"register map {source}", InvalidRequest)
     if not isinstance(data, dict) or data.get("format") != "handeye-modbus-map/1":
         raise _bad(source, "expected 'format: handeye-modbus-map/1'")
     word_order = data.get("word_order")
