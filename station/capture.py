@@ -40,9 +40,10 @@ from ..drivers.camera.errors import CameraError, SquareSizeMismatch
 from ..drivers.camera.triangulate import triangulate_images
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
-from .planning import PosturePlan, plan_postures
+from .planning import PlanScore, PosturePlan, plan_postures
+from .quality import config_thresholds
 
-__all__ = ["CaptureError", "CaptureSummary", "PostureReport", "capture", "measure_board", "stereo_views"]
+__all__ = ["CaptureError", "CaptureSummary", "PostureReport", "capture", "measure_board", "plan_line", "stereo_views"]
 
 
 _STATION_NAMES = {MOCK: "embedded mock station", REAL: "real station"}
@@ -164,7 +165,16 @@ def _new_plan(config: StationConfig, controller, camera, model, progress) -> Pos
     if np.linalg.norm(side) > 1e-6:
         sampling = ViewSampling(**{**sampling.__dict__, "side": tuple(side / np.linalg.norm(side))})
     return plan_postures(robot, start, compact.target2cam[0], config.camera.nominal_mount_transform(), config.target,
-                         p.postures, sampling, stereo_views(model), p.seed)
+                         p.postures, sampling, stereo_views(model), p.seed, thresholds=config_thresholds(config))
+
+
+def plan_line(score: PlanScore, postures: int) -> str:
+    """The plan as the operator reads it, in the verdict's quality words (``calibration.quality_words``)."""
+    return (f"plan: {postures} postures; rotation-axis spread {score.rotation_axis_spread_deg:.1f} deg "
+            f"(35.3 = even over the sphere); relative rotation angle between postures median "
+            f"{score.median_pair_angle_deg:.0f} deg (min {score.min_pair_angle_deg:.0f}); motion "
+            f"{score.motion_time_s:.0f} s at full speed; expected accuracy about {score.predicted_sigma_mm:.2f} mm / "
+            f"{score.predicted_sigma_deg:.3f} deg (simulated)")
 
 
 def capture(
@@ -229,11 +239,7 @@ def capture(
         plan = _new_plan(config, controller, camera, stereo_model, progress)
         plan_joints = plan.joints_deg
         plan_score = {k: float(v) for k, v in plan.score.__dict__.items()}
-        sc = plan.score
-        progress(f"plan: {len(plan_joints)} postures; rotation-axis spread {sc.axis_spread:.2f} (1 = even); rotation "
-                 f"between postures median {sc.median_pair_angle_deg:.0f} deg (min {sc.min_pair_angle_deg:.0f}); "
-                 f"motion {sc.motion_time_s:.0f} s at full speed; expected accuracy about {sc.predicted_sigma_mm:.2f} mm / "
-                 f"{sc.predicted_sigma_deg:.3f} deg (simulated)")
+        progress(plan_line(plan.score, len(plan_joints)))
         for note in plan.notes:
             progress(f"plan warning: {note}")
         session = Session(setup="eye_in_hand", robot=config.robot, target=config.target, extra={"capture": {

@@ -9,7 +9,7 @@ PASS; greyed out, struck through and not selectable under "FAIL - do not write t
 on a FAIL), its uncertainty and the outliers; the quality checks with advice; five figures and
 tables (per-posture residuals, rotation-axis coverage, method comparison, repeatability of the board
 corners in the fixed frame, quality metrics and truth errors); the data checks made before solving.
-d_org is everywhere the one of ``station.quality.station_d_org``, and the header says which postures
+d_org is everywhere the one of ``calibration.quality_words.result_d_org``, and the header says which postures
 and points it is computed over.
 
 Plots use matplotlib's object API (``Figure`` + Agg canvas): no pyplot, no global backend change.
@@ -34,16 +34,8 @@ from ..calibration.session import write_text_atomic
 from ..calibration.transforms import rotation_error_deg
 from ..rapid.literals import pose_literal, rounded_pose
 from .origin import origin_banner, session_origin
-from .quality import (
-    CHECK_LABELS,
-    D_ORG_ALL_NAME,
-    Verdict,
-    direction_name,
-    format_check_value,
-    kept_postures,
-    rotation_axis_coverage,
-    station_d_org,
-)
+from ..calibration.quality_words import D_ORG_ALL_NAME, kept_postures, result_d_org, rotation_axis_coverage
+from .quality import CHECK_LABELS, Verdict, direction_name, format_check_value
 
 __all__ = ["COMPARISON_METHODS", "comparison_results", "method_comparison", "write_report"]
 
@@ -89,14 +81,14 @@ def comparison_results(problem: HandEyeProblem, methods=COMPARISON_METHODS, trut
 def method_comparison(problem: HandEyeProblem, chosen, comparison: dict) -> list[dict]:
     """One row per method: pose, differences from ``chosen`` and ``d_org`` on the same data.
 
-    ``d_org_mm`` is the station's d_org (``station.quality.station_d_org``) of each method's X over
+    ``d_org_mm`` is the station's d_org (``calibration.quality_words.result_d_org``) of each method's X over
     the postures the CHOSEN result kept and the same board points, so the chosen method's row shows
     the very figure of the report's header and the verdict. ``d_org_incl_outliers_mm`` is the same over
     every posture (``None`` when the chosen result left none out).
     """
     rows = []
     for name, r in comparison.items():
-        scatter = station_d_org(problem, chosen, r.x)
+        scatter = result_d_org(problem, chosen, r.x)
         rows.append({
             "method": name,
             "position_mm": [float(v) for v in r.x[:3, 3]],
@@ -248,7 +240,7 @@ def plot_axis_coverage(problem: HandEyeProblem, result) -> tuple[bytes, object]:
     """Rotation axes of the relative flange motions (inlier postures) on two hemispheres, plus the RMS
     rotation about each axis of the hand frame."""
     inliers = kept_postures(problem, result)
-    coverage = rotation_axis_coverage(problem.subset(inliers))
+    coverage = rotation_axis_coverage(problem, inliers)
     vmax = max(90.0, float(coverage.angles_deg.max()) if coverage.angles_deg.size else 90.0)
     fig = _figure(12.5, 4.9)
     grid = fig.add_gridspec(2, 3, width_ratios=[1, 1, 0.8], height_ratios=[1, 0.045], wspace=0.3, hspace=0.12)
@@ -541,7 +533,7 @@ def _summary(result, problem, verdict, tooldata_literal, session_path, origin: s
     else:
         pose.append(("uncertainty", f"not estimated by method {_e(result.method)} (the robust default does)"))
     residual_text = ", ".join(f"{i} ({result.residuals_mm.get(i, float('nan')):.2f} mm)" for i in outliers)
-    scatter = station_d_org(problem, result)
+    scatter = result_d_org(problem, result)
     facts = [
         ("session", f"<code>{_e(session_path)}</code>"),
         ("data from", _e(_ORIGIN_FACTS.get(origin, origin))),
@@ -607,7 +599,7 @@ def _comparison_table(rows: list[dict]) -> str:
 
 def _metrics_table(result, problem: HandEyeProblem) -> str:
     m = result.metrics
-    scatter = station_d_org(problem, result)
+    scatter = result_d_org(problem, result)
     rows = [
         ("d_org", f"{scatter.mm:.3f} mm", "mean distance of a board point from its mean position in the fixed frame (eq. 22)"),
         ("d_back", f"{m['d_back_mm']:.3f} mm", "mean distance between the same board point seen from two postures (eq. 23)"),
@@ -710,8 +702,8 @@ def write_report(path_html, session_path, problem: HandEyeProblem, result, compa
         f"({_e(direction_name(coverage.weakest_direction, coverage.frame))}). Right: how much the flange turned "
         f"about each {hand_frame} axis.</p>"
         + _img(png, "rotation-axis coverage")
-        + f'<p class="note">{len(coverage.axes)} posture pairs with a usable axis; median rotation between two '
-          f"postures {coverage.median_angle_deg:.1f} deg; axis spread {coverage.spread_deg:.1f} deg "
+        + f'<p class="note">{len(coverage.axes)} posture pairs with a usable axis; median relative rotation angle '
+          f"between two postures {coverage.median_angle_deg:.1f} deg; rotation-axis spread {coverage.spread_deg:.1f} deg "
           f"(0 = all axes in one plane, 35.3 = even over the sphere).</p></section>")
 
     # 3 method comparison
@@ -721,7 +713,7 @@ def write_report(path_html, session_path, problem: HandEyeProblem, result, compa
             "<h2>3. Method comparison</h2><section>"
             '<p class="how">The same data solved by other methods. &Delta; = difference from the chosen result '
             "(position distance, rotation angle). d_org (eq. 22) is computed for every method on the same data, "
-            f"{_e(station_d_org(problem, result).basis())}, as in the header and the verdict, so the column compares "
+            f"{_e(result_d_org(problem, result).basis())}, as in the header and the verdict, so the column compares "
             "like with like"
             + (f"; {_e(D_ORG_ALL_NAME)}: the same over all {problem.n} postures. " if result.outliers else ". ")
             + "Methods that agree within a few tenths of a millimetre confirm the result; one far off is usually a "

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..calibration.quality_words import D_ORG_ALL_NAME, result_d_org
 from ..rapid.literals import pose_literal, rounded_pose
 from .calibrate import CalibrationOutcome
 from .origin import origin_banner
-from .quality import D_ORG_ALL_NAME, station_d_org
 
 _BAR = 30
 
@@ -64,7 +64,7 @@ def calibration_summary(outcome: CalibrationOutcome, verdict=None) -> str:
         "Quality (lower is better):",
     ]
     if outcome.problem is not None:
-        scatter = station_d_org(outcome.problem, r)
+        scatter = result_d_org(outcome.problem, r)
         lines += [f"  d_org   {scatter.mm:.3f} mm   mean distance of a board point from its mean position (eq. 22)",
                   f"          {scatter.basis()}"]
         if scatter.incl_outliers_mm is not None:

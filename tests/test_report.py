@@ -25,7 +25,8 @@ from handeye.calibration.transforms import (
 )
 from handeye.rapid.literals import pose_literal
 from handeye.station.cli import main
-from handeye.station.quality import QualityThresholds, ThresholdError, load_thresholds, rotation_axis_coverage, verdict
+from handeye.calibration.quality_words import rotation_axis_coverage
+from handeye.station.quality import QualityThresholds, ThresholdError, load_thresholds, verdict
 from handeye.station.report import comparison_results, corner_repeatability, write_report
 
 from helpers import scene

@@ -38,7 +38,7 @@ def test_capture_plans_programs_and_measures(tmp_path, no_leaked_threads):
     assert [p.index for p in session.postures] == list(range(8))
     assert all(p.points_mm.shape == (104, 3) and p.extra["quality"]["corners"] == 104 for p in session.postures)
     record = session.extra["capture"]
-    assert len(record["plan_joints_deg"]) == 8 and record["plan_score"]["axis_spread"] > 0
+    assert len(record["plan_joints_deg"]) == 8 and record["plan_score"]["rotation_axis_spread_deg"] > 0
     assert sorted(f.name for f in (tmp_path / "s" / "rapid").iterdir()) == ["HeMain.mod", "HeSocket.mod", "HeTool.mod"]
     # the joints the robot reported are the planned ones, and the measurements calibrate
     for p, planned in zip(session.postures, record["plan_joints_deg"]):
