@@ -35,3 +35,12 @@ def problem(postures=12, setup="eye_in_hand", sigma_cam=0.0, sigma_rob=0.0, seed
     sc = scene(postures, setup, scene_seed)
     session = sample_session(sc, NoiseConfig(sigma_rob_deg=sigma_rob, sigma_cam_mm=sigma_cam, seed=seed))
     return problem_from_session(session), {"x": sc.x_true, "target2fixed": sc.target2fixed}, sc
+
+
+def assessed(problem, result, session_path="s", origin=None, **options):
+    """``station.assessment.assess`` of a result solved in the test (no session folder needed; the
+    origin is read from ``session_path`` when not given)."""
+    from handeye.station.assessment import assess
+    from handeye.station.calibrate import CalibrationOutcome
+
+    return assess(CalibrationOutcome(session_path, result, problem=problem, origin=origin), **options)
