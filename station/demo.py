@@ -69,8 +69,7 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
     with open_station(config, mock=True) as link:
         progress(f"mock station up: IRB 1400 on {link.controller.address} ({options.protocol}), XB3 serial "
                  f"{link.camera.serial}")
-        summary = capture(config, session_dir, link.controller, link.camera, link.stereo_model, link.load_program,
-                          progress=progress, on_posture=on_posture)
+        summary = capture(config, session_dir, link, progress=progress, on_posture=on_posture)
         captured_s = time.monotonic() - started
         assessment = _assess(session_dir, config, options.report, progress)
         result, verdict = assessment.result, assessment.verdict
