@@ -21,7 +21,6 @@ from .quality_words import (
     MIN_AXIS_ANGLE_DEG,
     MIN_AXIS_DIVERGENCE_DEG,
     relative_rotation_angles_deg,
-    relative_rotation_quaternions,
     rotation_axis_divergence_deg,
     usable_axes,
 )
@@ -211,7 +210,9 @@ def check_motion(problem: HandEyeProblem) -> None:
     CalibrationError
         When every relative rotation is below ~2 deg, or all rotation axes are (nearly) parallel.
     """
-    q_rel = relative_rotation_quaternions(problem.hand)
+    # Q_A of every pair (Algorithm 1, step 2): quality_words.relative_rotation_quaternions of the hand. Built
+    # with Q_B here, so a board whose points are not finite fails in this first step, as it always has.
+    q_rel = relative_motions(problem).q_a
     angles = relative_rotation_angles_deg(q_rel)
     if angles.max() < MIN_ROTATION_DEG:
         raise CalibrationError(

@@ -38,6 +38,7 @@ import numpy as np
 from ..calibration.compact_points import BoardGeometry, compact_points_from_corners
 from ..calibration.errors import HandEyeError
 from ..calibration.kinematics import load_robot
+from ..calibration.quality_words import MAX_AXIS_SPREAD_DEG
 from ..calibration.session import (
     Posture,
     Session,
@@ -58,6 +59,7 @@ from .runtime import StationLink
 
 __all__ = [
     "CaptureError",
+    "CaptureRun",
     "CaptureSummary",
     "PostureReport",
     "capture",
@@ -203,8 +205,20 @@ def _new_plan(config: StationConfig, link: StationLink, progress) -> PosturePlan
 
 
 @dataclass
-class _CaptureRun:
-    """The session a capture works on and its plan (new, or read back when resuming)."""
+class CaptureRun:
+    """The session a capture works on and its plan (new, or read back when resuming).
+
+    Attributes
+    ----------
+    session : Session
+        As on disk when the run started; its capture record (``extra['capture']``) is updated and
+        rewritten after each posture.
+    plan_joints : ndarray, shape (n, dof)
+        Planned joint angles (deg), rounded as embedded in the RAPID program; posture ``k`` (1-based)
+        is row ``k - 1``.
+    plan_score : dict
+        The plan's :class:`~handeye.station.planning.PlanScore` as recorded in the session.
+    """
 
     session: Session
     plan_joints: np.ndarray
@@ -219,13 +233,13 @@ class _CaptureRun:
 def plan_line(score: PlanScore, postures: int) -> str:
     """The plan as the operator reads it, in the verdict's quality words (``calibration.quality_words``)."""
     return (f"plan: {postures} postures; rotation-axis spread {score.rotation_axis_spread_deg:.1f} deg "
-            f"(35.3 = even over the sphere); relative rotation angle between postures median "
+            f"({MAX_AXIS_SPREAD_DEG:.1f} = even over the sphere); relative rotation angle between postures median "
             f"{score.median_pair_angle_deg:.0f} deg (min {score.min_pair_angle_deg:.0f}); motion "
             f"{score.motion_time_s:.0f} s at full speed; expected accuracy about {score.predicted_sigma_mm:.2f} mm / "
             f"{score.predicted_sigma_deg:.3f} deg (simulated)")
 
 
-def plan_session(config: StationConfig, session_dir: Path, link: StationLink, progress) -> _CaptureRun:
+def plan_session(config: StationConfig, session_dir: Path, link: StationLink, progress) -> CaptureRun:
     """Plan the postures and create the session with its capture record (``capture.station: mock|real``)."""
     plan = _new_plan(config, link, progress)
     plan_score = {k: float(v) for k, v in plan.score.__dict__.items()}
@@ -242,10 +256,10 @@ def plan_session(config: StationConfig, session_dir: Path, link: StationLink, pr
         "config": config.to_dict(),
     }})
     create_session(session_dir, session)
-    return _CaptureRun(session, np.round(plan.joints_deg, 4), plan_score)  # as embedded in the RAPID program
+    return CaptureRun(session, np.round(plan.joints_deg, 4), plan_score)  # as embedded in the RAPID program
 
 
-def resume_session(config: StationConfig, session_dir: Path, session: Session, progress) -> _CaptureRun:
+def resume_session(config: StationConfig, session_dir: Path, session: Session, progress) -> CaptureRun:
     """Read the plan of a capture on disk; refuse one made on the other station (mock vs real)."""
     record = session.extra["capture"]
     recorded = session_origin(session)
@@ -255,10 +269,10 @@ def resume_session(config: StationConfig, session_dir: Path, session: Session, p
                            "or start a new session folder")
     plan_joints = np.array(record["plan_joints_deg"], float)
     progress(f"resuming {session_dir}: {len(session.postures)} of {len(plan_joints)} postures on disk")
-    return _CaptureRun(session, plan_joints, record.get("plan_score", {}))
+    return CaptureRun(session, plan_joints, record.get("plan_score", {}))
 
 
-def open_capture(config: StationConfig, session_dir: Path, link: StationLink, progress) -> _CaptureRun:
+def open_capture(config: StationConfig, session_dir: Path, link: StationLink, progress) -> CaptureRun:
     """The capture's session: resumed when ``session_dir`` holds a capture, else planned and created."""
     session = _session_record(session_dir)
     if session is None:
@@ -300,7 +314,7 @@ def release_waiting_posture(controller, done: set, progress) -> None:
             progress(f"posture {k} was already on disk: acknowledged")
 
 
-def visit_postures(config: StationConfig, session_dir: Path, run: _CaptureRun, link: StationLink, on_posture,
+def visit_postures(config: StationConfig, session_dir: Path, run: CaptureRun, link: StationLink, on_posture,
                    stop_after: int | None = None) -> tuple[list, dict]:
     """The posture loop: move, measure, write each posture not yet on disk, record skips, acknowledge.
 

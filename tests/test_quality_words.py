@@ -55,6 +55,13 @@ def test_relative_rotation_angles_are_the_angles_between_postures():
     assert np.allclose(angles, [30.0, 40.0, between])
 
 
+def test_relative_rotations_are_algorithm_1_step_2():
+    from handeye.calibration.triplets import relative_motions
+
+    problem, _, _ = make_problem(8, sigma_rob=0.01)
+    assert np.array_equal(relative_rotation_quaternions(problem.hand), relative_motions(problem).q_a)
+
+
 def test_spread_is_zero_for_axes_in_one_plane_and_maximal_for_even_axes():
     planar = _hand([[a, b, 0] for a, b in [(30, 0), (0, 30), (25, 20), (-20, 25), (35, -10)]])
     q = relative_rotation_quaternions(planar)
