@@ -17,6 +17,13 @@ from .kinematics import load_robot
 from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points, posture_residuals
 from .plausibility import check_plausible
 from .problem import EYE_IN_HAND, HandEyeProblem, hand_poses
+from .quality_words import (
+    MIN_AXIS_ANGLE_DEG,
+    MIN_AXIS_DIVERGENCE_DEG,
+    relative_rotation_angles_deg,
+    rotation_axis_divergence_deg,
+    usable_axes,
+)
 from .refine import (
     ANGLE_GAP_FLOOR_DEG,
     RESIDUAL_FLOOR_MM,
@@ -52,8 +59,7 @@ DEFAULT_METHOD = ROBUST_METHOD
 ALL_METHODS = PAPER_METHODS + (ROBUST_METHOD,) + tuple(CLASSIC_METHODS)
 
 MIN_POSTURES = 3
-MIN_ROTATION_DEG = 2.0
-MIN_AXIS_SPREAD_DEG = 2.0
+MIN_ROTATION_DEG = MIN_AXIS_ANGLE_DEG
 
 
 @dataclass
@@ -196,26 +202,27 @@ def problem_from_session(session: Session, check_units: bool = True) -> HandEyeP
 def check_motion(problem: HandEyeProblem) -> None:
     """Refuse data whose robot motion cannot determine ``X``.
 
+    Uses the quality words of ``calibration.quality_words``: the relative rotation angles and the
+    rotation-axis divergence (how far the axes stray from one line).
+
     Raises
     ------
     CalibrationError
         When every relative rotation is below ~2 deg, or all rotation axes are (nearly) parallel.
     """
-    motions = relative_motions(problem)
-    angles = motions.angle_a_deg
+    # Q_A of every pair (Algorithm 1, step 2): quality_words.relative_rotation_quaternions of the hand. Built
+    # with Q_B here, so a board whose points are not finite fails in this first step, as it always has.
+    q_rel = relative_motions(problem).q_a
+    angles = relative_rotation_angles_deg(q_rel)
     if angles.max() < MIN_ROTATION_DEG:
         raise CalibrationError(
             f"the flange barely rotates between postures (largest relative rotation {angles.max():.2f} deg); "
             f"rotate it by 15-45 deg about different axes between postures"
         )
-    vectors = motions.q_a[angles >= MIN_ROTATION_DEG, 1:]
-    axes = vectors / np.linalg.norm(vectors, axis=1, keepdims=True)
-    scatter = axes.T @ axes / len(axes)
-    eig = np.linalg.eigvalsh(scatter)
-    spread_deg = np.degrees(np.arcsin(np.sqrt(max(1.0 - eig[-1], 0.0))))
-    if spread_deg < MIN_AXIS_SPREAD_DEG:
+    divergence = rotation_axis_divergence_deg(usable_axes(q_rel))
+    if divergence < MIN_AXIS_DIVERGENCE_DEG:
         raise CalibrationError(
-            f"all relative rotations are about nearly parallel axes (spread {spread_deg:.2f} deg); "
+            f"all relative rotations are about nearly parallel axes (rotation-axis divergence {divergence:.2f} deg); "
             f"rotate the flange about at least two different axes"
         )
 
