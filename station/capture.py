@@ -37,6 +37,7 @@ import numpy as np
 
 from ..calibration.compact_points import BoardGeometry, compact_points_from_corners
 from ..calibration.errors import HandEyeError
+from ..calibration.files import remove_stale_temporaries
 from ..calibration.kinematics import load_robot
 from ..calibration.quality_words import MAX_AXIS_SPREAD_DEG
 from ..calibration.session import (
@@ -268,6 +269,7 @@ def resume_session(config: StationConfig, session_dir: Path, session: Session, p
                            f"station ({'--mock' if recorded == MOCK else '--config STATION.yaml with the real hardware'}) "
                            "or start a new session folder")
     plan_joints = np.array(record["plan_joints_deg"], float)
+    remove_stale_temporaries(session_dir)  # a killed run may leave one beside the (whole) file it was replacing
     progress(f"resuming {session_dir}: {len(session.postures)} of {len(plan_joints)} postures on disk")
     return CaptureRun(session, plan_joints, record.get("plan_score", {}))
 

@@ -101,12 +101,15 @@ def test_a_killed_capture_restarts_and_finishes_every_posture_once(tmp_path):
     finally:
         os.kill(process.pid, signal.SIGKILL)
         process.wait()
-    before = _indices(session)
+    before = _indices(session)  # reads and validates every file: none is half-written
     assert 3 <= len(before) < 10, before
-    assert not list(session.rglob("*.tmp"))  # no half-written files
+    yaml.safe_load((session / "session.yaml").read_text())
+    # a kill between writing a temporary file and renaming it may leave that temporary beside the whole
+    # target; the resume removes it
     again = subprocess.run(command, capture_output=True, text=True, timeout=180)
     assert again.returncode == 0, again.stderr
     assert "resuming" in again.stdout
+    assert not list(session.rglob("*.tmp"))
     assert _indices(session) == list(range(10))
     plan_index = [p.extra["plan_index"] for p in read_session(session).postures]
     assert plan_index == list(range(1, 11))
