@@ -10,10 +10,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .classic import CLASSIC_METHODS
 from .compact_points import compact_points_from_corners, compact_points_from_poses
 from .errors import CalibrationError
 from .kinematics import load_robot
+from .methods import METHODS, method_names
 from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points, posture_residuals
 from .plausibility import check_plausible
 from .problem import EYE_IN_HAND, HandEyeProblem, hand_poses
@@ -51,12 +51,13 @@ __all__ = [
 ]
 
 #: The paper's variants (section 4): MC without selection, the others select among triplets.
-PAPER_METHODS = ("mc", "mcr", "mct", "mcb", "mco", "mcy")
+PAPER_METHODS = method_names("paper")
 #: The recommended default: mcb, outlier postures out, robust refinement, uncertainty.
 ROBUST_METHOD = "robust"
 DEFAULT_METHOD = ROBUST_METHOD
-#: Every method name ``calibrate`` accepts: the paper's, the robust default, the classic solvers.
-ALL_METHODS = PAPER_METHODS + (ROBUST_METHOD,) + tuple(CLASSIC_METHODS)
+#: Every method name ``calibrate`` accepts (the table of ``methods``): the paper's, the robust default,
+#: the classic solvers.
+ALL_METHODS = method_names()
 
 MIN_POSTURES = 3
 MIN_ROTATION_DEG = MIN_AXIS_ANGLE_DEG
@@ -350,8 +351,8 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
     ----------
     problem : HandEyeProblem
     method : str, optional
-        A paper variant (:data:`PAPER_METHODS`), ``robust`` or a classic solver
-        (:data:`~handeye.calibration.classic.CLASSIC_METHODS`); ``None`` runs :data:`DEFAULT_METHOD`.
+        A paper variant (:data:`PAPER_METHODS`), ``robust`` or a classic solver: a name of the table
+        :data:`~handeye.calibration.methods.METHODS`; ``None`` runs :data:`DEFAULT_METHOD`.
     truth : dict, optional
         ``{'x': 4x4, 'target2fixed': 4x4}`` of a synthetic data set: enables ``mcy`` and truth errors.
 
@@ -391,10 +392,10 @@ def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict |
         metrics, _ = _summarise(problem.subset(~flags), x)
         residuals = {int(i): float(r) for i, r in zip(problem.posture_ids, posture_res)}
         outliers = [int(i) for i in problem.posture_ids[flags]]
-    elif method in CLASSIC_METHODS:
-        x = CLASSIC_METHODS[method](problem.hand, problem.target2cam)
+    elif METHODS[method].kind == "classic":
+        x = METHODS[method].solver(problem.hand, problem.target2cam)
         runtime = time.perf_counter() - start
-        details = {"reference": CLASSIC_METHODS[method].__doc__.strip().splitlines()[0].replace("Hand-eye ``X`` by ", "")}
+        details = {"reference": METHODS[method].reference}
         metrics, residuals = _summarise(problem, x)
     else:
         x, details = _solve_paper(problem, method, truth)
