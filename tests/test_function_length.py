@@ -13,11 +13,7 @@ MAX_BODY_LINES = 80
 
 #: (file, function) -> why it may be longer. Numeric kernels that read best as one block go here,
 #: each with its reason; none needs it today.
-ALLOWED = {
-    # Temporary: part A of issue 13 rewrites the station config schema (station/config.py) and removes
-    # this function; delete the entry then (test_allow_list_names_only_long_functions says when).
-    ("station/config.py", "config_from_dict"): "the config schema, rewritten by part A of issue 13",
-}
+ALLOWED: dict = {}
 
 
 def _function_bodies():
