@@ -113,9 +113,12 @@ def test_no_board_half_board_and_wrong_counts_are_refused():
     half[:, img.shape[1] // 2:] = 110
     with pytest.raises(BoardNotFound, match="in the left image"):  # either message (the hint is heuristic)
         detect_board(half, (13, 8), what="left image")
-    for wrong in ((14, 8), (12, 8), (13, 7), (9, 6)):
-        with pytest.raises(BoardNotFound, match=f"not all of its {wrong[0]}x{wrong[1]} inner corners.*--board"):
+    # one corner off in either direction (or squares counted instead of corners): the count is named
+    for wrong in ((14, 8), (12, 8), (13, 7), (14, 9), (12, 7)):
+        with pytest.raises(BoardNotFound, match=f"has 13x8 inner corners, not {wrong[0]}x{wrong[1]}: give --board 13x8"):
             detect_board(img, wrong)
+    with pytest.raises(BoardNotFound, match="not all of its 9x6 inner corners.*--board"):
+        detect_board(img, (9, 6))
 
 
 def test_a_grid_inside_a_larger_board_is_refused(monkeypatch):
@@ -123,17 +126,17 @@ def test_a_grid_inside_a_larger_board_is_refused(monkeypatch):
     # version or detector), the squares beyond the grid still alternate and the detection is refused.
     img, truth = drawn_board(13, 8)
     sub = truth[:, :12].reshape(-1, 2)
-    monkeypatch.setattr(cb, "_find_grid", lambda gray, pattern, thorough=False: sub.copy())
+    monkeypatch.setattr(cb, "find_grid", lambda gray, pattern, search="full": cb.GridSearch(sub.copy(), "roi"))
     with pytest.raises(BoardNotFound, match="part of a larger checkerboard"):
         detect_board(img, (12, 8))
     full = truth.reshape(-1, 2)
-    monkeypatch.setattr(cb, "_find_grid", lambda gray, pattern, thorough=False: full.copy())
+    monkeypatch.setattr(cb, "find_grid", lambda gray, pattern, search="full": cb.GridSearch(full.copy(), "roi"))
     assert detect_board(img, (13, 8)).corners_px.shape == (104, 2)
 
 
 def test_low_contrast_is_refused_with_the_reason(monkeypatch):
     img, truth = drawn_board(13, 8, black=120, white=128, background=124, blur=0)
-    monkeypatch.setattr(cb, "_find_grid", lambda gray, pattern, thorough=False: truth.reshape(-1, 2).copy())
+    monkeypatch.setattr(cb, "find_grid", lambda gray, pattern, search="full": cb.GridSearch(truth.reshape(-1, 2).copy(), "roi"))
     with pytest.raises(BoardNotFound, match="grey levels"):
         detect_board(img, (13, 8), refine=False)
 
