@@ -19,7 +19,10 @@ a fraction of its time (:data:`SEARCH_STAGES`, :func:`find_grid`):
 
 Then ``cv2.cornerSubPix`` on the full image with a half-window of 0.4 x the smallest corner spacing.
 ``search="fast"`` stops after stage 1 (a live preview that must keep up with the camera). Measured
-on hard renders and real photographs: ``benchmarks/vision/bench_detection.py``.
+on hard renders and real photographs: ``benchmarks/vision/bench_detection.py``. Every detection is
+checked for corners off the smooth grid through the others (:func:`off_grid_corners`): a glare spot
+or a shadow edge can move a corner by many pixels without the detector noticing; such corners are
+listed (``Detection.off_grid``) and :func:`observe_board` refuses the board.
 
 Canonical order (target frame of conventions.md): corner index ``k = row * nx + col``; the origin
 is a corner of the grid, x runs along the rows (``nx = corners[0]`` corners), y along the
@@ -56,6 +59,7 @@ __all__ = [
     "as_board",
     "detect_board",
     "find_grid",
+    "off_grid_corners",
     "GridSearch",
     "board_region",
     "SEARCH_STAGES",
@@ -87,6 +91,9 @@ WINDOW_MIN, WINDOW_MAX = 2, 15
 MIN_CONTRAST = 12.0
 #: Alternation (as a fraction of the contrast) beyond the grid above which the board is larger than asked.
 MAX_OUTER_ALTERNATION = 0.5
+#: A corner further than this from the smooth grid through the others is off the grid (px, and as a
+#: fraction of the corner spacing): glare or a shadow edge moved it.
+OFF_GRID_PX, OFF_GRID_FRACTION = 1.5, 0.06
 #: Largest RMS rectified row disagreement (px) of a stereo detection before it is refused.
 MAX_ROW_DISAGREEMENT_PX = 2.0
 
@@ -141,6 +148,12 @@ class Detection:
         The other ordering(s) with the right handedness (the 180-deg turn), for stereo matching.
     stage : str
         The search stage of :func:`find_grid` that found the board (``fast``, ``roi``, ``full``, ``sb``).
+    off_grid : tuple of int
+        Indices of corners that do not lie on the smooth grid through the others (:func:`off_grid_corners`:
+        glare or a shadow edge moved them); the detector found the board, but these corners are not
+        measurements. Triangulation refuses such a board; calibration leaves the view out.
+    off_grid_px : float
+        The largest distance of a corner from that grid.
     """
 
     corners_px: np.ndarray
@@ -150,6 +163,15 @@ class Detection:
     pattern_score: float
     alternatives: tuple = ()
     stage: str = ""
+    off_grid: tuple = ()
+    off_grid_px: float = 0.0
+
+    def off_grid_message(self, what: str = "image") -> str:
+        """One line for a board whose corners are off its grid (empty when they are all on it)."""
+        if not self.off_grid:
+            return ""
+        return (f"{len(self.off_grid)} corner(s) of the board in the {what} are up to {self.off_grid_px:.1f} px off its "
+                f"grid (glare or a shadow edge on the board): move the light or turn the board")
 
     @property
     def grid(self) -> np.ndarray:
@@ -337,6 +359,54 @@ def find_grid(gray: np.ndarray, pattern: tuple[int, int], search: str = "full") 
     return GridSearch(None, seconds=seconds)
 
 
+def _monomials(u: np.ndarray, v: np.ndarray, degree: int) -> np.ndarray:
+    return np.column_stack([u**i * v**j for i in range(degree + 1) for j in range(degree + 1 - i)])
+
+
+def off_grid_corners(grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Corners that do not lie on the smooth grid through the others.
+
+    A polynomial map from grid indices to pixels (cubic for 30 corners or more, quadratic from 12:
+    perspective and lens distortion are smooth at the scale of a board) is fitted to all corners,
+    then refitted without the worst one while it is further than ``max(OFF_GRID_PX,
+    OFF_GRID_FRACTION x spacing)`` from the fit. Glare and shadow edges move single corners by
+    several pixels; good corners stay within a few tenths.
+
+    Parameters
+    ----------
+    grid : ndarray, shape (ny, nx, 2)
+
+    Returns
+    -------
+    indices : ndarray of int
+        Flat indices ``row * nx + col`` of the corners off the grid (empty when all fit).
+    residuals_px : ndarray, shape (nx*ny,)
+        Each corner's distance from the final fit.
+    """
+    ny, nx = grid.shape[:2]
+    n = nx * ny
+    degree = 3 if n >= 30 else 2 if n >= 12 else 0
+    pts = grid.reshape(-1, 2)
+    if degree == 0:
+        return np.zeros(0, int), np.zeros(n)
+    spacing = float(np.median(np.concatenate([np.linalg.norm(np.diff(grid, axis=1), axis=2).ravel(),
+                                              np.linalg.norm(np.diff(grid, axis=0), axis=2).ravel()])))
+    limit = max(OFF_GRID_PX, OFF_GRID_FRACTION * spacing)
+    cols, rows = np.meshgrid(np.arange(nx), np.arange(ny))
+    u = (cols.ravel() - (nx - 1) / 2) / max(nx - 1, 1)
+    v = (rows.ravel() - (ny - 1) / 2) / max(ny - 1, 1)
+    basis = _monomials(u, v, degree)
+    keep = np.ones(n, bool)
+    for _ in range(n // 4):
+        coef, *_ = np.linalg.lstsq(basis[keep], pts[keep], rcond=None)
+        residuals = np.linalg.norm(basis @ coef - pts, axis=1)
+        worst = int(np.argmax(np.where(keep, residuals, -1.0)))
+        if residuals[worst] <= limit or keep.sum() <= basis.shape[1] + 4:
+            break
+        keep[worst] = False
+    return np.nonzero(residuals > limit)[0], residuals
+
+
 def _refine(gray: np.ndarray, grid: np.ndarray) -> np.ndarray:
     """``cornerSubPix`` with a half-window of 0.4 x the smallest corner spacing; grid ``(ny, nx, 2)``."""
     spacing = min(np.linalg.norm(np.diff(grid, axis=1), axis=2).min(), np.linalg.norm(np.diff(grid, axis=0), axis=2).min())
@@ -499,7 +569,9 @@ def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside
             )
     others = tuple(c.reshape(-1, 2) for k, c in enumerate(candidates) if k != best)
     h, w = gray.shape
-    return Detection(chosen.reshape(-1, 2), board, (w, h), ambiguous, float(scores[best]), others, stage)
+    off, residuals = off_grid_corners(chosen)
+    return Detection(chosen.reshape(-1, 2), board, (w, h), ambiguous, float(scores[best]), others, stage,
+                     tuple(int(i) for i in off), float(residuals.max()) if len(off) else 0.0)
 
 
 def board_pose_from_corners(corners_px, board, camera_matrix, dist_coeffs=None) -> tuple[np.ndarray, float]:
@@ -612,7 +684,8 @@ def observe_board(left: np.ndarray, right: np.ndarray, model: StereoModel, board
     FrameError
         Image sizes differ from each other or from the model.
     BoardNotFound
-        The board is not (completely) seen in one of the images.
+        The board is not (completely) seen in one of the images, or some of its corners are off its
+        grid (glare, a shadow edge: :attr:`Detection.off_grid`).
     StereoMismatch
         The two detections do not agree with the stereo model.
     """
@@ -633,6 +706,9 @@ def observe_board(left: np.ndarray, right: np.ndarray, model: StereoModel, board
         )
     det_left = detect_board(left, board, what="left image")
     det_right = detect_board(right, board, what="right image")
+    for det, name in ((det_left, "left image"), (det_right, "right image")):
+        if det.off_grid:
+            raise BoardNotFound(det.off_grid_message(name))
     # Make the right ordering agree with the left one: among the right image's orderings with the
     # correct handedness, corresponding corners share rectified rows and have positive disparity.
     options = [det_right.corners_px, *det_right.alternatives]
