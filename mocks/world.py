@@ -15,7 +15,8 @@ from scipy.spatial.transform import Rotation
 
 from ..calibration.compact_points import BoardGeometry
 
-__all__ = ["PrintedBoard", "Lighting", "look_at", "board_view", "sample_board_views", "sheet_in_view", "hard_lighting"]
+__all__ = ["PrintedBoard", "Lighting", "BoardOperator", "look_at", "board_view", "sample_board_views", "sheet_in_view",
+           "hard_lighting"]
 
 
 @dataclass(frozen=True)
@@ -250,3 +251,72 @@ def sample_board_views(n: int, model, board: PrintedBoard = PrintedBoard(), *, d
     if len(out) < n:
         raise RuntimeError(f"only {len(out)} of {n} board views fit in the images; relax the ranges")
     return out
+
+
+class BoardOperator:
+    """A simulated operator who holds the board where a guided capture asks (the mock camera's scene).
+
+    :meth:`follow` takes a hint of the stereo calibration's guided loop (an object with ``side``,
+    ``cell`` = ``(row, col)`` of a 3 x 3 grid, and ``tilt``, a tilt class of
+    :func:`handeye.drivers.camera.coverage.tilt_class`) and returns a board pose ``target2cam`` that
+    puts the board's centre in that cell of that image with that tilt, the whole sheet in view of
+    both cameras when it can (of that camera alone otherwise); ``None`` hints ask for any new view.
+
+    Parameters
+    ----------
+    model : StereoModel
+    board : PrintedBoard
+    distance_mm : (float, float)
+        Range of distances to hold the board at.
+    seed : int, optional
+    """
+
+    def __init__(self, model, board: PrintedBoard = PrintedBoard(), distance_mm=(550.0, 1100.0), seed=None):
+        self.model = model
+        self.board = board
+        self.distance_mm = distance_mm
+        self.rng = np.random.default_rng(seed)
+
+    def _candidate(self, tilt_range) -> np.ndarray:
+        w, h = self.model.image_size
+        f = float(self.model.K1[0, 0])
+        dist = self.rng.uniform(*self.distance_mm)
+        roll = self.rng.uniform(-30, 30) + (180.0 if self.rng.random() < 0.5 else 0.0)
+        off = (self.rng.uniform(-0.45 * w, 0.45 * w), self.rng.uniform(-0.45 * h, 0.45 * h))
+        return board_view(dist, self.rng.uniform(*tilt_range), self.rng.uniform(0, 360), roll, self.board, off, f)
+
+    def pose_for(self, hint, tries: int = 4000) -> np.ndarray:
+        """A board pose satisfying ``hint`` as well as can be found in ``tries`` random poses."""
+        from ..drivers.camera.coverage import tilt_class  # the class names of the guided loop
+
+        side = getattr(hint, "side", None)
+        cell = getattr(hint, "cell", None)
+        tilt = getattr(hint, "tilt", None)
+        tilt_range = (0.0, 8.0) if tilt == "facing" else (25.0, 40.0) if tilt else (0.0, 40.0)
+        w, h = self.model.image_size
+        centre = self.board.centre()
+        fallback = None
+        for k in range(tries):
+            pose = self._candidate(tilt_range)
+            if tilt and tilt_class(pose)[0] != tilt:
+                continue
+            views = ("left", "right") if k < tries // 2 else ((side,) if side else ("left", "right"))
+            if not sheet_in_view(pose, self.model, self.board, views, border_px=6.0):
+                continue
+            if cell is not None and side is not None:
+                x, y = self.model.project(pose[:3, :3] @ centre + pose[:3, 3], side)[0]
+                if (min(int(3 * y / h), 2), min(int(3 * x / w), 2)) != tuple(cell):
+                    fallback = fallback if fallback is not None else pose
+                    continue
+            return pose
+        if fallback is not None:
+            return fallback
+        return sample_board_views(1, self.model, self.board, seed=int(self.rng.integers(1 << 30)),
+                                  views=("left", "right"))[0]
+
+    def follow(self, camera, hint) -> np.ndarray:
+        """Move the board of a :class:`~handeye.mocks.camera.MockCamera` (camera frame = base frame) as
+        ``hint`` asks; returns the pose."""
+        pose = self.pose_for(hint)
+        camera.set_scene(target2base=pose, cam2base=np.eye(4))
+        return pose
