@@ -169,14 +169,15 @@ def find_pairs(images=None, left=None, right=None, swap: bool = False) -> list[t
         if not lfiles or not rfiles:
             raise StereoInputError(f"no file matches {left if not lfiles else right!r}: check the pattern (quote it so "
                                    "the shell does not expand it)")
-        lefts = {_key(p) or f"#{k}": p for k, p in enumerate(lfiles)}
-        rights = {_key(p) or f"#{k}": p for k, p in enumerate(rfiles)}
-        if not set(lefts) & set(rights):  # names do not say left/right alike: pair in sorted order
+        lkeys, rkeys = [_key(p) for p in lfiles], [_key(p) for p in rfiles]
+        lefts, rights = dict(zip(lkeys, lfiles)), dict(zip(rkeys, rfiles))
+        if None in lkeys or None in rkeys or not set(lefts) & set(rights):
+            # the names do not say left/right alike: pair in sorted order
             if len(lfiles) != len(rfiles):
                 raise StereoInputError(f"{len(lfiles)} left and {len(rfiles)} right images, and their names do not pair "
                                        "them: give as many of each, or name them *left* / *right*")
-            lefts = {f"{k:03d}": p for k, p in enumerate(lfiles)}
-            rights = {f"{k:03d}": p for k, p in enumerate(rfiles)}
+            lefts = {f"#{k:03d}": p for k, p in enumerate(lfiles)}
+            rights = {f"#{k:03d}": p for k, p in enumerate(rfiles)}
         where = f"{left} / {right}"
     else:
         raise StereoInputError("give image pairs: --images FOLDER, or --left 'L*.png' --right 'R*.png', or --camera")
@@ -190,7 +191,10 @@ def find_pairs(images=None, left=None, right=None, swap: bool = False) -> list[t
         raise StereoInputError(f"no image pairs in {where}: name them *left* / *right* ({', '.join(IMAGE_SUFFIXES)})")
     out = []
     for k in sorted(lefts):
-        name = _pair_name(k) if not k.startswith("#") else k[1:]
+        if k.startswith("#"):  # paired by order: the common file stem, else the number
+            name = lefts[k].stem if lefts[k].stem == rights[k].stem else k[1:]
+        else:
+            name = _pair_name(k)
         l_path, r_path = (rights[k], lefts[k]) if swap else (lefts[k], rights[k])
         out.append((name, l_path, r_path))
     names = [n for n, _, _ in out]
@@ -354,7 +358,7 @@ def capture_live(camera, config: StereoCalibrationConfig, say: Callable = print,
     if coverage is None:
         raise StereoInputError("the camera gave no frame")
     if pairs < config.pairs or not coverage.complete:
-        say(f"stopped after {config.max_grabs} frames with {pairs} pairs; {coverage.summary()}")
+        say(f"stopped after {config.max_grabs} frames with {pairs} pair{'' if pairs == 1 else 's'}; {coverage.summary()}")
     return views, size, coverage
 
 

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import stereo_scene as ss
+from handeye.calibration.errors import HandEyeError
 from handeye.drivers.camera.coverage import Coverage
 from handeye.drivers.camera.stereo import load_stereo_model
 from handeye.station.cli import main
@@ -64,6 +65,17 @@ def test_globs_and_swapped_images(scene, tmp_path, capsys):
                         "--no-refine", "-o", tmp_path / "s.yaml")
     assert code == 0, err
     assert load_stereo_model(tmp_path / "s.yaml").T[0] < 0
+
+
+def test_globs_without_left_right_names_pair_in_sorted_order(tmp_path):
+    for name in ("cam0/img_2.png", "cam0/img_1.png", "cam1/img_1.png", "cam1/img_2.png"):
+        (tmp_path / name).parent.mkdir(exist_ok=True)
+        (tmp_path / name).write_bytes(b"")
+    pairs = find_pairs(left=f"{tmp_path}/cam0/*.png", right=f"{tmp_path}/cam1/*.png")
+    assert [(n, a.name, b.name) for n, a, b in pairs] == [("img_1", "img_1.png", "img_1.png"), ("img_2", "img_2.png", "img_2.png")]
+    (tmp_path / "cam1" / "img_3.png").write_bytes(b"")
+    with pytest.raises(HandEyeError, match="2 left and 3 right images"):
+        find_pairs(left=f"{tmp_path}/cam0/*.png", right=f"{tmp_path}/cam1/*.png")
 
 
 def test_pairs_are_matched_by_name(tmp_path):
@@ -141,7 +153,7 @@ def test_the_live_loop_stops_after_max_grabs_and_says_why():
     views, size, coverage = capture_live(camera, config, said.append)
     assert camera.frames == 6 and len(views) == 1 and size == (1280, 960)
     assert isinstance(coverage, Coverage)
-    assert said[-1].startswith("stopped after 6 frames with 1 pairs")
+    assert said[-1].startswith("stopped after 6 frames with 1 pair;")
 
 
 def test_triclops_file_to_stereo_yaml(tmp_path, capsys):

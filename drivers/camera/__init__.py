@@ -2,7 +2,9 @@
 the stereo model, checkerboard detection in canonical order and triangulation to millimetres.
 
 Importing this package is cheap (no OpenCV, no libdc1394); the modules ``decode``, ``stereo``,
-``checkerboard`` and ``triangulate`` use OpenCV, ``xb3`` loads libdc1394 only when it connects.
+``checkerboard``, ``triangulate``, ``stereo_calibration`` (calibrating the head), ``coverage``
+(where the board has been, hints, the coverage map) and ``triclops`` (the factory calibration's
+rectified model) use OpenCV, ``xb3`` loads libdc1394 only when it connects.
 """
 
 from .errors import BoardNotFound, CameraError, FrameError, StereoMismatch, StereoModelError

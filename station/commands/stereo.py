@@ -23,6 +23,7 @@ Pairs, one of:
                                tilts still missing: facing, each edge nearer by 20-45 deg) until the
                                coverage is complete and --pairs pairs are in (--save-images DIR keeps
                                them; 'mock' runs the simulated XB3 with a simulated operator)
+Ctrl-C stops a live capture; the pairs written with --save-images calibrate later with --images DIR.
 Left = camera 1 = the project's 'camera' frame. If the images given as left are the right camera's,
 the command says so and stops (a left camera sees every point further right than the right one, so
 the board's columns tell; and T must point to the right camera): rerun with --swap.
