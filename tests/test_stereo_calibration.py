@@ -166,3 +166,13 @@ def test_the_json_figures(calibration):
     assert data["baseline_mm"] == pytest.approx(240.5, abs=1.2)
     assert len(data["views"]) == 18 and {"name", "used_pair", "reasons"} <= set(data["views"][0])
     assert data["T_mm"][0] < 0
+
+
+@pytest.mark.parametrize("distortion, coefficients", [("k1k2p1p2", 5), ("rational", 8)])
+def test_other_distortion_models(detections, distortion, coefficients):
+    views, _ = detections
+    result = calibrate_stereo(views, ss.GEOMETRY, (1280, 960), distortion=distortion, refine=False)
+    assert result.model.D1.size == coefficients
+    if distortion == "k1k2p1p2":
+        assert result.model.D1[4] == 0.0 and result.model.D2[4] == 0.0  # k3 fixed at zero
+    assert abs(result.baseline_mm / ss.truth_model().baseline_mm - 1) < 0.005

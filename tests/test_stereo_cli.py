@@ -39,8 +39,11 @@ def scene():
 
 def test_calibrate_a_folder_writes_the_model_the_report_and_the_map(scene, tmp_path, capsys):
     out = tmp_path / "cal" / "xb3.yaml"
+    factory = tmp_path / "factory.ini"
+    factory.write_text("[triclops]\nimage_width = 1280\nimage_height = 960\nfocal_length = 983.0\ncenter_row = 493.4\n"
+                       "center_col = 643.6\nbaseline = 0.23998\n")
     code, text, err = _run(capsys, "calibrate", "--images", scene.folder, "--board", "9x6", "--square-mm", "30",
-                           "-o", out)
+                           "-o", out, "--factory", factory)
     assert code == 0, err
     model = load_stereo_model(out)
     assert model.image_size == (1280, 960)
@@ -53,6 +56,9 @@ def test_calibrate_a_folder_writes_the_model_the_report_and_the_map(scene, tmp_p
     image = cv2.imread(str(tmp_path / "cal" / "xb3_coverage.png"))
     assert image is not None and image.shape[1] > 1000
     assert "RMS" in text and "epipolar" in text and "baseline" in text and "handeye triangulate" in text
+    assert report["factory"]["factory"]["baseline_mm"] == pytest.approx(239.98)
+    assert report["factory"]["baseline_difference_percent"] == pytest.approx(100 * (240.5 / 239.98 - 1), abs=0.5)
+    assert "factory (Triclops rectified): baseline 239.98 mm" in text
 
 
 def test_globs_and_swapped_images(scene, tmp_path, capsys):

@@ -57,6 +57,8 @@ DISTORTION_MODELS = {
     "k1k2p1p2": cv2.CALIB_FIX_K3,
     "rational": cv2.CALIB_RATIONAL_MODEL,
 }
+#: Coefficients each model keeps (OpenCV may return up to 14, the rest zero).
+COEFFICIENTS = {"k1k2p1p2k3": 5, "k1k2p1p2": 5, "rational": 8}
 #: A view is dropped when its RMS error exceeds DROP_RATIO x the median and DROP_FLOOR_PX.
 DROP_RATIO = 3.0
 DROP_FLOOR_PX = 0.5
@@ -249,8 +251,7 @@ def _outlier(errors: np.ndarray, n_dropped: int, n_total: int, min_keep: int) ->
     return worst, median
 
 
-def _calibrate_camera(side: str, items: list, obj: np.ndarray, size, flags: int, guess: np.ndarray | None,
-                      reports: dict) -> CameraIntrinsics:
+def _calibrate_camera(side: str, items: list, obj: np.ndarray, size, flags: int, reports: dict) -> CameraIntrinsics:
     """``calibrateCameraExtended`` on ``items = [(name, corners)]``, dropping far-off views one at a time."""
     if len(items) < MIN_VIEWS:
         raise StereoCalibrationError(
@@ -259,12 +260,10 @@ def _calibrate_camera(side: str, items: list, obj: np.ndarray, size, flags: int,
     items = list(items)
     total, dropped = len(items), 0
     while True:
-        k0 = None if guess is None else guess.copy()
-        use_guess = cv2.CALIB_USE_INTRINSIC_GUESS if guess is not None else 0
         try:
             rms, k, d, rvecs, tvecs, std_in, _, per_view = cv2.calibrateCameraExtended(
-                [obj] * len(items), [c.astype(np.float32).reshape(-1, 1, 2) for _, c in items], size, k0, None,
-                flags=flags | use_guess, criteria=CRITERIA)
+                [obj] * len(items), [c.astype(np.float32).reshape(-1, 1, 2) for _, c in items], size, None, None,
+                flags=flags, criteria=CRITERIA)
         except cv2.error as exc:
             raise StereoCalibrationError(
                 f"OpenCV could not calibrate the {side} camera ({str(exc).strip().splitlines()[-1][:120]}): the views "
@@ -320,7 +319,7 @@ def epipolar_errors(model: StereoModel, left_px, right_px) -> np.ndarray:
 
 
 def calibrate_stereo(views, board: BoardGeometry, image_size, *, distortion: str = "k1k2p1p2k3",
-                     refine: bool = True, guess: StereoModel | None = None, name: str = "") -> StereoCalibration:
+                     refine: bool = True, name: str = "") -> StereoCalibration:
     """Calibrate the stereo head from the board's corners in a set of pairs (see the module docstring).
 
     Parameters
@@ -333,8 +332,6 @@ def calibrate_stereo(views, board: BoardGeometry, image_size, *, distortion: str
         A key of :data:`DISTORTION_MODELS`.
     refine : bool
         Try the refinement pass (intrinsics and extrinsics together) after the fixed-intrinsics pass.
-    guess : StereoModel, optional
-        Start values for the camera matrices (e.g. the factory's rectified model); none by default.
     name : str
         The model's name (e.g. where the images came from).
 
@@ -373,16 +370,16 @@ def calibrate_stereo(views, board: BoardGeometry, image_size, *, distortion: str
                 "swapped, or the two images are not one frame): not used")
     usable = [v for v in views if v.name not in wrong]
     left = _calibrate_camera("left", [(v.name, v.left) for v in usable if v.left is not None], obj, size, flags,
-                             None if guess is None else guess.K1, reports)
+                             reports)
     right = _calibrate_camera("right", [(v.name, v.right) for v in usable if v.right is not None], obj, size, flags,
-                              None if guess is None else guess.K2, reports)
+                              reports)
     pairs = [v for v in usable if reports[v.name].used_left and reports[v.name].used_right]
     if len(pairs) < MIN_PAIRS:
         raise StereoCalibrationError(
             f"only {len(pairs)} pair(s) show the board in both images; at least {MIN_PAIRS} are needed (15-25 "
             f"recommended): hold the board where both cameras see it")
     total, dropped = len(pairs), 0
-    fixed = cv2.CALIB_FIX_INTRINSIC
+    fixed = cv2.CALIB_FIX_INTRINSIC | flags  # the model flags too: RATIONAL_MODEL keeps its 8 coefficients
     while True:
         out = _stereo(obj, pairs, left, right, size, fixed)
         per_pair = np.sqrt(np.mean(out[-1] ** 2, axis=1))
@@ -418,8 +415,10 @@ def calibrate_stereo(views, board: BoardGeometry, image_size, *, distortion: str
     if t[0] > 0 and abs(t[0]) > abs(t[1]):
         raise StereoSwapped(_swap_message(agree, disagree, f"T = ({t[0]:.1f}, {t[1]:.1f}, {t[2]:.1f}) mm puts camera 2 "
                                                           f"to the left of camera 1"))
+    n = COEFFICIENTS[distortion]
+    d1, d2 = np.asarray(d1, float).ravel()[:n], np.asarray(d2, float).ravel()[:n]
     try:
-        model = StereoModel(size, k1, d1.ravel(), k2, d2.ravel(), r, t,
+        model = StereoModel(size, k1, d1, k2, d2, r, t,
                             name=name or f"stereo calibration of {len(pairs)} pairs")
     except StereoModelError as exc:
         raise StereoCalibrationError(f"the calibration is not a usable side-by-side head: {exc}") from None
