@@ -255,6 +255,9 @@ class GridSearch:
     other_pattern : tuple of int or None
         Inner corners ``(nx, ny)`` of a whole board found instead when the asked count was not (the
         count given is wrong).
+    larger_seen : tuple of int or None
+        A grid of more inner corners than asked seen in the board's region (long side first): the
+        board is larger than the count given.
     seconds : dict
         Time spent per stage tried.
     """
@@ -262,6 +265,7 @@ class GridSearch:
     corners: np.ndarray | None
     stage: str = ""
     other_pattern: tuple | None = None
+    larger_seen: tuple | None = None
     seconds: dict = field(default_factory=dict)
 
 
@@ -304,7 +308,8 @@ def find_grid(gray: np.ndarray, pattern: tuple[int, int], search: str = "full") 
         With ``search="full"``, when the cheap stages fail but a checkerboard is in view, boards one
         corner off in either direction are looked for in its region (a wrong count makes OpenCV's
         exhaustive search take up to tens of seconds); a whole board found that way ends the search
-        with ``other_pattern`` set.
+        with ``other_pattern`` set, and so does a grid larger than asked (``findChessboardCornersSB``
+        with ``CALIB_CB_LARGER``), with ``larger_seen``.
     """
     if search not in ("full", "fast"):
         raise ValueError(f"search must be 'full' or 'fast'; got {search!r}")
@@ -341,7 +346,20 @@ def find_grid(gray: np.ndarray, pattern: tuple[int, int], search: str = "full") 
             if found is not None and _whole_board(found + region[:2], other, gray):
                 lap("count")
                 return GridSearch(None, other_pattern=other, seconds=seconds)
+        # A grid larger than asked (findChessboardCornersSB may return more corners than its pattern):
+        # whatever OpenCV's exhaustive search could find would be part of that larger board.
+        ok, seen, meta = cv2.findChessboardCornersSBWithMeta(crop, (3, 3), flags=cv2.CALIB_CB_LARGER | SB_FLAGS)
         lap("count")
+        if ok and meta is not None and seen is not None and len(seen) == meta.shape[0] * meta.shape[1]:
+            rows, cols = (int(v) for v in meta.shape[:2])
+            a, b = max(rows, cols), min(rows, cols)
+            if (a, b) != tuple(pattern) and a >= 3 and b >= 3:  # a whole board of another count? OpenCV confirms
+                found = _opencv_grid(crop, (a, b), ROI_FLAGS)
+                lap("count")
+                if found is not None and _whole_board(found + region[:2], (a, b), gray):
+                    return GridSearch(None, other_pattern=(a, b), seconds=seconds)
+            if a > pattern[0] or b > pattern[1]:
+                return GridSearch(None, larger_seen=(a, b), seconds=seconds)
     corners = _opencv_grid(gray, pattern, OPENCV_DEFAULT_FLAGS)
     lap("full")
     if corners is not None:
@@ -529,6 +547,10 @@ def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside
         a, b = result.other_pattern
         raise BoardNotFound(f"the board in the {what} has {a}x{b} inner corners, not {nx}x{ny}: give --board {a}x{b} "
                             f"(inner corners, long side first)")
+    if result.larger_seen is not None:
+        a, b = result.larger_seen
+        raise BoardNotFound(f"the board in the {what} has more inner corners than {nx}x{ny} ({a}x{b} seen at least): "
+                            f"give its full inner-corner count (--board, long side first)")
     found, stage = result.corners, result.stage
     if found is None:
         if cv2.checkChessboard(gray, (nx, ny)):
