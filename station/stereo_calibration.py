@@ -397,6 +397,19 @@ def write_stereo_file(path, model, extra: dict | None = None) -> Path:
         return _write_bytes(path, temp.read_bytes())
 
 
+def _check_factory(path) -> None:
+    """Read the factory file before any work: a bad file is refused at once (a file without the image
+    size is read again with the images' size after the capture)."""
+    from ..drivers.camera.errors import StereoModelError
+    from ..drivers.camera.triclops import read_triclops_model
+
+    try:
+        read_triclops_model(path)
+    except StereoModelError as exc:
+        if "no SensorResolution" not in str(exc) and "give image_width" not in str(exc):
+            raise
+
+
 def _factory_comparison(path, calibration) -> dict:
     from ..drivers.camera.triclops import read_triclops_model
 
@@ -442,6 +455,8 @@ def run_stereo_calibration(config: StereoCalibrationConfig, *, say: Callable = p
     for target in (config.output, config.report_path, config.coverage_path):
         if Path(target).is_dir():
             raise OutputError(f"cannot write {target}: it is a folder; give a file name")
+    if config.factory:
+        _check_factory(config.factory)
     seconds = {}
     start = time.perf_counter()
     if config.camera or camera is not None:

@@ -118,6 +118,15 @@ def test_bad_input_is_one_line(scene, tmp_path, capsys, setup, args, message):
     _one_line_error(code, err, message)
 
 
+def test_a_bad_factory_file_is_refused_before_any_work(scene, tmp_path, capsys):
+    bad = tmp_path / "factory.yaml"
+    bad.write_text("focal_length: 983\n")
+    code, out, err = _run(capsys, "calibrate", "--images", scene.folder, "--board", "9x6", "--factory", bad,
+                          "-o", tmp_path / "s.yaml")
+    _one_line_error(code, err, "missing center_row, center_col, baseline")
+    assert out == ""  # refused before the pairs were read
+
+
 def test_output_into_a_folder_is_refused(scene, tmp_path, capsys):
     code, _, err = _run(capsys, "calibrate", "--images", scene.folder, "--board", "9x6", "-o", tmp_path)
     _one_line_error(code, err, "it is a folder")
