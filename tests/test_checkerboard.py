@@ -251,3 +251,15 @@ def test_a_larger_grid_seen_in_part_says_the_board_is_larger(monkeypatch):
     monkeypatch.setattr(cb.cv2, "findChessboardCornersSBWithMeta", lambda *a, **k: (True, part, meta))
     with pytest.raises(BoardNotFound, match="has more inner corners than 9x6 \\(13x3 seen at least\\): give its full"):
         detect_board(img, (9, 6))
+
+
+def test_a_board_cut_by_the_image_edge_is_not_given_another_count():
+    # 13x8 board whose last two corner columns are outside the image: the 11x8 corners in view must not
+    # be taken for a whole 11x8 (or 12x8) board
+    img, truth = drawn_board(13, 8)
+    cut = int(truth[0, 10, 0] + SQ // 2)
+    part = np.ascontiguousarray(img[:, :cut])
+    for asked in ((13, 8), (12, 8)):
+        with pytest.raises(BoardNotFound) as info:
+            detect_board(part, asked)
+        assert "inner corners, not" not in str(info.value)

@@ -281,9 +281,17 @@ def _neighbour_patterns(pattern) -> list[tuple[int, int]]:
 
 
 def _whole_board(corners: np.ndarray, pattern, gray: np.ndarray) -> bool:
-    """Whether a grid found for ``pattern`` is a board of its own (no checker pattern continues beyond it)."""
+    """Whether a grid found for ``pattern`` is a whole board of its own: its outer squares lie inside the
+    image (a board cut by the image's edge shows fewer corners than it has) and no checker pattern
+    continues beyond them."""
     nx, ny = pattern
-    candidates = canonical_orderings(corners.reshape(ny, nx, 2))
+    grid = corners.reshape(ny, nx, 2)
+    h, w = gray.shape
+    beyond = np.concatenate([2 * grid[:, 0] - grid[:, 1], 2 * grid[:, -1] - grid[:, -2],
+                             2 * grid[0] - grid[1], 2 * grid[-1] - grid[-2]])
+    if np.any(beyond < 2) or np.any(beyond[:, 0] > w - 3) or np.any(beyond[:, 1] > h - 3):
+        return False
+    candidates = canonical_orderings(grid)
     if not candidates:
         return False
     contrast = max(abs(pattern_score(c, gray)) for c in candidates)
