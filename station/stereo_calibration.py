@@ -260,6 +260,37 @@ def _pose_guess(corners, board, model):
         return None
 
 
+def _detect_both(left, right, board) -> dict:
+    """``{"left": corners or None, "right": corners or None}`` with the live loop's quick search
+    (a board with corners off its grid counts as not found)."""
+    from ..drivers.camera.checkerboard import detect_board
+    from ..drivers.camera.errors import BoardNotFound
+
+    found = {}
+    for side, image in (("left", left), ("right", right)):
+        try:
+            det = detect_board(image, board, search="fast", what=f"{side} image")
+            found[side] = None if det.off_grid else det.corners_px
+        except BoardNotFound:
+            found[side] = None
+    return found
+
+
+def _save_pair(save, name: str, left, right) -> None:
+    import cv2
+
+    for side, image in (("left", left), ("right", right)):
+        ok, data = cv2.imencode(".png", image)
+        _write_bytes(save / f"{name}_{side}.png", data.tobytes())
+
+
+def _view_line(name: str, found: dict, pairs: int, coverage, hint, wanted: int) -> str:
+    both = found["left"] is not None and found["right"] is not None
+    state = "pair" if both else f"{'left' if found['left'] is not None else 'right'} image only"
+    return (f"view {name} ({state}): {pairs} pair{'' if pairs == 1 else 's'}; {coverage.summary()}"
+            + (f"; next: {hint.text}" if hint else "" if pairs >= wanted else "; next: any new place and tilt"))
+
+
 def capture_live(camera, config: StereoCalibrationConfig, say: Callable = print,
                  follow: Callable | None = None, update: Callable | None = None) -> tuple[list, tuple, object]:
     """The guided loop: grab, detect, keep new views, say where to hold the board next.
@@ -284,77 +315,53 @@ def capture_live(camera, config: StereoCalibrationConfig, say: Callable = print,
     coverage : Coverage
         The live coverage (board poses from the nominal XB3 model: enough for the tilt classes).
     """
-    import cv2
-
     from ..drivers.camera.coverage import Coverage
     from ..drivers.camera.stereo import nominal_xb3_model
     from ..drivers.camera.stereo_calibration import ViewCorners
-    from ..drivers.camera.checkerboard import detect_board
-    from ..drivers.camera.errors import BoardNotFound
 
-    board = config.board
-    views, coverage, model, last, size = [], None, None, None, None
-    pairs = 0
-    hint = None
-    missing_said = False
+    follow = follow or (lambda hint: None)
+    views, coverage, model, last, size, hint = [], None, None, None, None, None
+    pairs, missing_said = 0, False
     save = make_folder(config.save_images) if config.save_images else None
-    for grab in range(config.max_grabs):
+    for _ in range(config.max_grabs):
         if coverage is not None and pairs >= config.pairs and coverage.complete:
             break
         frame = camera.grab()
         left, right = (frame.right, frame.left) if config.swap else (frame.left, frame.right)
         if coverage is None:
             size = (left.shape[1], left.shape[0])
-            coverage = Coverage(size)
-            model = nominal_xb3_model(*size)
+            coverage, model = Coverage(size), nominal_xb3_model(*size)
             hint = coverage.next_hint()
             say(f"next: {hint.text}")
-            if follow:
-                follow(hint)
+            follow(hint)
             continue
-        found = {}
-        for side, image in (("left", left), ("right", right)):
-            try:
-                det = detect_board(image, board, search="fast", what=f"{side} image")
-                found[side] = None if det.off_grid else det.corners_px
-            except BoardNotFound:
-                found[side] = None
+        found = _detect_both(left, right, config.board)
         if found["left"] is None and found["right"] is None:
             if not missing_said:
                 say("no board in view: hold the whole board, with its white margin, in front of the cameras")
                 missing_said = True
-            if follow:
-                follow(hint)
+            follow(hint)
             continue
         missing_said = False
         ref = found["left"] if found["left"] is not None else found["right"]
-        if last is not None and last.shape == ref.shape:
-            moved = float(np.mean(np.linalg.norm(ref - last, axis=1)))
-            if moved < NOVELTY_FRACTION * float(np.hypot(*size)):
-                if follow:
-                    follow(hint)
-                continue  # the same view again: wait for the board to move
-        last = ref
-        name = f"{len(views):03d}"
+        if (last is not None and last.shape == ref.shape
+                and float(np.mean(np.linalg.norm(ref - last, axis=1))) < NOVELTY_FRACTION * float(np.hypot(*size))):
+            follow(hint)
+            continue  # the same view again: wait for the board to move
+        last, name = ref, f"{len(views):03d}"
         alone = "board not in this image (a view for the other camera alone)"
         views.append(ViewCorners(name, found["left"], found["right"], "" if found["left"] is not None else alone,
                                  "" if found["right"] is not None else alone))
-        pose = _pose_guess(ref, board, model) if found["left"] is not None else None
-        coverage.add(found["left"], found["right"], pose)
-        both = found["left"] is not None and found["right"] is not None
-        pairs += both
+        coverage.add(found["left"], found["right"],
+                     _pose_guess(ref, config.board, model) if found["left"] is not None else None)
+        pairs += found["left"] is not None and found["right"] is not None
         if save is not None:
-            for side, image in (("left", left), ("right", right)):
-                ok, data = cv2.imencode(".png", image)
-                _write_bytes(save / f"{name}_{side}.png", data.tobytes())
+            _save_pair(save, name, left, right)
         hint = coverage.next_hint()
-        state = "pair" if both else f"{'left' if found['left'] is not None else 'right'} image only"
-        say(f"view {name} ({state}): {pairs} pair{'' if pairs == 1 else 's'}; {coverage.summary()}"
-            + (f"; next: {hint.text}" if hint else "" if pairs >= config.pairs else "; next: any new place and tilt"))
+        say(_view_line(name, found, pairs, coverage, hint, config.pairs))
         if update:
             update(min(pairs, config.pairs), config.pairs, f"{pairs} pairs")
-        if follow:
-            follow(hint)
+        follow(hint)
     if coverage is None:
         raise StereoInputError("the camera gave no frame")
     if pairs < config.pairs or not coverage.complete:
