@@ -161,8 +161,9 @@ def _quality_problem(result, config: StationConfig) -> str | None:
 
 
 def _station_kind(config: StationConfig) -> str:
-    """``mock`` or ``real``: the station a capture runs on, as the capture record says it."""
-    return MOCK if config.is_mock else REAL
+    """``mock`` or ``real``: the station a capture runs on, as the capture record says it (a rehearsal
+    against ``handeye mock controller`` is a mock station: its session is never written to a robot)."""
+    return MOCK if config.is_mock or config.is_rehearsal else REAL
 
 
 def _session_record(session_dir: Path) -> Session | None:
@@ -293,7 +294,12 @@ def install_program(config: StationConfig, session_dir: Path, plan_joints: np.nd
 
     rapid_dir = session_dir / "rapid"
     if not rapid_dir.is_dir():
-        station = station_from_dict(config.rapid_dict(plan_joints), config.source)
+        data = config.rapid_dict(plan_joints)
+        if link.is_mock and data["controller"]["write_key"] is None:
+            # the embedded station's controller holds a key of its own (HeKey.sys, handed to the PC): its
+            # link module asks HeKey for it. The key itself never goes into the program modules.
+            data["controller"]["write_key"] = link.mock.write_key
+        station = station_from_dict(data, config.source)
         write_modules(render_program(station, plan_joints), rapid_dir)
         progress(f"RAPID program written to {rapid_dir}")
     if link.load_program is not None:

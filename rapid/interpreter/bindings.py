@@ -42,8 +42,9 @@ class SocketBinding:
     def connect(self, task, handle, address: str, port: int, timeout: float | None) -> None:
         raise NotImplementedError
 
-    def receive(self, task, handle, max_bytes: int, timeout: float | None) -> bytes:
-        """Whatever arrived, at most ``max_bytes``; ``ERR_SOCK_TIMEOUT``, ``ERR_SOCK_CLOSED``."""
+    def receive(self, task, handle, max_bytes: int, timeout: float | None, exact: bool = False) -> bytes:
+        """Whatever arrived, at most ``max_bytes`` (exactly that many with ``exact``); ``ERR_SOCK_TIMEOUT``,
+        ``ERR_SOCK_CLOSED``."""
         raise NotImplementedError
 
     def send(self, task, handle, data: bytes) -> None:

@@ -59,6 +59,10 @@ class TcpSockets(SocketBinding):
         self.listening = None  # callable(handle) when a listener starts (the mock waits for it)
 
     # ------------------------------------------------------------------ hooks
+    def where(self, address: str, port: int) -> tuple[str, int]:
+        """The OS address and port a ``SocketBind address, port`` binds (the maps above)."""
+        return self.addresses.get(address, address), self.ports.get(port, port)
+
     def accepted(self, handle: TcpHandle) -> None:
         """A connection was accepted into ``handle``."""
 
@@ -82,8 +86,7 @@ class TcpSockets(SocketBinding):
     def bind(self, handle: TcpHandle, address: str, port: int) -> None:
         if handle.state != "created":
             raise RapidFatalError(f"SocketBind: the socket is {handle.state}")
-        host = self.addresses.get(address, address)
-        actual = self.ports.get(port, port)
+        host, actual = self.where(address, port)
         sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
@@ -162,7 +165,7 @@ class TcpSockets(SocketBinding):
             handle.rx.clear()
             return True
         handle.rx += data
-        return bool(data) or True
+        return True
 
     def send(self, task, handle: TcpHandle, data: bytes) -> None:
         if handle.state != "connected":

@@ -117,6 +117,8 @@ class Task:
             log.exception("RAPID task %s stopped on an internal error", self.name)
         finally:
             self._release()
+            for sock in (self._wake_r, self._wake_w):
+                sock.close()
             self._waiting.set()
             self._finished.set()
 
