@@ -76,7 +76,7 @@ __all__ = [
 ]
 
 
-_STATION_NAMES = {MOCK: "embedded mock station", REAL: "real station"}
+_STATION_NAMES = {MOCK: "mock station (embedded, or a rehearsal)", REAL: "real station"}
 
 
 class CaptureError(HandEyeError):
@@ -267,7 +267,7 @@ def resume_session(config: StationConfig, session_dir: Path, session: Session, p
     recorded = session_origin(session)
     if recorded in (MOCK, REAL) and recorded != _station_kind(config):
         raise CaptureError(f"{session_dir} was captured on the {_STATION_NAMES[recorded]}; resume it on the same "
-                           f"station ({'--mock' if recorded == MOCK else '--config STATION.yaml with the real hardware'}) "
+                           f"station ({'--mock, or the rehearsal config' if recorded == MOCK else '--config STATION.yaml with the real hardware'}) "
                            "or start a new session folder")
     plan_joints = np.array(record["plan_joints_deg"], float)
     remove_stale_temporaries(session_dir)  # a killed run may leave one beside the (whole) file it was replacing

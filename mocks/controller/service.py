@@ -125,8 +125,10 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
     if not is_loopback(options.host):
         warn(f"warning: the mock controller listens on {options.host}, not a loopback address: anyone on that network "
              "can move the robot's mock and write its tool data; it is for testing only")
+    robot = _rehearsal_arm(station, options) if options.camera_port is not None else None
     try:
         server = start_mock_controller(options.protocol, host=options.host, port=port, postures=station.postures,
+                                       robot=robot,
                                        time_scale=options.time_scale, ack_timeout_s=station.ack_timeout_s,
                                        allowed_client=options.allowed_client, register_map=options.register_map,
                                        idle_timeout_s=idle, write_key=key, station=station, program=options.program)
@@ -161,6 +163,15 @@ def _serve(server, duration_s: float | None) -> str | None:
             return server.program_error
         time.sleep(0.1 if end is None else max(0.0, min(0.1, end - time.monotonic())))
     return server.program_error
+
+
+def _rehearsal_arm(station: RapidStation, options: MockControllerOptions):
+    """The arm of a mock with a camera: standing where the camera sees the board, as an operator leaves it."""
+    from ..robot import SimulatedRobot
+    from ..station import DEFAULT_START
+
+    return SimulatedRobot(station.postures, model=station.robot, time_scale=options.time_scale,
+                          start_joints=DEFAULT_START)
 
 
 def _start_cell(server, options: MockControllerOptions):
