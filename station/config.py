@@ -421,7 +421,7 @@ def _check_hardware_named(data: dict, config: StationConfig) -> None:
                           f"station has its own camera; set both to {MOCK}, or neither")
     if camera_mock and not controller_mock and config.camera.mock_arm is None:
         raise ConfigError(f"camera.backend is {MOCK} but controller.protocol is {config.controller.protocol}: the mock camera "
-                          f"only sees a mock robot. Set both to {MOCK} (the embedded mock station), or rehearse against "
+                          f"only sees the mock robot: set both to {MOCK} (the embedded mock station), or rehearse against "
                           "`handeye mock controller --camera-port PORT` with camera.mock_arm: HOST:PORT")
 
 

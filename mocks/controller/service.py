@@ -40,7 +40,7 @@ class MockControllerOptions:
     time_scale : float
         Wall-clock seconds per simulated second of motion.
     allowed_client : str or None
-        Socket only: accept only this client address, as the RAPID module does.
+        Socket only: the PC address rendered into the program (``HE_PC_ADDRESS``; None: the station's).
     register_map : str or None
         Modbus only: register map YAML.
     duration_s : float or None

@@ -14,12 +14,12 @@ from dataclasses import dataclass
 
 from . import syntax as S
 from .builtins import lookup as lookup_builtin
-from .errors import ERROR_NUMBERS, RapidFatalError, RapidLoadError
+from .errors import RapidFatalError, RapidLoadError
 from .frames import ABSENT, Frame, Ref
 from .operators import OPERATORS, logical_not, negate
 from .scope import DataSymbol, LocalSymbol, RoutineSymbol, SignalSymbol
-from .values import (NUM_TYPES, SIGNAL_TYPES, TYPES, Aggregate, Array, Record, TypeInfo, coerce, coerce_array,
-                     compatible, copy_value, to_num, type_info)
+from .values import (NUM_TYPES, TYPES, Aggregate, Array, Record, TypeInfo, coerce, compatible, copy_value,
+                     type_info)
 
 __all__ = ["Compiler", "ArrayType", "same_type"]
 

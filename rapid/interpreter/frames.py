@@ -9,7 +9,7 @@ that no error handling in a binding catches them.
 
 from __future__ import annotations
 
-from .errors import RapidFatalError, RapidRuntimeError
+from .errors import RapidRuntimeError
 
 __all__ = ["Ref", "Frame", "ABSENT", "ReturnSignal", "RetrySignal", "TryNextSignal", "ExitSignal", "StopSignal",
            "TaskStopped", "RETRY", "TRYNEXT", "MAX_RETRIES"]
@@ -116,7 +116,3 @@ class Frame:
         # caller, as RAISE would (a guess of RAPID's rule; the shipped modules always end theirs).
         err.handled_in = self
         raise err
-
-
-def fatal(message: str) -> RapidFatalError:
-    return RapidFatalError(message)

@@ -72,9 +72,9 @@ class RoutineSymbol:
     rtype: TypeInfo | None
     module: str
     line: int
-    node: object
+    node: object = field(repr=False)
     local: bool = False
-    compiled: object = None
+    compiled: object = field(default=None, repr=False)
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from time import monotonic
 
-from . import syntax as S
 from .builtins import lookup as lookup_builtin
 from .compiler import ArrayType, Compiler
 from .errors import RapidFatalError, RapidRuntimeError

@@ -14,7 +14,7 @@
 from __future__ import annotations
 
 import struct
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from .errors import RapidFatalError, RapidRuntimeError
 
@@ -271,20 +271,19 @@ def format_value(value) -> str:
     return repr(value)
 
 
-@dataclass
+def _agg(value):
+    return Aggregate(_agg(v) for v in value) if isinstance(value, list) else value
+
+
 class _Predefined:
     """Predefined data (``tool0``, ``wobj0``, ``fine``, ``v100``, ``STR_DIGIT`` ...): name -> (type, value)."""
 
-    table: dict = field(default_factory=dict)
+    def __init__(self):
+        self.table: dict = {}
 
     def add(self, name: str, type_name: str, value) -> None:
         t = TYPES[type_name]
-        self.table[name.lower()] = (t, coerce(Aggregate(value) if isinstance(value, list) else value, t) if
-                                    not isinstance(value, list) else coerce(_agg(value), t))
-
-
-def _agg(value):
-    return Aggregate(_agg(v) for v in value) if isinstance(value, list) else value
+        self.table[name.lower()] = (t, coerce(_agg(value), t))
 
 
 def _predefined() -> dict:

@@ -66,7 +66,9 @@ def add_parser(sub):
                    help="station config: approved postures, ack and idle timeouts, write key (controller.write_key)")
     c.add_argument("--time-scale", type=argtypes.positive, default=1.0, metavar="X",
                    help="wall-clock seconds per simulated second of motion (default 1; 0.1 = 10x faster)")
-    c.add_argument("--allow-client", metavar="IP", help="socket: accept only this client address, like the RAPID module")
+    c.add_argument("--allow-client", metavar="IP",
+                   help="socket: the PC address rendered into the generated program (HE_PC_ADDRESS; default: the "
+                        "config's controller.pc_address, 127.0.0.1); --program modules carry their own")
     c.add_argument("--register-map", metavar="MAP.yaml", help="modbus: register map (default: the built-in one)")
     c.add_argument("--duration", type=argtypes.positive, metavar="S", help="stop after S seconds (default: run until Ctrl-C)")
     c.add_argument("--idle-timeout", type=argtypes.positive, metavar="S",

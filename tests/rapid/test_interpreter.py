@@ -237,3 +237,80 @@ def test_the_builtins_the_brief_names_are_supported():
               "IDelete", "MoveAbsJ", "CJointT", "CRobT", "WaitTime", "TPWrite", "ClkReset", "ClkStart", "ClkRead",
               "WZBoxDef", "WZCylDef", "WZLimSup", "WZHomeJointDef", "WZDOSet", "GetSysInfo", "Stop"}
     assert needed <= names, needed - names
+
+
+# ---------------------------------------------------------------------------------------- the parser vs rapidchecker
+def _shipped_modules():
+    from handeye.rapid.generate import render_key, render_program
+    from handeye.rapid.station import default_station
+
+    station = default_station().with_(write_key="Cell7-key_2024")
+    out = {}
+    for protocol in ("socket", "serial", "modbus"):
+        for m in render_program(station, protocol=protocol):
+            out[m.filename] = m.text
+    out["HeKey.sys"] = render_key(station).text
+    return out
+
+
+MUTATIONS = {
+    "lost ';'": ("heConnected := FALSE;", "heConnected := FALSE"),
+    "'=' for ':='": ("heConnected := FALSE;", "heConnected = FALSE;"),
+    "ENDIF lost": ("      HeAccept waitTime;\n      RETURN;\n    ENDIF\n", "      HeAccept waitTime;\n      RETURN;\n"),
+    "open parenthesis": ("WHILE (heState = HE_AT) OR (heState = HE_LATE) DO", "WHILE (heState = HE_AT OR (heState = HE_LATE) DO"),
+    "misspelt ENDPROC": ("    heRxTail := \"\";\n  ENDPROC", "    heRxTail := \"\";\n  ENDPROCX"),
+}
+
+
+pytestmark_rapidchecker = pytest.mark.filterwarnings("ignore::DeprecationWarning")  # pyparsing names it uses
+
+
+@pytestmark_rapidchecker
+def test_the_parser_accepts_what_rapidchecker_accepts_on_the_shipped_modules():
+    from rapidchecker.check import check_format
+
+    from handeye.rapid.checks import for_rapidchecker
+    from handeye.rapid.interpreter import parse_module
+
+    for name, text in _shipped_modules().items():
+        assert check_format(for_rapidchecker(text)) == [], name
+        assert parse_module(text, name).name == name.split(".")[0]
+
+
+@pytestmark_rapidchecker
+@pytest.mark.parametrize("mutation", sorted(MUTATIONS))
+def test_the_parser_refuses_what_rapidchecker_refuses(mutation):
+    from rapidchecker.check import check_format
+
+    from handeye.rapid.interpreter import parse_module
+
+    old, new = MUTATIONS[mutation]
+    text = _shipped_modules()["HeSocket.mod"]
+    assert old in text, "the template changed: update the mutation"
+    broken = text.replace(old, new, 1)
+    assert check_format(broken), f"rapidchecker accepts {mutation}"
+    with pytest.raises(RapidLoadError, match=r"^HeSocket\.mod:\d+: "):
+        parse_module(broken, "HeSocket.mod")
+
+
+def test_records_of_the_program_local_data_and_functions():
+    task = run("""
+    p.name := "cam";
+    p.pose.trans := [1, 2, 3];
+    n := Twice(p.pose.trans.z) + counter;
+    Bump counter;
+    Bump counter;""", """  RECORD part
+    string name;
+    pose pose;
+  ENDRECORD
+  LOCAL VAR part p;
+  LOCAL PERS num counter := 10;
+  VAR num n;""", extra="""
+  LOCAL FUNC num Twice(num x)
+    RETURN 2 * x;
+  ENDFUNC
+
+  PROC Bump(INOUT num value)
+    value := value + 1;
+  ENDPROC""")
+    assert value(task, "p").fields["name"] == "cam" and value(task, "n") == 16 and value(task, "counter") == 12

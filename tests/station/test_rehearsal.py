@@ -23,7 +23,7 @@ KEY = "rehearse-key_07"
 
 # ---------------------------------------------------------------------------------------- the config's rule
 def test_a_mock_camera_with_a_real_controller_needs_the_mock_arm():
-    with pytest.raises(ConfigError, match="mock camera only sees a mock robot.*camera.mock_arm"):
+    with pytest.raises(ConfigError, match="mock camera only sees the mock robot.*camera.mock_arm"):
         config_from_dict({"controller": {"protocol": "socket"}, "camera": {"backend": "mock"}})
     config = config_from_dict({"controller": {"protocol": "socket"}, "camera": {"backend": "mock",
                                                                                "mock_arm": "127.0.0.1:1100"}})
