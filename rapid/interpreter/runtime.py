@@ -102,6 +102,7 @@ class Task:
         try:
             while True:  # continuous run mode: main starts again when it returns
                 main.run(Frame(self, main, main.size))
+                self.service()
         except TaskStopped:
             self.state = "stopped"
         except StopSignal:
