@@ -76,7 +76,7 @@ __all__ = [
 ]
 
 
-_STATION_NAMES = {MOCK: "embedded mock station", REAL: "real station"}
+_STATION_NAMES = {MOCK: "mock station (embedded, or a rehearsal)", REAL: "real station"}
 
 
 class CaptureError(HandEyeError):
@@ -161,8 +161,9 @@ def _quality_problem(result, config: StationConfig) -> str | None:
 
 
 def _station_kind(config: StationConfig) -> str:
-    """``mock`` or ``real``: the station a capture runs on, as the capture record says it."""
-    return MOCK if config.is_mock else REAL
+    """``mock`` or ``real``: the station a capture runs on, as the capture record says it (a rehearsal
+    against ``handeye mock controller`` is a mock station: its session is never written to a robot)."""
+    return MOCK if config.is_mock or config.is_rehearsal else REAL
 
 
 def _session_record(session_dir: Path) -> Session | None:
@@ -266,7 +267,7 @@ def resume_session(config: StationConfig, session_dir: Path, session: Session, p
     recorded = session_origin(session)
     if recorded in (MOCK, REAL) and recorded != _station_kind(config):
         raise CaptureError(f"{session_dir} was captured on the {_STATION_NAMES[recorded]}; resume it on the same "
-                           f"station ({'--mock' if recorded == MOCK else '--config STATION.yaml with the real hardware'}) "
+                           f"station ({'--mock, or the rehearsal config' if recorded == MOCK else '--config STATION.yaml with the real hardware'}) "
                            "or start a new session folder")
     plan_joints = np.array(record["plan_joints_deg"], float)
     remove_stale_temporaries(session_dir)  # a killed run may leave one beside the (whole) file it was replacing
@@ -293,7 +294,12 @@ def install_program(config: StationConfig, session_dir: Path, plan_joints: np.nd
 
     rapid_dir = session_dir / "rapid"
     if not rapid_dir.is_dir():
-        station = station_from_dict(config.rapid_dict(plan_joints), config.source)
+        data = config.rapid_dict(plan_joints)
+        if link.is_mock and data["controller"]["write_key"] is None:
+            # the embedded station's controller holds a key of its own (HeKey.sys, handed to the PC): its
+            # link module asks HeKey for it. The key itself never goes into the program modules.
+            data["controller"]["write_key"] = link.mock.write_key
+        station = station_from_dict(data, config.source)
         write_modules(render_program(station, plan_joints), rapid_dir)
         progress(f"RAPID program written to {rapid_dir}")
     if link.load_program is not None:
