@@ -3,6 +3,7 @@ module the interpreter cannot run is refused with its name and line, world zones
 
 from __future__ import annotations
 
+import json
 import re
 import subprocess
 import sys
@@ -115,3 +116,35 @@ def test_mock_controller_refuses_a_program_of_another_link(tmp_path, capsys):
     capsys.readouterr()
     assert main(["mock", "controller", "--program", str(tmp_path / "io"), "--port", "0", "--duration", "1"]) == 1
     assert "choose --protocol modbus" in capsys.readouterr().err
+
+
+def test_robot_joints_against_a_mock_running_a_module_that_replies_wrong_fails_in_one_line(tmp_path):
+    """The module loads and runs, but its JOINTS reply lost a value: `handeye robot joints` against the
+    mock running it exits 1 with one line naming the reply, and works again with the generated modules."""
+    assert main(["rapid", "generate", "-o", str(tmp_path / "prog")]) == 0
+    link = tmp_path / "prog" / "HeSocket.mod"
+    text = link.read_text()
+    old = ' + " " + NumToStr(jt.robax.rax_6, 4);'
+    assert old in text, "the template no longer holds the JOINTS reply this test breaks: update the test"
+    link.write_text(text.replace(old, ";", 1))
+    for folder, broken in ((tmp_path / "prog", True), (None, False)):
+        program = ["--program", str(folder)] if folder else []
+        proc = subprocess.Popen([sys.executable, "-m", "handeye.station", "mock", "controller", *program,
+                                 "--port", "0", "--duration", "60"],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            banner = proc.stdout.readline()
+            port = re.search(r"listening on 127\.0\.0\.1:(\d+)", banner)
+            assert port, banner + proc.stderr.read()
+            joints = subprocess.run([sys.executable, "-m", "handeye.station", "robot", "joints", "--protocol", "socket",
+                                     "--host", "127.0.0.1", "--port", port.group(1), "--json"],
+                                    capture_output=True, text=True, timeout=60)
+        finally:
+            proc.terminate()
+            proc.communicate(timeout=30)
+        if broken:
+            assert joints.returncode == 1 and "Traceback" not in joints.stderr, joints.stderr
+            assert joints.stderr.count("\n") == 1 and "JOINTS" in joints.stderr, joints.stderr
+        else:
+            assert joints.returncode == 0, joints.stderr
+            assert len(json.loads(joints.stdout)["joints_deg"]) == 6
