@@ -2,10 +2,13 @@
 
 The postures are split into ``k`` folds (posture ``i`` in fold ``i mod k``, so each fold samples
 the whole capture). For every fold, ``X`` is solved from the other folds and the held-out postures'
-measured board points are carried into the frame the board is fixed in; the prediction error of a
-posture is the mean distance of its points from where the training postures put them, the mean
-point of eq. 21 over the training postures (a held-out d_org, eq. 22). The same definition serves
-every method, so their figures compare.
+board points are carried into the frame the board is fixed in; the prediction error of a posture
+is the mean distance of its points from where the training postures put them, the mean point of
+eq. 21 over the training postures (a held-out d_org, eq. 22). The board points are the board's
+corners as fitted at each posture (the board pose ``target2cam`` applied to the board grid), or the
+three compact points of sessions that hold board poses: a single corner's detection noise is a
+property of one measurement (reported with the noise levels), not of the calibration. The same
+definition serves every method, so their figures compare.
 
 Random noise makes this error about as large as the noise model predicts (the posture's own noise
 plus the uncertainty of ``X`` and of the mean point). Errors that depend on the posture -- a robot
@@ -28,6 +31,7 @@ __all__ = [
     "SYSTEMATIC_ADVICE",
     "CrossValidation",
     "fold_assignment",
+    "board_points",
     "held_out_errors",
     "cross_validate",
 ]
@@ -54,7 +58,7 @@ class CrossValidation:
         Per posture (in posture order): mean distance of its points from their predicted places.
         NaN for postures not held out (outliers of the method, when excluded).
     points : str
-        ``corners`` (every measured board corner) or ``compact`` (three board points).
+        ``corners`` (the fitted board corners) or ``compact`` (three board points).
     predicted_rms_mm : float or None
         What the method's noise model expects for the RMS point error (``None`` without a model).
     """
@@ -94,7 +98,7 @@ class CrossValidation:
             "mean_mm": round(self.mean_mm, 6),
             "rms_mm": round(self.rms_mm, 6),
             "per_posture_mm": {str(int(i)): round(float(e), 6) for i, e in zip(ids, self.errors_mm) if np.isfinite(e)},
-            "definition": "each posture held out in turn (k folds): mean distance of its measured board points, carried "
+            "definition": "each posture held out in turn (k folds): mean distance of its fitted board points, carried "
                           "by the flange pose and X into the fixed frame, from the mean of the training postures' points "
                           "(eq. 21-22 out of sample)",
         }
@@ -131,7 +135,20 @@ def held_out_errors(hand, x, points_cam, reference) -> tuple[np.ndarray, np.ndar
     return dist.mean(axis=1), (dist**2).mean(axis=1)
 
 
-def cross_validate(problem, solver, folds: int = DEFAULT_FOLDS, keep=None, points: str = "measured") -> CrossValidation:
+def board_points(problem) -> np.ndarray:
+    """The fitted board points of every posture in the camera frame, ``(n, m, 3)``.
+
+    The board grid (``problem.target_points``) under the fitted pose ``target2cam`` when the
+    session holds corners, else the three compact points.
+    """
+    model = problem.target_points
+    if model is not None and problem.points_cam.shape[1] == len(model) and len(model) > 3:
+        pose = problem.target2cam
+        return np.einsum("nij,mj->nmi", pose[:, :3, :3], model) + pose[:, None, :3, 3]
+    return problem.compact.points
+
+
+def cross_validate(problem, solver, folds: int = DEFAULT_FOLDS, keep=None) -> CrossValidation:
     """k-fold posture cross-validation of any solver.
 
     Parameters
@@ -142,13 +159,10 @@ def cross_validate(problem, solver, folds: int = DEFAULT_FOLDS, keep=None, point
     folds : int
     keep : array-like of bool, shape (n,), optional
         Postures taking part (training and held out); the others get NaN.
-    points : str
-        ``measured`` (``problem.points_cam``: every corner, or the three compact points of board
-        poses) or ``compact`` (the three fitted board points).
     """
     n = problem.n
     keep = np.ones(n, bool) if keep is None else np.asarray(keep, bool)
-    pts = problem.points_cam if points == "measured" else problem.compact.points
+    pts = board_points(problem)
     kind = "corners" if pts.shape[1] > 3 else "compact"
     index = np.flatnonzero(keep)
     fold = np.full(n, -1)

@@ -22,23 +22,38 @@ solved by Gauss-Newton on ``X ⊕ δx``, ``T ⊕ δt`` (``dr/dδx = Ad_{B_i^-1}`
 
 Weights. ``C_B,i`` comes from the weighted rigid fit of the board to its corners, each corner
 weighted by its stereo covariance (``noise.py``: far noisier in depth than sideways), with the
-corner-noise variance components estimated from the fit residuals. Sessions with board poses only
-get ``C_B,i = σ_φ² (rotation) + σ_ρ² (translation)`` in the board frame. ``C_A,i = σ_q² J_i J_i^T``
-from the joint noise through the flange Jacobian of the robot model when the session holds joint
-angles, else ``σ_A,φ² (rotation) + σ_A,ρ² (translation)`` in the flange frame.
+corner-noise variance components estimated from the fit residuals. Sessions of board poses only
+get ``C_B,i`` from components in the board frame: tilt (rotation about the board's in-plane axes,
+poorly seen by one camera), spin (about its normal), depth (along the camera's optical axis) and an
+isotropic position noise (which an isotropic flange position noise could not be told from).
+``C_A,i = σ_q² J_i J_i^T + σ_p² I_pos`` with the flange Jacobian ``J_i`` of the robot model when the
+session holds joint angles (joint noise, and position noise for what joints cannot shape); else
+flange rotation and translation noise in the flange frame.
 
-Variance components. Every ``σ²`` not fixed by the board fits is estimated from the posture
-residuals by restricted maximum likelihood (Fisher scoring on ``S_i = F_i + sum_k θ_k G_ik``; the
-restriction accounts for the 12 fitted parameters), alternated with the Gauss-Newton fit, so no
-noise level is typed in. The covariance of ``X`` is the inverse of the normal matrix at the
-optimum with those components.
+Kinematic deviations. A real arm differs from its DH table by deviations ``u`` that are the same
+at every posture (``noise.kinematic_jacobian``: the flange moves by ``K_i u``). With joints, the
+fit is repeated with ``u ~ N(0, diag(σ_len², σ_ang²))`` as random effects (Henderson's mixed-model
+equations: the unknowns become ``X, T, u``); the model is kept when the likelihood ratio of the two
+restricted likelihoods exceeds :data:`KINEMATIC_LR` (chi-square, 2 degrees of freedom,
+p = 0.001). The deviations that ``X`` absorbs exactly (the flange's own offset) then enter the
+covariance of ``X`` through their prior, with variances estimated from the deviations the data
+do show: the one-sigma values cover the arm's errors, not only the noise.
+
+Variance components. Every ``σ²`` not fixed by the board fits is estimated by restricted maximum
+likelihood (Fisher scoring, scale-free, on ``S_i = F_i + sum_k θ_k G_ik``; the kinematic variances
+through the mixed-model identity ``Z^T P Z = Λ^-1 - Λ^-1 M_uu Λ^-1``), alternated with the
+Gauss-Newton fit, so no noise level is typed in. The covariance of ``X`` is the inverse of the
+mixed-model normal matrix at the optimum with those components.
 
 Start and outliers. The paper's mcb (Algorithm 1, selection by d_back, eq. 23) on the postures
 that keep the X-free angle invariant (eq. 30: ``S_A = S_B``); with many postures, on a subset of
 :data:`START_POSTURES` spread over the hand rotations, so the default never needs the exhaustive
 triplet search. Then alternately the ML fit over the inliers and outlier detection on the
-postures' Mahalanobis distances ``d_i = sqrt(r_i^T S_i^-1 r_i)`` until the inlier set is stable,
-never dropping more than half.
+postures' Mahalanobis distances ``d_i = sqrt(r_i^T S_i^-1 r_i)`` (robust z-score, and a chi-square
+test with a Bonferroni bound, so clean sets keep every posture; a posture that breaks the angle
+invariant stays out when its ``d_i`` is also beyond the 1 % level) until the inlier set is stable,
+never dropping more than half. Finally a 5-fold posture cross-validation (``crossval.py``) with
+the error the noise model predicts for it.
 """
 
 from __future__ import annotations
@@ -46,6 +61,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy.stats import chi2
 
 from .noise import (
     VARIANCE_FLOOR,
@@ -58,20 +74,26 @@ from .noise import (
     kinematic_jacobian,
     retract,
     shape_eigen,
+    skew,
     stereo_point_shape,
     twist_between,
 )
+from .metrics import fixed_points
 from .problem import EYE_IN_HAND, HandEyeProblem
 from .rotations import quaternion_from_matrix
 from .transforms import invert_transforms
 
 __all__ = [
     "START_POSTURES",
+    "KINEMATIC_LR",
     "Component",
     "Observations",
     "observations",
     "MLFit",
     "fit_ml",
+    "EivSolution",
+    "solve_eiv",
+    "ml_cross_validation",
     "angle_gaps_deg",
     "spread_subset",
     "initial_board_pose",
@@ -190,7 +212,13 @@ def _hand_components(problem: HandEyeProblem) -> tuple:
         jac = flange_jacobian(robot, problem.joints_deg)
         g = to_hand @ (jac @ np.swapaxes(jac, 1, 2)) @ np.swapaxes(to_hand, 1, 2)
         kin, kinds = kinematic_jacobian(robot, problem.joints_deg)
-        return (Component("joint", "hand", g),), (to_hand @ kin, kinds)
+        # joint noise, and a position noise of the flange for what joint noise cannot shape
+        # (a jittering bracket, elastic deflection)
+        trans = np.zeros((6, 6))
+        trans[:3, :3] = np.eye(3)
+        comps = (Component("joint", "hand", g),
+                 Component("flange_translation", "hand", to_hand @ trans @ np.swapaxes(to_hand, 1, 2)))
+        return comps, (to_hand @ kin, kinds)
     rot = np.zeros((6, 6))
     rot[3:, 3:] = np.eye(3)
     trans = np.zeros((6, 6))
@@ -694,7 +722,10 @@ class EivSolution:
     observations : Observations
     uncertainty : dict
     details : dict
-    cross_validation : CrossValidation or None
+    cross_validation : dict or None
+        ``CrossValidation.to_dict`` with the systematic-error verdict: the ratio test, or the
+        arm's kinematic deviations found by the likelihood-ratio test.
+    cv : CrossValidation or None
     """
 
     x: np.ndarray
@@ -704,7 +735,8 @@ class EivSolution:
     observations: Observations
     uncertainty: dict
     details: dict
-    cross_validation: object | None
+    cross_validation: dict | None
+    cv: object | None = None
 
 
 def _mcb_start(problem: HandEyeProblem, subset: np.ndarray) -> tuple[np.ndarray, dict]:
@@ -727,12 +759,7 @@ def _compact_residuals(problem: HandEyeProblem, x: np.ndarray, target: np.ndarra
     """Mean distance per posture of ``A_i X c_ik`` from ``T c_k`` over the three compact points, mm."""
     c = problem.compact
     model = c.target_points @ target[:3, :3].T + target[:3, 3]
-    return np.linalg.norm(fixed_points_of(problem.hand, x, c.points) - model[None], axis=-1).mean(axis=1)
-
-
-def fixed_points_of(hand, x, points_cam) -> np.ndarray:
-    chain = hand @ x
-    return np.einsum("nij,nmj->nmi", chain[:, :3, :3], points_cam) + chain[:, None, :3, 3]
+    return np.linalg.norm(fixed_points(problem.hand, x, c.points) - model[None], axis=-1).mean(axis=1)
 
 
 def _start(problem: HandEyeProblem, obs: Observations, gap_flags: np.ndarray) -> tuple[np.ndarray, dict]:
@@ -805,12 +832,15 @@ def _noise_report(obs: Observations, fit: MLFit) -> dict:
 def ml_cross_validation(obs: Observations, fit: MLFit, keep: np.ndarray, folds: int, kinematic: bool = False):
     """k-fold cross-validation of the ML fit (``crossval.py`` definition) with its predicted error.
 
-    Each fold refits ``X, T`` from the full solution with the variance components held at their
-    full-data values. The predicted mean-square error of a held-out point ``p`` of posture ``i``
-    is ``tr(L_p (S_i + J_i C J_i^T) L_p^T)`` (its posture's noise and the training fit's
-    uncertainty ``C``, ``L_p = [I, -[g_p]x]`` carrying a board twist to the point) plus the point's
-    own noise beyond the board fit, plus the same for the training mean point divided by the
-    number of training postures.
+    Each fold refits ``X, T`` (and the DH deviations when modelled) from the full solution with the
+    variance components held at their full-data values; the held-out postures' fitted board points
+    are carried by their flange poses as measured (the nominal kinematics, as the controller uses
+    them). The predicted mean-square error of a held-out point ``p`` of posture ``i`` is
+    ``tr(L_p (S_i + J_i C J_i^T) L_p^T)``: its posture's random noise (camera, joints) and the
+    training fit's uncertainty ``C``, ``L_p = [I, -[g_p]x]`` carrying a board twist to the point,
+    plus the same for the training mean point divided by the number of training postures. Errors
+    the random model does not hold (the arm's kinematic deviations, a moving bracket) make the
+    observed error larger.
     """
     from .crossval import CrossValidation, fold_assignment, held_out_errors  # noqa: PLC0415
 
@@ -819,13 +849,11 @@ def ml_cross_validation(obs: Observations, fit: MLFit, keep: np.ndarray, folds: 
     fold = np.full(n, -1)
     fold[index] = fold_assignment(len(index), folds)
     k = int(fold.max()) + 1
-    lever = np.zeros((len(obs.model_points), 3, 6))
+    model = obs.model_points
+    points = np.einsum("nij,mj->nmi", obs.board[:, :3, :3], model) + obs.board[:, None, :3, 3]
+    lever = np.zeros((len(model), 3, 6))
     lever[:, :, :3] = np.eye(3)
-    lever[:, :, 3:] = -skew_of(obs.model_points)
-    m = obs.points.shape[1]
-    own = np.zeros(n)
-    if obs.point_cov is not None:  # the corner's own noise, less what the 6-parameter board fit absorbs
-        own = np.trace(obs.point_cov, axis1=-2, axis2=-1).mean(axis=1) * max(1.0 - 6.0 / (3 * m), 0.0)
+    lever[:, :, 3:] = -skew(model)
     jac = _jacobians(obs)
     mean = np.full(n, np.nan)
     mean_sq = np.full(n, np.nan)
@@ -835,20 +863,14 @@ def ml_cross_validation(obs: Observations, fit: MLFit, keep: np.ndarray, folds: 
         test = fold == f
         ff = fit_ml(obs, fit.x, fit.target, fit.theta, estimate_theta=False, keep=train, kinematic0=fit.kinematic,
                     kinematic_var0=fit.kinematic_var, kinematic=kinematic)
-        reference = fixed_points_of(obs.hand[train], ff.x, obs.points[train]).mean(axis=0)
-        mean[test], mean_sq[test] = held_out_errors(obs.hand[test], ff.x, obs.points[test], reference)
+        reference = fixed_points(obs.hand[train], ff.x, points[train]).mean(axis=0)
+        mean[test], mean_sq[test] = held_out_errors(obs.hand[test], ff.x, points[test], reference)
         s_cv = ff.posture_cov + jac @ ff.covariance @ np.swapaxes(jac, 1, 2)
         per_point = np.trace(np.mean(lever[None] @ s_cv[:, None] @ np.swapaxes(lever, 1, 2)[None], axis=1),
-                             axis1=1, axis2=2) + own  # (n,)
+                             axis1=1, axis2=2)  # (n,)
         predicted[test] = per_point[test] + per_point[train].mean() / train.sum()
     rms_pred = float(np.sqrt(np.nanmean(predicted)))
-    return CrossValidation(k, mean, "corners" if m > 3 else "compact", mean_sq, rms_pred)
-
-
-def skew_of(v) -> np.ndarray:
-    from .noise import skew  # noqa: PLC0415
-
-    return skew(v)
+    return CrossValidation(k, mean, "corners" if len(model) > 3 else "compact", mean_sq, rms_pred)
 
 
 def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) -> EivSolution:
@@ -901,7 +923,13 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
         x = fit.x
         residual_mm = _compact_residuals(problem, x, fit.target)
         # the ML's own test decides: the angle-gap and start flags only kept postures out of the start
-        new_flags = robust_outliers(fit.mahalanobis) & (residual_mm > RESIDUAL_FLOOR_MM)
+        # and a posture must also be unlikely under the fitted noise model (chi-square, 6 degrees of
+        # freedom, Bonferroni over the postures), so small clean sets keep every posture
+        significant = fit.mahalanobis**2 > chi2.ppf(1.0 - OUTLIER_P / n, 6)
+        new_flags = robust_outliers(fit.mahalanobis) & (residual_mm > RESIDUAL_FLOOR_MM) & significant
+        # a posture that breaks the X-free angle invariant stays out when the fit confirms it at 1 %
+        confirmed = gap_flags & (fit.mahalanobis**2 > chi2.ppf(1.0 - GAP_CONFIRM_P, 6)) & (residual_mm > RESIDUAL_FLOOR_MM)
+        new_flags = new_flags | confirmed
         new_flags = _flag(new_flags, fit.mahalanobis, n)
         report(1 + rounds, total + rounds, f"ML fit, round {rounds}: {int(new_flags.sum())} outlier postures")
         if n - new_flags.sum() < MIN_POSTURES_KEPT or np.array_equal(new_flags, flags) or rounds > MAX_ROUNDS:
@@ -915,12 +943,18 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
         "rotation_deg": [float(v) for v in np.sqrt(np.maximum(np.diag(cov)[3:], 0.0))],
         "covariance": [[float(v) for v in row] for row in cov],
         "covariance_units": "x, y, z (mm) and rotations about x, y, z (deg) of the camera pose in its parent frame",
-        "level": "one sigma from the maximum-likelihood covariance with noise levels estimated from the data; "
-                 "see cross_validation for errors that depend on the posture",
+        "level": "one sigma from the maximum-likelihood covariance with noise levels estimated from the data"
+                 + ("; includes the uncertainty of the arm's kinematic deviations (details.kinematics)" if kinematic
+                    else "; the robot's errors modelled as independent from posture to posture")
+                 + "; cross_validation checks it on held-out postures",
     }
-    cv = None
+    cv = cv_dict = None
     if folds and keep.sum() >= max(2 * MIN_POSTURES_KEPT, folds):
         cv = ml_cross_validation(obs, fit, keep, folds, kinematic)
+        cv_dict = cv.to_dict(problem.posture_ids)
+        if kinematic:
+            cv_dict["systematic"] = True
+            cv_dict["advice"] = KINEMATIC_ADVICE + ("; " + cv_dict["advice"] if "advice" in cv_dict else "")
         report(total + rounds, total + rounds, "cross-validation done")
     details = {
         "estimator": "maximum likelihood, errors in variables (calibration/eiv.py)",
@@ -935,10 +969,19 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
         "target_pose": {"position_mm": [float(v) for v in fit.target[:3, 3]],
                         "rotation_matrix": [[float(v) for v in row] for row in fit.target[:3, :3]]},
     }
-    return EivSolution(fit.x, flags, residual_mm, fit, obs, uncertainty, details, cv)
+    return EivSolution(fit.x, flags, residual_mm, fit, obs, uncertainty, details, cv_dict, cv)
 
 
 MAX_ROUNDS = 5
+#: Probability that a clean posture set loses a posture to the outlier test (chi-square part).
+OUTLIER_P = 1e-3
+#: Level at which the fit confirms a posture that breaks the angle invariant (eq. 30).
+GAP_CONFIRM_P = 0.01
+KINEMATIC_ADVICE = (
+    "the robot's errors are systematic: its kinematics differ from the nominal model (a likelihood-ratio test "
+    "finds DH deviations, details.kinematics). They were estimated with the camera pose and their uncertainty is "
+    "in the one-sigma values; positions the controller computes with its nominal model keep these errors: calibrate "
+    "the robot, or measure in postures near the calibration postures")
 #: Likelihood ratio above which the arm's kinematic deviations enter the model (chi-square with two
 #: degrees of freedom: p = 0.001).
 KINEMATIC_LR = 13.8

@@ -413,8 +413,7 @@ def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict |
         residuals = {int(i): float(r) for i, r in zip(problem.posture_ids, solution.residuals_mm)}
         outliers = [int(i) for i in problem.posture_ids[flags]]
         uncertainty = solution.uncertainty
-        if solution.cross_validation is not None:
-            cross_validation = solution.cross_validation.to_dict(problem.posture_ids)
+        cross_validation = solution.cross_validation
     elif method == ROBUST_METHOD:
         x, details, flags, posture_res, uncertainty = _solve_robust(problem)
         runtime = time.perf_counter() - start

@@ -32,18 +32,19 @@ class CalibrationOutcome:
     origin: str = "unknown"
 
 
-def calibrate_session_folder(path, method: str | None = None, units: str = "mm") -> CalibrationOutcome:
+def calibrate_session_folder(path, method: str | None = None, units: str = "mm", progress=None) -> CalibrationOutcome:
     """Read, validate and solve a session; uses ``truth.yaml`` when present (synthetic sessions).
 
     ``units`` declares the session's length unit (``mm``, the format's own, or ``m``: converted on
     reading); lengths that do not look like millimetres then are refused before solving.
+    ``progress(done, total, label)`` is called after each stage of the default estimator.
     """
     from .origin import session_origin
 
     session = session_in_mm(read_session(path), units)
     truth = truth_from_dict(read_truth(path))
     problem = problem_from_session(session)
-    result = calibrate(problem, method, truth)
+    result = calibrate(problem, method, truth, progress)
     return CalibrationOutcome(Path(path), result, truth is not None, session, problem, truth,
                               session_origin(session, path))
 

@@ -73,7 +73,7 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
         session = read_session(session_dir)
         problem = problem_from_session(session)
         result = calibrate(problem)
-        progress(f"calibrated {problem.n} postures in {result.runtime_s * 1000:.0f} ms (robust default), "
+        progress(f"calibrated {problem.n} postures in {result.runtime_s * 1000:.0f} ms (the default estimator), "
                  f"outliers: {result.outliers or 'none'}")
         verdict = station_verdict(result, problem, config)
         progress(verdict.line())

@@ -56,7 +56,7 @@ class PlanScore:
     min_pair_angle_deg, median_pair_angle_deg : float
         Rotation angles between postures.
     predicted_sigma_mm, predicted_sigma_deg : float
-        RMS error of the camera pose over simulated sessions of this plan (robust default).
+        RMS error of the camera pose over simulated sessions of this plan (the default estimator).
     motion_time_s : float
         Sum of the synchronised move times along the order.
     """

@@ -47,7 +47,8 @@ from .quality import (
 
 __all__ = ["COMPARISON_METHODS", "comparison_results", "method_comparison", "write_report"]
 
-#: Methods the report compares by default: the robust default, the paper's mcb and mc, three classics.
+#: Methods the report compares by default (the result's own method is always added): the robust
+#: pipeline, the paper's mcb and mc, three classics.
 COMPARISON_METHODS = ("robust", "mcb", "mc", "park", "tsai", "daniilidis")
 
 _BLUE, _RED, _ORANGE, _GREY = "#1f5fa8", "#c62828", "#ef8a17", "#8a8a8a"
@@ -539,7 +540,13 @@ def _summary(result, problem, verdict, tooldata_literal, session_path, origin: s
                  ("uncertainty, rotation", "&plusmn; " + " / ".join(f"{v:.4f}" for v in u["rotation_deg"])
                   + " deg (about x / y / z, one sigma)")]
     else:
-        pose.append(("uncertainty", f"not estimated by method {_e(result.method)} (the robust default does)"))
+        pose.append(("uncertainty", f"not estimated by method {_e(result.method)} (the default does)"))
+    cv = result.cross_validation
+    if cv:  # the default estimator's held-out accuracy (calibration/crossval.py)
+        pose.append(("cross-validated accuracy", f"{cv['rms_mm']:.3f} mm RMS of held-out board points ({cv['folds']}-fold)"
+                     + (f"; the noise model predicts {cv['predicted_rms_mm']:.3f} mm" if "predicted_rms_mm" in cv else "")))
+        if cv.get("systematic"):
+            pose.append(("systematic error", _e(cv.get("advice", ""))))
     residual_text = ", ".join(f"{i} ({result.residuals_mm.get(i, float('nan')):.2f} mm)" for i in outliers)
     scatter = station_d_org(problem, result)
     facts = [
@@ -640,7 +647,7 @@ def write_report(path_html, session_path, problem: HandEyeProblem, result, compa
     problem : HandEyeProblem
         The data ``result`` was solved from.
     result : CalibrationResult
-        The calibration to report (normally the robust default).
+        The calibration to report (normally the default estimator).
     comparison : dict, optional
         ``{method: CalibrationResult}`` on the same problem (see :func:`comparison_results`); adds the
         method comparison.

@@ -343,7 +343,9 @@ def test_solver_failures_inside_numpy_become_one_line(session, capsys):
     with pytest.raises(CalibrationError, match=r"^the tsai solver failed on these data \(.*\); check the session's values"):
         calibrate(problem, "tsai")
     with pytest.raises(CalibrationError, match=r"^the robust solver failed on these data"):
-        calibrate(problem)
+        calibrate(problem, "robust")
+    with pytest.raises(CalibrationError, match=r"^the ml solver failed on these data"):
+        calibrate(problem)  # the default
 
 
 def test_a_solver_returning_nan_is_not_a_result(session, monkeypatch):

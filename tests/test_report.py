@@ -102,7 +102,7 @@ def test_cli_report_is_self_contained_with_pose_verdict_and_every_plot(good_sess
     assert rotation_error_deg(reported, truth) < 0.05
 
     # every compared method is in the table; truth errors shown for a synthetic session
-    for method in ("robust (chosen)", "mcb", "mc", "park", "tsai", "daniilidis"):
+    for method in ("ml (chosen)", "robust", "mcb", "mc", "park", "tsai", "daniilidis"):
         assert f">{method}<" in page
     assert "truth error (mm)" in page
 
