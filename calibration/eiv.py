@@ -51,7 +51,8 @@ that keep the X-free angle invariant (eq. 30: ``S_A = S_B``); with many postures
 triplet search. Then alternately the ML fit over the inliers and outlier detection on the
 postures' Mahalanobis distances ``d_i = sqrt(r_i^T S_i^-1 r_i)`` (robust z-score, and a chi-square
 test with a Bonferroni bound, so clean sets keep every posture; a posture that breaks the angle
-invariant stays out when its ``d_i`` is also beyond the 1 % level) until the inlier set is stable,
+invariant stays out when its ``d_i`` is also beyond the 5 % level shared among such postures and its
+angle gap three times what the fitted rotation noise explains) until the inlier set is stable,
 never dropping more than half. Finally a 5-fold posture cross-validation (``crossval.py``) with
 the error the noise model predicts for it.
 """
@@ -278,9 +279,9 @@ def observations(problem: HandEyeProblem, stereo: tuple | None = None) -> Observ
         kwargs = {} if f_px is None else {"f_px": f_px, "baseline_mm": baseline}
         shapes = stereo_point_shape(pts, **kwargs)
         eigen = shape_eigen(shapes)
-        fit = fit_board_poses(pts, model, start)  # unweighted first: residuals for the components
+        fit = fit_board_poses(pts, model, start, iterations=2)  # unweighted first: residuals for the components
         noise = corner_noise(fit.residuals, eigen)
-        fit = fit_board_poses(pts, model, fit.target2cam, inverse_covariances(noise, eigen), iterations=2)
+        fit = fit_board_poses(pts, model, fit.target2cam, inverse_covariances(noise, eigen), iterations=1)
         noise = corner_noise(fit.residuals, eigen)
         fit = fit_board_poses(pts, model, fit.target2cam, inverse_covariances(noise, eigen), iterations=1)
         cov = noise.covariances(shapes)
@@ -474,31 +475,54 @@ def _small(step) -> bool:
                 and np.all(np.abs(step[12:]) < STEP_TOL_MM))
 
 
-def _reml_step(g: np.ndarray, w: np.ndarray, theta: np.ndarray, rho: np.ndarray, jac: np.ndarray,
-               prior: np.ndarray, fisher_scoring: bool) -> tuple[np.ndarray, np.ndarray]:
-    """One REML update of the block components (Fisher scoring, or the positive fixed point).
+def _variance_step(g: np.ndarray, w: np.ndarray, theta: np.ndarray, rho: np.ndarray, jac: np.ndarray,
+                   prior: np.ndarray, u: np.ndarray, lam: np.ndarray, kinds, fisher_scoring: bool):
+    """One REML update of the block components ``θ`` and the DH-deviation variances ``λ``, jointly.
 
-    Henderson's mixed-model form: with ``C = [J_X, J_T, J_u]``, ``M = (C^T S^-1 C + Π)^-1`` (``Π``
-    the prior precision of the DH deviations), ``P = S^-1 - S^-1 C M C^T S^-1``; score
-    ``½ (ρ^T S^-1 G_k S^-1 ρ - tr(P G_k))``, information ``½ tr(P G_k P G_l)``, all reduced to
-    per-posture 6x6 products and ``(12 + q)``-square sums.
+    Henderson's mixed-model form: with ``C = [J_X, J_T, Z]`` (``Z = J_u``), ``M = (C^T S^-1 C + Π)^-1``
+    (``Π`` the prior precision ``Λ^-1`` of the DH deviations), ``P = S^-1 - S^-1 C M C^T S^-1`` and
+    ``P y = S^-1 ρ``, ``Z^T P y = Λ^-1 û``. Scores: ``½ (ρ^T S^-1 G_k S^-1 ρ - tr(P G_k))`` for a block
+    component, ``½ (û_c^T û_c / λ_c² - tr(Z_c^T P Z_c))`` for a kind of DH entry; the information is
+    ``½ tr(P V_a P V_b)`` for every pair (``V = G_k`` or ``Z_c Z_c^T``), all reduced to per-posture
+    6x6 products and ``(12 + q)``-square sums. The first iterations take the positive fixed point
+    (EM), then scale-free Fisher scoring with an active set at zero.
+
+    Returns
+    -------
+    theta, lam : ndarray
+    m : ndarray, shape (12 + q, 12 + q)
+        ``M`` at the current values.
     """
     k = len(theta)
     p = jac.shape[2]
+    q = p - 12
     wj = w @ jac                                      # (n, 6, p)
     m = np.linalg.inv(_sum_t(jac, wj) + prior)
-    if k == 0:
-        return theta, m
+    kinds_present = [c for c in range(len(lam)) if q and np.any(kinds == c)]
+    if k == 0 and not kinds_present:
+        return theta, lam, m
     wg = w[None] @ g                                  # S^-1 G_k, (k, n, 6, 6)
-    wr = (w @ rho[..., None])                         # (n, 6, 1)
+    wr = w @ rho[..., None]                           # (n, 6, 1)
     quad = np.sum((g @ wr[None]) * wr[None], axis=(1, 2, 3))
     gwj = g @ wj[None]                                # G_k S^-1 C, (k, n, 6, p)
     a = _sum_t(wj[None], gwj)                         # C^T S^-1 G_k S^-1 C, (k, p, p)
     tr_pg = np.trace(wg, axis1=2, axis2=3).sum(axis=1) - np.sum(m[None] * np.swapaxes(a, 1, 2), axis=(1, 2))
+    if q:
+        z = jac[:, :, 12:]
+        pz = w @ z - wj @ (m @ _sum_t(jac, w @ z))   # P Z, per posture (n, 6, q)
+        ztpz = _sum_t(z, pz)                          # Z^T P Z, (q, q)
     if not fisher_scoring:
-        return np.maximum(theta * quad / np.maximum(tr_pg, 1e-300), VARIANCE_FLOOR), m
-    score = 0.5 * (quad - tr_pg)
-    info = np.empty((k, k))
+        new_theta = np.maximum(theta * quad / np.maximum(tr_pg, 1e-300), VARIANCE_FLOOR)
+        new_lam = lam.copy()
+        for c in kinds_present:
+            sel = kinds == c
+            m_uu = m[12:, 12:][np.ix_(sel, sel)]
+            new_lam[c] = max((np.sum(u[sel] ** 2) + np.trace(m_uu)) / sel.sum(), VARIANCE_FLOOR)
+        return new_theta, new_lam, m
+    size = k + len(kinds_present)
+    score = np.empty(size)
+    info = np.empty((size, size))
+    score[:k] = 0.5 * (quad - tr_pg)
     for i in range(k):
         for j in range(i, k):
             term1 = np.sum(wg[i] * np.swapaxes(wg[j], 1, 2))
@@ -506,49 +530,25 @@ def _reml_step(g: np.ndarray, w: np.ndarray, theta: np.ndarray, rho: np.ndarray,
             term2 = np.trace(m @ b)
             term3 = np.trace(m @ a[i] @ m @ a[j])
             info[i, j] = info[j, i] = 0.5 * (term1 - 2.0 * term2 + term3)
-    # scale-free step: in relative units u_k = δθ_k / θ_k, components pinned at the floor with a
-    # negative score left out (active set)
-    active = ~((theta <= 10.0 * VARIANCE_FLOOR) & (score <= 0.0))
-    rel = np.zeros(k)
-    if active.any():
-        scaled = info[np.ix_(active, active)] * np.outer(theta[active], theta[active])
-        rel[active] = np.linalg.lstsq(scaled, theta[active] * score[active], rcond=1e-12)[0]
-    # keep positive: a component driven below zero stops at a tenth of its value (then converges to 0)
-    return np.maximum(theta * (1.0 + np.maximum(rel, -0.9)), VARIANCE_FLOOR), m
-
-
-def _kinematic_update(obs: Observations, u: np.ndarray, m_uu: np.ndarray, lam: np.ndarray,
-                      fisher_scoring: bool) -> np.ndarray:
-    """REML update of the DH-deviation variances ``λ_c`` (lengths, angles).
-
-    With ``Z^T P Z = Λ^-1 - Λ^-1 M_uu Λ^-1`` (mixed-model identity) the score is
-    ``½ (û_c^T û_c / λ_c² - q_c / λ_c + tr M_uu,c / λ_c²)`` and the information
-    ``½ ||(Λ^-1 - Λ^-1 M_uu Λ^-1)_cd||_F²``; the EM fixed point ``λ_c = (û_c^T û_c + tr M_uu,c) / q_c``
-    starts, Fisher scoring (scale-free, as for the block components) finishes.
-    """
-    kinds = obs.kinematic_kinds
-    present = [c for c in range(len(lam)) if np.any(kinds == c)]
-    if not fisher_scoring:
-        out = lam.copy()
-        for c in present:
-            sel = kinds == c
-            out[c] = max((np.sum(u[sel] ** 2) + np.trace(m_uu[np.ix_(sel, sel)])) / sel.sum(), VARIANCE_FLOOR)
-        return out
-    inv = 1.0 / lam[kinds]
-    q_mat = np.diag(inv) - inv[:, None] * m_uu * inv[None, :]
-    score = np.zeros(len(lam))
-    info = np.eye(len(lam))
-    for c in present:
+    for ci, c in enumerate(kinds_present):
         sel = kinds == c
-        score[c] = 0.5 * (np.sum(u[sel] ** 2) / lam[c] ** 2 - sel.sum() / lam[c] + np.trace(m_uu[np.ix_(sel, sel)]) / lam[c] ** 2)
-        for d in present:
-            info[c, d] = 0.5 * np.sum(q_mat[np.ix_(sel, kinds == d)] ** 2)
-    active = np.array([c in present and not (lam[c] <= 10.0 * VARIANCE_FLOOR and score[c] <= 0.0) for c in range(len(lam))])
-    rel = np.zeros(len(lam))
+        score[k + ci] = 0.5 * (np.sum(u[sel] ** 2) / lam[c] ** 2 - np.trace(ztpz[np.ix_(sel, sel)]))
+        for i in range(k):  # ½ tr(Z_c^T P G_i P Z_c)
+            info[i, k + ci] = info[k + ci, i] = 0.5 * np.sum(pz[:, :, sel] * (g[i] @ pz[:, :, sel]))
+        for di, d in enumerate(kinds_present):
+            info[k + ci, k + di] = 0.5 * np.sum(ztpz[np.ix_(sel, kinds == d)] ** 2)
+    values = np.concatenate([theta, lam[kinds_present]])
+    # scale-free step: in relative units δv / v; components pinned at the floor with a negative score
+    # left out (active set); a component driven below zero stops at a hundredth of its value
+    active = ~((values <= 10.0 * VARIANCE_FLOOR) & (score <= 0.0))
+    rel = np.zeros(size)
     if active.any():
-        scaled = info[np.ix_(active, active)] * np.outer(lam[active], lam[active])
-        rel[active] = np.linalg.lstsq(scaled, lam[active] * score[active], rcond=1e-12)[0]
-    return np.maximum(lam * (1.0 + np.maximum(rel, -0.9)), VARIANCE_FLOOR)
+        scaled = info[np.ix_(active, active)] * np.outer(values[active], values[active])
+        rel[active] = np.linalg.lstsq(scaled, values[active] * score[active], rcond=1e-12)[0]
+    values = np.maximum(values * (1.0 + np.maximum(rel, -0.99)), VARIANCE_FLOOR)
+    new_lam = lam.copy()
+    new_lam[kinds_present] = values[k:]
+    return values[:k], new_lam, m
 
 
 #: Start of the DH-deviation variances (mm², deg²): a start for EM, which takes it from here.
@@ -595,6 +595,7 @@ def fit_ml(obs: Observations, x0: np.ndarray, t0: np.ndarray | None = None, thet
         theta = np.array(theta0, float)
     converged = False
     outer = 0
+    last_delta = np.zeros(len(theta) + len(lam))
     for outer in range(1, MAX_OUTER + 1):
         g = _structures(sub, x)
         w = np.linalg.inv(_posture_cov(sub, g, theta))
@@ -607,10 +608,18 @@ def fit_ml(obs: Observations, x0: np.ndarray, t0: np.ndarray | None = None, thet
         ju = _kinematic_jac(sub, x)
         jac = _jacobians(sub, ju)
         rho = _residuals(sub, x, t, u, ju)
-        new, m = _reml_step(g, w, theta, rho, jac, prior, fisher_scoring=outer > 3)
+        new, new_lam, _ = _variance_step(g, w, theta, rho, jac, prior, u, lam, sub.kinematic_kinds,
+                                         fisher_scoring=outer > 3)
+        # alternating with the fit, confounded components can overshoot back and forth: halve a
+        # component's step when it turns against the previous one
+        delta = np.concatenate([new - theta, new_lam - lam])
+        flip = delta * last_delta < 0
+        if flip.any():
+            delta = np.where(flip, 0.5 * delta, delta)
+            new, new_lam = theta + delta[:len(theta)], lam + delta[len(theta):]
+        last_delta = delta
         change = np.max(np.abs(new - theta) / np.maximum(theta, VARIANCE_FLOOR)) if len(theta) else 0.0
         if q:
-            new_lam = _kinematic_update(sub, u, m[12:, 12:], lam, fisher_scoring=outer > 3)
             change = max(change, np.max(np.abs(new_lam - lam) / lam))
             lam = new_lam
             prior = _prior(sub, lam)
@@ -927,8 +936,14 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
         # freedom, Bonferroni over the postures), so small clean sets keep every posture
         significant = fit.mahalanobis**2 > chi2.ppf(1.0 - OUTLIER_P / n, 6)
         new_flags = robust_outliers(fit.mahalanobis) & (residual_mm > RESIDUAL_FLOOR_MM) & significant
-        # a posture that breaks the X-free angle invariant stays out when the fit confirms it at 1 %
-        confirmed = gap_flags & (fit.mahalanobis**2 > chi2.ppf(1.0 - GAP_CONFIRM_P, 6)) & (residual_mm > RESIDUAL_FLOOR_MM)
+        # a posture that breaks the X-free angle invariant stays out when the fit confirms it
+        # (5 % shared among the flagged postures), and its angle gap is also three times what the
+        # fitted rotation noise explains: the median of |N(0, v_i + v_j)| is 0.674 sqrt(v_i + v_j)
+        level = GAP_CONFIRM_P / max(int(gap_flags.sum()), 1)
+        v = np.trace(fit.posture_cov[:, 3:, 3:], axis1=1, axis2=2) / 3.0  # rad² per axis
+        expected = np.degrees(0.674 * np.sqrt(v + np.median(v)))
+        confirmed = (gap_flags & (gaps > GAP_CONFIRM_Z * expected) & (fit.mahalanobis**2 > chi2.ppf(1.0 - level, 6))
+                     & (residual_mm > RESIDUAL_FLOOR_MM))
         new_flags = new_flags | confirmed
         new_flags = _flag(new_flags, fit.mahalanobis, n)
         report(1 + rounds, total + rounds, f"ML fit, round {rounds}: {int(new_flags.sum())} outlier postures")
@@ -975,8 +990,10 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
 MAX_ROUNDS = 5
 #: Probability that a clean posture set loses a posture to the outlier test (chi-square part).
 OUTLIER_P = 1e-3
-#: Level at which the fit confirms a posture that breaks the angle invariant (eq. 30).
-GAP_CONFIRM_P = 0.01
+#: Level at which the fit confirms the postures that break the angle invariant (eq. 30), shared
+#: among them (Bonferroni).
+GAP_CONFIRM_P = 0.05
+GAP_CONFIRM_Z = 3.0
 KINEMATIC_ADVICE = (
     "the robot's errors are systematic: its kinematics differ from the nominal model (a likelihood-ratio test "
     "finds DH deviations, details.kinematics). They were estimated with the camera pose and their uncertainty is "

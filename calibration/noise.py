@@ -359,17 +359,15 @@ def flange_jacobian(robot: RobotModel, joints_deg) -> np.ndarray:
     return serial @ robot.coupling * (np.pi / 180.0)
 
 
-#: Finite-difference steps of the DH table: mm for d and a, degrees for alpha and theta offsets.
-_DH_STEP = np.array([1e-3, 1e-3, 1e-4, 1e-4])
-
-
 def kinematic_jacobian(robot: RobotModel, joints_deg) -> tuple[np.ndarray, np.ndarray]:
     """Local twist of tool0 per unit deviation of every entry of the robot's DH table.
 
     A real arm is never exactly its table: its ``d, a`` (mm), ``alpha`` and ``theta`` offsets
-    (degrees) differ by small amounts that are the same at every posture. Column ``j`` is the
-    twist of the flange (in its own frame) when DH entry ``j`` (row-major, ``d, a, alpha, theta``
-    per axis) grows by one unit, by central differences of the chain of eq. 11-12.
+    (degrees) differ by small amounts that are the same at every posture. With the standard DH
+    link ``L_i = Rz(θ_i) Tz(d_i) Tx(a_i) Rx(α_i)`` and frames ``F_i = L_1 ... L_i`` (``F_0`` the base),
+    a deviation of ``θ_i`` or ``d_i`` is a twist about or along ``z`` of frame ``F_(i-1)`` (``Rz`` and
+    ``Tz`` commute), of ``a_i`` or ``α_i`` along or about ``x`` of ``F_i`` (``Tx`` and ``Rx`` commute);
+    a twist ``ξ`` in frame ``F`` moves the flange ``F_n`` by the local twist ``Ad_{F_n^-1 F} ξ``.
 
     Parameters
     ----------
@@ -379,23 +377,27 @@ def kinematic_jacobian(robot: RobotModel, joints_deg) -> tuple[np.ndarray, np.nd
     Returns
     -------
     jacobian : ndarray, shape (n, 6, 4k)
+        Column ``4 i + c`` for DH entry ``c`` (``d, a, alpha, theta``) of axis ``i``.
     kinds : ndarray of int, shape (4k,)
         0 for lengths (mm), 1 for angles (degrees).
     """
-    joints = np.asarray(joints_deg, dtype=float)
-    rows = [(i + 1, j + 1, robot.coupling[i, j]) for i in range(robot.dof) for j in range(robot.dof)
-            if i != j and robot.coupling[i, j] != 0]
-    base = robot.forward_transform(joints)
-    columns = []
-    for entry in range(robot.dh.size):
-        row, col = divmod(entry, 4)
-        h = _DH_STEP[col]
-        out = []
-        for sign in (1.0, -1.0):
-            dh = robot.dh.copy()
-            dh[row, col] += sign * h
-            model = RobotModel.from_dh(robot.name, dh, rows, robot.joint_limits_deg, robot.max_speed_deg_s)
-            out.append(twist_between(base, model.forward_transform(joints)))
-        columns.append((out[0] - out[1]) / (2.0 * h))
-    kinds = np.tile([0, 0, 1, 1], robot.dof)
-    return np.stack(columns, axis=-1), kinds
+    from .kinematics import dh_transforms  # noqa: PLC0415
+
+    theta = robot.serial_angles_rad(joints_deg) + np.radians(robot.dh[:, 3])
+    links = dh_transforms(robot.dh, theta)  # (n, k, 4, 4)
+    n, k = theta.shape
+    frames = np.empty((n, k + 1, 4, 4))
+    frames[:, 0] = np.eye(4)
+    for i in range(k):
+        frames[:, i + 1] = frames[:, i] @ links[:, i]
+    flange_inv = np.linalg.inv(frames[:, k])
+    to_flange = adjoint(flange_inv[:, None] @ frames)  # (n, k + 1, 6, 6): Ad_{F_n^-1 F_j}
+    deg = np.pi / 180.0
+    jac = np.empty((n, 6, 4 * k))
+    for i in range(k):
+        before, after = to_flange[:, i], to_flange[:, i + 1]
+        jac[:, :, 4 * i + 0] = before[:, :, 2]          # d: along z of F_(i-1)
+        jac[:, :, 4 * i + 1] = after[:, :, 0]           # a: along x of F_i
+        jac[:, :, 4 * i + 2] = after[:, :, 3] * deg     # alpha: about x of F_i
+        jac[:, :, 4 * i + 3] = before[:, :, 5] * deg    # theta: about z of F_(i-1)
+    return jac, np.tile([0, 0, 1, 1], k)
