@@ -538,13 +538,18 @@ def _variance_step(g: np.ndarray, w: np.ndarray, theta: np.ndarray, rho: np.ndar
         for di, d in enumerate(kinds_present):
             info[k + ci, k + di] = 0.5 * np.sum(ztpz[np.ix_(sel, kinds == d)] ** 2)
     values = np.concatenate([theta, lam[kinds_present]])
+    if not (np.all(np.isfinite(score)) and np.all(np.isfinite(info))):  # noise-free data: nothing to learn
+        return theta, lam, m
     # scale-free step: in relative units δv / v; components pinned at the floor with a negative score
     # left out (active set); a component driven below zero stops at a hundredth of its value
     active = ~((values <= 10.0 * VARIANCE_FLOOR) & (score <= 0.0))
     rel = np.zeros(size)
     if active.any():
         scaled = info[np.ix_(active, active)] * np.outer(values[active], values[active])
-        rel[active] = np.linalg.lstsq(scaled, values[active] * score[active], rcond=1e-12)[0]
+        rhs = values[active] * score[active]
+        if not (np.all(np.isfinite(scaled)) and np.all(np.isfinite(rhs))):
+            return theta, lam, m
+        rel[active] = np.linalg.lstsq(scaled, rhs, rcond=1e-12)[0]
     values = np.maximum(values * (1.0 + np.maximum(rel, -0.99)), VARIANCE_FLOOR)
     new_lam = lam.copy()
     new_lam[kinds_present] = values[k:]
