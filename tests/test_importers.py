@@ -389,7 +389,7 @@ def test_stream_tolerance_drops_far_pairs(tmp_path, eih):
 def test_units_option_overrides_detection(tmp_path, eih):
     path = write_plain_csv(tmp_path / "poses.csv", eih.tool0, eih.target)
     session = read_plain(path, units="m")  # wrong on purpose: values of hundreds declared metres
-    assert any("looks like mm" in n for n in session.extra["import"]["notes"])
+    assert any("looks like mm" in n for n in session.extra["import"]["warnings"])
     a = [p.tool0_in_base for p in session.postures]
     b = [p.target_in_camera for p in session.postures]
     findings = diagnostics.diagnose(a, b, session.setup)

@@ -63,7 +63,7 @@ class Importer:
 
 
 #: Options every reader takes.
-COMMON_OPTIONS = ("setup", "units", "board", "skip_invalid")
+COMMON_OPTIONS = ("setup", "units", "board", "skip_invalid", "robot_pose", "camera_pose")
 
 IMPORTERS = {
     "moveit": Importer("moveit", read_moveit, "MoveIt Calibration pose_samples.json ([T_base_eef, T_cam_target] pairs)",
@@ -73,7 +73,7 @@ IMPORTERS = {
     "opencv": Importer("opencv", read_opencv, "OpenCV FileStorage pose pairs T1_<i> (robot) / T2_<i> (camera), camodocal layout",
                        "eye_to_hand", ("robot_prefix", "camera_prefix")),
     "stream": Importer("stream", read_stream, "two time-stamped CSV pose streams (t,x,y,z,qx,qy,qz,qw), robot then camera",
-                       "eye_in_hand", ("quaternion_order", "camera_pose", "tolerance_s", "max_postures", "rest_mm_s",
+                       "eye_in_hand", ("quaternion_order", "tolerance_s", "max_postures", "rest_mm_s",
                                        "rest_deg_s"), several_paths=True),
     "plain": Importer("plain", read_plain, "plain CSV/JSON, one posture per row: tool0 in base + target in camera",
                       "eye_in_hand", ("quaternion_order",)),

@@ -29,7 +29,8 @@ def looks_like_moveit(path, head: str) -> bool:
     return head.lstrip().replace(" ", "").replace("\n", "").replace("\r", "").replace("\t", "").startswith("[[[[")
 
 
-def read_moveit(path, *, setup=None, units=None, board=None, skip_invalid: bool = False) -> Session:
+def read_moveit(path, *, setup=None, units=None, board=None, skip_invalid: bool = False,
+                robot_pose=None, camera_pose=None) -> Session:
     """Read a MoveIt Calibration ``pose_samples.json`` into a session (mm).
 
     Parameters
@@ -76,4 +77,5 @@ def read_moveit(path, *, setup=None, units=None, board=None, skip_invalid: bool 
         labels.append(label)
     return build_session(FORMAT, path, np.array(robot).reshape(-1, 4, 4), np.array(camera).reshape(-1, 4, 4), labels,
                          setup=setup, default_setup=DEFAULT_SETUP, units=units, documented_units="m", board=board,
-                         dropped=dropped, entries_read=len(data))
+                         dropped=dropped, entries_read=len(data), robot_pose=robot_pose,
+                         camera_pose=camera_pose, robot_words="4x4 matrix (T_base_eef)", camera_words="4x4 matrix (T_cam_target)")

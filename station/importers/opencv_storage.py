@@ -56,7 +56,7 @@ def _cv_message(exc: BaseException) -> str:
 
 
 def read_opencv(path, *, setup=None, units=None, board=None, skip_invalid: bool = False,
-                robot_prefix: str = "T1", camera_prefix: str = "T2") -> Session:
+                robot_prefix: str = "T1", camera_prefix: str = "T2", robot_pose=None, camera_pose=None) -> Session:
     """Read OpenCV FileStorage pose pairs into a session (mm).
 
     Parameters
@@ -94,7 +94,8 @@ def read_opencv(path, *, setup=None, units=None, board=None, skip_invalid: bool 
         if not storage.isOpened():
             raise SessionError(f"{path}: not a readable OpenCV FileStorage file")
         try:
-            return _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, camera_prefix)
+            return _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, camera_prefix,
+                                  robot_pose, camera_pose)
         except (cv2.error, SystemError) as exc:
             raise SessionError(f"{path}: not a readable OpenCV FileStorage file ({_cv_message(exc)})") from None
         finally:
@@ -118,7 +119,8 @@ def _read_matrix(storage, name: str):
     return rigid_transform(matrix)
 
 
-def _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, camera_prefix) -> Session:
+def _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, camera_prefix, robot_pose=None,
+                camera_pose=None) -> Session:
     import cv2
 
     indices = set()
@@ -164,4 +166,6 @@ def _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, 
         notes.append(f"frameCount says {declared} but the file holds {len(indices)} numbered pairs")
     return build_session(FORMAT, path, np.array(robot).reshape(-1, 4, 4), np.array(camera).reshape(-1, 4, 4), labels,
                          setup=setup, default_setup=DEFAULT_SETUP, units=units, documented_units="m", board=board,
-                         dropped=dropped, entries_read=len(indices), notes=notes)
+                         dropped=dropped, entries_read=len(indices), notes=notes,
+                         robot_pose=robot_pose, camera_pose=camera_pose, robot_words=f"4x4 matrix ({robot_prefix}_<i>)",
+                         camera_words=f"4x4 matrix ({camera_prefix}_<i>)")

@@ -41,6 +41,7 @@ from .visp_images import find_images, measure_board_pose, read_chessboard_data, 
 __all__ = ["FORMAT", "DEFAULT_SETUP", "read_visp", "read_pose_vector", "looks_like_visp", "ROBOT_PATTERN", "CAMERA_PATTERN"]
 
 FORMAT = "visp"
+THETA_U = "ViSP pose vector: rotation vector theta-u (axis x angle, radians)"
 DEFAULT_SETUP = "eye_in_hand"
 #: ``pose_fPe_3.yaml``, ``franka_pose_rPe_3.yaml``, ``pose_w_P_ee-3.yaml`` (newer ViSP): end effector
 #: in the robot base.
@@ -96,7 +97,8 @@ def _collect(paths) -> tuple[dict, dict, list]:
     return robot, camera, other
 
 
-def read_visp(path, *, setup=None, units=None, board=None, skip_invalid: bool = False) -> Session:
+def read_visp(path, *, setup=None, units=None, board=None, skip_invalid: bool = False, robot_pose=None,
+              camera_pose=None) -> Session:
     """Read ViSP pose files into a session (mm).
 
     Parameters
@@ -134,7 +136,8 @@ def read_visp(path, *, setup=None, units=None, board=None, skip_invalid: bool = 
     if not camera_files:
         images = find_images(files)
         if images:
-            return _read_with_images(where, source, files, robot_files, images, setup, units, board, skip_invalid)
+            return _read_with_images(where, source, files, robot_files, images, setup, units, board, skip_invalid,
+                                    robot_pose, camera_pose)
         raise SessionError(
             f"{where}: robot poses ({len(robot_files)} files) but no board poses (pose_cPo_<i>.yaml) and no "
             f"images (<robot>_image-<i>.png) to measure them from")
@@ -164,10 +167,12 @@ def read_visp(path, *, setup=None, units=None, board=None, skip_invalid: bool = 
         labels.append(f"{robot_files[number].name} + {camera_files[number].name}")
     return build_session(FORMAT, source, np.array(robot).reshape(-1, 4, 4), np.array(camera).reshape(-1, 4, 4), labels,
                          setup=setup, default_setup=DEFAULT_SETUP, units=units, documented_units="m", board=board,
-                         dropped=dropped, entries_read=len(set(robot_files) | set(camera_files)))
+                         dropped=dropped, entries_read=len(set(robot_files) | set(camera_files)),
+                         robot_pose=robot_pose, camera_pose=camera_pose, robot_words=THETA_U, camera_words=THETA_U)
 
 
-def _read_with_images(where, source, files, robot_files, images, setup, units, board, skip_invalid) -> Session:
+def _read_with_images(where, source, files, robot_files, images, setup, units, board, skip_invalid, robot_pose=None,
+                      camera_pose=None) -> Session:
     """Robot pose files + images: measure the board poses, then build the session."""
     xml = [p for p in files if p.suffix.lower() == ".xml"]
     if len(xml) != 1:
@@ -219,4 +224,5 @@ def _read_with_images(where, source, files, robot_files, images, setup, units, b
     return build_session(FORMAT, source, np.array(robot).reshape(-1, 4, 4), np.array(measured).reshape(-1, 4, 4),
                          labels, setup=setup, default_setup=DEFAULT_SETUP, units=units, documented_units="m",
                          board=board, dropped=dropped, entries_read=len(set(robot_files) | set(images)),
-                         notes=notes, details=details)
+                         notes=notes, details=details, robot_pose=robot_pose, camera_pose=camera_pose,
+                         robot_words=THETA_U, camera_words="measured from the images")
