@@ -183,13 +183,14 @@ def fit_hand_eye(hand, target2cam, pairs=None, min_motion_deg: float = MIN_MOTIO
     Returns
     -------
     InvariantFit
+        All NaN when a pose is not finite or no pair is given.
     """
     h = np.asarray(hand, dtype=float)
     b = np.asarray(target2cam, dtype=float)
     if pairs is None:
         pairs = pair_indices(len(h))
     pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
-    if len(pairs) == 0:
+    if len(pairs) == 0 or not (np.all(np.isfinite(h)) and np.all(np.isfinite(b))):
         return _nan_fit()
     rel_a, rel_b = relative_motions(h, b, pairs)
     va, vb = _rotvecs(rel_a), _rotvecs(rel_b)

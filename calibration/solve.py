@@ -12,6 +12,7 @@ import numpy as np
 
 from .classic import CLASSIC_METHODS
 from .compact_points import compact_points_from_corners, compact_points_from_poses
+from .consistency import check_consistent
 from .errors import CalibrationError
 from .kinematics import load_robot
 from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points, posture_residuals
@@ -140,7 +141,8 @@ def _posture_tool0(session: Session) -> np.ndarray:
     return np.array(poses)
 
 
-def problem_from_session(session: Session, check_units: bool = True) -> HandEyeProblem:
+def problem_from_session(session: Session, check_units: bool = True,
+                         check_consistency: bool | None = None) -> HandEyeProblem:
     """Turn a validated session into arrays, checking what the solver needs.
 
     Parameters
@@ -150,6 +152,9 @@ def problem_from_session(session: Session, check_units: bool = True) -> HandEyeP
     check_units : bool
         Refuse lengths that are not plausible millimetres (``plausibility.check_plausible``;
         default). Only tests of the solvers on deliberately odd data switch it off.
+    check_consistency : bool, optional
+        Refuse poses that no rigid camera mount fits (``consistency.check_consistent``); default:
+        as ``check_units`` (both guard against data no real cell produces).
 
     Raises
     ------
@@ -158,11 +163,15 @@ def problem_from_session(session: Session, check_units: bool = True) -> HandEyeP
     UnitsError
         Lengths that look like metres, a posture in another unit, a flange out of the robot's reach,
         corners whose spacing does not match ``target.square_mm``.
+    InconsistentPosesError
+        Robot and board poses that no rigid camera mount fits (a wrong set-up, pose direction or
+        rotation convention), checked on the X-free invariants of AX = XB.
     """
     postures = session.postures
     if len(postures) < MIN_POSTURES:
         raise CalibrationError(f"at least {MIN_POSTURES} postures are needed; got {len(postures)}")
     ids = np.array([p.index for p in postures])
+    check_consistency = check_units if check_consistency is None else check_consistency
     tool02base = _posture_tool0(session)
     if check_units:
         check_plausible(session, tool02base)
@@ -182,7 +191,7 @@ def problem_from_session(session: Session, check_units: bool = True) -> HandEyeP
         points = np.array([p.points_mm for p in postures])
         compact = compact_points_from_corners(points, board)
         target_points = board.grid(compact.square_mm)
-        return HandEyeProblem(session.setup, hand, compact, points, ids, target_points)
+        return _consistent(HandEyeProblem(session.setup, hand, compact, points, ids, target_points), check_consistency)
     missing = [p.index for p in postures if p.target_in_camera is None]
     if missing:
         raise CalibrationError(f"posture {missing[0]} holds neither points_mm nor target_in_camera like the others")
@@ -190,7 +199,15 @@ def problem_from_session(session: Session, check_units: bool = True) -> HandEyeP
     if session.target is not None and session.target.square_mm:
         length = (max(session.target.corners) - 1) * session.target.square_mm
     compact = compact_points_from_poses(np.array([p.target_in_camera for p in postures]), length)
-    return HandEyeProblem(session.setup, hand, compact, compact.points, ids, compact.target_points)
+    return _consistent(HandEyeProblem(session.setup, hand, compact, compact.points, ids, compact.target_points),
+                       check_consistency)
+
+
+def _consistent(problem: HandEyeProblem, check: bool) -> HandEyeProblem:
+    """The problem, after ``consistency.check_consistent`` when ``check`` (the calibrate re-check)."""
+    if check:
+        check_consistent(problem.hand, problem.target2cam, problem.setup)
+    return problem
 
 
 def check_motion(problem: HandEyeProblem) -> None:

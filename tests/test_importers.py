@@ -680,7 +680,8 @@ def test_cli_import_and_refuse_overwrite(tmp_path, capsys, eth):
     assert code == 0
     assert "setup:    eye_in_hand, given" in stdout
     assert "removed:  truth.yaml of the replaced session" in stdout and not (out / "truth.yaml").exists()
-    assert stderr.startswith("handeye import: warning: the data fit eye_to_hand much better")
+    assert stderr.startswith("handeye import: warning: --setup eye_in_hand: the poses do not fit it (angle gap")
+    assert "while eye_to_hand, robot flange in base" in stderr and "read as given" in stderr
     assert read_session(out).setup == "eye_in_hand"
 
 

@@ -47,7 +47,7 @@ Examples:
 
 #: The importers' names (station.importers.FORMAT_NAMES; repeated here so that building the parser
 #: imports nothing heavy; a test keeps the two equal).
-FORMAT_NAMES = ("moveit", "visp", "opencv", "stream", "plain", "easy_handeye")
+FORMAT_NAMES = ("moveit", "visp", "opencv", "stream", "plain", "easy_handeye", "log")
 
 
 def add_parser(sub):
@@ -56,10 +56,18 @@ def add_parser(sub):
     p.add_argument("sources", nargs="+", metavar="SOURCE", help="input file(s) or folder")
     p.add_argument("-o", "--output", required=True, metavar="SESSION", help="session folder to create")
     p.add_argument("--format", choices=FORMAT_NAMES, help="input format (default: detected)")
-    p.add_argument("--setup", choices=("eye_in_hand", "eye_to_hand"), help="override the set-up")
-    p.add_argument("--units", choices=("m", "mm"), help="length unit of the input (default: detected)")
+    p.add_argument("--setup", choices=("eye_in_hand", "eye_to_hand"), help="force the set-up (default: inferred)")
+    p.add_argument("--units", choices=("m", "mm"), help="length unit of the input (default: inferred)")
+    p.add_argument("--robot-pose", choices=("flange_in_base", "base_in_flange"),
+                   help="what the robot poses are (default: inferred)")
+    p.add_argument("--camera-pose", choices=("target_in_camera", "camera_in_target"),
+                   help="what the camera poses are (default: inferred)")
+    p.add_argument("--euler", action="append", metavar="SPEC",
+                   help="rotation convention of 6-number poses: ZYX (rotating axes) / xyz (static axes) with :deg or "
+                        ":rad, rotvec, rvec-tvec, or a vendor: abb, kuka, fanuc, ur, ros, visp, opencv; robot:SPEC or "
+                        "camera:SPEC for one side (log format; default: inferred)")
     p.add_argument("--quaternion-order", choices=("wxyz", "xyzw"),
-                   help="quaternion order (stream: default xyzw; plain q1..q4 columns / JSON: default wxyz)")
+                   help="quaternion order of 7-number poses (default: inferred; names such as qw decide)")
     p.add_argument("--board", type=argtypes.corners, metavar="NXxNY", help="target inner corners, e.g. 9x6 (optional)")
     p.add_argument("--square-mm", type=argtypes.positive, metavar="MM", help="target square size in mm (with --board)")
     p.add_argument("--skip-invalid", action="store_true", help="drop malformed entries (reported) instead of stopping")
@@ -70,8 +78,9 @@ def add_parser(sub):
                         help="keep the slowest pair in each of N time windows (default 40; 0 = keep all)")
     stream.add_argument("--rest-mm-s", type=argtypes.positive, metavar="V", help="keep only pairs with the hand slower than V mm/s")
     stream.add_argument("--rest-deg-s", type=argtypes.positive, metavar="W", help="keep only pairs with the hand turning slower than W deg/s")
-    stream.add_argument("--camera-pose", choices=("camera_in_target", "target_in_camera"),
-                        help="what the camera stream holds (default camera_in_target, the ETH layout)")
+    visp = p.add_argument_group("visp options")
+    visp.add_argument("--tag-mm", type=argtypes.positive, metavar="MM",
+                      help="app folder with images of an AprilTag 36h11: the tag's side in mm (its black square)")
     opencv = p.add_argument_group("opencv options")
     opencv.add_argument("--robot-prefix", metavar="NAME", help="robot matrices are NAME_<i> (default T1)")
     opencv.add_argument("--camera-prefix", metavar="NAME", help="camera matrices are NAME_<i> (default T2)")
@@ -84,15 +93,17 @@ def run(args) -> int:
     options = ImportOptions(
         sources=tuple(args.sources), output=args.output, format=args.format, setup=args.setup, units=args.units,
         quaternion_order=args.quaternion_order, board=args.board, square_mm=args.square_mm,
-        skip_invalid=args.skip_invalid, overwrite=args.overwrite,
+        skip_invalid=args.skip_invalid, overwrite=args.overwrite, robot_pose=args.robot_pose,
+        camera_pose=args.camera_pose,
         format_options={
             "tolerance_s": None if args.tolerance_ms is None else args.tolerance_ms / 1000.0,
             "max_postures": args.max_postures, "rest_mm_s": args.rest_mm_s, "rest_deg_s": args.rest_deg_s,
-            "camera_pose": args.camera_pose, "robot_prefix": args.robot_prefix, "camera_prefix": args.camera_prefix,
+            "robot_prefix": args.robot_prefix, "camera_prefix": args.camera_prefix, "euler": args.euler,
+            "tag_mm": args.tag_mm,
         },
     )
     outcome = import_to_session(options)
-    for finding in outcome.findings:
-        print(f"handeye import: warning: {finding.message}", file=sys.stderr)
+    for message in outcome.warnings:
+        print(f"handeye import: warning: {message}", file=sys.stderr)
     print("\n".join(import_summary(outcome)))
     return 0

@@ -306,6 +306,8 @@ def _reading_words(robot: Side, camera: Side, r: Reading) -> str:
 
 
 def _scores_words(r: Reading) -> str:
+    if not np.isfinite(r.axis_deg):
+        return f"angle gap {r.gap_deg:.2f} deg; too little rotation for the other checks"
     return (f"angle gap {r.gap_deg:.2f} deg, axis misfit {r.axis_deg:.2f} deg, "
             f"translation misfit {100 * r.translation:.1f} % of the motion")
 
