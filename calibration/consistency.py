@@ -21,7 +21,7 @@ board's place. Physics tells them apart, and so does this check, only where it i
 - the object on the flange (the camera eye-in-hand, the board eye-to-hand) is not several times
   farther from the flange than the fixed object is from the base (over 500 mm and 2.5 times);
 - the board is not behind the camera (its median direction over 120 deg from the optical axis +z,
-  and from +x, the forward axis of ROS body frames).
+  and not within 50 deg of +x, the forward axis of ROS body frames).
 """
 
 from __future__ import annotations
@@ -56,8 +56,9 @@ class ConsistencyLimits:
     mount_ratio, mount_min_mm : float
         The object on the flange farther than both ``mount_min_mm`` and ``mount_ratio`` times the
         fixed object's distance from the base: the pose sets look inverted.
-    behind_deg : float
-        The board's median direction in the camera frame farther than this from +z and from +x:
+    behind_deg, x_forward_deg : float
+        The board's median direction in the camera frame farther than ``behind_deg`` from the
+        optical axis +z, and not within ``x_forward_deg`` of +x (a ROS body frame's forward axis):
         the board is behind the camera.
     """
 
@@ -69,6 +70,7 @@ class ConsistencyLimits:
     mount_ratio: float = 2.5
     mount_min_mm: float = 500.0
     behind_deg: float = 120.0
+    x_forward_deg: float = 50.0
 
 
 class InconsistentPosesError(CalibrationError):
@@ -157,7 +159,7 @@ def check_consistent(hand, target2cam, setup: str, limits: ConsistencyLimits = C
             f"the {flange_object} would be {mount:.0f} mm from the flange and the {fixed_object} "
             f"{fixed:.0f} mm from the base: both pose sets look inverted (robot base in flange and camera in "
             f"target), which fits the data exactly as well; {fix} (--robot-pose, --camera-pose)")
-    if min(f["board_from_z_deg"], f["board_from_x_deg"]) > limits.behind_deg:
+    if f["board_from_z_deg"] > limits.behind_deg and f["board_from_x_deg"] > limits.x_forward_deg:
         raise InconsistentPosesError(
             f"the board is behind the camera (its median direction {f['board_from_z_deg']:.0f} deg from the optical axis "
             f"+z): the board poses look inverted (camera in target), which with the other set-up fits the data exactly as "

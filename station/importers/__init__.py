@@ -3,19 +3,26 @@
 One module per format, each with ``read_<format>(path(s), **options) -> Session``; this package
 holds the registry and the format detection used by ``handeye import``.
 
-==============  =======================================================  ==============  ======
-format          files                                                     default setup   units
-==============  =======================================================  ==============  ======
-moveit          MoveIt Calibration ``pose_samples.json``                  eye_to_hand     m
-visp            folder of ViSP ``pose_fPe_<i>.yaml`` + ``pose_cPo_<i>``   eye_in_hand     m
-opencv          OpenCV FileStorage ``T1_<i>``/``T2_<i>`` (camodocal)       eye_to_hand     m
-stream          two time-stamped CSV streams (ETH layout)                 eye_in_hand     m
-plain           CSV / JSON of flange pose + board pose (documented here)  eye_in_hand     m|mm
-easy_handeye    easy_handeye2 ``.samples`` (YAML)                         from the file   m
-==============  =======================================================  ==============  ======
+==============  =======================================================  ==================  ======
+format          files                                                     what the file says  units
+==============  =======================================================  ==================  ======
+moveit          MoveIt Calibration ``pose_samples.json``                  T_base_eef,         m
+                                                                          T_cam_target
+visp            folder of ViSP ``pose_fPe_<i>.yaml`` + ``pose_cPo_<i>``   fPe/rPe, cPo        m
+opencv          OpenCV FileStorage ``T1_<i>``/``T2_<i>`` (camodocal)       T_base_ee,          m
+                                                                          T_cam_marker
+stream          two time-stamped CSV streams (ETH layout)                 hand in base,       m
+                                                                          camera in target
+plain           CSV / JSON of flange pose + board pose (documented here)  tool0 in base,      m|mm
+                                                                          target in camera;
+                                                                          eye_in_hand default
+easy_handeye    easy_handeye2 ``.samples`` (YAML)                         calibration_type    m
+log             any table, JSON or YAML of pose numbers                   (names, if any)     m|mm
+==============  =======================================================  ==================  ======
 
-"Default set-up" applies when neither ``setup=`` nor the file decides and the data do not decide
-clearly either (see ``common.build_session``); units are detected from the values unless given.
+Every reader hands the poses as the file holds them, with what the format says they are, to
+``common.build_session``, where ``inference.infer`` decides the reading (rotation convention,
+directions, set-up, units) from the data; what the file says breaks the ties the data leave.
 Every reader records how it decided in ``session.extra["import"]``.
 """
 
@@ -69,13 +76,13 @@ COMMON_OPTIONS = ("setup", "units", "board", "skip_invalid", "robot_pose", "came
 
 IMPORTERS = {
     "moveit": Importer("moveit", read_moveit, "MoveIt Calibration pose_samples.json ([T_base_eef, T_cam_target] pairs)",
-                       "eye_to_hand"),
+                       None),
     "visp": Importer("visp", read_visp, "ViSP pose vectors: folder of pose_fPe_<i>.yaml (or *_pose_rPe_<i>.yaml) + pose_cPo_<i>.yaml",
-                     "eye_in_hand", ("tag_mm",), several_paths=True),
+                     None, ("tag_mm",), several_paths=True),
     "opencv": Importer("opencv", read_opencv, "OpenCV FileStorage pose pairs T1_<i> (robot) / T2_<i> (camera), camodocal layout",
-                       "eye_to_hand", ("robot_prefix", "camera_prefix")),
+                       None, ("robot_prefix", "camera_prefix")),
     "stream": Importer("stream", read_stream, "two time-stamped CSV pose streams (t,x,y,z,qx,qy,qz,qw), robot then camera",
-                       "eye_in_hand", ("quaternion_order", "tolerance_s", "max_postures", "rest_mm_s",
+                       None, ("quaternion_order", "tolerance_s", "max_postures", "rest_mm_s",
                                        "rest_deg_s"), several_paths=True),
     "plain": Importer("plain", read_plain, "plain CSV/JSON, one posture per row: tool0 in base + target in camera",
                       "eye_in_hand", ("quaternion_order",)),

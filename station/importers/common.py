@@ -305,6 +305,7 @@ def build_session(
     camera_declared: str | None = "target_in_camera",
     robot_words: str | None = None,
     camera_words: str | None = None,
+    conventions_given: str | None = None,
 ) -> Session:
     """Choose the reading of pose pairs (``inference.infer``) and build a session in mm with its record.
 
@@ -330,6 +331,8 @@ def build_session(
         ``target_in_camera`` / ``camera_in_target``); ``None``: not said.
     robot_words, camera_words : str, optional
         The rotation convention of poses given as arrays, in words.
+    conventions_given : str, optional
+        The rotation-convention flags as the user gave them (``--euler robot:kuka``), for warnings.
 
     Raises
     ------
@@ -348,7 +351,8 @@ def build_session(
         why = "; ".join(f"{d['count']} {d['reason']}" for d in dropped.as_list())
         raise SessionError(f"{where}: no usable pose pair" + (f" ({why})" if why else ""))
     constraints = Constraints(setup=setup, robot_pose=robot_pose, camera_pose=camera_pose, units=units,
-                              declared_setup=declared_setup, default_setup=default_setup)
+                              declared_setup=declared_setup, default_setup=default_setup,
+                              conventions_given=conventions_given)
     try:
         inference = infer(robot_side, camera_side, constraints)
     except SessionError as exc:

@@ -30,7 +30,9 @@ from .common import Dropped, EntryErrors, build_session, read_text, transform_fr
 __all__ = ["FORMAT", "DEFAULT_SETUP", "read_easy_handeye", "looks_like_easy_handeye"]
 
 FORMAT = "easy_handeye"
-DEFAULT_SETUP = "eye_in_hand"
+#: No default set-up: the files this tool writes declare what their poses are, and with the data
+#: that decides the set-up (``inference``); the set-up of the source's own example data is only a hint.
+DEFAULT_SETUP = None
 _TYPES = {"eye_in_hand": "eye_in_hand", "eye_on_hand": "eye_in_hand", "eye_on_base": "eye_to_hand",
           "eye_to_hand": "eye_to_hand"}
 

@@ -86,7 +86,7 @@ SPREAD_SLACK = 1.3
 #: The robot/camera length ratio (screw pitches) must be within this factor of 1.
 SCALE_FACTOR = 3.0
 #: Rotation pairs screened by their angle gap and kept for the full fit.
-MAX_ROTATION_PAIRS = 12
+MAX_ROTATION_PAIRS = 48
 SCREEN_PAIRS = 600
 FIT_PAIRS = 1500
 
@@ -139,6 +139,7 @@ class Constraints:
     units: str | None = None
     declared_setup: str | None = None
     default_setup: str | None = None
+    conventions_given: str | None = None
 
 
 @dataclass
@@ -609,7 +610,7 @@ def _flags_text(robot: Side, camera: Side, c: Constraints) -> str:
     parts = [f"--{k.replace('_', '-')} {v}" for k, v in (("setup", c.setup), ("robot_pose", c.robot_pose),
                                                        ("camera_pose", c.camera_pose)) if v]
     if not all(x.allowed for x in robot.readings + camera.readings):
-        parts.append("the rotation convention given")
+        parts.append(c.conventions_given or "the rotation convention given")
     return ", ".join(parts)
 
 
@@ -625,9 +626,9 @@ def _badness(r: Reading) -> float:
 
 def _declared_match(robot: Side, camera: Side, c: Constraints, r: Reading, flags_only: bool = False) -> bool:
     """Does reading ``r`` match everything the file and the format declare?"""
-    if flags_only:
-        return ((robot.declared_direction is None or r.robot_pose == robot.declared_direction or c.robot_pose)
-                and (camera.declared_direction is None or r.camera_pose == camera.declared_direction or c.camera_pose))
+    if flags_only:  # reading as told: what is not told stays as declared, else as most logs hold it
+        return ((c.robot_pose is not None or r.robot_pose == (robot.declared_direction or "flange_in_base"))
+                and (c.camera_pose is not None or r.camera_pose == (camera.declared_direction or "target_in_camera")))
     setup = c.declared_setup or c.default_setup
     return ((robot.declared_direction is None or r.robot_pose == robot.declared_direction)
             and (camera.declared_direction is None or r.camera_pose == camera.declared_direction)

@@ -215,6 +215,9 @@ def _table_groups(path: Path, text: str) -> list:
     rows = table.rows
     if table.widths == {4} or table.widths == {4, 3}:
         return _matrix_groups(path, table)
+    two = _two_blocks(path, table)
+    if two is not None:
+        return [two]
     widths = sorted(table.widths, key=lambda w: -sum(len(r.values) == w for r in rows))
     width = widths[0]
     main = [r for r in rows if len(r.values) == width]
@@ -240,6 +243,33 @@ def _table_groups(path: Path, text: str) -> list:
             f"{path}: rows of {width} numbers are neither one pose (6, 7, 12 or 16 numbers, after a posture number or "
             f"time stamp) nor a robot pose and a camera pose side by side")
     return out
+
+
+def _two_blocks(path: Path, table: Table):
+    """``(robot, camera)`` when the rows form two blocks of one pose per row and the same length, else ``None``."""
+    blocks = table.blocks()
+    if len(blocks) != 2 or len(blocks[0]) != len(blocks[1]) or len(blocks[0]) < 2:
+        return None
+    groups, labels = [], []
+    for block in blocks:
+        width = len(block[0].values)
+        label = table.labels.get(block[0].block)
+        names = _names_for(label, width)
+        values = np.array([r.values for r in block], dtype=float)
+        skips = [k for k in _skips(values, names) if width - k in POSE_WIDTHS]
+        if not skips:
+            return None
+        groups.append(_rows_group(path, block, skips[0], names, label))
+        labels.append(label)
+    return _assign(groups[0], groups[1], labels)
+
+
+def _names_for(label: str | None, width: int) -> list | None:
+    """The column names a text line gives a block of ``width`` numbers (``None`` when it gives none)."""
+    if not label:
+        return None
+    names = [n for n in label.strip().lstrip("#%/").replace(",", " ").replace(";", " ").replace("\t", " ").split()]
+    return names if len(names) == width else None
 
 
 def _rows_group(path: Path, rows: list, skip: int, header, label) -> Group:
@@ -494,26 +524,30 @@ def read_log(paths, *, setup=None, units=None, board=None, skip_invalid: bool = 
             pairings.append((b, a) if names[0] == "camera" or names[1] == "robot" else (a, b))
     source = str(files[0]) if len(files) == 1 else [str(f) for f in files]
     options = {"euler": euler, "quaternion_order": quaternion_order}
+    given = " ".join([f"--euler {e}" for e in ([euler] if isinstance(euler, str) else euler or [])]
+                     + ([f"--quaternion-order {quaternion_order}"] if quaternion_order else [])) or None
     results, errors = [], []
     for robot, camera in pairings:
+        stage = 0
         try:
             robot, camera, unpaired = _paired(robot, camera, files[0])
             dropped = Dropped()
             for _ in range(unpaired):
                 dropped.add("pose without a partner of the same posture number", "")
             robot_side, camera_side, labels = _build_sides((robot, camera), options, dropped, skip_invalid, files[0])
+            stage = 1
             details = {"layout": {"robot_numbers": robot.width, "camera_numbers": camera.width}}
             results.append(build_session(FORMAT, source, robot_side, camera_side, labels, setup=setup,
                                          default_setup=None, units=units, documented_units=None, board=board,
                                          dropped=dropped, entries_read=len(robot.values), details=details,
                                          robot_pose=robot_pose, camera_pose=camera_pose, robot_declared=robot.direction,
-                                         camera_declared=camera.direction))
+                                         camera_declared=camera.direction, conventions_given=given))
         except SessionError as exc:
-            errors.append(exc)
+            errors.append((stage, exc))
     if len(results) == 1:
         return results[0]
-    if not results:
-        raise errors[0]
+    if not results:  # the error of the layout that got furthest (read, then refused by the inference)
+        raise max(errors, key=lambda e: e[0])[1]
     layouts = ", ".join(f"{r.extra['import']['layout']['robot_numbers']} + {r.extra['import']['layout']['camera_numbers']}"
                         for r in results)
     raise SessionError(f"{files[0]}: the columns split into a robot and a camera pose in several ways that all fit "

@@ -21,7 +21,9 @@ from .common import Dropped, EntryErrors, build_session, parse_json, read_text, 
 __all__ = ["FORMAT", "DEFAULT_SETUP", "read_moveit", "looks_like_moveit"]
 
 FORMAT = "moveit"
-DEFAULT_SETUP = "eye_to_hand"
+#: No default set-up: the files this tool writes declare what their poses are, and with the data
+#: that decides the set-up (``inference``); the set-up of the source's own example data is only a hint.
+DEFAULT_SETUP = None
 
 
 def looks_like_moveit(path, head: str) -> bool:

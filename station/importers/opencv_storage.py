@@ -32,7 +32,9 @@ from .common import Dropped, EntryErrors, build_session, read_text, rigid_transf
 __all__ = ["FORMAT", "DEFAULT_SETUP", "read_opencv", "looks_like_opencv"]
 
 FORMAT = "opencv"
-DEFAULT_SETUP = "eye_to_hand"
+#: No default set-up: the files this tool writes declare what their poses are, and with the data
+#: that decides the set-up (``inference``); the set-up of the source's own example data is only a hint.
+DEFAULT_SETUP = None
 _KEY = re.compile(r"^([A-Za-z][A-Za-z0-9]*)_(\d+)$")
 
 

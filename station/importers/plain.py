@@ -163,7 +163,8 @@ def read_plain_csv(path, *, setup=None, units=None, board=None, skip_invalid: bo
     return build_session(FORMAT, path, sides[0], sides[1], labels,
                          setup=setup, default_setup=DEFAULT_SETUP, units=units, documented_units=None, board=board,
                          dropped=dropped, entries_read=rows, notes=notes, robot_pose=robot_pose,
-                         camera_pose=camera_pose)
+                         camera_pose=camera_pose,
+                         conventions_given=f"--quaternion-order {quaternion_order}" if quaternion_order else None)
 
 
 def _number(text: str):

@@ -42,7 +42,9 @@ __all__ = ["FORMAT", "DEFAULT_SETUP", "CAMERA_POSES", "read_stream", "read_pose_
            "looks_like_stream", "split_stream_files"]
 
 FORMAT = "stream"
-DEFAULT_SETUP = "eye_in_hand"
+#: No default set-up: the files this tool writes declare what their poses are, and with the data
+#: that decides the set-up (``inference``); the set-up of the source's own example data is only a hint.
+DEFAULT_SETUP = None
 CAMERA_POSES = ("camera_in_target", "target_in_camera")
 
 

@@ -42,7 +42,9 @@ __all__ = ["FORMAT", "DEFAULT_SETUP", "read_visp", "read_pose_vector", "looks_li
 
 FORMAT = "visp"
 THETA_U = "ViSP pose vector: rotation vector theta-u (axis x angle, radians)"
-DEFAULT_SETUP = "eye_in_hand"
+#: No default set-up: the files this tool writes declare what their poses are, and with the data
+#: that decides the set-up (``inference``); the set-up of the source's own example data is only a hint.
+DEFAULT_SETUP = None
 #: ``pose_fPe_3.yaml``, ``franka_pose_rPe_3.yaml``, ``pose_w_P_ee-3.yaml`` (newer ViSP): end effector
 #: in the robot base.
 ROBOT_PATTERN = re.compile(r"(?:^|_)(?:pose_(?:fPe|rPe)_|(?:pose_)?w_P_ee-)(\d+)\.ya?ml$")
