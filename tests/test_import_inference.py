@@ -16,7 +16,6 @@ import numpy as np
 import pytest
 
 from handeye.calibration.errors import SessionError
-from handeye.calibration.transforms import invert_transforms
 from handeye.station.importers import detect_format, read_any
 from handeye.station.importers.conventions import EULER_SEQUENCES, PoseConvention, parse_rotation_spec
 

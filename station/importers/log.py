@@ -363,9 +363,9 @@ def _invalid_reason(values: np.ndarray) -> str:
     return "rotation numbers beyond two full turns"
 
 
-def _side(name: str, group: Group, rotation_flags: dict, quaternion_order, skip_invalid: bool, dropped: Dropped,
-          keep: np.ndarray) -> tuple:
-    """The :class:`Side` of a group (readings valid on every kept row) and the rows no reading can read."""
+def _readings_of(group: Group) -> tuple[list, np.ndarray]:
+    """Every reading the group's width (or structure) allows, with its poses and valid rows, and the
+    rows at least one reading can read."""
     conventions = group.conventions or conventions_for_width(group.width)
     results = [(c, *c.transforms(group.values)) for c in conventions]
     readable = np.zeros(len(group.values), bool)
@@ -375,23 +375,20 @@ def _side(name: str, group: Group, rotation_flags: dict, quaternion_order, skip_
 
 
 def _build_sides(groups: tuple, options: dict, dropped: Dropped, skip_invalid: bool, path) -> tuple:
-    """(robot Side, camera Side, labels) of a pairing, rows no reading can read dropped or refused."""
+    """(robot Side, camera Side, labels) of a pairing; rows no reading can read are refused or dropped."""
     robot, camera = groups
     flags = _rotation_flags(options.get("euler"))
     order = options.get("quaternion_order")
-    per_side = {}
-    readable = np.ones(len(robot.values), bool)
+    per_side, readable = {}, np.ones(len(robot.values), bool)
     for name, group in (("robot", robot), ("camera", camera)):
-        results, ok = _side(name, group, flags, order, skip_invalid, dropped, readable)
-        per_side[name] = results
+        per_side[name], ok = _readings_of(group)
+        for k in np.flatnonzero(readable & ~ok):
+            reason = f"the {name} pose {_invalid_reason(group.values[k])}"
+            if not skip_invalid:
+                raise SessionError(f"{path}: {group.labels[k].split(': ', 1)[-1]}: {reason} (fix it, or pass "
+                                   f"--skip-invalid to drop such entries)")
+            dropped.add(f"invalid: {reason.split(' (')[0]}", group.labels[k])
         readable &= ok
-    for k in np.flatnonzero(~readable):
-        bad = next(g for g in (robot, camera) if not any(v[k] for _, _, v in per_side["robot" if g is robot else "camera"]))
-        reason = f"the {'robot' if bad is robot else 'camera'} pose {_invalid_reason(bad.values[k])}"
-        if not skip_invalid:
-            raise SessionError(f"{path}: {robot.labels[k].split(': ', 1)[-1]}: {reason} (fix it, or pass --skip-invalid to "
-                               f"drop such entries)")
-        dropped.add(f"invalid: {reason.split(' (')[0]}", robot.labels[k])
     if readable.sum() == 0:
         raise SessionError(f"{path}: no readable pose pair")
     sides = []
@@ -400,19 +397,16 @@ def _build_sides(groups: tuple, options: dict, dropped: Dropped, skip_invalid: b
         for convention, poses, valid in per_side[name]:
             if not np.all(valid[readable]):
                 continue
-            allowed = True
-            if group.width in flags[name]:
-                allowed = convention in flags[name][group.width]
+            allowed = convention in flags[name].get(group.width, [convention])
             if group.width == 7 and order is not None:
                 allowed = allowed and convention.layout == order
-            declared = convention in group.declared
             readings.append(SideReading(convention.key, convention.describe(), convention.short(), poses[readable],
-                                        declared=declared, allowed=allowed))
+                                        declared=convention in group.declared, allowed=allowed))
         if not readings:
             raise SessionError(f"{path}: the {name} poses have no reading valid for every posture")
         unit = next((vendor_units(v) for v in _flag_values(options.get("euler"), name) if vendor_units(v)), None)
         sides.append(Side(name, readings, group.direction, unit))
-    labels = [lbl for lbl, ok in zip(robot.labels, readable) if ok]
+    labels = [label for label, ok in zip(robot.labels, readable) if ok]
     return sides[0], sides[1], labels
 
 
