@@ -282,6 +282,16 @@ def _setup_how(inference, setup, declared, default: str | None) -> str:
     return how
 
 
+def _check_lengths(where, labels, robot_mm, camera_mm) -> None:
+    """Refuse translations beyond the session format's limit (10 km), naming the entry."""
+    for part, poses in (("robot", robot_mm), ("camera", camera_mm)):
+        farthest = np.max(np.abs(poses[:, :3, 3]), axis=1)
+        k = int(np.argmax(farthest))
+        if not farthest[k] <= MAX_LENGTH_MM:
+            raise SessionError(f"{where}: {labels[k]}: the {part} translation reaches {farthest[k]:g} mm, beyond "
+                               f"{MAX_LENGTH_WORDS}: is the unit right? (--units)")
+
+
 def build_session(
     format_name: str,
     source,
@@ -358,12 +368,7 @@ def build_session(
     except SessionError as exc:
         raise SessionError(f"{where}: {exc}") from None
     robot_mm, camera_mm = inference.robot_mm, inference.camera_mm
-    for part, poses in (("robot", robot_mm), ("camera", camera_mm)):
-        farthest = np.max(np.abs(poses[:, :3, 3]), axis=1)
-        k = int(np.argmax(farthest))
-        if not farthest[k] <= MAX_LENGTH_MM:
-            raise SessionError(f"{where}: {labels[k]}: the {part} translation reaches {farthest[k]:g} mm, beyond "
-                               f"{MAX_LENGTH_WORDS}: is the unit right? (--units)")
+    _check_lengths(where, labels, robot_mm, camera_mm)
     unit_info = _units_record(inference, robot_side, camera_side, units, documented_units, notes)
     notes += inference.notes
     postures = [

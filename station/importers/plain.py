@@ -82,6 +82,23 @@ def _quaternion_columns(names: set, part: str, order: str):
     raise SessionError(f"header lacks {', '.join(missing)} (or {part}_q1..{part}_q4)")
 
 
+def _csv_columns(names: list, quaternion_order: str | None, where: str) -> dict:
+    """``{part: (position columns, quaternion columns, order, named)}`` of a header, or a one-line error."""
+    name_set = set(names)
+    try:
+        columns = {}
+        for part in PARTS:
+            position = [f"{part}_{c}" for c in "xyz"]
+            missing = [n for n in position if n not in name_set]
+            if missing:
+                raise SessionError(f"header lacks {', '.join(missing)}")
+            quaternion, order, named = _quaternion_columns(name_set, part, quaternion_order or "wxyz")
+            columns[part] = ([names.index(n) for n in position], [names.index(n) for n in quaternion], order, named)
+    except SessionError as exc:
+        raise SessionError(f"{where}: {exc} (columns: {','.join(CSV_COLUMNS)})") from None
+    return columns
+
+
 def read_plain_csv(path, *, setup=None, units=None, board=None, skip_invalid: bool = False,
                    quaternion_order: str | None = None, robot_pose=None, camera_pose=None) -> Session:
     """Read the plain CSV layout (module docstring) into a session (mm).
@@ -110,17 +127,7 @@ def read_plain_csv(path, *, setup=None, units=None, board=None, skip_invalid: bo
     if duplicates:
         raise SessionError(f"{path}: line {header_line}: column {duplicates[0]!r} appears twice")
     name_set = set(names)
-    try:
-        columns = {}
-        for part in PARTS:
-            position = [f"{part}_{c}" for c in "xyz"]
-            missing = [n for n in position if n not in name_set]
-            if missing:
-                raise SessionError(f"header lacks {', '.join(missing)}")
-            quaternion, order, named = _quaternion_columns(name_set, part, quaternion_order or "wxyz")
-            columns[part] = ([names.index(n) for n in position], [names.index(n) for n in quaternion], order, named)
-    except SessionError as exc:
-        raise SessionError(f"{path}: line {header_line}: {exc} (columns: {','.join(CSV_COLUMNS)})") from None
+    columns = _csv_columns(names, quaternion_order, f"{path}: line {header_line}")
     used = {i for part in columns.values() for group in part[:2] for i in group}
     raw = {part: ([], []) for part in PARTS}
     index_col = names.index("index") if "index" in name_set else None

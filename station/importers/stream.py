@@ -181,6 +181,39 @@ def _hand_speeds(t, poses, scale_mm) -> tuple[np.ndarray, np.ndarray]:
     return v, w
 
 
+def _moving(keep, v, w, camera_t, rest_mm_s, rest_deg_s, dropped: Dropped) -> np.ndarray:
+    """Pairs ``(m,)`` among ``keep`` whose hand moves faster than the rest limits (reported as dropped)."""
+    if rest_mm_s is None and rest_deg_s is None:
+        return np.zeros(len(keep), dtype=bool)
+    moving = keep & (((v > rest_mm_s) if rest_mm_s is not None else False)
+                     | ((w > rest_deg_s) if rest_deg_s is not None else False))
+    limits = " / ".join(s for s in (f"{rest_mm_s:g} mm/s" if rest_mm_s is not None else "",
+                                    f"{rest_deg_s:g} deg/s" if rest_deg_s is not None else "") if s)
+    for k in np.flatnonzero(moving):
+        dropped.add(f"hand moving (faster than {limits})", f"t={camera_t[k]:.3f}")
+    return moving
+
+
+def _slowest_per_window(candidates, camera_t, v, w, max_postures: int, dropped: Dropped) -> np.ndarray:
+    """At most ``max_postures`` of the ``candidates`` (camera sample indices): the slowest pair in each of
+    as many time windows (0 keeps all); the others are reported as dropped."""
+    if not max_postures or len(candidates) <= max_postures:
+        return candidates
+    edges = np.linspace(camera_t[candidates[0]], camera_t[candidates[-1]], max_postures + 1)
+    window = np.clip(np.searchsorted(edges, camera_t[candidates], side="right") - 1, 0, max_postures - 1)
+    score = v[candidates] / 100.0 + w[candidates] / 10.0  # 100 mm/s ~ 10 deg/s
+    chosen = []
+    for b in range(max_postures):
+        members = np.flatnonzero(window == b)
+        if len(members):
+            chosen.append(candidates[members[np.argmin(score[members])]])
+    chosen = np.array(chosen, dtype=int)
+    for k in np.setdiff1d(candidates, chosen):
+        dropped.add(f"decimated (kept the slowest pair in each of {max_postures} time windows)",
+                    f"t={camera_t[k]:.3f}")
+    return chosen
+
+
 def read_stream(paths, *, setup=None, units=None, board=None, skip_invalid: bool = False,
                 quaternion_order: str = "xyzw", camera_pose: str | None = None, robot_pose: str | None = None,
                 tolerance_s: float = 0.03, max_postures: int = 40,
@@ -241,29 +274,8 @@ def read_stream(paths, *, setup=None, units=None, board=None, skip_invalid: bool
     robot_unit = units or detect_unit(robot_poses)[0]
     speed_v, speed_w = _hand_speeds(robot_t, robot_poses, 1000.0 if robot_unit == "m" else 1.0)
     v, w = speed_v[nearest], speed_w[nearest]
-    if rest_mm_s is not None or rest_deg_s is not None:
-        moving = keep & (((v > rest_mm_s) if rest_mm_s is not None else False)
-                         | ((w > rest_deg_s) if rest_deg_s is not None else False))
-        limits = " / ".join(s for s in (f"{rest_mm_s:g} mm/s" if rest_mm_s is not None else "",
-                                        f"{rest_deg_s:g} deg/s" if rest_deg_s is not None else "") if s)
-        for k in np.flatnonzero(moving):
-            dropped.add(f"hand moving (faster than {limits})", f"t={camera_t[k]:.3f}")
-        keep &= ~moving
-    candidates = np.flatnonzero(keep)
-    if max_postures and len(candidates) > max_postures:
-        edges = np.linspace(camera_t[candidates[0]], camera_t[candidates[-1]], max_postures + 1)
-        window = np.clip(np.searchsorted(edges, camera_t[candidates], side="right") - 1, 0, max_postures - 1)
-        score = v[candidates] / 100.0 + w[candidates] / 10.0  # 100 mm/s ~ 10 deg/s
-        chosen = []
-        for b in range(max_postures):
-            members = np.flatnonzero(window == b)
-            if len(members):
-                chosen.append(candidates[members[np.argmin(score[members])]])
-        chosen = np.array(chosen, dtype=int)
-        for k in np.setdiff1d(candidates, chosen):
-            dropped.add(f"decimated (kept the slowest pair in each of {max_postures} time windows)",
-                        f"t={camera_t[k]:.3f}")
-        candidates = chosen
+    keep &= ~_moving(keep, v, w, camera_t, rest_mm_s, rest_deg_s, dropped)
+    candidates = _slowest_per_window(np.flatnonzero(keep), camera_t, v, w, max_postures, dropped)
     labels = [f"t={camera_t[k]:.4f} (robot t={robot_t[nearest[k]]:.4f}, {offset[k] * 1000:.1f} ms apart)"
               for k in candidates]
     details = {"pairing": {"tolerance_ms": tolerance_s * 1000.0, "robot_samples": int(len(robot_t)),
