@@ -8,7 +8,9 @@ column-major. The import must read them back unchanged.
 
 from __future__ import annotations
 
+import itertools
 import json
+from dataclasses import dataclass
 
 import numpy as np
 import yaml
@@ -17,9 +19,40 @@ from scipy.spatial.transform import Rotation
 from handeye.calibration.compact_points import compact_points_from_corners
 from handeye.calibration.synthetic import NoiseConfig, sample_session
 from handeye.calibration.transforms import invert_transforms
-from handeye.station.importers.conventions import PoseConvention
-
 from helpers import scene
+
+#: The 24 Euler conventions as scipy names them: uppercase = rotating (intrinsic) axes, lowercase =
+#: static (extrinsic) axes; 6 Tait-Bryan and 6 proper-Euler axis orders each.
+_ORDERS = ["".join(p) for p in itertools.permutations("xyz")] + [a + b + a for a in "xyz" for b in "xyz" if b != a]
+EULER_SEQUENCES = tuple(o.upper() for o in _ORDERS) + tuple(_ORDERS)
+
+
+@dataclass(frozen=True)
+class PoseConvention:
+    """How a log writes a pose (the test's own description, independent of the package's readers).
+
+    ``kind``: matrix, quaternion, rotvec or euler; ``layout``: row/column (matrix) or wxyz/xyzw
+    (quaternion); ``sequence`` and ``degrees`` (euler); ``rotation_first``; ``width`` numbers.
+    """
+
+    kind: str
+    layout: str = ""
+    sequence: str = ""
+    degrees: bool = False
+    rotation_first: bool = False
+    width: int = 6
+
+    @property
+    def key(self) -> str:
+        """The name the package's reader gives this convention (``conventions.PoseConvention.key``)."""
+        if self.kind == "euler":
+            return f"euler:{self.sequence}:{'deg' if self.degrees else 'rad'}"
+        if self.kind == "quaternion":
+            return f"quaternion:{self.layout}" + (":first" if self.rotation_first else "")
+        if self.kind == "matrix":
+            return f"matrix{self.width}:{self.layout}"
+        return "rotvec" + (":first" if self.rotation_first else "")
+
 
 KUKA = PoseConvention("euler", sequence="ZYX", degrees=True)
 FANUC = PoseConvention("euler", sequence="xyz", degrees=True)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration.consistency import InconsistentPosesError, check_consistent, consistency_figures
+from handeye.calibration.errors import CalibrationError
 from handeye.calibration.session import Session, create_session, write_posture
 from handeye.calibration.solve import calibrate_session, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, sample_session
@@ -42,6 +42,8 @@ def poses(setup, sigma_cam=0.5, sigma_rob=0.01, postures=20, seed=2):
 def test_real_sets_pass_the_re_check(name, file):
     folder = shared_dataset(name)
     session = read_any(folder / file if file else folder)
+    from handeye.calibration.consistency import consistency_figures
+
     problem = problem_from_session(session)  # raises when the re-check refuses
     f = consistency_figures(problem.hand, problem.target2cam)
     assert f["gap_deg"] < 1.5 and f["axis_deg"] < 3.0 and f["translation"] < 0.1
@@ -53,6 +55,7 @@ def test_real_sets_pass_the_re_check(name, file):
 def test_noisy_mock_sessions_pass(setup, sigma_cam, sigma_rob):
     """The mock station's sessions, up to the paper's worst camera noise (20 mm) and 0.3 deg per joint."""
     session = sample_session(scene(20, setup, 0), NoiseConfig(sigma_rob_deg=sigma_rob, sigma_cam_mm=sigma_cam, seed=4))
+    # 20 mm of noise spreads the corners beyond the square-size check: only the re-check is asked for here
     problem_from_session(session, check_units=False, check_consistency=True)
 
 
@@ -100,7 +103,7 @@ def test_inconsistent_sessions_are_refused_with_the_likely_cause(wrong):
     change, setup, message = WRONG[wrong]
     a, b = change(tool0, target)
     session = pose_session(a, b, "eye_to_hand" if setup == "other" else "eye_in_hand")
-    with pytest.raises(InconsistentPosesError, match=message) as info:
+    with pytest.raises(CalibrationError, match=message) as info:  # consistency.InconsistentPosesError
         calibrate_session(session)
     assert "\n" not in str(info.value) and "handeye import" in str(info.value)
 
@@ -119,6 +122,8 @@ def test_the_command_refuses_in_one_line(tmp_path, capsys):
 
 
 def test_the_check_is_quiet_on_too_little_data():
+    from handeye.calibration.consistency import check_consistent
+
     tool0, target = poses("eye_in_hand", postures=20)
     check_consistent(tool0[:2], target[:2], "eye_in_hand")  # fewer than 3 postures: the solver refuses those
     nan = copy.deepcopy(target)

@@ -11,37 +11,57 @@ import argparse
 from . import argtypes
 import sys
 
-HELP = "turn MoveIt, ViSP, OpenCV/camodocal, easy_handeye, CSV stream or plain CSV/JSON samples into a session"
+HELP = "turn any hand-eye log (MoveIt, ViSP, camodocal, easy_handeye, streams, CSV/JSON/YAML tables) into a session"
 
 EPILOG = """\
-Formats (--format; detected from the files when omitted):
+Formats (--format; detected from the files when omitted; station/importers/FORMATS.md has details):
   moveit        MoveIt Calibration pose_samples.json: [[T_base_eef, T_cam_target], ...], 4x4, metres
   visp          folder of ViSP pose_fPe_<i>.yaml (or <robot>_pose_rPe_<i>.yaml) + pose_cPo_<i>.yaml,
-                [tx ty tz θux θuy θuz] metres/radians
+                [tx ty tz θux θuy θuz] metres/radians; an app folder of <robot>_image-<i>.png measures
+                the chessboard (chessboard-data.txt, or --board/--square-mm) or an AprilTag (--tag-mm)
   opencv        OpenCV FileStorage T1_<i> = end effector in base, T2_<i> = marker in camera (camodocal)
-  stream        two CSV streams "t,x,y,z,qx,qy,qz,qw": robot (hand in base) then camera (default: camera
-                in target, the ETH layout; --camera-pose target_in_camera otherwise); each camera sample
-                pairs with the nearest robot stamp within --tolerance-ms; --max-postures keeps the
-                slowest pair per time window; --rest-mm-s/--rest-deg-s keep only a hand at rest
+  stream        two CSV streams "t,x,y,z,qx,qy,qz,qw": robot (hand in base) then camera (camera in
+                target, the ETH layout); each camera sample pairs with the nearest robot stamp within
+                --tolerance-ms; --max-postures keeps the slowest pair per time window;
+                --rest-mm-s/--rest-deg-s keep only a hand at rest
   plain         CSV with a header: index,tool0_x,tool0_y,tool0_z,tool0_qw,tool0_qx,tool0_qy,tool0_qz,
-                target_x,...,target_qz (tool0 in base, target in camera; q1..q4 columns follow
-                --quaternion-order); or JSON {"postures": [{"tool0_in_base": {"position": [..],
-                "quaternion": [..]}, "target_in_camera": {"matrix": [[..4x4..]]}}, ...]}
-  easy_handeye  easy_handeye2 .samples (YAML; calibration_type sets the set-up)
+                target_x,...,target_qz (tool0 in base, target in camera); or JSON {"postures": [...]}
+  easy_handeye  easy_handeye2 .samples (YAML; calibration_type says the set-up)
+  log           anything else: CSV/TSV/space tables with or without a header (one posture per row,
+                or robot and camera poses in two blocks or two files, or matrices over 4 lines), JSON
+                or YAML of any nesting. A pose is 16/12 numbers (matrix), 7 (position + quaternion)
+                or 6 (position + rotation vector or Euler angles, any of the 24 conventions)
 
-Set-up: --setup wins; else what the file says; else the data decide when they fit one set-up
-clearly better (relative rotation axes); else the format's default (moveit, opencv: eye_to_hand;
-others: eye_in_hand). Units: --units wins; else each side is detected from its values (median
-length under 20 -> metres). The session is written in mm, quaternions (w, x, y, z).
+The reading is inferred from the data and printed with a table of the candidates: the rotation
+convention of each side, whether the robot poses are the flange in the base or the base in the
+flange, the camera poses the target in the camera or the camera in the target, the set-up and the
+units. Every reading is scored by the X-free invariants of AX = XB (relative rotation angles,
+rotation axes, translations) and by plausibility (the camera or board on the flange is near it;
+the board is in front of the camera); what the file says (MoveIt's T_cam_target, ViSP's cPo,
+column names like qw or a b c) breaks ties. When the data cannot decide, the import is refused
+naming the flag that does. Flags always win; a flag the data contradict is a warning with the
+numbers:
+  --robot-pose flange_in_base|base_in_flange     --camera-pose target_in_camera|camera_in_target
+  --setup eye_in_hand|eye_to_hand                --units m|mm
+  --quaternion-order wxyz|xyzw
+  --euler SPEC: ZYX (uppercase: rotating axes) or xyz (lowercase: static axes), :deg or :rad;
+    rotvec; rvec-tvec; or a vendor: abb (quaternion wxyz), kuka (A B C = ZYX rotating, deg),
+    fanuc (W P R = XYZ static, deg), ur (rotation vector), ros (quaternion xyzw, RPY = XYZ static,
+    rad), visp (theta-u), opencv (rvec, tvec); robot:SPEC or camera:SPEC for one side
+The session is written in mm, quaternions (w, x, y, z); session.yaml keeps the conventions in words
+and the candidates under import:.
 
 The import checks the data and warns, one line each, about duplicated postures, stale board poses,
-mixed units, board poses flipped 180 deg, gross outliers, and a set-up the data contradict.
+mixed units, board poses flipped 180 deg and gross outliers. calibrate checks the invariants again
+and refuses a session no rigid camera mount fits.
 
 Examples:
   handeye import pose_samples.json -o moveit_session
   handeye import TransformPairsInput.yml -o camodocal --format opencv
   handeye import hand.csv target.csv -o eth --format stream --tolerance-ms 20 --max-postures 30
-  handeye import poses.csv -o mine --units mm --board 13x8 --square-mm 30
+  handeye import kuka_log.csv -o cell3                       # X Y Z A B C + camera rvec tvec, inferred
+  handeye import robot.txt marker.txt -o cell4 --euler robot:kuka --camera-pose camera_in_target
+  handeye import data-eye-to-hand/ -o visp_eth --tag-mm 120
 """
 
 

@@ -203,6 +203,9 @@ def _choose(robot: Side, camera: Side, c: Constraints, readings: list, warnings_
         options = [reading_words(robot, camera, min((r for r in pool if r.outcome == k), key=badness))
                    for k in outcomes_left[:3]]
         fit = "equally well" if how == "undecided" else "(none of them plausibly)"
+        if len(robot.readings[0].poses) < 3:
+            raise SessionError(f"only {len(robot.readings[0].poses)} posture(s): at least 3 are needed to tell the pose "
+                               f"conventions from the data (and to calibrate)")
         raise SessionError(
             f"the data fit {len(outcomes_left)} readings {fit} ({'; or '.join(options)}); "
             f"pass {' or '.join(_flag_names(pool, robot, camera)) or '--setup'} to decide")
