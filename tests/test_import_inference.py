@@ -279,7 +279,8 @@ def run_cli(capsys, *argv):
 
 
 def import_then_calibrate(capsys, tmp_path, source, *flags):
-    """``handeye import`` then ``handeye calibrate --json``: (import exit, calibrate exit, X or None, stderr lines)."""
+    """``handeye import`` then ``handeye calibrate --json``: (import exit, calibrate exit, ``(parent, X)`` or None,
+    stderr lines)."""
     out = tmp_path / f"s{len(list(tmp_path.iterdir()))}"
     code, _, err = run_cli(capsys, "import", *([source] if not isinstance(source, list) else source), "-o", out, *flags)
     lines = err.strip().splitlines()
@@ -294,7 +295,12 @@ def import_then_calibrate(capsys, tmp_path, source, *flags):
     pose = json.loads(result.read_text())["camera_pose"]
     from handeye.calibration.transforms import transform_from_pose
 
-    return code, code2, transform_from_pose(pose["position_mm"], pose["quaternion_wxyz"]), lines
+    return code, code2, (pose["parent"], transform_from_pose(pose["position_mm"], pose["quaternion_wxyz"])), lines
+
+
+def same_pose(one, two) -> bool:
+    """Two ``(parent, 4x4)`` camera poses are the same: the same parent frame, every entry within 1e-6."""
+    return one[0] == two[0] and float(np.max(np.abs(one[1] - two[1]))) < 1e-6
 
 
 WRONG_FLAGS = [  # (the unit the log is written in, the wrong flags)
@@ -322,12 +328,12 @@ def test_deliberately_wrong_readings_never_give_a_wrong_pose(tmp_path, capsys, e
         sources[unit] = write_log(tmp_path / f"log_{unit}.csv", truth, robot_unit=unit, camera_unit=unit)
         code, code2, right[unit], _ = import_then_calibrate(capsys, tmp_path, sources[unit])
         assert (code, code2) == (0, 0)
-    assert np.max(np.abs(right["m"] - right["mm"])) < 1e-6
+    assert same_pose(right["m"], right["mm"])
     for unit, flags in WRONG_FLAGS:
         flags = [f.format(other=other) for f in flags]
         code, code2, x, lines = import_then_calibrate(capsys, tmp_path, sources[unit], *flags)
         if code == 0 and code2 == 0:
-            assert np.max(np.abs(x - right[unit])) < 1e-6, (flags, lines)
+            assert same_pose(x, right[unit]), (flags, lines)
         else:
             assert lines and any(flag in lines[-1] for flag in FLAGS + ("--units m", "metres", "units")), (flags, lines)
         if code == 0:
@@ -386,3 +392,23 @@ def test_an_undecidable_log_is_refused_naming_the_flag(tmp_path, capsys, real_po
     assert not (tmp_path / "s").exists()
     code, out, err = run_cli(capsys, "import", source, "-o", tmp_path / "s", "--setup", "eye_in_hand")
     assert code == 0 and "camera poses read as camera in target" in out and err == ""
+
+
+@pytest.mark.parametrize("invert_robot, invert_camera", [(False, False), (False, True), (True, True), (True, False)])
+def test_the_issue_cases_in_the_plain_layout_calibrate_to_the_right_pose(tmp_path, capsys, eih, invert_robot,
+                                                                         invert_camera):
+    """Issue 11's reports, in the plain CSV layout (``target_*`` columns holding camera-in-marker poses,
+    both sets inverted, ``tool0_*`` holding base-in-flange): on main they imported with a note or nothing
+    and calibrated to a wrong pose with exit 0 (the board pose as the camera pose, a camera 1.14 m from
+    the flange, d_org 229 mm). Now the same pose as the right file, or a refusal naming the flag."""
+    header = ["index"] + [f"{p}_{c}" for p in ("tool0", "target") for c in ("x", "y", "z", "qw", "qx", "qy", "qz")]
+    robot, camera = encode(eih.tool0, WXYZ, invert=invert_robot), encode(eih.target, WXYZ, invert=invert_camera)
+    source = tmp_path / "poses.csv"
+    source.write_text(table_text(robot, camera, header=header, index=True))
+    code, code2, x, lines = import_then_calibrate(capsys, tmp_path, source)
+    assert code == 0 and code2 == 0, lines
+    right = tmp_path / "right.csv"
+    right.write_text(table_text(encode(eih.tool0, WXYZ), encode(eih.target, WXYZ), header=header, index=True))
+    _, _, x_right, _ = import_then_calibrate(capsys, tmp_path, right)
+    assert same_pose(x, x_right) and x[0] == "tool0"
+    assert np.linalg.norm(x[1][:3, 3] - eih.x[:3, 3]) < 3.0  # and that is the true mount, within the noise
