@@ -29,9 +29,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from .errors import CalibrationError
-from .invariants import fit_hand_eye, pair_indices
+from .invariants import MIN_MOTION_DEG, fit_hand_eye, pair_indices
 from .transforms import invert_transforms
 
 __all__ = ["ConsistencyLimits", "InconsistentPosesError", "consistency_figures", "check_consistent"]
@@ -45,6 +46,9 @@ class ConsistencyLimits:
     ----------
     max_gap_deg : float
         Median angle gap above this: a rotation convention is wrong.
+    min_axis_spread_deg : float
+        Below this spread of the robot's rotation axes (all about one axis, as ``solve.check_motion``
+        measures it) ``X`` is not determined: the other checks are left to the motion check.
     axis_floor_deg, axis_noise_factor : float
         Axis misfit above ``max(axis_floor_deg, axis_noise_factor x gap)``: no rigid mount fits the
         rotations under the session's set-up.
@@ -63,6 +67,7 @@ class ConsistencyLimits:
     """
 
     max_gap_deg: float = 5.0
+    min_axis_spread_deg: float = 2.0
     axis_floor_deg: float = 8.0
     axis_noise_factor: float = 6.0
     max_translation: float = 0.3
@@ -92,7 +97,7 @@ def consistency_figures(hand, target2cam) -> dict:
     Returns
     -------
     dict
-        ``gap_deg``, ``axis_deg``, ``translation``, ``translation_mm``, ``other_axis_deg``,
+        ``axis_spread_deg`` (how far the robot's rotation axes stray from one line), ``gap_deg``, ``axis_deg``, ``translation``, ``translation_mm``, ``other_axis_deg``,
         ``other_translation`` (NaN where no pair rotates enough); ``x_mm`` and ``g_mm``, the distances
         of the fitted ``X`` and ``G`` (camera from flange and board from base eye-in-hand, camera from
         base and board from flange eye-to-hand); ``board_from_z_deg``, ``board_from_x_deg``, the
@@ -101,10 +106,18 @@ def consistency_figures(hand, target2cam) -> dict:
     pairs = pair_indices(len(hand), _PAIRS)
     fit = fit_hand_eye(hand, target2cam, pairs)
     other = fit_hand_eye(invert_transforms(np.asarray(hand, float)), target2cam, pairs)
+    rel = invert_transforms(np.asarray(hand, float)[pairs[:, 0]]) @ np.asarray(hand, float)[pairs[:, 1]]
+    vectors = Rotation.from_matrix(rel[:, :3, :3]).as_rotvec()
+    norms = np.linalg.norm(vectors, axis=1)
+    axes = vectors[norms > np.radians(MIN_MOTION_DEG)] / norms[norms > np.radians(MIN_MOTION_DEG), None]
+    spread = float("nan")
+    if len(axes):
+        largest = np.linalg.eigvalsh(axes.T @ axes / len(axes))[-1]
+        spread = float(np.degrees(np.arcsin(np.sqrt(max(1.0 - largest, 0.0)))))
     t = np.asarray(target2cam, float)[:, :3, 3]
     direction = np.median(t / np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-12), axis=0)
     direction = direction / max(np.linalg.norm(direction), 1e-12)
-    return {"gap_deg": fit.angle_gap_deg, "axis_deg": fit.axis_deg, "translation": fit.translation_ratio,
+    return {"axis_spread_deg": spread, "gap_deg": fit.angle_gap_deg, "axis_deg": fit.axis_deg, "translation": fit.translation_ratio,
             "translation_mm": fit.translation, "other_axis_deg": other.axis_deg,
             "other_translation": other.translation_ratio, "x_mm": float(np.linalg.norm(fit.x[:3, 3])),
             "g_mm": float(np.linalg.norm(fit.g[:3, 3])),
@@ -130,8 +143,8 @@ def check_consistent(hand, target2cam, setup: str, limits: ConsistencyLimits = C
             f"the robot and board poses fit no rigid camera mount: the relative rotations of robot and board differ by "
             f"a median {f['gap_deg']:.1f} deg where they must be equal; a rotation convention is wrong (Euler order, "
             f"degrees/radians, rotation vector read as angles); {fix} (--euler)")
-    if not np.isfinite(f["axis_deg"]):
-        return  # too little rotation to tell; check_motion refuses such data
+    if not np.isfinite(f["axis_deg"]) or not f["axis_spread_deg"] >= limits.min_axis_spread_deg:
+        return  # too little rotation, or about one axis only: X is not determined, check_motion refuses such data
     axis_limit = max(limits.axis_floor_deg, limits.axis_noise_factor * f["gap_deg"])
     if f["axis_deg"] > axis_limit:
         other_fits = np.isfinite(f["other_axis_deg"]) and f["other_axis_deg"] <= axis_limit and (

@@ -272,8 +272,9 @@ def _setup_how(inference, setup, declared, default: str | None) -> str:
     if declared is not None and inference.setup == declared:
         return "declared in the file"
     scores = inference.record["scores"]
-    figures = (f"rotation-axis misfit {scores['axis_misfit_deg']} deg, translation misfit "
-               f"{scores['translation_misfit']} of the motion")
+    axis, translation = scores.get("axis_misfit_deg"), scores.get("translation_misfit")
+    figures = ("rotation-axis misfit " + ("-" if axis is None else f"{axis:.2f} deg") + ", translation misfit "
+               + ("-" if translation is None else f"{100 * translation:.1f} % of the motion"))
     if any("declares" in d for d in inference.record.get("decided_by", [])):
         return f"as the format declares (default {default}); the data fit it ({figures}) but cannot tell alone"
     how = f"detected from the data ({figures})"

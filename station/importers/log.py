@@ -213,7 +213,7 @@ def _table_groups(path: Path, text: str) -> list:
     if not table.rows:
         raise SessionError(f"{path}: no rows of numbers found (a pose is 6, 7, 12 or 16 numbers)")
     rows = table.rows
-    if table.widths == {4} or table.widths == {4, 3}:
+    if table.widths == {4}:
         return _matrix_groups(path, table)
     two = _two_blocks(path, table)
     if two is not None:

@@ -117,6 +117,8 @@ def matrices_from_rows(rows: list) -> list:
     Four rows make a 4x4 matrix when the fourth is ``0 0 0 1``; otherwise three rows make a 3x4
     matrix. Returns an empty list when the rows do not group evenly.
     """
+    if any(len(r.values) != 4 for r in rows):
+        return []
     out, k = [], 0
     while k < len(rows):
         group = rows[k:k + 4]
