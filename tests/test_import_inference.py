@@ -412,3 +412,45 @@ def test_the_issue_cases_in_the_plain_layout_calibrate_to_the_right_pose(tmp_pat
     _, _, x_right, _ = import_then_calibrate(capsys, tmp_path, right)
     assert same_pose(x, x_right) and x[0] == "tool0"
     assert np.linalg.norm(x[1][:3, 3] - eih.x[:3, 3]) < 3.0  # and that is the true mount, within the noise
+
+
+def test_random_logs_are_read_right_or_refused_naming_a_flag(tmp_path):
+    """Random stations, noise (up to 15 mm, 0.2 deg per joint), posture counts (3 to 30), conventions per
+    side, inversions and units: every log is read to the poses it was written from, or refused naming a
+    flag; never read wrong."""
+    import random
+
+    from handeye.calibration.compact_points import compact_points_from_corners
+    from handeye.calibration.synthetic import NoiseConfig, sample_session
+
+    from helpers import scene
+
+    conventions = [KUKA, FANUC, ROS_RPY, ROTVEC, WXYZ, XYZW, MATRIX16, RVEC_TVEC,
+                   PoseConvention("euler", sequence="zxz", degrees=True), PoseConvention("euler", sequence="YZY"),
+                   PoseConvention("matrix", "column", width=12)]
+    rng = random.Random(11)
+    counts = {"right": 0, "refused": 0}
+    for trial in range(40):
+        setup = rng.choice(["eye_in_hand", "eye_to_hand"])
+        sc = scene(30, setup, 0)
+        noise = NoiseConfig(sigma_cam_mm=rng.choice([0.0, 1.0, 5.0, 15.0]), sigma_rob_deg=rng.choice([0.0, 0.05, 0.2]),
+                            seed=trial)
+        session = sample_session(sc, noise)
+        keep = sorted(rng.sample(range(30), rng.choice([3, 5, 8, 15, 30])))
+        tool0 = np.array([session.postures[i].tool0_in_base for i in keep])
+        target = compact_points_from_corners(np.array([session.postures[i].points_mm for i in keep]), sc.board).target2cam
+        path = tmp_path / f"log{trial}.csv"
+        path.write_text(table_text(encode(tool0, rng.choice(conventions), rng.choice(["m", "mm"]), rng.random() < 0.5),
+                                   encode(target, rng.choice(conventions), rng.choice(["m", "mm"]), rng.random() < 0.5)))
+        got = read_or_refusal(path) if len(keep) > 3 else None
+        if len(keep) == 3:  # three postures leave 3 pairs: a refusal may name no flag, only the posture count
+            try:
+                got = read_any(path)
+            except SessionError as exc:
+                got = str(exc)
+        if isinstance(got, str):
+            counts["refused"] += 1
+            continue
+        assert same_poses(got, tool0, target) and got.setup == setup, (trial, got.extra["import"]["conventions"])
+        counts["right"] += 1
+    assert counts["right"] >= 30, counts

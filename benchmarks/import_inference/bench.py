@@ -6,7 +6,9 @@ A noisy synthetic station (the package's IRB 1400 scene, 0.5 mm camera noise, 0.
 is written as logs of unknown convention, the hardest first: a headerless CSV of 6 + 6 numbers
 (49 readings per side: a rotation vector, 24 Euler conventions in degrees and in radians, rvec-tvec;
 2401 rotation pairs to screen, then eight direction/set-up readings per surviving pair), with the
-robot poses inverted and the camera poses inverted. Each log is imported `--repeats` times with
+robot poses inverted and the camera poses inverted; then proper Euler angles on both sides (the
+axis relabellings of zxz share its angle gap, so about a hundred rotation pairs survive the screen
+and are fitted in full). Each log is imported `--repeats` times with
 `read_any` (reading, inference, session in memory: what the 2-s budget is about), as many times with
 `import_to_session` (the same plus the import checks and writing the session folder: 100 posture
 files, each written atomically and synced to disk), and once with the command `handeye import` in a
@@ -41,6 +43,8 @@ def encode(poses, kind: str, unit: str, invert: bool = False) -> np.ndarray:
     r = Rotation.from_matrix(poses[:, :3, :3])
     if kind == "kuka":
         return np.hstack([t, r.as_euler("ZYX", degrees=True)])
+    if kind == "zxz":
+        return np.hstack([t, r.as_euler("zxz", degrees=True)])
     if kind == "rotvec":
         return np.hstack([t, r.as_rotvec()])
     if kind == "xyzw":
@@ -75,6 +79,8 @@ def main() -> None:
                                                                encode(target, "rotvec", "m")),
         "  same, camera poses inverted (camera in target)": table(encode(tool0, "kuka", "mm"),
                                                                   encode(target, "rotvec", "m", True)),
+        "CSV 6+6, proper Euler zxz (static, deg) on both sides, both inverted": table(
+            encode(tool0, "zxz", "mm", True), encode(target, "zxz", "m", True)),
         "CSV 7+7, quaternions x y z w, metres": table(encode(tool0, "xyzw", "m"), encode(target, "xyzw", "m")),
         "CSV 16+16, 4x4 matrices, metres": table(encode(tool0, "matrix", "m"), encode(target, "matrix", "m")),
     }

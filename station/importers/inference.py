@@ -53,7 +53,6 @@ from .readings import (
     Reading,
     Side,
     SideReading,
-    angle_gaps,
     badness,
     check_flag,
     mark_consistency,
@@ -63,6 +62,7 @@ from .readings import (
     pose_outcome,
     score_readings,
     scores_words,
+    screen,
     side_units,
 )
 
@@ -140,8 +140,8 @@ def infer(robot: Side, camera: Side, constraints: Constraints = Constraints()) -
     n = len(robot.readings[0].poses)
     warnings_, notes = [], []
     units = side_units(robot, camera, c, warnings_)
-    gaps = angle_gaps(robot, camera, n)
-    readings = score_readings(robot, camera, pairs_to_evaluate(robot, camera, gaps), gaps, units, n)
+    gaps, pitches = screen(robot, camera, units, n)
+    readings = score_readings(robot, camera, pairs_to_evaluate(robot, camera, gaps, pitches), gaps, units, n)
     mark_consistency(readings, n, notes)
     mark_plausibility(readings)
     mark_outcomes(robot, camera, readings, n)

@@ -9,19 +9,21 @@ the board would be seen. Thresholds are named here, once.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from ...calibration.errors import SessionError
-from ...calibration.invariants import fit_hand_eye, pair_indices, relative_angles_deg
+from ...calibration.invariants import MIN_MOTION_DEG, fit_hand_eye, pair_indices
 from ...calibration.problem import EYE_IN_HAND, EYE_TO_HAND
 from ...calibration.transforms import invert_transforms, rotation_error_deg
 
 __all__ = [
     "ROBOT_POSES", "CAMERA_POSES", "POSE_WORDS", "METRES_BELOW", "SCALE", "PLAUSIBLE_MM", "SideReading", "Side",
-    "Constraints", "Reading", "check_flag", "side_units", "angle_gaps", "pairs_to_evaluate", "score_readings",
-    "mark_consistency", "mark_plausibility", "mark_outcomes", "pose_outcome", "badness", "scores_words",
+    "Constraints", "Reading", "check_flag", "side_units", "pairs_to_evaluate", "score_readings",
+    "mark_consistency", "mark_plausibility", "mark_outcomes", "pose_outcome", "badness", "scores_words", "screen",
 ]
 
 ROBOT_POSES = ("flange_in_base", "base_in_flange")
@@ -51,10 +53,15 @@ SPREAD_RATIO = 1.8
 SPREAD_SLACK = 1.3
 #: The robot/camera length ratio (screw pitches) must be within this factor of 1.
 SCALE_FACTOR = 3.0
-#: Rotation pairs screened by their angle gap and kept for the full fit.
-MAX_ROTATION_PAIRS = 48
+#: Rotation pairs screened by their angle and pitch gaps (on a sample of SCREEN_PAIRS posture pairs);
+#: every pair within the noise of the best on both is fitted in full (on FIT_PAIRS posture pairs; at
+#: most MAX_ROTATION_PAIRS, a bound the screens keep far away).
+MAX_ROTATION_PAIRS = 400
 SCREEN_PAIRS = 600
-FIT_PAIRS = 1500
+FIT_PAIRS = 1000
+#: A reading whose robot rotates enough for the axis test in under this fraction of the pairs the
+#: best-rotating reading has (degrees read as radians, angles that barely turn) cannot be tested.
+MIN_USABLE_FRACTION = 0.5
 
 
 
@@ -135,9 +142,7 @@ class Reading:
     klass: tuple = ()
     scale: float = float("nan")
     view: dict = field(default_factory=dict, repr=False)
-
-    def dims(self) -> tuple:
-        return (self.robot, self.camera, self.robot_pose, self.camera_pose, self.setup)
+    usable_pairs: int = 0
 
 
 def median_length(poses) -> float:
@@ -266,22 +271,56 @@ def side_units(robot: Side, camera: Side, c: Constraints, warnings_: list) -> di
     return units
 
 
-def angle_gaps(robot: Side, camera: Side, n: int) -> np.ndarray:
-    """Median angle gap (deg) of every (robot reading, camera reading) pair, on a sample of posture pairs."""
+def _screw(poses_mm, pairs) -> tuple:
+    """Per posture pair: rotation angle (deg), translation along the rotation axis and translation
+    length (mm) of ``T_i^-1 T_j``, the per-side halves of the angle and pitch invariants."""
+    rel = invert_transforms(poses_mm[pairs[:, 0]]) @ poses_mm[pairs[:, 1]]
+    vectors = Rotation.from_matrix(rel[:, :3, :3]).as_rotvec()
+    angle = np.linalg.norm(vectors, axis=1)
+    pitch = np.einsum("mi,mi->m", vectors / np.maximum(angle, 1e-12)[:, None], rel[:, :3, 3])
+    return np.degrees(angle), pitch, np.linalg.norm(rel[:, :3, 3], axis=1)
+
+
+def screen(robot: Side, camera: Side, units: dict, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The X-free, set-up-free and direction-free invariants of every (robot reading, camera reading)
+    pair, on a sample of posture pairs: the median angle gap (deg) and the median screw-pitch gap
+    ``|d_A - d_B|`` as a fraction of the median robot motion (NaN where no pair turns enough).
+
+    The pitch catches what the angles cannot: Euler orders that relabel the axes of the right one,
+    and quaternions read in the wrong order on both sides, turn by the right angles about the wrong
+    axes.
+    """
+    shape = (len(robot.readings), len(camera.readings))
     if n < 3:
-        return np.zeros((len(robot.readings), len(camera.readings)))
+        return np.zeros(shape), np.zeros(shape)
     pairs = pair_indices(n, SCREEN_PAIRS)
-    angles_r = np.array([relative_angles_deg(r.poses, pairs) for r in robot.readings])
-    angles_c = np.array([relative_angles_deg(r.poses, pairs) for r in camera.readings])
-    return np.median(np.abs(angles_r[:, None, :] - angles_c[None, :, :]), axis=2)
+    sides = []
+    for side in (robot, camera):
+        sides.append([_screw(in_mm(r.poses, units[side.name, k][0]), pairs) for k, r in enumerate(side.readings)])
+    angle_r, pitch_r, motion_r = (np.array([s[k] for s in sides[0]]) for k in range(3))
+    angle_c, pitch_c, _ = (np.array([s[k] for s in sides[1]]) for k in range(3))
+    gaps = np.median(np.abs(angle_r[:, None, :] - angle_c[None, :, :]), axis=2)
+    lo, hi = MIN_MOTION_DEG, 180.0 - MIN_MOTION_DEG
+    usable = ((angle_r > lo) & (angle_r < hi))[:, None, :] & ((angle_c > lo) & (angle_c < hi))[None, :, :]
+    gap = np.where(usable, np.abs(pitch_r[:, None, :] - pitch_c[None, :, :]), np.nan)
+    motion = np.where(usable, np.broadcast_to(motion_r[:, None, :], usable.shape), np.nan)
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows: no pair turns enough
+        pitches = np.nanmedian(gap, axis=2) / np.nanmedian(motion, axis=2)
+    return gaps, pitches
 
 
-def pairs_to_evaluate(robot: Side, camera: Side, gaps: np.ndarray) -> list:
-    """Rotation pairs fitted in full: those within the angle noise, the best the flags allow, what the
-    file declares, and a few of the rejected ones (to show in the table)."""
+def pairs_to_evaluate(robot: Side, camera: Side, gaps: np.ndarray, pitches: np.ndarray) -> list:
+    """Rotation pairs fitted in full: those within the noise of the best on both screens, the best the
+    flags allow, what the file declares, and a few of the rejected ones (to show in the table)."""
     order = [tuple(int(v) for v in np.unravel_index(k, gaps.shape)) for k in np.argsort(gaps, axis=None, kind="stable")]
     best = gaps[order[0]]
-    close = [p for p in order if gaps[p] <= max(GAP_FLOOR_DEG, NOISE_FACTOR * best)][:MAX_ROTATION_PAIRS]
+    close = [p for p in order if gaps[p] <= max(GAP_FLOOR_DEG, NOISE_FACTOR * best)]
+    measured = [pitches[p] for p in close if np.isfinite(pitches[p])]
+    if measured:
+        limit = max(TRANSLATION_FLOOR, NOISE_FACTOR * min(measured))
+        close = [p for p in close if not pitches[p] > limit]
+    close = close[:MAX_ROTATION_PAIRS]
     allowed = [p for p in order if robot.readings[p[0]].allowed and camera.readings[p[1]].allowed][:3]
     declared = [p for p in order if robot.readings[p[0]].declared and camera.readings[p[1]].declared][:3]
     others = [p for p in order if p not in close][:4]
@@ -303,7 +342,7 @@ def score_readings(robot: Side, camera: Side, evaluated: list, gaps, units: dict
             fit = m.pop("fit")
             readings.append(Reading(i, j, units=(unit_r, unit_c), gap_deg=float(gaps[i, j]), axis_deg=fit.axis_deg,
                                     translation=fit.translation_ratio, klass=(i, j, k // 4), scale=fit.pitch_scale,
-                                    view=view, **m))
+                                    view=view, usable_pairs=fit.pairs, **m))
     return readings
 
 
@@ -314,7 +353,9 @@ def mark_consistency(readings: list, n: int, notes: list) -> None:
             r.consistent = True
         notes.append(f"only {n} posture(s): the conventions cannot be checked against the data")
         return
-    best = min(readings, key=badness)
+    most = max(r.usable_pairs for r in readings)
+    testable = [r for r in readings if r.usable_pairs >= MIN_USABLE_FRACTION * most]
+    best = min(testable, key=badness)
     no_axes = all(not np.isfinite(r.axis_deg) for r in readings)
     tol_gap = max(GAP_FLOOR_DEG, NOISE_FACTOR * best.gap_deg)
     tol_axis = max(AXIS_FLOOR_DEG, NOISE_FACTOR * finite(best.axis_deg))
@@ -331,6 +372,9 @@ def mark_consistency(readings: list, n: int, notes: list) -> None:
             bad.append(f"axis misfit {r.axis_deg:.1f} deg")
         if not no_axes and not finite(r.translation) <= tol_tr:
             bad.append(f"translation misfit {100 * r.translation:.0f} %")
+        if r.usable_pairs < MIN_USABLE_FRACTION * most:
+            bad.append(f"too little rotation to test ({r.usable_pairs} pairs turn over {MIN_MOTION_DEG:g} deg, "
+                       f"{most} in the best-turning reading)")
         r.consistent = fits_at_all and not bad
         r.why = "" if r.consistent else "does not fit: " + (", ".join(bad) or scores_words(r))
 
