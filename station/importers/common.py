@@ -276,7 +276,8 @@ def _setup_how(inference, setup, declared, default: str | None) -> str:
     figures = ("rotation-axis misfit " + ("-" if axis is None else f"{axis:.2f} deg") + ", translation misfit "
                + ("-" if translation is None else f"{100 * translation:.1f} % of the motion"))
     if any("declares" in d for d in inference.record.get("decided_by", [])):
-        return f"as the format declares (default {default}); the data fit it ({figures}) but cannot tell alone"
+        what = "the file's pose directions" + (f" and the format's default set-up {default}" if default else "")
+        return f"as {what} declare; the data fit it ({figures}) and another reading as well (see the notes)"
     how = f"detected from the data ({figures})"
     if default is not None and inference.setup != default:
         how += f"; this format's default is {default}"

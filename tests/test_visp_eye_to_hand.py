@@ -1,4 +1,4 @@
-"""ViSP's hand-eye app folders with AprilTag data, eye-to-hand (``visp-compute-eye-to-hand-calibration``):
+"""ViSP's hand-eye app folders eye-to-hand (``visp-compute-eye-to-hand-calibration``), AprilTag or chessboard:
 tag pose files ``pose_cPo_<i>.yaml`` as ``visp-compute-apriltag-poses`` writes them, or the images
 and the tag size (``--tag-mm``), the set-up and directions inferred from the data."""
 
@@ -104,3 +104,24 @@ def test_apriltag_pose_files_eye_to_hand(tmp_path, eth):
     assert any("the data alone also fit eye_in_hand" in note for note in record["notes"])
     result = calibrate_session(session, "mcb")
     assert np.linalg.norm(result.x[:3, 3] - eth.x[:3, 3]) < 1e-4 and rotation_error_deg(result.x, eth.x) < 1e-5
+
+
+def test_chessboard_images_eye_to_hand(tmp_path, eth):
+    """The same app folder with a chessboard on the flange (chessboard-data.txt): eye-to-hand from the data."""
+    import cv2
+
+    from test_importers import render_board
+
+    folder = tmp_path / "chessboard"
+    folder.mkdir()
+    for i, (a, b) in enumerate(zip(eth.tool0, eth.target), start=1):
+        (folder / f"ur_pose_rPe_{i}.yaml").write_text(_pose_vector_yaml(a))
+        cv2.imwrite(str(folder / f"ur_image-{i}.png"), render_board(b, (13, 8), 30.0, K, (CAM.width, CAM.height),
+                                                                     px_per_mm=3.0))
+    _camera_xml(folder / "ur_camera.xml")
+    (folder / "chessboard-data.txt").write_text("Chessboard\n13 x 8\nsquare size: 0.030 m\n")
+    session = read_any(folder)
+    assert session.setup == "eye_to_hand" and len(session.postures) == eth.n
+    assert "detected from the data" in session.extra["import"]["setup_how"]
+    result = calibrate_session(session, "mcb")
+    assert np.linalg.norm(result.x[:3, 3] - eth.x[:3, 3]) < 10.0 and rotation_error_deg(result.x, eth.x) < 0.5
