@@ -11,11 +11,16 @@ these rules, in order:
 1. **Flags win.** ``--euler``, ``--quaternion-order``, ``--robot-pose``, ``--camera-pose``,
    ``--setup`` and ``--units`` keep only the readings they allow; when the data contradict a flag
    the import says so with the numbers (a warning) and still reads as told.
-2. **Invariants.** A reading is *consistent* when the rotation angles of the relative motions agree
-   (median gap), one rotation carries every camera rotation axis onto the robot's (axis misfit) and
-   one translation fits (translation misfit, as a fraction of the motion), each within three times
-   the best reading's value (the noise of the data) and a floor (1 deg, 2 deg, 8 %). Readings that
-   give the same session (same set-up, the same poses within the noise) count as one outcome.
+2. **Invariants.** The rotation conventions are screened first by what neither ``X``, the set-up
+   nor an inversion changes (``readings.screen``): the median gap between the rotation angles of
+   the robot's and the camera's relative motions, and between their screw pitches. The pairs of
+   conventions within the noise of the best are then read in every direction and set-up, and a
+   reading is *consistent* when the angles agree (median gap), one rotation carries every camera
+   rotation axis onto the robot's (axis misfit) and one translation fits (translation misfit, as a
+   fraction of the motion), each within three times the best reading's value (the noise of the
+   data) or under a floor (1 deg, 2 deg, 8 %), and its robot turns enough to be tested (half the
+   testable pairs of the best-turning reading). Readings that give the same session (same set-up,
+   the same poses within the noise) count as one outcome.
 3. **Plausibility**, only where physics leaves a genuine ambiguity. Inverting both pose sets, or
    one pose set together with the set-up, fits the invariants exactly as well: what changes is
    which object rides on the flange. So (a) the object on the flange (camera eye-in-hand, board
@@ -25,8 +30,9 @@ these rules, in order:
    ROS body frames) and in a narrow cone (the camera's field of view); a reading is dropped when
    the other one is in front and no wider, or is 1.8 times narrower.
 4. **Declarations** break what is left: the format's documented meaning (MoveIt's
-   ``T_cam_target``, ViSP's ``cPo``, a header's ``qw``), the set-up the file declares or the
-   format's default. They decide only when exactly one remaining outcome matches all of them.
+   ``T_cam_target``, ViSP's ``cPo``, a header's ``a b c``, a key ``T_base_eef``, a file name), the
+   set-up the file declares, or the plain format's default (files written by hand). They decide
+   only when exactly one remaining outcome matches all of them.
 5. Otherwise the import is **refused**, naming the flag that decides.
 
 The units of each side come from the magnitudes (median translation under 20 -> metres), must be
