@@ -283,6 +283,25 @@ def make_folder(path) -> Path:
     return path
 
 
+def _temporary_prefix(path: Path) -> str:
+    return f".{path.name}."
+
+
+def remove_stale_temporaries(folder) -> list:
+    """Remove the temporary files :func:`write_text_atomic` leaves when its process is killed between
+    writing and renaming (``.NAME.*.tmp``), in ``folder`` and below; returns the paths removed.
+
+    Call it only where no other process writes (e.g. when a session is resumed): the targets
+    themselves are always whole, the old version or the new one.
+    """
+    removed = []
+    for path in Path(folder).rglob(".*.tmp"):
+        if path.is_file():
+            path.unlink(missing_ok=True)
+            removed.append(path)
+    return removed
+
+
 def write_text_atomic(path, text: str, encoding: str = "utf-8", newline: str | None = None) -> Path:
     """Write ``text`` to ``path`` atomically: a temporary file in the same folder, flushed to disk,
     renamed over the target (and the rename itself synced). The file gets the user's usual
@@ -302,7 +321,7 @@ def write_text_atomic(path, text: str, encoding: str = "utf-8", newline: str | N
     except OSError as exc:
         raise write_failure(path, exc) from None
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        fd, tmp = tempfile.mkstemp(prefix=_temporary_prefix(path), suffix=".tmp", dir=path.parent)
     except OSError as exc:
         raise write_failure(path, exc) from None
     try:

@@ -10,14 +10,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .classic import CLASSIC_METHODS
 from .compact_points import compact_points_from_corners, compact_points_from_poses
 from .consistency import check_consistent
 from .errors import CalibrationError
 from .kinematics import load_robot
+from .methods import METHODS, method_names
 from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points, posture_residuals
 from .plausibility import check_plausible
 from .problem import EYE_IN_HAND, HandEyeProblem, hand_poses
+from .quality_words import (
+    MIN_AXIS_ANGLE_DEG,
+    MIN_AXIS_DIVERGENCE_DEG,
+    relative_rotation_angles_deg,
+    rotation_axis_divergence_deg,
+    usable_axes,
+)
 from .refine import (
     ANGLE_GAP_FLOOR_DEG,
     RESIDUAL_FLOOR_MM,
@@ -45,16 +52,16 @@ __all__ = [
 ]
 
 #: The paper's variants (section 4): MC without selection, the others select among triplets.
-PAPER_METHODS = ("mc", "mcr", "mct", "mcb", "mco", "mcy")
+PAPER_METHODS = method_names("paper")
 #: The recommended default: mcb, outlier postures out, robust refinement, uncertainty.
 ROBUST_METHOD = "robust"
 DEFAULT_METHOD = ROBUST_METHOD
-#: Every method name ``calibrate`` accepts: the paper's, the robust default, the classic solvers.
-ALL_METHODS = PAPER_METHODS + (ROBUST_METHOD,) + tuple(CLASSIC_METHODS)
+#: Every method name ``calibrate`` accepts (the table of ``methods``): the paper's, the robust default,
+#: the classic solvers.
+ALL_METHODS = method_names()
 
 MIN_POSTURES = 3
-MIN_ROTATION_DEG = 2.0
-MIN_AXIS_SPREAD_DEG = 2.0
+MIN_ROTATION_DEG = MIN_AXIS_ANGLE_DEG
 
 
 @dataclass
@@ -213,26 +220,27 @@ def _consistent(problem: HandEyeProblem, check: bool) -> HandEyeProblem:
 def check_motion(problem: HandEyeProblem) -> None:
     """Refuse data whose robot motion cannot determine ``X``.
 
+    Uses the quality words of ``calibration.quality_words``: the relative rotation angles and the
+    rotation-axis divergence (how far the axes stray from one line).
+
     Raises
     ------
     CalibrationError
         When every relative rotation is below ~2 deg, or all rotation axes are (nearly) parallel.
     """
-    motions = relative_motions(problem)
-    angles = motions.angle_a_deg
+    # Q_A of every pair (Algorithm 1, step 2): quality_words.relative_rotation_quaternions of the hand. Built
+    # with Q_B here, so a board whose points are not finite fails in this first step, as it always has.
+    q_rel = relative_motions(problem).q_a
+    angles = relative_rotation_angles_deg(q_rel)
     if angles.max() < MIN_ROTATION_DEG:
         raise CalibrationError(
             f"the flange barely rotates between postures (largest relative rotation {angles.max():.2f} deg); "
             f"rotate it by 15-45 deg about different axes between postures"
         )
-    vectors = motions.q_a[angles >= MIN_ROTATION_DEG, 1:]
-    axes = vectors / np.linalg.norm(vectors, axis=1, keepdims=True)
-    scatter = axes.T @ axes / len(axes)
-    eig = np.linalg.eigvalsh(scatter)
-    spread_deg = np.degrees(np.arcsin(np.sqrt(max(1.0 - eig[-1], 0.0))))
-    if spread_deg < MIN_AXIS_SPREAD_DEG:
+    divergence = rotation_axis_divergence_deg(usable_axes(q_rel))
+    if divergence < MIN_AXIS_DIVERGENCE_DEG:
         raise CalibrationError(
-            f"all relative rotations are about nearly parallel axes (spread {spread_deg:.2f} deg); "
+            f"all relative rotations are about nearly parallel axes (rotation-axis divergence {divergence:.2f} deg); "
             f"rotate the flange about at least two different axes"
         )
 
@@ -360,8 +368,8 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
     ----------
     problem : HandEyeProblem
     method : str, optional
-        A paper variant (:data:`PAPER_METHODS`), ``robust`` or a classic solver
-        (:data:`~handeye.calibration.classic.CLASSIC_METHODS`); ``None`` runs :data:`DEFAULT_METHOD`.
+        A paper variant (:data:`PAPER_METHODS`), ``robust`` or a classic solver: a name of the table
+        :data:`~handeye.calibration.methods.METHODS`; ``None`` runs :data:`DEFAULT_METHOD`.
     truth : dict, optional
         ``{'x': 4x4, 'target2fixed': 4x4}`` of a synthetic data set: enables ``mcy`` and truth errors.
 
@@ -401,10 +409,10 @@ def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict |
         metrics, _ = _summarise(problem.subset(~flags), x)
         residuals = {int(i): float(r) for i, r in zip(problem.posture_ids, posture_res)}
         outliers = [int(i) for i in problem.posture_ids[flags]]
-    elif method in CLASSIC_METHODS:
-        x = CLASSIC_METHODS[method](problem.hand, problem.target2cam)
+    elif METHODS[method].kind == "classic":
+        x = METHODS[method].solver(problem.hand, problem.target2cam)
         runtime = time.perf_counter() - start
-        details = {"reference": CLASSIC_METHODS[method].__doc__.strip().splitlines()[0].replace("Hand-eye ``X`` by ", "")}
+        details = {"reference": METHODS[method].reference}
         metrics, residuals = _summarise(problem, x)
     else:
         x, details = _solve_paper(problem, method, truth)

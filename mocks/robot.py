@@ -32,7 +32,7 @@ class SimulatedRobot:
 
     Parameters
     ----------
-    postures : array-like, shape (n, 6)
+    postures : array-like, shape (n, dof)
         Approved postures (controller angles, deg), 1-based for :meth:`start_posture`.
     model : str
         Robot model name or YAML path (default ``IRB1400``).
@@ -40,7 +40,7 @@ class SimulatedRobot:
         Fraction of each axis' maximum speed used by moves (default 0.25).
     time_scale : float
         Wall-clock seconds per simulated second (default 1; tests use e.g. 0.001).
-    start_joints : array-like, shape (6,), optional
+    start_joints : array-like, shape (dof,), optional
         Initial configuration (default: all zero).
     clock : callable
         Monotonic time source in seconds (default ``time.monotonic``).
@@ -189,7 +189,7 @@ class SimulatedRobot:
     # ------------------------------------------------------------------ state
     @property
     def current_joints(self) -> np.ndarray:
-        """Controller axis angles now (deg), shape (6,)."""
+        """Controller axis angles now (deg), shape (dof,)."""
         with self._lock:
             self._settle()
             return self._joints_at(self._clock())

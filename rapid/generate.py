@@ -35,7 +35,8 @@ from ..calibration.session import write_text_atomic
 from .checks import check_program
 from .errors import RapidError
 from .literals import format_num, jointtarget_literal, speeddata_literal, tooldata_literal
-from .station import PROTOCOLS, RapidStation, check_postures, default_station, load_station
+from .links import LINK_MODULES, PROTOCOLS
+from .station import RapidStation, check_postures, default_station, load_station
 
 __all__ = [
     "RAPID_PROTOCOL_VERSION",
@@ -57,7 +58,6 @@ __all__ = [
 #: Version of the handeye line protocol the modules speak (drivers/controller/protocol.py keeps the
 #: same number; a test checks they agree).
 RAPID_PROTOCOL_VERSION = 1
-LINK_MODULES = {"socket": "HeSocket", "serial": "HeSerial", "modbus": "HeIo"}
 #: Signals HeIo expects in the controller's I/O configuration.
 IO_SIGNALS = (
     ["goHeProtocol", "goHeCount", "goHeState", "goHePosture", "doHeAtPosture", "goHeError", "goHeBeat",

@@ -9,9 +9,10 @@ From a start posture where the camera sees the board, the planner knows roughly 
    limits with a margin from which every camera of the head sees the whole board;
 2. orders them for short motions: nearest neighbour by synchronised motion time (the slowest axis,
    from the axis speeds), then 2-opt;
-3. scores the plan: the spread of the relative rotation axes over all directions (the method needs
-   non-parallel axes), the rotation angles between postures, and the accuracy to expect, by solving
-   a few simulated sessions of this very plan with the configured noise.
+3. scores the plan with the verdict's own quality words (``calibration.quality_words``): the
+   rotation-axis spread and the relative rotation angles between postures, so the plan shows the
+   numbers the verdict will judge; and the accuracy to expect, by solving a few simulated sessions
+   of this very plan with the configured noise.
 """
 
 from __future__ import annotations
@@ -23,11 +24,12 @@ import numpy as np
 from ..calibration.compact_points import BoardGeometry, board_corners
 from ..calibration.errors import HandEyeError
 from ..calibration.kinematics import RobotModel
-from ..calibration.rotations import quaternion_from_matrix
+from ..calibration.quality_words import hand_axis_coverage
 from ..calibration.solve import calibrate, problem_from_session
 from ..calibration.synthetic import NoiseConfig, Scene, SceneConfig, sample_session
 from ..calibration.transforms import invert_transforms
 from ..calibration.views import NOMINAL_XB3, ViewSampling, sample_eye_in_hand_postures
+from .quality import QualityThresholds
 
 __all__ = [
     "PlanScore",
@@ -51,30 +53,37 @@ class PlanScore:
 
     Attributes
     ----------
-    axis_spread : float
-        ``sqrt(λ_min / λ_max)`` of the scatter of relative rotation axes (0: all parallel, 1: even).
+    rotation_axis_spread_deg : float
+        The rotation-axis spread of the planned flange motions (``calibration.quality_words``): how
+        far the relative rotation axes rise out of the plane they lie closest to; 0 = all in one
+        plane, 35.3 = even over the sphere. The verdict checks the same figure of the kept postures
+        against ``min_rotation_axis_spread_deg``.
     min_pair_angle_deg, median_pair_angle_deg : float
-        Rotation angles between postures.
+        Relative rotation angles between postures (every pair).
     predicted_sigma_mm, predicted_sigma_deg : float
         RMS error of the camera pose over simulated sessions of this plan (robust default).
     motion_time_s : float
         Sum of the synchronised move times along the order.
     """
 
-    axis_spread: float
+    rotation_axis_spread_deg: float
     min_pair_angle_deg: float
     median_pair_angle_deg: float
     predicted_sigma_mm: float
     predicted_sigma_deg: float
     motion_time_s: float
 
-    def verdict(self) -> list[str]:
-        """Warnings an operator should read before moving (empty when the plan looks good)."""
+    def verdict(self, thresholds: QualityThresholds | None = None) -> list[str]:
+        """Warnings an operator should read before moving (empty when the plan looks good): the
+        plan's figures below the verdict's thresholds (defaults when omitted)."""
+        t = thresholds or QualityThresholds()
         out = []
-        if self.axis_spread < 0.3:
-            out.append(f"rotation axes poorly spread (score {self.axis_spread:.2f} < 0.30): widen the cone or the roll")
-        if self.median_pair_angle_deg < 15:
-            out.append(f"small rotations between postures (median {self.median_pair_angle_deg:.1f} deg): widen the cone")
+        if self.rotation_axis_spread_deg < t.min_rotation_axis_spread_deg:
+            out.append(f"rotation-axis spread {self.rotation_axis_spread_deg:.1f} deg < "
+                       f"{t.min_rotation_axis_spread_deg:g} deg (min_rotation_axis_spread_deg): widen the cone or the roll")
+        if self.median_pair_angle_deg < t.min_median_rotation_deg:
+            out.append(f"small rotations between postures (median {self.median_pair_angle_deg:.1f} deg < "
+                       f"{t.min_median_rotation_deg:g} deg): widen the cone")
         return out
 
 
@@ -141,22 +150,11 @@ def order_for_short_motions(robot: RobotModel, joints: np.ndarray, start) -> np.
     return route[1:] - 1
 
 
-def _axis_statistics(tool02base: np.ndarray) -> tuple[float, float, float]:
-    i, j = np.triu_indices(len(tool02base), k=1)
-    rel = quaternion_from_matrix(np.swapaxes(tool02base[i, :3, :3], 1, 2) @ tool02base[j, :3, :3])
-    angles = np.degrees(2 * np.arccos(np.clip(rel[:, 0], -1, 1)))
-    vectors = rel[:, 1:]
-    scatter = vectors.T @ vectors
-    eig = np.linalg.eigvalsh(scatter)
-    return float(np.sqrt(max(eig[0], 0) / max(eig[-1], 1e-300))), float(angles.min()), float(np.median(angles))
-
-
 def score_plan(robot: RobotModel, joints: np.ndarray, board2base: np.ndarray, cam2tool0: np.ndarray,
                board: BoardGeometry, start, noise: NoiseConfig = NoiseConfig(0.005, 0.3, "gaussian"),
                trials: int = 5) -> PlanScore:
     """Score a plan (see :class:`PlanScore`); ``noise`` is what the simulated sessions carry."""
-    tool02base = robot.forward_transform(joints)
-    spread, min_angle, median_angle = _axis_statistics(tool02base)
+    coverage = hand_axis_coverage(robot.forward_transform(joints), "tool0")  # eye-in-hand: hand = tool02base
     nodes = np.vstack([np.asarray(start, float)[None], joints])
     total = float(motion_time_s(robot, nodes[:-1], nodes[1:]).sum())
     scene = Scene(SceneConfig(postures=len(joints), corners=board.corners, square_mm=board.square_mm, robot=robot.name),
@@ -168,7 +166,8 @@ def score_plan(robot: RobotModel, joints: np.ndarray, board2base: np.ndarray, ca
         result = calibrate(problem_from_session(session), None, {"x": cam2tool0, "target2fixed": board2base})
         errors_mm.append(result.truth_errors["translation_error_mm"])
         errors_deg.append(result.truth_errors["rotation_error_deg"])
-    return PlanScore(spread, min_angle, median_angle, float(np.sqrt(np.mean(np.square(errors_mm)))),
+    return PlanScore(coverage.spread_deg, coverage.min_angle_deg, coverage.median_angle_deg,
+                     float(np.sqrt(np.mean(np.square(errors_mm)))),
                      float(np.sqrt(np.mean(np.square(errors_deg)))), total)
 
 
@@ -184,6 +183,7 @@ def plan_postures(
     seed: int = 0,
     noise: NoiseConfig = NoiseConfig(0.005, 0.3, "gaussian"),
     max_attempts: int | None = None,
+    thresholds: QualityThresholds | None = None,
 ) -> PosturePlan:
     """Plan ``count`` postures around the board seen from the start posture.
 
@@ -207,6 +207,8 @@ def plan_postures(
         Noise of the simulated sessions that predict the accuracy.
     max_attempts : int, optional
         View points to try before giving up (default ``200 * count``).
+    thresholds : QualityThresholds, optional
+        The verdict's thresholds the plan is warned against (the defaults when omitted).
 
     Raises
     ------
@@ -231,7 +233,8 @@ def plan_postures(
     order = order_for_short_motions(robot, joints, start)
     joints = joints[order]
     score = score_plan(robot, joints, board2base, cam2tool0_nominal, board, start, noise)
-    return PosturePlan(joints, board2base, np.asarray(cam2tool0_nominal, float), score, start, board, score.verdict())
+    return PosturePlan(joints, board2base, np.asarray(cam2tool0_nominal, float), score, start, board,
+                       score.verdict(thresholds))
 
 
 def board_distance_and_tilt(plan: PosturePlan, robot: RobotModel) -> np.ndarray:

@@ -48,17 +48,21 @@ class StationLink:
 
 
 def _controller_options(config: StationConfig) -> dict:
+    """The keyword options of ``open_controller`` for the config's controller: where it is, as its
+    back end's registry entry builds it from the ``controller`` section, and the link settings."""
+    from ..drivers.controller.backends import CONTROLLERS
+
     c = config.controller
     common = {"timeout": c.timeout_s, "motion_timeout": c.motion_timeout_s, "robot": config.robot,
               "idle_timeout": c.idle_timeout_s, "write_key": c.write_key}
-    if c.protocol == "socket":
-        return {"host": c.host, "port": c.port, **common}
-    if c.protocol == "serial":
-        return {"url": c.serial_url, **common}
-    options = {"host": c.host, "port": c.port, **common}
-    if c.modbus_map:
-        options["register_map"] = c.modbus_map
-    return options
+    return {**CONTROLLERS[config.link_protocol].link_options(c), **common}
+
+
+def _camera_options(config: StationConfig) -> dict:
+    """The keyword options of ``open_camera`` for the config's camera, as its back end builds them."""
+    from ..drivers.camera.backends import CAMERAS
+
+    return CAMERAS[config.camera.backend].options(config.camera)
 
 
 def mock_spec(config: StationConfig):
@@ -109,7 +113,8 @@ def open_station(config: StationConfig, mock: bool = False):
     from ..drivers.controller import open_controller
 
     model = load_stereo_model(config.camera.stereo_model) if config.camera.stereo_model else nominal_xb3_model()
-    with open_controller(config.controller.protocol, **_controller_options(config)) as controller, open_camera(config.camera.backend) as camera:
+    with open_controller(config.controller.protocol, **_controller_options(config)) as controller, \
+            open_camera(config.camera.backend, **_camera_options(config)) as camera:
         yield StationLink(controller, camera, model)
 
 

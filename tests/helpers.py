@@ -35,3 +35,31 @@ def problem(postures=12, setup="eye_in_hand", sigma_cam=0.0, sigma_rob=0.0, seed
     sc = scene(postures, setup, scene_seed)
     session = sample_session(sc, NoiseConfig(sigma_rob_deg=sigma_rob, sigma_cam_mm=sigma_cam, seed=seed))
     return problem_from_session(session), {"x": sc.x_true, "target2fixed": sc.target2fixed}, sc
+
+
+class LinePeer:
+    """A raw line-protocol peer of a mock controller (socket, or the serial mock's TCP stream), for
+    what the client hides: ``ask("7 PING")`` sends one request line and returns the reply line."""
+
+    def __init__(self, server):
+        import socket
+
+        self.sock = socket.create_connection((server.host, server.port), timeout=2)
+        self.file = self.sock.makefile("rb")
+
+    def ask(self, text: str) -> str:
+        self.sock.sendall(text.encode("ascii") + b"\n")
+        return self.file.readline().decode("ascii").rstrip("\n")
+
+    def close(self) -> None:
+        self.file.close()
+        self.sock.close()
+
+
+def assessed(problem, result, session_path="s", origin=None, **options):
+    """``station.assessment.assess`` of a result solved in the test (no session folder needed; the
+    origin is read from ``session_path`` when not given)."""
+    from handeye.station.assessment import assess
+    from handeye.station.calibrate import CalibrationOutcome
+
+    return assess(CalibrationOutcome(session_path, result, problem=problem, origin=origin), **options)

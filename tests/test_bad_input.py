@@ -347,13 +347,15 @@ def test_solver_failures_inside_numpy_become_one_line(session, capsys):
 
 
 def test_a_solver_returning_nan_is_not_a_result(session, monkeypatch):
-    from handeye.calibration import solve
+    from dataclasses import replace
+
+    from handeye.calibration.methods import METHODS
 
     def nan_solver(hand, target):
-        """Hand-eye ``X`` by nothing: a stand-in that returns NaN."""
+        """A stand-in that returns NaN."""
         return np.full((4, 4), np.nan)
 
-    monkeypatch.setitem(solve.CLASSIC_METHODS, "tsai", nan_solver)
+    monkeypatch.setitem(METHODS, "tsai", replace(METHODS["tsai"], solver=nan_solver))
     with pytest.raises(CalibrationError, match=r"^the tsai solver found no finite camera pose"):
         calibrate(problem_from_session(read_session(session)), "tsai")
 

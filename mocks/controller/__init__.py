@@ -19,6 +19,7 @@ key included).
 from __future__ import annotations
 
 from ...rapid.station import default_station
+from ..backends import mock_protocols, mock_server
 from ..robot import SimulatedRobot
 from .faults import Faults
 from .line_server import DEFAULT_IDLE_TIMEOUT_S, LineSession, SerialControllerServer, SocketControllerServer
@@ -27,8 +28,8 @@ from .program import ProgramRefusal, RapidProgram
 
 __all__ = [
     "start_mock_controller",
-    "MOCK_PROTOCOLS",
-    "DEFAULT_PORTS",
+    "mock_protocols",
+    "mock_server",
     "DEFAULT_IDLE_TIMEOUT_S",
     "Faults",
     "RapidProgram",
@@ -38,10 +39,6 @@ __all__ = [
     "SerialControllerServer",
     "ModbusControllerServer",
 ]
-
-MOCK_PROTOCOLS = ("socket", "serial", "modbus")
-#: Ports of ``handeye mock controller`` when none is given (unprivileged).
-DEFAULT_PORTS = {"socket": 1025, "serial": 1026, "modbus": 5020}
 
 
 def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", port: int = 0, postures=None,
@@ -55,10 +52,11 @@ def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", 
     Parameters
     ----------
     protocol : str
-        ``socket``, ``serial`` (TCP stream for pyserial's ``socket://`` URL) or ``modbus``.
+        ``socket``, ``serial`` (TCP stream for pyserial's ``socket://`` URL), ``modbus``, or any
+        back end a mock serves (:func:`mock_protocols`).
     host, port : str, int
         Where to listen (port 0: a free port; read ``server.port``).
-    postures : array-like, shape (n, 6), optional
+    postures : array-like, shape (n, dof), optional
         Approved postures (default: the built-in station's 12).
     robot : SimulatedRobot, optional
         An existing simulated robot (then ``postures``, ``time_scale``, ``speed_fraction`` are ignored).
@@ -78,19 +76,14 @@ def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", 
     start : bool
         Start the server (default); else call ``server.start()`` or use ``with``.
     """
-    if protocol not in MOCK_PROTOCOLS:
-        raise ValueError(f"unknown mock protocol {protocol!r}; choose one of {', '.join(MOCK_PROTOCOLS)}")
+    mock = mock_server(protocol)
     if robot is None:
         if postures is None:
             postures = default_station().postures
         robot = SimulatedRobot(postures, time_scale=time_scale, speed_fraction=speed_fraction)
     program = RapidProgram(robot, ack_timeout_s=ack_timeout_s)
-    link = {"idle_timeout_s": idle_timeout_s, "write_key": write_key}
-    if protocol == "socket":
-        server = SocketControllerServer(program, host, port, faults, allowed_client, **link)
-    elif protocol == "serial":
-        server = SerialControllerServer(program, host, port, faults, **link)
-    else:
-        server = ModbusControllerServer(program, host, port, register_map, faults, publish_period_s, **link)
-    server.protocol = protocol
+    offered = {"allowed_client": allowed_client, "register_map": register_map, "publish_period_s": publish_period_s}
+    server = mock.load()(program, host, port, faults=faults, idle_timeout_s=idle_timeout_s, write_key=write_key,
+                         **{name: offered[name] for name in mock.options})
+    server.protocol = str(protocol).lower()
     return server.start() if start else server

@@ -8,7 +8,8 @@ import time
 from dataclasses import dataclass, field
 
 from ...rapid.station import IDLE_TIMEOUT_RANGE, RapidStation, default_station, load_station
-from . import DEFAULT_PORTS, MOCK_PROTOCOLS, start_mock_controller
+from ..backends import mock_protocols, mock_server
+from . import start_mock_controller
 
 __all__ = ["MockControllerOptions", "run_mock_controller", "is_loopback"]
 
@@ -20,9 +21,9 @@ class MockControllerOptions:
     Attributes
     ----------
     protocol : str
-        ``socket``, ``serial`` or ``modbus``.
+        ``socket``, ``serial``, ``modbus`` (any of :func:`~handeye.mocks.backends.mock_protocols`).
     port : int or None
-        None: the protocol's default (:data:`DEFAULT_PORTS`); 0: any free port.
+        None: the mock's default port (``mock_server(protocol).default_port``); 0: any free port.
     host : str
     config : str or None
         Station YAML (the ``rapid generate`` keys) for the approved postures, the acknowledgement
@@ -95,8 +96,8 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
     from ...drivers.controller.errors import InvalidRequest
     from ...drivers.controller.types import check_write_key
 
-    if options.protocol not in MOCK_PROTOCOLS:
-        raise InvalidRequest(f"unknown protocol {options.protocol!r}; choose one of {', '.join(MOCK_PROTOCOLS)}")
+    if options.protocol not in mock_protocols():
+        raise InvalidRequest(f"unknown protocol {options.protocol!r}; choose one of {', '.join(mock_protocols())}")
     if not options.time_scale > 0:
         raise InvalidRequest(f"--time-scale must be > 0; got {options.time_scale}")
     station = options.station or (load_station(options.config) if options.config else default_station())
@@ -105,7 +106,7 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
     if not low <= idle <= high:
         raise InvalidRequest(f"--idle-timeout must be {low:g} to {high:g} s; got {idle:g}")
     key = check_write_key(options.write_key if options.write_key is not None else station.write_key, "--write-key")
-    port = DEFAULT_PORTS[options.protocol] if options.port is None else options.port
+    port = mock_server(options.protocol).default_port if options.port is None else options.port
     if not is_loopback(options.host):
         warn(f"warning: the mock controller listens on {options.host}, not a loopback address: anyone on that network "
              "can move the robot's mock and write its tool data; it is for testing only")

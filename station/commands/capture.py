@@ -69,8 +69,7 @@ def run(args) -> int:
             say(("  ok    " if report.ok else "  SKIP  ") + report.message + f"  ({report.elapsed_s:.1f} s)")
             update(report.k, report.total, f"posture {report.k}/{report.total}")
 
-        summary = capture(config, args.session, link.controller, link.camera, link.stereo_model, link.load_program,
-                          progress=say, on_posture=on_posture)
+        summary = capture(config, args.session, link, progress=say, on_posture=on_posture)
     have = len(summary.captured) + len(summary.already)
     say(f"{have} of {summary.planned} postures in {summary.session} ({len(summary.captured)} this run, "
         f"{summary.duration_s:.0f} s)")

@@ -17,9 +17,7 @@ waits for the PC's acknowledgement at each; joints and flange pose come from the
 kinematics, motion time from the axis speeds (x --time-scale).
 
 Protocols and default ports:
-  socket   TCP line protocol (rapid/PROTOCOL.md), port 1025
-  serial   the same line protocol as a byte stream for pyserial's socket://HOST:PORT URL, port 1026
-  modbus   Modbus TCP gateway with the I/O handshake (drivers/controller/modbus_map.yaml), port 5020
+{protocols}
 --port 0 picks a free port; the line printed at start says where it listens.
 
 The link recovers as the RAPID modules do: a PC silent for --idle-timeout seconds (default: the
@@ -35,12 +33,23 @@ Example:
 """
 
 
+def _protocols() -> tuple[str, str]:
+    """The protocols a mock serves (registry order) and their lines for the epilog."""
+    from ...mocks.backends import mock_protocols, mock_server
+
+    names = mock_protocols()
+    lines = [f"  {name:<8} {mock_server(name).help}, port {mock_server(name).default_port}" for name in names]
+    return names, "\n".join(lines)
+
+
 def add_parser(sub):
+    names, lines = _protocols()
     p = sub.add_parser("mock", help=HELP, description=HELP)
     targets = p.add_subparsers(dest="mock_target", metavar="TARGET")
-    c = targets.add_parser("controller", help=CONTROLLER_HELP, description=CONTROLLER_HELP, epilog=CONTROLLER_EPILOG,
+    c = targets.add_parser("controller", help=CONTROLLER_HELP, description=CONTROLLER_HELP,
+                           epilog=CONTROLLER_EPILOG.format(protocols=lines),
                            formatter_class=argparse.RawDescriptionHelpFormatter)
-    c.add_argument("--protocol", choices=("socket", "serial", "modbus"), default="socket", help="default socket")
+    c.add_argument("--protocol", choices=names, default="socket", help="default socket")
     c.add_argument("--port", type=argtypes.port, default=None, help="TCP port (defaults above; 0 = any free port)")
     c.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     c.add_argument("--config", metavar="STATION.yaml",

@@ -31,7 +31,7 @@ shape the RAPID program; all are optional, missing ones come from the built-in s
                write_key: YOUR-SECRET-KEY}
   motion: {speed_tcp_mm_s: 200, speed_ori_deg_s: 100}
   tool: {name: tHeCamera, mass_kg: 1.0, cog_mm: [0, 0, 60]}
-  postures: [[a1, a2, a3, a4, a5, a6], ...]        # controller axis angles, degrees
+  postures: [[a1, a2, a3, a4, a5, a6], ...]        # controller axis angles, degrees (one per robot axis)
 controller_address auto binds to GetSysInfo(\\LanIp); a virtual controller needs 127.0.0.1.
 (`handeye capture` plans the postures itself and writes its program into the session.)
 
@@ -41,13 +41,15 @@ Example:
 
 
 def add_parser(sub):
+    from ...rapid.links import PROTOCOLS
+
     p = sub.add_parser("rapid", help=HELP, description=HELP)
     what = p.add_subparsers(dest="rapid_command", metavar="COMMAND")
     g = what.add_parser("generate", help=GENERATE_HELP, description=GENERATE_HELP, epilog=GENERATE_EPILOG,
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     g.add_argument("--config", metavar="STATION.yaml", help="station config (default: the built-in mock station)")
     g.add_argument("-o", "--output", required=True, metavar="DIR", help="folder for the .mod files (created)")
-    g.add_argument("--protocol", choices=("socket", "serial", "modbus"),
+    g.add_argument("--protocol", choices=PROTOCOLS,
                    help="link module to write (default: controller.protocol of the config)")
     p.set_defaults(_rapid_parser=p)
     return p

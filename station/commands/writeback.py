@@ -45,10 +45,11 @@ def run(args) -> int:
     from ...calibration.errors import HandEyeError
     from ...calibration.plausibility import session_in_mm
     from ...calibration.session import read_session
-    from ...calibration.solve import calibrate, problem_from_session
+    from ..assessment import assess
+    from ..calibrate import solve_session
     from ..config import default_config, load_config
-    from ..demo import station_verdict
     from ..origin import origin_line, session_origin
+    from ..quality import config_thresholds
     from ..runtime import MOCK_BANNER, open_controller_link
     from ..writeback import check_session_origin, side_by_side, writeback
 
@@ -64,9 +65,8 @@ def run(args) -> int:
         check_session_origin(origin, config.is_mock)
     if origin_line(origin):
         print(origin_line(origin))
-    problem = problem_from_session(session)
-    result = calibrate(problem, args.method)
-    verdict = station_verdict(result, problem, config)
+    assessment = assess(solve_session(session, args.session, args.method, origin=origin), config_thresholds(config))
+    result, verdict = assessment.result, assessment.verdict
     print(f"calibration ({result.method}): {verdict.line()}")
     common = dict(verdict_passed=verdict.passed, verdict_reason=verdict.line(), force=args.force, origin=origin,
                   progress=lambda m: print(m, flush=True))

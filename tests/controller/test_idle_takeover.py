@@ -15,6 +15,8 @@ import pytest
 from handeye.drivers.controller import ControllerTimeout, ToolData, open_controller
 from handeye.mocks.controller import start_mock_controller
 
+from helpers import LinePeer
+
 IDLE = 0.4
 TIME_SCALE = 0.002
 TEST_KEY = "link-test-key"
@@ -47,22 +49,6 @@ def _silent_pc(server, partial: bytes = b"") -> socket.socket:
     else:
         time.sleep(0.05)
     return sock
-
-
-class LinePeer:
-    """A raw line-protocol peer (socket or the serial mock's TCP stream), for what the client hides."""
-
-    def __init__(self, server):
-        self.sock = socket.create_connection((server.host, server.port), timeout=2)
-        self.file = self.sock.makefile("rb")
-
-    def ask(self, text: str) -> str:
-        self.sock.sendall(text.encode("ascii") + b"\n")
-        return self.file.readline().decode("ascii").rstrip("\n")
-
-    def close(self) -> None:
-        self.file.close()
-        self.sock.close()
 
 
 @pytest.mark.parametrize("partial", [b"", b"7 JOI"], ids=["silent", "half-a-request"])

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import hashlib
-import socket
 import time
 
 import pytest
@@ -12,6 +11,8 @@ from handeye.drivers.controller import ControllerRefused, InvalidRequest, ToolDa
 from handeye.drivers.controller import protocol as P
 from handeye.drivers.controller.types import write_key_code
 from handeye.mocks.controller import start_mock_controller
+
+from helpers import LinePeer
 
 KEY = "right-key_42"
 WRONG = "wrong-key_42"
@@ -28,20 +29,6 @@ def _options(server, **changes):
     options = {**server.client_options(), "timeout": 1.0, "backoff_s": 0.02}
     options.pop("write_key", None)
     return {**options, **changes}
-
-
-class LinePeer:
-    def __init__(self, server):
-        self.sock = socket.create_connection((server.host, server.port), timeout=2)
-        self.file = self.sock.makefile("rb")
-
-    def ask(self, text: str) -> str:
-        self.sock.sendall(text.encode("ascii") + b"\n")
-        return self.file.readline().decode("ascii").rstrip("\n")
-
-    def close(self) -> None:
-        self.file.close()
-        self.sock.close()
 
 
 def test_the_right_key_writes_and_reads_back(keyed):
