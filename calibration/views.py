@@ -156,6 +156,8 @@ def sample_eye_in_hand_postures(
     views=(NOMINAL_XB3_LEFT,),
     seed_joints=None,
     max_attempts: int | None = None,
+    veto=None,
+    min_count: int | None = None,
 ) -> np.ndarray:
     """Controller angles ``(count, k)`` of postures from which ``views`` see the whole board.
 
@@ -177,11 +179,17 @@ def sample_eye_in_hand_postures(
         Configuration the inverse kinematics starts from (default: found from standard seeds).
     max_attempts : int, optional
         Give up after this many view points (default ``200 * count``).
+    veto : callable, optional
+        ``veto(joints) -> bool``: True keeps a posture that passed every other test (the cell's
+        clearance check); a vetoed one counts as an attempt and another is drawn.
+    min_count : int, optional
+        Fewest postures that will do when the attempts run out (default ``count``); the result may
+        then hold fewer than ``count`` rows.
 
     Raises
     ------
     RuntimeError
-        When not enough postures are found.
+        When fewer than ``min_count`` postures are found.
     """
     x = np.asarray(cam2tool0, float)
     board = np.asarray(target2base, float)
@@ -201,6 +209,8 @@ def sample_eye_in_hand_postures(
     while len(joints) < count:
         attempts += 1
         if attempts > limit:
+            if len(joints) >= (count if min_count is None else min_count):
+                break
             raise RuntimeError(f"only {len(joints)} of {count} postures found; widen the distance or cone, or move the board")
         distance = rng.uniform(*sampling.distance_mm)
         tilt = np.radians(sampling.cone_deg) * np.sqrt(rng.uniform())
@@ -224,6 +234,8 @@ def sample_eye_in_hand_postures(
             found = ik.joints_deg if ik.success else ik_from_standard_seeds(robot, tool02base, sampling.joint_margin_deg)
         if found is None or (anchor is not None and np.any(np.abs(found - anchor) > sampling.max_joint_jump_deg)):
             continue
+        if veto is not None and not veto(found):
+            continue
         anchor = found if anchor is None else anchor
         joints.append(found)
-    return np.array(joints)
+    return np.array(joints).reshape(len(joints), robot.dof)
