@@ -26,7 +26,7 @@ from ..calibration.clearance import CellGuard
 from ..calibration.compact_points import BoardGeometry
 from ..calibration.kinematics import RobotModel
 
-__all__ = ["CellCheck", "PostureVeto", "Rejections", "clear_route", "start_problem"]
+__all__ = ["CellCheck", "PostureVeto", "Rejections", "cell_check", "clear_route", "start_problem"]
 
 #: Rounds of drawing replacements for postures at blocked moves.
 REPAIR_ROUNDS = 4
@@ -61,6 +61,14 @@ class CellCheck:
             zones = (self.zone_tcp_mm, self.model.world_zone_volumes(board2base, board))
         return CellGuard(robot, self.model.volumes(board2base, board), self.model.carried, self.margin_mm, self.step_mm,
                          tcp_zones=zones)
+
+
+def cell_check(config) -> CellCheck:
+    """The :class:`CellCheck` of a station config (its ``cell`` section; with ``cell.world_zones`` the
+    camera's nominal mount is the TCP the zones watch)."""
+    c = config.cell
+    tcp = tuple(config.camera.nominal_mount[0]) if c.world_zones else None
+    return CellCheck(c.model(), c.margin_mm, c.path_step_mm, tcp)
 
 
 @dataclass

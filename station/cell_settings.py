@@ -153,6 +153,6 @@ class GuidedSettings:
     min_step_mm: float = setting(50.0, Number(0, 2000), "... or moves at least this far", "mm")
     min_distance_spread_mm: float = setting(200.0, Number(0, 5000), "board distances should span at least this",
                                             "mm")
-    min_image_cells: int = setting(6, Number(1, 9, integer=True), "of the 3x3 cells of the image, the board centre "
-                                   "should visit at least this many")
+    min_image_cells: int = setting(7, Number(1, 9, integer=True), "of the 3x3 cells of the image, the board's "
+                                   "corners should be seen in at least this many")
     max_postures: int = setting(60, Number(3, 255, integer=True), "stop after this many postures")

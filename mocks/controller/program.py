@@ -16,6 +16,7 @@ import numpy as np
 
 from ...drivers.controller import protocol as P
 from ...drivers.controller.types import ACKED, AT, ERROR, LATE, MOVING, READY, ToolData
+from ..robot import ZoneViolation
 
 __all__ = ["RapidProgram", "ProgramRefusal"]
 
@@ -73,7 +74,8 @@ class RapidProgram:
         Raises
         ------
         ProgramRefusal
-            E_RANGE (not an approved posture) or E_BUSY (moving elsewhere / not acknowledged).
+            E_RANGE (not an approved posture), E_BUSY (moving elsewhere / not acknowledged) or E_FAULT
+            (the path enters a volume of the cell: a world zone stops the arm; it did not move).
         """
         with self._lock:
             self._advance()
@@ -85,7 +87,10 @@ class RapidProgram:
                 raise ProgramRefusal(P.E_BUSY, f"busy: acknowledge posture {self._posture} first")
             if self._state != READY:
                 raise ProgramRefusal(P.E_BUSY, f"busy: state {self._state}")
-            self.robot.start_posture(k)
+            try:
+                self.robot.start_posture(k)
+            except ZoneViolation as refusal:
+                raise ProgramRefusal(P.E_FAULT, str(refusal)) from None
             self._state, self._posture, self.error_code = MOVING, k, 0
             return True
 
