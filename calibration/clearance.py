@@ -68,10 +68,10 @@ class Violation:
         return f"{self.body} {'inside' if self.clearance_mm < 0 else 'too close to'} '{self.volume}'"
 
     def describe(self) -> str:
-        """One line: ``camera 12 mm inside 'fixture'`` / ``link 5 8 mm from 'floor'``."""
+        """One line: ``camera is 12 mm inside 'fixture'`` / ``link 5 is 8 mm from 'floor'``."""
         if self.clearance_mm < 0:
-            return f"{self.body} {-self.clearance_mm:.0f} mm inside '{self.volume}'"
-        return f"{self.body} {self.clearance_mm:.0f} mm from '{self.volume}'"
+            return f"{self.body} is {-self.clearance_mm:.0f} mm inside '{self.volume}'"
+        return f"{self.body} is {self.clearance_mm:.0f} mm from '{self.volume}'"
 
 
 def link_spheres(robot: RobotModel):
@@ -208,6 +208,22 @@ class CellGuard:
         """The closest approach of one posture ``(k,)`` when below the margin, else None."""
         best, sphere, volume = self.clearances(np.asarray(joints_deg, float)[None])
         return self._violation(best[0], sphere[0], volume[0]) if best[0] < self.margin_mm else None
+
+    def flange_violation(self, tool02base) -> Violation | None:
+        """What the flange carries (and the world zones' TCP) closer than the margin at a flange pose
+        ``(4, 4)``, else None: the part of :meth:`posture_violation` that needs no joints (a cheap
+        test before the inverse kinematics)."""
+        tool = np.asarray(tool02base, float)
+        centres = self._tool_centres @ tool[:3, :3].T + tool[:3, 3]
+        first = len(self._link_t)
+        best = (np.inf, 0, 0)
+        for v, vol in enumerate(self.volumes):
+            gap = vol.signed_distance(centres) - self.radii[first:]
+            gap[~self._mask[first:, v]] = np.inf
+            k = int(np.argmin(gap)) if len(gap) else 0
+            if len(gap) and gap[k] < best[0]:
+                best = (float(gap[k]), first + k, v)
+        return self._violation(*best) if best[0] < self.margin_mm else None
 
     # ----------------------------------------------------------------------------- moves
     def sample_count(self, a, b) -> int:

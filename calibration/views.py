@@ -158,6 +158,7 @@ def sample_eye_in_hand_postures(
     max_attempts: int | None = None,
     veto=None,
     min_count: int | None = None,
+    pose_veto=None,
 ) -> np.ndarray:
     """Controller angles ``(count, k)`` of postures from which ``views`` see the whole board.
 
@@ -185,6 +186,9 @@ def sample_eye_in_hand_postures(
     min_count : int, optional
         Fewest postures that will do when the attempts run out (default ``count``); the result may
         then hold fewer than ``count`` rows.
+    pose_veto : callable, optional
+        ``pose_veto(tool02base) -> bool``: like ``veto``, on the flange pose, before the inverse
+        kinematics (what the flange carries needs no joints).
 
     Raises
     ------
@@ -226,6 +230,8 @@ def sample_eye_in_hand_postures(
         if not robot.may_reach(tool02base[:3, 3]):
             continue
         if not board_visible(invert_transforms(cam2base) @ board, corners, views, sampling.margin_px):
+            continue
+        if pose_veto is not None and not pose_veto(tool02base):
             continue
         if anchor is None:
             found = ik_from_standard_seeds(robot, tool02base, sampling.joint_margin_deg)

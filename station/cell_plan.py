@@ -96,18 +96,24 @@ class Rejections:
 
 
 class PostureVeto:
-    """The sampler's veto (``calibration.views.sample_eye_in_hand_postures``): a posture closer than the
-    margin to the cell is refused and its reason counted."""
+    """The sampler's vetoes (``calibration.views.sample_eye_in_hand_postures``): a posture closer than the
+    margin to the cell is refused and its reason counted; :meth:`pose` tests what the flange carries on
+    the flange pose alone, before the inverse kinematics, :meth:`__call__` the whole posture."""
 
     def __init__(self, guard: CellGuard, rejections: Rejections):
         self.guard = guard
         self.rejections = rejections
 
-    def __call__(self, joints) -> bool:
-        violation = self.guard.posture_violation(joints)
+    def _counted(self, violation) -> bool:
         if violation is not None:
             self.rejections.postures[violation.reason] += 1
         return violation is None
+
+    def pose(self, tool02base) -> bool:
+        return self._counted(self.guard.flange_violation(tool02base))
+
+    def __call__(self, joints) -> bool:
+        return self._counted(self.guard.posture_violation(joints))
 
 
 def start_problem(guard: CellGuard, start) -> str | None:
@@ -116,9 +122,9 @@ def start_problem(guard: CellGuard, start) -> str | None:
     if violation is None:
         return None
     if violation.clearance_mm < 0:
-        return (f"the start posture puts the {violation.describe()}: jog the robot out of it, with the board in view, "
+        return (f"at the start posture, {violation.describe()}: jog the robot out of it, with the board in view, "
                 "then run capture again")
-    return (f"the start posture puts the {violation.describe()}, within the margin of {guard.margin_mm:g} mm "
+    return (f"at the start posture, {violation.describe()}, within the margin of {guard.margin_mm:g} mm "
             "(cell.margin_mm): jog the robot clear of it, with the board in view, then run capture again")
 
 

@@ -299,23 +299,28 @@ def _draw_clear_of_cell(robot, cam2tool0, board2base, board, corners, count, rng
     fewest = min(count, thresholds.min_inlier_postures)
     try:
         joints = sample_eye_in_hand_postures(robot, cam2tool0, board2base, corners, count, rng, sampling, views,
-                                             seed_joints=start, max_attempts=max_attempts, veto=veto, min_count=fewest)
+                                             seed_joints=start, max_attempts=max_attempts, veto=veto, min_count=fewest,
+                                             pose_veto=veto.pose)
     except RuntimeError as exc:
-        raise PlanningError(_too_few(str(exc).split(";")[0], fewest, rejections)) from None
+        found = int(str(exc).split()[1])  # "only N of M postures found; ..."
+        raise PlanningError(_too_few(f"only {found} of {count} postures keep clear of the cell", fewest, rejections)) \
+            from None
 
     def redraw(m: int) -> np.ndarray:
         return sample_eye_in_hand_postures(robot, cam2tool0, board2base, corners, m, rng, sampling, views,
-                                           seed_joints=start, max_attempts=200 * m, veto=veto, min_count=0)
+                                           seed_joints=start, max_attempts=200 * m, veto=veto, min_count=0,
+                                           pose_veto=veto.pose)
 
     joints = clear_route(robot, guard, start, joints, redraw, rejections, order_for_short_motions)
     if len(joints) < fewest:
-        raise PlanningError(_too_few(f"only {len(joints)} postures with clear moves between them", fewest, rejections))
+        raise PlanningError(_too_few(f"only {len(joints)} of {count} postures keep clear of the cell with clear moves "
+                                     "between them", fewest, rejections))
     return joints, rejections
 
 
 def _too_few(found: str, fewest: int, rejections: Rejections) -> str:
-    return (f"{found} keep clear of the cell, fewer than the {fewest} the verdict needs (min_inlier_postures): "
-            f"{rejections.summary()}; move the board or the keep-out volumes, or widen plan.distance_mm / plan.cone_deg")
+    return (f"{found}, fewer than the {fewest} the verdict needs (min_inlier_postures): {rejections.summary()}; "
+            "move the board or the keep-out volumes, or widen plan.distance_mm / plan.cone_deg")
 
 
 def board_distance_and_tilt(plan: PosturePlan, robot: RobotModel) -> np.ndarray:

@@ -22,7 +22,7 @@ from ..calibration.compact_points import board_corners
 from ..calibration.kinematics import RobotModel
 from .planning import PosturePlan
 
-__all__ = ["plan_preview_png", "write_preview"]
+__all__ = ["plan_preview_figure", "plan_preview_png", "write_preview"]
 
 _VOLUME, _STAND, _BOARD, _PATH, _CAMERA = "#c62828", "#ef8a17", "#1f5fa8", "#555555", "#1f5fa8"
 #: The two views: (title, index of the horizontal axis, of the vertical axis, their names).
@@ -121,7 +121,15 @@ def _extent(points: np.ndarray, volumes) -> np.ndarray:
 
 
 def plan_preview_png(robot: RobotModel, plan: PosturePlan) -> bytes:
-    """The preview of ``plan`` (its cell: ``plan.cell``; none: the board and the path only), as PNG bytes."""
+    """The preview of ``plan`` (:func:`plan_preview_figure`) as PNG bytes."""
+    buffer = io.BytesIO()
+    plan_preview_figure(robot, plan).savefig(buffer, format="png", dpi=100, facecolor="white")
+    return buffer.getvalue()
+
+
+def plan_preview_figure(robot: RobotModel, plan: PosturePlan):
+    """The preview of ``plan`` (its cell: ``plan.cell``; none: the board and the path only), a matplotlib
+    ``Figure`` on an Agg canvas."""
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
@@ -176,9 +184,7 @@ def plan_preview_png(robot: RobotModel, plan: PosturePlan) -> bytes:
     margin = f"margin {plan.cell.margin_mm:g} mm" if plan.cell is not None else "no cell given"
     notes = "; ".join([margin] + left_out)
     fig.suptitle(f"Plan preview: {len(plan.joints_deg)} postures in visiting order; {notes}", fontsize=11)
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=100, facecolor="white")
-    return buffer.getvalue()
+    return fig
 
 
 def write_preview(path, robot: RobotModel, plan: PosturePlan):
