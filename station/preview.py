@@ -93,7 +93,7 @@ def _place_labels(ax, points_2d, labels, renderer, taken: list) -> int:
         for dx, dy in offsets:
             label = ax.annotate(text, (x, y), xytext=(dx, dy), textcoords="offset points", fontsize=7,
                                 ha="left" if dx >= 0 else "right", va="bottom" if dy >= 0 else "top", color=_CAMERA)
-            box = label.get_window_extent(renderer).expanded(1.15, 1.25)
+            box = label.get_window_extent(renderer).padded(2.0)
             inside = frame.x0 <= box.x0 and box.x1 <= frame.x1 and frame.y0 <= box.y0 and box.y1 <= frame.y1
             if inside and not any(box.overlaps(other) for other in taken):
                 taken.append(box)
