@@ -21,6 +21,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..calibration.errors import HandEyeError
 from ..calibration.kinematics import load_robot
 from ..drivers.controller.types import FlangePose, ToolData
 
@@ -30,7 +31,7 @@ __all__ = ["SimulatedRobot", "DEFAULT_TOOL", "ZoneViolation"]
 DEFAULT_TOOL = ToolData((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0), 1.0, (0.0, 0.0, 0.0))
 
 
-class ZoneViolation(Exception):
+class ZoneViolation(HandEyeError):
     """A move refused because its path enters a volume of the cell (what world zones would stop).
 
     Attributes

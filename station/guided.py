@@ -112,8 +112,29 @@ def what_is_missing(tool02base, distances_mm, cells: set, thresholds: QualityThr
     n, needed = len(tool02base), postures_needed(thresholds)
     out = []
     if n < needed:
-        out.append(Missing("postures", str(n), f">= {needed}", f"capture {needed - n} more"))
-    coverage = hand_axis_coverage(np.asarray(tool02base, float).reshape(-1, 4, 4), "tool0")
+        first = " (the first: the board whole in view, about 0.9 m away)" if n == 0 else ""
+        out.append(Missing("postures", str(n), f">= {needed}", f"capture {needed - n} more{first}"))
+    if n == 0:
+        return out
+    out += _rotation_missing(np.asarray(tool02base, float).reshape(-1, 4, 4), thresholds)
+    spread = distance_spread_mm(distances_mm)
+    if spread < guided.min_distance_spread_mm:
+        near, far = float(np.min(distances_mm)), float(np.max(distances_mm))
+        out.append(Missing("distance spread", f"{spread:.0f} mm", f">= {guided.min_distance_spread_mm:g} mm",
+                           f"move the camera nearer than {near:.0f} mm or farther than {far:.0f} mm from the board"))
+    if len(cells) < guided.min_image_cells:
+        out.append(Missing("board position in the image", f"{len(cells)} of 9 cells", f">= {guided.min_image_cells}",
+                           f"show the board in the {', '.join(_cell_names(cells))} of the image"))
+    return out
+
+
+def _rotation_missing(tool02base: np.ndarray, thresholds: QualityThresholds) -> list:
+    """The rotation words of the flange poses against the thresholds (a single posture: turn at all)."""
+    if len(tool02base) < 2:
+        return [Missing("relative rotation angle (median)", "none yet", f">= {thresholds.min_median_rotation_deg:g} deg",
+                        "turn the flange 20-45 deg from this posture, keeping the board in view")]
+    out = []
+    coverage = hand_axis_coverage(tool02base, "tool0")
     if coverage.spread_deg < thresholds.min_rotation_axis_spread_deg:
         direction = direction_name(coverage.weakest_direction, "tool0")
         hint = " (axis 6 alone does that)" if direction == "tool0 z" else ""
@@ -124,14 +145,6 @@ def what_is_missing(tool02base, distances_mm, cells: set, thresholds: QualityThr
         out.append(Missing("relative rotation angle (median)", f"{coverage.median_angle_deg:.1f} deg",
                            f">= {thresholds.min_median_rotation_deg:g} deg",
                            "turn the flange further between postures (20-45 deg)"))
-    spread = distance_spread_mm(distances_mm)
-    if spread < guided.min_distance_spread_mm:
-        near, far = (float(np.min(distances_mm)), float(np.max(distances_mm))) if len(distances_mm) else (0.0, 0.0)
-        out.append(Missing("distance spread", f"{spread:.0f} mm", f">= {guided.min_distance_spread_mm:g} mm",
-                           f"move the camera nearer than {near:.0f} mm or farther than {far:.0f} mm from the board"))
-    if len(cells) < guided.min_image_cells:
-        out.append(Missing("board position in the image", f"{len(cells)} of 9 cells", f">= {guided.min_image_cells}",
-                           f"show the board in the {', '.join(_cell_names(cells))} of the image"))
     return out
 
 

@@ -181,3 +181,14 @@ def test_the_plan_record_keeps_the_reasons(cell_plan):
     assert record["rejections"] == list(cell_plan.score.rejections)
     assert isinstance(record["rotation_axis_spread_deg"], float)
     assert replace(cell_plan.score, rejections=()).to_dict()["rejections"] == []
+
+
+def test_with_world_zones_the_camera_tcp_keeps_clear_of_the_zones_as_the_controller_sees_them():
+    check = CellCheck(CELL, MARGIN, STEP, zone_tcp_mm=(-115.0, 30.0, 95.0))
+    guard = check.guard(ROBOT, DEFAULT_BOARD, BOARD)
+    assert guard.bodies.count("TCP") == 1
+    zones = guard.volumes[len(CELL.volumes(DEFAULT_BOARD, BOARD)):]
+    assert [z.name for z in zones] == ["floor", "cabinet beside the board", "board stand"]
+    assert zones[2].box2parent is None  # the stand as its bounding box in base, as WZBoxDef declares it
+    stand = CELL.volumes(DEFAULT_BOARD, BOARD)[2]
+    assert np.all(zones[2].signed_distance(stand.corners()) <= 1e-6)

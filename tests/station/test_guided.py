@@ -86,7 +86,7 @@ def test_the_operator_set_reaches_the_thresholds_coverage(guided_and_planned):
     config, folder, summary, messages, _, _ = guided_and_planned
     assert summary.captured == list(range(POSTURES)) and summary.already == 0
     assert summary.good_enough and summary.missing == []
-    assert any(m.startswith("missing: postures 0 (needs >= 15)") for m in messages)
+    assert "missing: postures 0 (needs >= 15): capture 15 more (the first: the board whole in view, about 0.9 m away)" in messages
     assert any(m.startswith("GOOD ENOUGH: 15 postures") for m in messages)
     assert sum("from a captured posture: move on" in m for m in messages) == 1  # the nudge at pose 4: said once
 
@@ -150,6 +150,12 @@ def test_what_is_missing_names_the_word_the_value_and_what_to_do():
     assert "upper left" in words["board position in the image"].advice and "centre" not in \
         words["board position in the image"].advice
     assert postures_needed(thresholds) == 15 and postures_needed(QualityThresholds(min_inlier_postures=20)) == 25
+    # before the first posture only the count; after it, turn at all
+    assert [m.word for m in what_is_missing(np.zeros((0, 4, 4)), np.zeros(0), set(), thresholds, guided)] == ["postures"]
+    one = what_is_missing(poses[:1], np.array([800.0]), {(1, 1)}, thresholds, guided)
+    assert [m.word for m in one] == ["postures", "relative rotation angle (median)", "distance spread",
+                                     "board position in the image"]
+    assert "turn the flange 20-45 deg from this posture" in one[1].advice
 
 
 def test_the_arm_counts_as_still_once_per_rest():
