@@ -4,7 +4,8 @@ For cells that cannot run an automatic program: the operator moves the robot wit
 PC reads the joints every ``guided.poll_s`` and, once they have not changed by more than
 ``guided.still_tolerance_deg`` for ``guided.still_s`` (:class:`StillWatch`), and the flange stands
 somewhere new (at least ``guided.min_step_deg`` of rotation or ``guided.min_step_mm`` from every
-posture already captured), captures there exactly as the planned capture does: the flange pose
+posture already captured), captures there exactly as the planned capture does (warning when the arm
+rests within ``cell.margin_mm`` of a keep-out volume: the PC does not move it, the operator does): the flange pose
 checked against the kinematics, the board grabbed, triangulated and judged (retried), the posture
 file written atomically. After every posture it says what is still missing (:func:`what_is_missing`)
 in the quality words of ``calibration.quality_words`` and what to do next, and says when the set is
@@ -48,6 +49,7 @@ from .capture import (
     stereo_views,
     store_posture,
 )
+from .cell_plan import cell_check
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
 from .quality import QualityThresholds, config_thresholds, direction_name
@@ -262,6 +264,7 @@ class _GuidedRun:
             self.state.add(posture.index, posture.tool0_in_base, posture.points_mm, self.view)
         self.captured: list = []
         self._told = None
+        self.guard = cell_check(config).guard(self.robot)  # the configured volumes (the stand needs a board pose)
 
     def missing(self) -> list:
         s = self.state
@@ -288,6 +291,9 @@ class _GuidedRun:
                 self._told = k
             return
         self._told = None
+        near = self.guard.posture_violation(joints)
+        if near is not None:
+            self.progress(f"careful: {near.describe()} (cell.margin_mm {self.guard.margin_mm:g}): jog away from it")
         index = self.state.next_index
         joints, tool02base = read_flange(self.config, self.link, self.robot, f"posture {index}")
         result, frame, problem, attempts = measure_with_retries(self.config, self.link)

@@ -89,6 +89,7 @@ def test_the_operator_set_reaches_the_thresholds_coverage(guided_and_planned):
     assert "missing: postures 0 (needs >= 15): capture 15 more (the first: the board whole in view, about 0.9 m away)" in messages
     assert any(m.startswith("GOOD ENOUGH: 15 postures") for m in messages)
     assert sum("from a captured posture: move on" in m for m in messages) == 1  # the nudge at pose 4: said once
+    assert not any(m.startswith("careful:") for m in messages)  # the operator kept clear of the cell
 
 
 def test_the_guided_session_calibrates_as_well_as_the_planned_one(guided_and_planned):
