@@ -1,5 +1,10 @@
 """A simulated ABB IRB 1400 for the mock controller: limits, synchronised moves, kinematics, tool data.
 
+The controller's RAPID program (run by the interpreter, ``mocks/controller``) moves it with
+``MoveAbsJ``, reads it with ``CJointT``/``CRobT`` and keeps the camera's tool data in its PERS
+tooldata (:attr:`SimulatedRobot.tool` reads it there once a program is attached); the world zones
+the program defines are kept in :attr:`SimulatedRobot.world_zones`.
+
 The arm moves between joint configurations with all axes starting and stopping together
 (a synchronised ``MoveAbsJ``): the move lasts ``max_i |Δq_i| / (speed_fraction * max_speed_i)``,
 axes interpolated linearly in time (no acceleration ramps, no path planning). A cell can be given
@@ -78,6 +83,10 @@ class SimulatedRobot:
         The cell the moves are checked against (may be replaced at any time).
     refusals : list of ZoneViolation
         The moves refused so far.
+    world_zones : dict
+        World zones the controller's program defined (number -> zone), checked by its moves.
+    tool_source : callable or None
+        Where :attr:`tool` reads the camera's tool data (the program's PERS tooldata).
     """
 
     def __init__(self, postures, model: str = "IRB1400", speed_fraction: float = 0.25, time_scale: float = 1.0,
@@ -108,6 +117,8 @@ class SimulatedRobot:
         self._arrival_reported = True
         self._tool = DEFAULT_TOOL
         self.arrival_hooks: list[Callable[[int, np.ndarray], None]] = []
+        self.world_zones: dict = {}
+        self.tool_source: Callable[[], ToolData] | None = None
         #: Number of moves started (for tests).
         self.moves = 0
         self.guard = guard
@@ -252,7 +263,10 @@ class SimulatedRobot:
 
     @property
     def tool(self) -> ToolData:
-        """The PERS tooldata of the camera."""
+        """The PERS tooldata of the camera (the program's, once one is attached)."""
+        source = self.tool_source
+        if source is not None:
+            return source()
         with self._lock:
             return self._tool
 

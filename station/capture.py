@@ -88,7 +88,7 @@ __all__ = [
 ]
 
 
-_STATION_NAMES = {MOCK: "embedded mock station", REAL: "real station"}
+_STATION_NAMES = {MOCK: "mock station (embedded, or a rehearsal)", REAL: "real station"}
 
 
 class CaptureError(HandEyeError):
@@ -173,8 +173,9 @@ def _quality_problem(result, config: StationConfig) -> str | None:
 
 
 def _station_kind(config: StationConfig) -> str:
-    """``mock`` or ``real``: the station a capture runs on, as the capture record says it."""
-    return MOCK if config.is_mock else REAL
+    """``mock`` or ``real``: the station a capture runs on, as the capture record says it (a rehearsal
+    against ``handeye mock controller`` is a mock station: its session is never written to a robot)."""
+    return MOCK if config.is_mock or config.is_rehearsal else REAL
 
 
 def _session_record(session_dir: Path) -> Session | None:
@@ -294,7 +295,7 @@ def resume_session(config: StationConfig, session_dir: Path, session: Session, p
     recorded = session_origin(session)
     if recorded in (MOCK, REAL) and recorded != _station_kind(config):
         raise CaptureError(f"{session_dir} was captured on the {_STATION_NAMES[recorded]}; resume it on the same "
-                           f"station ({'--mock' if recorded == MOCK else '--config STATION.yaml with the real hardware'}) "
+                           f"station ({'--mock, or the rehearsal config' if recorded == MOCK else '--config STATION.yaml with the real hardware'}) "
                            "or start a new session folder")
     plan_joints = np.array(record["plan_joints_deg"], float)
     remove_stale_temporaries(session_dir)  # a killed run may leave one beside the (whole) file it was replacing
@@ -313,15 +314,21 @@ def open_capture(config: StationConfig, session_dir: Path, link: StationLink, pr
 
 
 def write_program(config: StationConfig, session_dir: Path, plan_joints: np.ndarray, progress,
-                  board2base=None) -> Path:
+                  board2base=None, link: StationLink | None = None) -> Path:
     """Write the RAPID program into ``SESSION/rapid`` (once; with ``cell.world_zones`` the keep-out
-    volumes and the stand of the board at ``board2base`` as world zones); returns the folder."""
+    volumes and the stand of the board at ``board2base`` as world zones); returns the folder. On the
+    embedded mock station (``link``) the program asks the mock's HeKey for the write key."""
     from ..rapid.generate import render_program, write_modules
     from ..rapid.station import station_from_dict
 
     rapid_dir = session_dir / "rapid"
     if not rapid_dir.is_dir():
-        station = station_from_dict(config.rapid_dict(plan_joints, board2base), config.source)
+        data = config.rapid_dict(plan_joints, board2base)
+        if link is not None and link.is_mock and data["controller"]["write_key"] is None:
+            # the embedded station's controller holds a key of its own (HeKey.sys, handed to the PC): its
+            # link module asks HeKey for it. The key itself never goes into the program modules.
+            data["controller"]["write_key"] = link.mock.write_key
+        station = station_from_dict(data, config.source)
         write_modules(render_program(station, plan_joints), rapid_dir)
         progress(f"RAPID program written to {rapid_dir}")
     return rapid_dir
@@ -331,7 +338,7 @@ def install_program(config: StationConfig, session_dir: Path, plan_joints: np.nd
                     progress, board2base=None) -> None:
     """Write the RAPID program (:func:`write_program`), load it when the station can, and wait until the
     controller runs a program with the plan's posture count."""
-    rapid_dir = write_program(config, session_dir, plan_joints, progress, board2base)
+    rapid_dir = write_program(config, session_dir, plan_joints, progress, board2base, link)
     if link.load_program is not None:
         link.load_program(plan_joints, rapid_dir)
         link.controller.close()  # the posture count is read at connect: read it again
@@ -429,7 +436,7 @@ def capture(
     session_dir = Path(session_dir)
     run = open_capture(config, session_dir, link, progress)
     if plan_only:
-        write_program(config, session_dir, run.plan_joints, progress, run.board2base)
+        write_program(config, session_dir, run.plan_joints, progress, run.board2base, link)
         progress(f"plan only: nothing moved; look at {session_dir / 'preview.png'}, then run the same command "
                  "without --plan-only to capture")
         return CaptureSummary(session_dir, len(run.plan_joints), [], sorted(k + 1 for k in run.done), {},

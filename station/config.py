@@ -120,6 +120,16 @@ def _joints(value, key: str, context) -> tuple:
     return joints
 
 
+def _mock_arm(value, key: str, context) -> str:
+    """``HOST:PORT`` of a standalone mock controller's camera port."""
+    address = text(value, key)
+    host, sep, port = address.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ConfigError(f"{key} must be HOST:PORT (where `handeye mock controller --camera-port PORT` serves its "
+                          f"camera); got {brief(value)}")
+    return address
+
+
 def _rapid_name(value, key: str, context) -> str:
     name = text(value, key)
     if not (name[0].isalpha() and name.replace("_", "a").isalnum() and len(name) <= 32):
@@ -205,6 +215,9 @@ class CameraSettings:
                                    "camera in tool0 from the drawing, for planning only (position_mm, "
                                    "quaternion_wxyz)", "mm")
     grab_timeout_s: float = setting(2.0, Number(0.001, 60), "budget of one grab", "s")
+    mock_arm: str | None = setting(None, Optional(Custom(_mock_arm)), "rehearsal only (backend mock with a real "
+                                   "controller protocol): HOST:PORT where `handeye mock controller --camera-port` "
+                                   "serves the simulated XB3 on its arm")
 
     def nominal_mount_transform(self) -> np.ndarray:
         return transform_from_pose(self.nominal_mount[0], self.nominal_mount[1])
@@ -310,9 +323,16 @@ class StationConfig:
         """True when this configuration runs the embedded mock station (both back ends are ``mock``)."""
         return self.controller.protocol == MOCK
 
+    @property
+    def is_rehearsal(self) -> bool:
+        """True for a rehearsal station: a real controller link to ``handeye mock controller`` and the
+        mock camera on its arm (``camera.backend: mock`` with ``camera.mock_arm``)."""
+        return self.controller.protocol != MOCK and self.camera.backend == MOCK and self.camera.mock_arm is not None
+
     def as_mock(self) -> "StationConfig":
         """The same settings on the embedded mock station (what ``--mock`` does to a config)."""
-        return replace(self, controller=replace(self.controller, protocol=MOCK), camera=replace(self.camera, backend=MOCK))
+        return replace(self, controller=replace(self.controller, protocol=MOCK),
+                       camera=replace(self.camera, backend=MOCK, mock_arm=None))
 
     @property
     def link_protocol(self) -> str:
@@ -408,9 +428,18 @@ def _check_hardware_named(data: dict, config: StationConfig) -> None:
         if not isinstance(data.get(name), dict) or key not in data[name]:
             raise ConfigError(f"{name}.{key} is missing: name the station's {name} ({' | '.join(real)}), "
                               f"or {MOCK} for the embedded mock station")
-    if (config.controller.protocol == MOCK) != (config.camera.backend == MOCK):
-        raise ConfigError(f"controller.protocol is {config.controller.protocol} but camera.backend is {config.camera.backend}: "
-                          f"the mock camera only sees the mock robot; set both to {MOCK}, or neither")
+    controller_mock, camera_mock = config.controller.protocol == MOCK, config.camera.backend == MOCK
+    if config.camera.mock_arm is not None and not (camera_mock and not controller_mock):
+        raise ConfigError(f"camera.mock_arm is for a rehearsal: camera.backend {MOCK} with a real controller protocol "
+                          f"(socket, serial, modbus) pointing at `handeye mock controller`; here controller.protocol is "
+                          f"{config.controller.protocol} and camera.backend {config.camera.backend}")
+    if controller_mock and not camera_mock:
+        raise ConfigError(f"controller.protocol is {MOCK} but camera.backend is {config.camera.backend}: the embedded mock "
+                          f"station has its own camera; set both to {MOCK}, or neither")
+    if camera_mock and not controller_mock and config.camera.mock_arm is None:
+        raise ConfigError(f"camera.backend is {MOCK} but controller.protocol is {config.controller.protocol}: the mock camera "
+                          f"only sees the mock robot: set both to {MOCK} (the embedded mock station), or rehearse against "
+                          "`handeye mock controller --camera-port PORT` with camera.mock_arm: HOST:PORT")
 
 
 def _check_cell(config: StationConfig) -> None:

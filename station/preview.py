@@ -18,7 +18,6 @@ import io
 import numpy as np
 
 from ..calibration.cell import Box, Cylinder, Floor
-from ..calibration.compact_points import board_corners
 from ..calibration.kinematics import RobotModel
 from .planning import PosturePlan
 

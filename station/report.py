@@ -381,7 +381,7 @@ def _kv(pairs) -> str:
 #: What the report says about where the data come from (``station.origin``).
 _ORIGIN_FACTS = {
     "real": "the real station (capture record in session.yaml)",
-    "mock": "the embedded mock station (simulated robot and camera)",
+    "mock": "a mock station, embedded or a rehearsal (simulated robot and camera)",
     "simulated": "a simulation (truth.yaml beside the session)",
     "unknown": "not recorded (imported or hand-written session)",
 }

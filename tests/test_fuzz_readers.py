@@ -56,7 +56,7 @@ TOTAL_CASES = (SESSION_CASES + CONFIG_CASES + THRESHOLD_CASES + MOVEIT_CASES + P
 
 
 def fuzz_settings(cases: int):
-    return settings(max_examples=cases, deadline=None, database=None, print_blob=False,
+    return settings(max_examples=cases, deadline=None, database=None, print_blob=True,
                     suppress_health_check=list(HealthCheck))
 
 

@@ -3,8 +3,9 @@
 checkerboard detection in canonical order and triangulation to millimetres.
 
 Importing this package is cheap (no OpenCV, no libdc1394): names load on first use; the modules
-``decode``, ``stereo``, ``checkerboard`` and ``triangulate`` use OpenCV, ``xb3`` loads libdc1394
-only when it connects.
+``decode``, ``stereo``, ``checkerboard``, ``triangulate``, ``stereo_calibration`` (calibrating the
+head), ``coverage`` (where the board has been, hints, the coverage map) and ``triclops`` (the
+factory calibration's rectified model) use OpenCV, ``xb3`` loads libdc1394 only when it connects.
 """
 
 from __future__ import annotations

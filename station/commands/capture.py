@@ -40,8 +40,11 @@ ends up on disk exactly once.
 when the controller or the camera cannot be reached, capture stops with the reason: it never falls
 back to the mock. --mock runs the embedded mock station (a simulated IRB 1400 behind a real
 TCP/Modbus server and a simulated XB3 on its flange), with the config's settings if one is given;
-so does a config whose controller.protocol and camera.backend are both mock. Every line it prints
-then starts with MOCK, and the session records that it came from the mock station.
+so does a config whose controller.protocol and camera.backend are both mock. A rehearsal config
+(camera.backend: mock with camera.mock_arm: HOST:PORT, the controller section pointing at
+`handeye mock controller --camera-port PORT`) runs the real drivers against that standalone mock,
+which executes the session's RAPID. Every line it prints then starts with MOCK, and the session
+records that it came from a mock station.
 
 Examples:
   handeye capture --mock --session cal_2026_11_21
@@ -88,7 +91,7 @@ def run(args) -> int:
     from ..capture import capture
     from ..config import default_config, load_config
     from ..progress import progress_bar
-    from ..runtime import MOCK_BANNER, open_station
+    from ..runtime import MOCK_BANNER, open_station, rehearsal_banner
 
     if not args.config and not args.mock:
         raise HandEyeError("give --config STATION.yaml for a real station or --mock for the embedded one")
@@ -99,10 +102,12 @@ def run(args) -> int:
         if not 3 <= args.postures <= 255:
             raise HandEyeError(f"--postures must be between 3 and 255; got {args.postures}")
         config = replace(config, plan=replace(config.plan, postures=args.postures))
-    tag = "MOCK " if config.is_mock else ""
+    tag = "MOCK " if config.is_mock or config.is_rehearsal else ""
     say = lambda message: print(tag + message, flush=True)  # noqa: E731
     if config.is_mock:
         print(MOCK_BANNER, flush=True)
+    elif config.is_rehearsal:
+        print(rehearsal_banner(config), flush=True)
     if args.guided:
         return _run_guided(config, args, say)
     with open_station(config) as link, progress_bar("capture") as update:

@@ -15,8 +15,7 @@ from handeye.calibration.clearance import CellGuard
 from handeye.calibration.kinematics import load_robot
 from handeye.calibration.session import read_session
 from handeye.drivers.controller import open_controller
-from handeye.drivers.controller import protocol as P
-from handeye.drivers.errors import Refused
+from handeye.drivers.errors import StationError
 from handeye.mocks.controller import start_mock_controller
 from handeye.mocks.robot import SimulatedRobot, ZoneViolation
 from handeye.rapid.checks import check_program
@@ -52,19 +51,18 @@ def test_the_mock_arm_refuses_a_move_whose_path_enters_the_cell():
 
 
 @pytest.mark.parametrize("protocol", ["socket", "modbus"])
-def test_the_mock_controller_refuses_it_over_the_link(protocol, no_leaked_threads):
+def test_the_mock_controller_stops_the_program_before_such_a_move(protocol, no_leaked_threads):
+    """The interpreted RAPID's MoveAbsJ into the cell stops the program as motion supervision would: the
+    arm stays, the PC gets an error (no link / program stopped), the reason names the volume."""
     guard = CellGuard(ROBOT, [_post_between()], DEFAULT_CARRIED, margin_mm=0.0, step_mm=5.0)
     arm = SimulatedRobot([A, B], start_joints=A, time_scale=0.001, guard=guard)
-    with start_mock_controller(protocol, robot=arm) as server:
-        with open_controller(protocol, timeout=2.0, motion_timeout=10.0, **server.client_options()) as controller:
-            with pytest.raises(Refused) as refused:
+    with start_mock_controller(protocol, robot=arm, postures=[A, B]) as server:
+        with open_controller(protocol, timeout=1.0, motion_timeout=5.0, **server.client_options()) as controller:
+            with pytest.raises(StationError):
                 controller.goto_posture(2)
-            assert refused.value.code == P.E_FAULT
-            if protocol == "socket":
-                assert "world zone" in str(refused.value)
-            assert np.allclose(controller.read_joints(), A, atol=1e-3)
-            controller.goto_posture(1)  # a clear move still runs after the refusal
-            assert np.allclose(controller.read_joints(), A, atol=1e-3)
+                controller.wait_at_rest()
+        assert "would enter 'post' on the way to posture 2" in server.program_error
+    assert np.array_equal(arm.current_joints, A) and arm.moves == 0 and len(arm.refusals) == 1
 
 
 def test_the_embedded_mock_station_carries_the_configured_cell(no_leaked_threads):
