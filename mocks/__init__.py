@@ -1,5 +1,7 @@
-"""Simulated station hardware: an IRB 1400 controller (socket, serial, Modbus servers on 127.0.0.1)
-and a Bumblebee XB3, built on the same codec, kinematics and frame layout as the real paths.
+"""Simulated station hardware: an IRB 1400 controller (socket, serial, Modbus servers on 127.0.0.1
+that execute the generated RAPID in handeye's interpreter) and a Bumblebee XB3, built on the same
+kinematics and frame layout as the real paths; ``mocks.cell`` serves the XB3 on a standalone mock
+controller's arm to a rehearsal station.
 
 Importing this package registers the mocks with the drivers' back-end registries
 (:mod:`handeye.mocks.backends`): the controller servers as the ``mock`` of their back ends, the

@@ -16,18 +16,27 @@ _HERE = __package__  # handeye.mocks
 
 #: Controller back end -> the simulated controller that serves it (default ports are unprivileged).
 MOCK_SERVERS = {
-    "socket": MockServer(f"{_HERE}.controller.line_server:SocketControllerServer", 1025, ("allowed_client",),
-                         help="TCP line protocol (rapid/PROTOCOL.md)"),
+    "socket": MockServer(f"{_HERE}.controller.line_server:SocketControllerServer", 1025,
+                         help="HeSocket executed: TCP line protocol (rapid/PROTOCOL.md)"),
     "serial": MockServer(f"{_HERE}.controller.line_server:SerialControllerServer", 1026,
-                         help="the same line protocol as a byte stream for pyserial's socket://HOST:PORT URL"),
-    "modbus": MockServer(f"{_HERE}.controller.modbus_server:ModbusControllerServer", 5020,
-                         ("register_map", "publish_period_s"),
-                         help="Modbus TCP gateway with the I/O handshake (drivers/controller/modbus_map.yaml)"),
+                         help="HeSerial executed on a line behind pyserial's socket://HOST:PORT URL"),
+    "modbus": MockServer(f"{_HERE}.controller.modbus_server:ModbusControllerServer", 5020, ("register_map",),
+                         help="HeIo executed behind a Modbus TCP gateway (drivers/controller/modbus_map.yaml)"),
 }
 
-#: The simulated Bumblebee XB3 (renders the board, packs real XB3 frames).
-MOCK_CAMERA = CameraBackend("mock", f"{_HERE}.camera:MockCamera", simulated=True,
-                            help="simulated Bumblebee XB3 (the embedded mock station)")
+
+
+def _camera_options(section) -> dict:
+    """``camera.mock_arm`` of a rehearsal station (the standalone mock controller's camera port)."""
+    address = getattr(section, "mock_arm", None)
+    return {"mock_arm": address} if address else {}
+
+
+#: The simulated XB3 (renders the board, packs real XB3 frames): the embedded station's, or with
+#: ``mock_arm`` the one on a standalone mock controller's arm (a rehearsal station).
+MOCK_CAMERA = CameraBackend("mock", f"{_HERE}.cell:mock_camera", options=_camera_options, simulated=True,
+                            help="simulated Bumblebee XB3 (the embedded mock station, or camera.mock_arm: the "
+                                 "camera of `handeye mock controller --camera-port`)")
 
 for _name, _server in MOCK_SERVERS.items():
     CONTROLLERS.update(_name, mock=_server)

@@ -8,7 +8,8 @@ Contents: a banner when the data come from the embedded mock station or a simula
 PASS; greyed out, struck through and not selectable under "FAIL - do not write this into the robot"
 on a FAIL), its uncertainty and the outliers; the quality checks with advice; five figures and
 tables (per-posture residuals, rotation-axis coverage, method comparison, repeatability of the board
-corners in the fixed frame, quality metrics and truth errors); the data checks made before solving.
+corners in the fixed frame, quality metrics and truth errors); the data checks made before solving;
+the capture plan's preview of the cell when the session holds one (``SESSION/preview.png``).
 d_org is everywhere the one of ``calibration.quality_words.result_d_org``, and the header says which
 postures and points it is computed over.
 
@@ -380,7 +381,7 @@ def _kv(pairs) -> str:
 #: What the report says about where the data come from (``station.origin``).
 _ORIGIN_FACTS = {
     "real": "the real station (capture record in session.yaml)",
-    "mock": "the embedded mock station (simulated robot and camera)",
+    "mock": "a mock station, embedded or a rehearsal (simulated robot and camera)",
     "simulated": "a simulation (truth.yaml beside the session)",
     "unknown": "not recorded (imported or hand-written session)",
 }
@@ -627,6 +628,13 @@ def _repeatability_section(a: Assessment, fixed_frame: str) -> str:
           f"(point {int(np.argmax(rms))}).</p></section>")
 
 
+def _preview_section(png: bytes) -> str:
+    return ("<h2>Capture plan: the cell</h2><section>"
+            '<p class="how">The preview written before the robot moved: the keep-out volumes and the board\'s stand, the '
+            "board, the path the flange ran and the numbered postures, from above and from the side (base frame, "
+            "mm).</p>" + _img(png, "capture plan preview: the cell from above and from the side") + "</section>")
+
+
 def _findings_section(findings) -> str:
     items = "".join(f"<li>{_e(f)}</li>" for f in findings)
     body = f"<ul>{items}</ul>" if findings else '<p class="note">Nothing odd found in the poses.</p>'
@@ -677,6 +685,8 @@ def write_report(path_html, assessment: Assessment, title: str = "Hand-eye calib
                  "<h2>5. Quality metrics</h2><section>" + _metrics_table(a) + "</section>"]
     if a.findings is not None:
         sections.append(_findings_section(a.findings))
+    if a.plan_preview is not None:
+        sections.append(_preview_section(a.plan_preview))
     sections.append(_FOOTER)
     document = ("<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
                 f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"><title>{_e(title)}</title>"

@@ -16,7 +16,10 @@ from handeye.drivers.controller.backends import CONTROLLERS
 
 REPO = Path(__file__).resolve().parents[1]
 #: Exceptions that never leave their module (turned into one of the package's before they do).
-INTERNAL = {"LinkDown", "ProgramRefusal"}
+INTERNAL = {"LinkDown",
+            # the RAPID interpreter's control flow (RETURN, RETRY, TRYNEXT, EXIT, Stop, a task asked to stop):
+            # BaseExceptions that never leave a running task
+            "ReturnSignal", "RetrySignal", "TryNextSignal", "ExitSignal", "StopSignal", "TaskStopped"}
 
 
 def test_five_kinds_shared_by_every_back_end():

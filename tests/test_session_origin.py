@@ -18,7 +18,7 @@ from handeye.station.report import write_report
 from helpers import assessed, scene
 
 NOISE = NoiseConfig(sigma_rob_deg=0.001, sigma_cam_mm=0.05, camera_model="gaussian", seed=1)
-MOCK_BANNER = "MOCK SESSION</b> &ndash; captured on the embedded mock station; not a calibration of a real robot"
+MOCK_BANNER = "MOCK SESSION</b> &ndash; captured on a mock station (embedded, or a rehearsal); not a calibration of a real robot"
 
 
 def _session(tmp_path, name, capture=None, truth=False):

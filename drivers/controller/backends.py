@@ -57,9 +57,9 @@ class MockServer:
     Attributes
     ----------
     target : str or type
-        The server class (``"module:Class"``), called as ``cls(program, host, port, faults=...,
-        idle_timeout_s=..., write_key=..., **options)``; it has ``start``, ``stop`` and
-        ``client_options()``.
+        The server class (``"module:Class"``), called as ``cls(program, robot, host, port, faults=...,
+        idle_timeout_s=..., write_key=..., **options)`` (``program``: the RAPID modules it runs,
+        ``robot``: the simulated arm); it has ``start``, ``stop`` and ``client_options()``.
     default_port : int
         Where ``handeye mock controller`` listens when no ``--port`` is given (unprivileged).
     options : tuple of str

@@ -174,7 +174,7 @@ def test_a_mock_session_is_not_resumed_on_the_real_station(tmp_path):
     session = _synthetic(6)
     session.extra["capture"] = {"station": "mock", "plan_joints_deg": [[0.0] * 6] * 6}
     _write(tmp_path / "s", session)
-    with pytest.raises(CaptureError, match="captured on the embedded mock station"):
+    with pytest.raises(CaptureError, match="captured on the mock station"):
         capture(config_from_dict(REAL_STATION), tmp_path / "s", StationLink(None))
 
 
