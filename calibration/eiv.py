@@ -560,6 +560,18 @@ def _variance_step(g: np.ndarray, w: np.ndarray, theta: np.ndarray, rho: np.ndar
 KINEMATIC_START = np.array([0.1**2, 0.01**2])
 
 
+def _damped(theta, lam, new, new_lam, last_delta):
+    """The variance step, damped: alternating with the fit, confounded components can overshoot back
+    and forth, so a component's step is halved when it turns against the previous one. Returns the
+    new ``theta``, the new kinematic variances and the step taken."""
+    delta = np.concatenate([new - theta, new_lam - lam])
+    flip = delta * last_delta < 0
+    if flip.any():
+        delta = np.where(flip, 0.5 * delta, delta)
+        new, new_lam = theta + delta[:len(theta)], lam + delta[len(theta):]
+    return new, new_lam, delta
+
+
 def fit_ml(obs: Observations, x0: np.ndarray, t0: np.ndarray | None = None, theta0: np.ndarray | None = None,
            estimate_theta: bool = True, keep=None, kinematic0=None, kinematic_var0=None,
            kinematic: bool = True) -> MLFit:
@@ -615,14 +627,7 @@ def fit_ml(obs: Observations, x0: np.ndarray, t0: np.ndarray | None = None, thet
         rho = _residuals(sub, x, t, u, ju)
         new, new_lam, _ = _variance_step(g, w, theta, rho, jac, prior, u, lam, sub.kinematic_kinds,
                                          fisher_scoring=outer > 3)
-        # alternating with the fit, confounded components can overshoot back and forth: halve a
-        # component's step when it turns against the previous one
-        delta = np.concatenate([new - theta, new_lam - lam])
-        flip = delta * last_delta < 0
-        if flip.any():
-            delta = np.where(flip, 0.5 * delta, delta)
-            new, new_lam = theta + delta[:len(theta)], lam + delta[len(theta):]
-        last_delta = delta
+        new, new_lam, last_delta = _damped(theta, lam, new, new_lam, last_delta)
         change = np.max(np.abs(new - theta) / np.maximum(theta, VARIANCE_FLOOR)) if len(theta) else 0.0
         if q:
             change = max(change, np.max(np.abs(new_lam - lam) / lam))
@@ -632,6 +637,13 @@ def fit_ml(obs: Observations, x0: np.ndarray, t0: np.ndarray | None = None, thet
         if change < THETA_TOL and _small(step):
             converged = True
             break
+    return _finished_fit(obs, sub, x, t, u, theta, lam, prior, outer, converged)
+
+
+def _finished_fit(obs: Observations, sub: Observations, x, t, u, theta, lam, prior, outer: int,
+                  converged: bool) -> MLFit:
+    """The :class:`MLFit` of a converged fit over ``sub``: the covariance of X, the REML
+    log-likelihood, and residuals with Mahalanobis distances for every posture of ``obs``."""
     g = _structures(sub, x)
     s = _posture_cov(sub, g, theta)
     ju = _kinematic_jac(sub, x)
@@ -887,6 +899,45 @@ def ml_cross_validation(obs: Observations, fit: MLFit, keep: np.ndarray, folds: 
     return CrossValidation(k, mean, "corners" if len(model) > 3 else "compact", mean_sq, rms_pred)
 
 
+def _outlier_flags(problem: HandEyeProblem, fit: MLFit, gaps: np.ndarray, gap_flags: np.ndarray) -> np.ndarray:
+    """The outlier postures after a fit, shape (n,) of bool.
+
+    The ML's own test decides: the angle-gap and start flags only kept postures out of the start, and
+    a posture must also be unlikely under the fitted noise model (chi-square, 6 degrees of freedom,
+    Bonferroni over the postures), so small clean sets keep every posture. A posture that breaks the
+    X-free angle invariant stays out when the fit confirms it (5 % shared among the flagged postures)
+    and its angle gap is also three times what the fitted rotation noise explains: the median of
+    |N(0, v_i + v_j)| is 0.674 sqrt(v_i + v_j).
+    """
+    from .refine import RESIDUAL_FLOOR_MM, robust_outliers  # noqa: PLC0415
+
+    n = problem.n
+    residual_mm = _compact_residuals(problem, fit.x, fit.target)
+    significant = fit.mahalanobis**2 > chi2.ppf(1.0 - OUTLIER_P / n, 6)
+    flags = robust_outliers(fit.mahalanobis) & (residual_mm > RESIDUAL_FLOOR_MM) & significant
+    level = GAP_CONFIRM_P / max(int(gap_flags.sum()), 1)
+    v = np.trace(fit.posture_cov[:, 3:, 3:], axis1=1, axis2=2) / 3.0  # rad² per axis
+    expected = np.degrees(0.674 * np.sqrt(v + np.median(v)))
+    confirmed = (gap_flags & (gaps > GAP_CONFIRM_Z * expected) & (fit.mahalanobis**2 > chi2.ppf(1.0 - level, 6))
+                 & (residual_mm > RESIDUAL_FLOOR_MM))
+    return _flag(flags | confirmed, fit.mahalanobis, n)
+
+
+def _uncertainty(fit: MLFit, kinematic: bool) -> dict:
+    """The result's ``uncertainty`` entry: one-sigma values and the covariance of X in its parent frame."""
+    cov = _parent_covariance(fit)
+    return {
+        "translation_mm": [float(v) for v in np.sqrt(np.maximum(np.diag(cov)[:3], 0.0))],
+        "rotation_deg": [float(v) for v in np.sqrt(np.maximum(np.diag(cov)[3:], 0.0))],
+        "covariance": [[float(v) for v in row] for row in cov],
+        "covariance_units": "x, y, z (mm) and rotations about x, y, z (deg) of the camera pose in its parent frame",
+        "level": "one sigma from the maximum-likelihood covariance with noise levels estimated from the data"
+                 + ("; includes the uncertainty of the arm's kinematic deviations (details.kinematics)" if kinematic
+                    else "; the robot's errors modelled as independent from posture to posture")
+                 + "; cross_validation checks it on held-out postures",
+    }
+
+
 def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) -> EivSolution:
     """The default estimator: robust start, ML fit with outlier loop, covariance and cross-validation.
 
@@ -935,39 +986,14 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
             if lr > KINEMATIC_LR:
                 fit, kinematic = kin_fit, True
         x = fit.x
-        residual_mm = _compact_residuals(problem, x, fit.target)
-        # the ML's own test decides: the angle-gap and start flags only kept postures out of the start
-        # and a posture must also be unlikely under the fitted noise model (chi-square, 6 degrees of
-        # freedom, Bonferroni over the postures), so small clean sets keep every posture
-        significant = fit.mahalanobis**2 > chi2.ppf(1.0 - OUTLIER_P / n, 6)
-        new_flags = robust_outliers(fit.mahalanobis) & (residual_mm > RESIDUAL_FLOOR_MM) & significant
-        # a posture that breaks the X-free angle invariant stays out when the fit confirms it
-        # (5 % shared among the flagged postures), and its angle gap is also three times what the
-        # fitted rotation noise explains: the median of |N(0, v_i + v_j)| is 0.674 sqrt(v_i + v_j)
-        level = GAP_CONFIRM_P / max(int(gap_flags.sum()), 1)
-        v = np.trace(fit.posture_cov[:, 3:, 3:], axis1=1, axis2=2) / 3.0  # rad² per axis
-        expected = np.degrees(0.674 * np.sqrt(v + np.median(v)))
-        confirmed = (gap_flags & (gaps > GAP_CONFIRM_Z * expected) & (fit.mahalanobis**2 > chi2.ppf(1.0 - level, 6))
-                     & (residual_mm > RESIDUAL_FLOOR_MM))
-        new_flags = new_flags | confirmed
-        new_flags = _flag(new_flags, fit.mahalanobis, n)
+        new_flags = _outlier_flags(problem, fit, gaps, gap_flags)
         report(1 + rounds, total + rounds, f"ML fit, round {rounds}: {int(new_flags.sum())} outlier postures")
         if n - new_flags.sum() < MIN_POSTURES_KEPT or np.array_equal(new_flags, flags) or rounds > MAX_ROUNDS:
             break
         flags = new_flags
     keep = ~flags
     residual_mm = _compact_residuals(problem, fit.x, fit.target)
-    cov = _parent_covariance(fit)
-    uncertainty = {
-        "translation_mm": [float(v) for v in np.sqrt(np.maximum(np.diag(cov)[:3], 0.0))],
-        "rotation_deg": [float(v) for v in np.sqrt(np.maximum(np.diag(cov)[3:], 0.0))],
-        "covariance": [[float(v) for v in row] for row in cov],
-        "covariance_units": "x, y, z (mm) and rotations about x, y, z (deg) of the camera pose in its parent frame",
-        "level": "one sigma from the maximum-likelihood covariance with noise levels estimated from the data"
-                 + ("; includes the uncertainty of the arm's kinematic deviations (details.kinematics)" if kinematic
-                    else "; the robot's errors modelled as independent from posture to posture")
-                 + "; cross_validation checks it on held-out postures",
-    }
+    uncertainty = _uncertainty(fit, kinematic)
     cv = cv_dict = None
     if folds and keep.sum() >= max(2 * MIN_POSTURES_KEPT, folds):
         cv = ml_cross_validation(obs, fit, keep, folds, kinematic)

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import reprlib
 
-__all__ = ["HandEyeError", "SessionError", "CalibrationError", "OutputError", "brief"]
+__all__ = ["HandEyeError", "SessionError", "CalibrationError", "ConfigError", "OutputError", "brief", "with_backend"]
+
 
 class _Brief(reprlib.Repr):
     def repr_int(self, x, level):
@@ -28,6 +29,32 @@ def brief(value) -> str:
 
 class HandEyeError(Exception):
     """Base of every error the ``handeye`` command reports as one line (no traceback)."""
+
+
+def with_backend(message: str, backend: str | None) -> str:
+    """``message`` prefixed with the back end's name (``socket: ...``), unless it already starts with it."""
+    message = str(message)
+    if not backend or message.startswith(f"{backend}:"):
+        return message
+    return f"{backend}: {message}"
+
+
+class ConfigError(HandEyeError):
+    """A configuration is missing, malformed or holds a bad value: the station file, the RAPID station,
+    a register map, a back end's options. The one exception of every configuration problem.
+
+    Parameters
+    ----------
+    message : str
+        One line naming the key at fault and what it must be.
+    backend : str, optional
+        The back end whose configuration it is (``modbus`` for its register map); put in front of
+        the message and kept as :attr:`backend`.
+    """
+
+    def __init__(self, message: str = "", *, backend: str | None = None):
+        self.backend = backend
+        super().__init__(with_backend(message, backend))
 
 
 class SessionError(HandEyeError):

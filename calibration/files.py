@@ -37,6 +37,7 @@ __all__ = [
     "write_failure",
     "make_folder",
     "write_text_atomic",
+    "write_bytes_atomic",
 ]
 
 #: Largest file a reader accepts unless told otherwise (sessions, configs, imports are kilobytes).
@@ -283,6 +284,25 @@ def make_folder(path) -> Path:
     return path
 
 
+def _temporary_prefix(path: Path) -> str:
+    return f".{path.name}."
+
+
+def remove_stale_temporaries(folder) -> list:
+    """Remove the temporary files :func:`write_text_atomic` leaves when its process is killed between
+    writing and renaming (``.NAME.*.tmp``), in ``folder`` and below; returns the paths removed.
+
+    Call it only where no other process writes (e.g. when a session is resumed): the targets
+    themselves are always whole, the old version or the new one.
+    """
+    removed = []
+    for path in Path(folder).rglob(".*.tmp"):
+        if path.is_file():
+            path.unlink(missing_ok=True)
+            removed.append(path)
+    return removed
+
+
 def write_text_atomic(path, text: str, encoding: str = "utf-8", newline: str | None = None) -> Path:
     """Write ``text`` to ``path`` atomically: a temporary file in the same folder, flushed to disk,
     renamed over the target (and the rename itself synced). The file gets the user's usual
@@ -294,6 +314,15 @@ def write_text_atomic(path, text: str, encoding: str = "utf-8", newline: str | N
         The folder cannot be created or written (permission, read-only, a file in the way, full
         disk), or ``path`` is a folder; one line naming the path. Nothing is left behind.
     """
+    return _write_atomic(path, lambda fd: os.fdopen(fd, "w", encoding=encoding, newline=newline), text, encoding)
+
+
+def write_bytes_atomic(path, data: bytes) -> Path:
+    """Write ``data`` (an image) to ``path`` atomically, as :func:`write_text_atomic` writes text."""
+    return _write_atomic(path, lambda fd: os.fdopen(fd, "wb"), bytes(data), "bytes")
+
+
+def _write_atomic(path, opener, content, encoding: str) -> Path:
     path = Path(path)
     if path.is_dir():
         raise OutputError(f"cannot write {path}: it is a folder; give a file name")
@@ -302,15 +331,15 @@ def write_text_atomic(path, text: str, encoding: str = "utf-8", newline: str | N
     except OSError as exc:
         raise write_failure(path, exc) from None
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        fd, tmp = tempfile.mkstemp(prefix=_temporary_prefix(path), suffix=".tmp", dir=path.parent)
     except OSError as exc:
         raise write_failure(path, exc) from None
     try:
-        with os.fdopen(fd, "w", encoding=encoding, newline=newline) as handle:
+        with opener(fd) as handle:
             umask = os.umask(0)
             os.umask(umask)
             os.fchmod(handle.fileno(), 0o666 & ~umask)
-            handle.write(text)
+            handle.write(content)
             handle.flush()
             os.fsync(handle.fileno())
         os.replace(tmp, path)

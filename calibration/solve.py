@@ -10,14 +10,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .classic import CLASSIC_METHODS
 from .compact_points import compact_points_from_corners, compact_points_from_poses
 from .eiv import solve_eiv
+from .consistency import check_consistent
 from .errors import CalibrationError
 from .kinematics import load_robot
+from .methods import METHODS, method_names
 from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points, posture_residuals
 from .plausibility import check_plausible
 from .problem import EYE_IN_HAND, HandEyeProblem, hand_poses
+from .quality_words import (
+    MIN_AXIS_ANGLE_DEG,
+    MIN_AXIS_DIVERGENCE_DEG,
+    relative_rotation_angles_deg,
+    rotation_axis_divergence_deg,
+    usable_axes,
+)
 from .refine import (
     ANGLE_GAP_FLOOR_DEG,
     RESIDUAL_FLOOR_MM,
@@ -46,18 +54,18 @@ __all__ = [
 ]
 
 #: The paper's variants (section 4): MC without selection, the others select among triplets.
-PAPER_METHODS = ("mc", "mcr", "mct", "mcb", "mco", "mcy")
+PAPER_METHODS = method_names("paper")
 #: mcb, outlier postures out, robust point-consistency refinement, uncertainty (the default before ``ml``).
 ROBUST_METHOD = "robust"
 #: The recommended default: maximum likelihood with errors in variables (calibration/eiv.py).
 ML_METHOD = "ml"
 DEFAULT_METHOD = ML_METHOD
-#: Every method name ``calibrate`` accepts: the paper's, the robust pipelines, the classic solvers.
-ALL_METHODS = PAPER_METHODS + (ROBUST_METHOD, ML_METHOD) + tuple(CLASSIC_METHODS)
+#: Every method name ``calibrate`` accepts (the table of ``methods``): the paper's, the default, the
+#: robust pipeline, the classic solvers.
+ALL_METHODS = method_names()
 
 MIN_POSTURES = 3
-MIN_ROTATION_DEG = 2.0
-MIN_AXIS_SPREAD_DEG = 2.0
+MIN_ROTATION_DEG = MIN_AXIS_ANGLE_DEG
 
 
 @dataclass
@@ -150,7 +158,8 @@ def _posture_tool0(session: Session) -> np.ndarray:
     return np.array(poses)
 
 
-def problem_from_session(session: Session, check_units: bool = True) -> HandEyeProblem:
+def problem_from_session(session: Session, check_units: bool = True,
+                         check_consistency: bool | None = None) -> HandEyeProblem:
     """Turn a validated session into arrays, checking what the solver needs.
 
     Parameters
@@ -160,6 +169,9 @@ def problem_from_session(session: Session, check_units: bool = True) -> HandEyeP
     check_units : bool
         Refuse lengths that are not plausible millimetres (``plausibility.check_plausible``;
         default). Only tests of the solvers on deliberately odd data switch it off.
+    check_consistency : bool, optional
+        Refuse poses that no rigid camera mount fits (``consistency.check_consistent``); default:
+        as ``check_units`` (both guard against data no real cell produces).
 
     Raises
     ------
@@ -168,11 +180,15 @@ def problem_from_session(session: Session, check_units: bool = True) -> HandEyeP
     UnitsError
         Lengths that look like metres, a posture in another unit, a flange out of the robot's reach,
         corners whose spacing does not match ``target.square_mm``.
+    InconsistentPosesError
+        Robot and board poses that no rigid camera mount fits (a wrong set-up, pose direction or
+        rotation convention), checked on the X-free invariants of AX = XB.
     """
     postures = session.postures
     if len(postures) < MIN_POSTURES:
         raise CalibrationError(f"at least {MIN_POSTURES} postures are needed; got {len(postures)}")
     ids = np.array([p.index for p in postures])
+    check_consistency = check_units if check_consistency is None else check_consistency
     tool02base = _posture_tool0(session)
     if check_units:
         check_plausible(session, tool02base)
@@ -193,8 +209,8 @@ def problem_from_session(session: Session, check_units: bool = True) -> HandEyeP
         points = np.array([p.points_mm for p in postures])
         compact = compact_points_from_corners(points, board)
         target_points = board.grid(compact.square_mm)
-        return HandEyeProblem(session.setup, hand, compact, points, ids, target_points, joints_deg=joints,
-                              robot=session.robot if joints is not None else None)
+        return _consistent(HandEyeProblem(session.setup, hand, compact, points, ids, target_points, joints_deg=joints,
+                                          robot=session.robot if joints is not None else None), check_consistency)
     missing = [p.index for p in postures if p.target_in_camera is None]
     if missing:
         raise CalibrationError(f"posture {missing[0]} holds neither points_mm nor target_in_camera like the others")
@@ -202,8 +218,9 @@ def problem_from_session(session: Session, check_units: bool = True) -> HandEyeP
     if session.target is not None and session.target.square_mm:
         length = (max(session.target.corners) - 1) * session.target.square_mm
     compact = compact_points_from_poses(np.array([p.target_in_camera for p in postures]), length)
-    return HandEyeProblem(session.setup, hand, compact, compact.points, ids, compact.target_points, joints_deg=joints,
-                          robot=session.robot if joints is not None else None)
+    return _consistent(HandEyeProblem(session.setup, hand, compact, compact.points, ids, compact.target_points,
+                                      joints_deg=joints, robot=session.robot if joints is not None else None),
+                       check_consistency)
 
 
 def _session_joints(session: Session) -> np.ndarray | None:
@@ -216,29 +233,37 @@ def _session_joints(session: Session) -> np.ndarray | None:
     return np.array(joints)
 
 
+def _consistent(problem: HandEyeProblem, check: bool) -> HandEyeProblem:
+    """The problem, after ``consistency.check_consistent`` when ``check`` (the calibrate re-check)."""
+    if check:
+        check_consistent(problem.hand, problem.target2cam, problem.setup)
+    return problem
+
+
 def check_motion(problem: HandEyeProblem) -> None:
     """Refuse data whose robot motion cannot determine ``X``.
+
+    Uses the quality words of ``calibration.quality_words``: the relative rotation angles and the
+    rotation-axis divergence (how far the axes stray from one line).
 
     Raises
     ------
     CalibrationError
         When every relative rotation is below ~2 deg, or all rotation axes are (nearly) parallel.
     """
-    motions = relative_motions(problem)
-    angles = motions.angle_a_deg
+    # Q_A of every pair (Algorithm 1, step 2): quality_words.relative_rotation_quaternions of the hand. Built
+    # with Q_B here, so a board whose points are not finite fails in this first step, as it always has.
+    q_rel = relative_motions(problem).q_a
+    angles = relative_rotation_angles_deg(q_rel)
     if angles.max() < MIN_ROTATION_DEG:
         raise CalibrationError(
             f"the flange barely rotates between postures (largest relative rotation {angles.max():.2f} deg); "
             f"rotate it by 15-45 deg about different axes between postures"
         )
-    vectors = motions.q_a[angles >= MIN_ROTATION_DEG, 1:]
-    axes = vectors / np.linalg.norm(vectors, axis=1, keepdims=True)
-    scatter = axes.T @ axes / len(axes)
-    eig = np.linalg.eigvalsh(scatter)
-    spread_deg = np.degrees(np.arcsin(np.sqrt(max(1.0 - eig[-1], 0.0))))
-    if spread_deg < MIN_AXIS_SPREAD_DEG:
+    divergence = rotation_axis_divergence_deg(usable_axes(q_rel))
+    if divergence < MIN_AXIS_DIVERGENCE_DEG:
         raise CalibrationError(
-            f"all relative rotations are about nearly parallel axes (spread {spread_deg:.2f} deg); "
+            f"all relative rotations are about nearly parallel axes (rotation-axis divergence {divergence:.2f} deg); "
             f"rotate the flange about at least two different axes"
         )
 
@@ -367,8 +392,8 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
     ----------
     problem : HandEyeProblem
     method : str, optional
-        A paper variant (:data:`PAPER_METHODS`), ``robust`` or a classic solver
-        (:data:`~handeye.calibration.classic.CLASSIC_METHODS`); ``None`` runs :data:`DEFAULT_METHOD`.
+        A paper variant (:data:`PAPER_METHODS`), ``robust`` or a classic solver: a name of the table
+        :data:`~handeye.calibration.methods.METHODS`; ``None`` runs :data:`DEFAULT_METHOD`.
     truth : dict, optional
         ``{'x': 4x4, 'target2fixed': 4x4}`` of a synthetic data set: enables ``mcy`` and truth errors.
     progress : callable, optional
@@ -420,10 +445,10 @@ def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict |
         metrics, _ = _summarise(problem.subset(~flags), x)
         residuals = {int(i): float(r) for i, r in zip(problem.posture_ids, posture_res)}
         outliers = [int(i) for i in problem.posture_ids[flags]]
-    elif method in CLASSIC_METHODS:
-        x = CLASSIC_METHODS[method](problem.hand, problem.target2cam)
+    elif METHODS[method].kind == "classic":
+        x = METHODS[method].solver(problem.hand, problem.target2cam)
         runtime = time.perf_counter() - start
-        details = {"reference": CLASSIC_METHODS[method].__doc__.strip().splitlines()[0].replace("Hand-eye ``X`` by ", "")}
+        details = {"reference": METHODS[method].reference}
         metrics, residuals = _summarise(problem, x)
     else:
         x, details = _solve_paper(problem, method, truth)

@@ -1,0 +1,42 @@
+"""Simulated station hardware: an IRB 1400 controller (socket, serial, Modbus servers on 127.0.0.1
+that execute the generated RAPID in handeye's interpreter) and a Bumblebee XB3, built on the same
+kinematics and frame layout as the real paths; ``mocks.cell`` serves the XB3 on a standalone mock
+controller's arm to a rehearsal station.
+
+Importing this package registers the mocks with the drivers' back-end registries
+(:mod:`handeye.mocks.backends`): the controller servers as the ``mock`` of their back ends, the
+simulated XB3 as the camera back end ``mock``. The other names load on first use::
+
+    from handeye.mocks import MockStation
+    with MockStation() as station:          # a simulated arm behind a real server, a camera on its flange
+        print(station.controller_options())
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ..calibration.lazy import lazy_exports
+from . import backends as _backends  # noqa: F401  (registers the mocks)
+
+_EXPORTS = {
+    "mock_protocols": "backends",
+    "mock_server": "backends",
+    "start_mock_controller": "controller",
+    "MockStation": "station",
+    "MockStationSpec": "station",
+    "MockCamera": "camera",
+    "RenderOptions": "camera",
+    "SimulatedRobot": "robot",
+    "PrintedBoard": "world",
+}
+__all__ = list(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+
+if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
+    from .backends import mock_protocols, mock_server  # noqa: F401
+    from .camera import MockCamera, RenderOptions  # noqa: F401
+    from .controller import start_mock_controller  # noqa: F401
+    from .robot import SimulatedRobot  # noqa: F401
+    from .station import MockStation, MockStationSpec  # noqa: F401
+    from .world import PrintedBoard  # noqa: F401

@@ -39,9 +39,10 @@ from ..drivers.camera.decode import decode_xb3_frame, pack_rgb8
 from ..drivers.camera.errors import CameraError
 from ..drivers.camera.interface import Camera, StereoFrame
 from ..drivers.camera.stereo import StereoModel, nominal_xb3_model
-from .world import PrintedBoard
+from .world import Lighting, PrintedBoard, hard_lighting
 
-__all__ = ["RenderOptions", "ViewRenderer", "StereoRenderer", "MockCamera", "render_views", "render_xb3_frame"]
+__all__ = ["RenderOptions", "ViewRenderer", "StereoRenderer", "MockCamera", "render_views", "render_xb3_frame",
+           "hard_options"]
 
 VIEWS = ("left", "centre", "right")
 
@@ -64,6 +65,11 @@ class RenderOptions:
         Shot-noise variance per grey level (variance = read^2 + shot_noise * value).
     black, white, background : float
         Grey levels of black squares, white paper and the background behind the sheet.
+    lighting : Lighting or None
+        Uneven light, glare, shadow and vignetting (:class:`~handeye.mocks.world.Lighting`); ``None`` = even.
+    jpeg_quality : int
+        Grey image pairs (:meth:`StereoRenderer.gray_pair`) go through JPEG at this quality, as
+        images saved by a frame grabber or a phone would (0 = lossless, no JPEG).
     channel_gains : tuple of float
         Response of the R, G and B filters to the (neutral) scene, before white balance.
     colour : bool
@@ -80,6 +86,8 @@ class RenderOptions:
     background: float = 105.0
     channel_gains: tuple = (0.80, 1.0, 0.70)
     colour: bool = True
+    lighting: Lighting | None = None
+    jpeg_quality: int = 0
 
 
 def _view_pose(target2cam: np.ndarray, r: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -106,6 +114,7 @@ class ViewRenderer:
         self.size = (int(image_size[0]), int(image_size[1]))
         self.distorted = bool(np.any(self.d != 0))
         self._ray_cache = None
+        self._vig_key, self._vig = None, None
         w, h = self.size
         self._bg_ramp = (0.9 + 0.2 * np.arange(w, dtype=np.float32) / w)[None, :]
 
@@ -137,6 +146,18 @@ class ViewRenderer:
     # ---------------------------------------------------------------- scene
     def render(self, target2view: np.ndarray, board: PrintedBoard, options: RenderOptions, rng) -> np.ndarray:
         """Ideal (noise-free, unblurred) image ``(h, w)`` float32 of the board seen from ``target2view``."""
+        image = self._render(target2view, board, options, rng)
+        if options.lighting is not None and options.lighting.vignetting:
+            image *= self._vignetting(options.lighting)
+        return image
+
+    def _vignetting(self, lighting: Lighting) -> np.ndarray:
+        key = ("vignetting", lighting.vignetting)
+        if self._vig_key != key:
+            self._vig_key, self._vig = key, lighting.in_image(*self.size)
+        return self._vig
+
+    def _render(self, target2view, board, options, rng) -> np.ndarray:
         w, h = self.size
         image = np.empty((h, w), np.float32)
         image[:] = options.background * self._bg_ramp
@@ -158,10 +179,17 @@ class ViewRenderer:
         # Board plane -> normalised image is the homography [r1 r2 t]; its inverse maps rays to (u, v).
         inv = np.linalg.inv(np.column_stack([target2view[:3, 0], target2view[:3, 1], target2view[:3, 3]]))
         xn, yn, jac = self._rays(x0, x1, y0, y1)
-        labels = _labels(*_board_coords(inv, xn, yn), board)
+        u, v, front = _board_coords(inv, xn, yn)
+        labels = _labels(u, v, front, board)
         bg = options.background * self._bg_ramp[:, x0:x1]
         levels = np.array([0.0, options.white, options.black], np.float32)
         block = np.where(labels == 0, bg, levels[labels])
+        lighting = options.lighting
+        lit = lighting is not None and not lighting.is_even
+        if lit:  # the light on the sheet, per pixel centre (smooth at the scale of a pixel)
+            u, v = np.broadcast_arrays(u, v)
+            gain, added = lighting.on_board(u, v, board)
+            block = np.where(labels == 0, block, block * gain + added)
         # A straight edge through a pixel's footprint separates some of the 3x3 neighbouring pixel
         # centres: pixels whose neighbourhood holds two labels are the ones to supersample.
         kernel = np.ones((3, 3), np.uint8)
@@ -189,7 +217,10 @@ class ViewRenderer:
                 sx = xn[ey, ex][:, None] + gx_x[ey, ex][:, None] * ox + gx_y[ey, ex][:, None] * oy
                 sy = yn[ey, ex][:, None] + gy_x[ey, ex][:, None] * ox + gy_y[ey, ex][:, None] * oy
             sub = _labels(*_board_coords(inv, sx, sy), board)
-            values = np.where(sub == 0, bg[0, ex][:, None], levels[sub])
+            sheet = levels[sub]
+            if lit:
+                sheet = sheet * gain[ey, ex][:, None] + added[ey, ex][:, None]
+            values = np.where(sub == 0, bg[0, ex][:, None], sheet)
             block[ey, ex] = values.mean(axis=1)
         image[y0:y1, x0:x1] = block
         return image
@@ -288,10 +319,30 @@ class StereoRenderer:
         return pack_rgb8(planes["right"], planes["centre"], planes["left"])
 
     def gray_pair(self, target2cam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Left and right grey images of a mono head (the "PNG pair" case)."""
+        """Left and right grey images of a mono head (the "PNG pair" case), through JPEG when
+        ``options.jpeg_quality`` is set."""
         opts = replace(self.options, colour=False)
         planes = self.planes(target2cam, ("left", "right"), opts)
-        return planes["left"], planes["right"]
+        return _jpeg(planes["left"], opts.jpeg_quality), _jpeg(planes["right"], opts.jpeg_quality)
+
+
+def _jpeg(image: np.ndarray, quality: int) -> np.ndarray:
+    """``image`` after a JPEG round trip at ``quality`` (1-100; 0 = unchanged)."""
+    if not quality:
+        return image
+    ok, data = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
+    return cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
+
+
+def hard_options(rng, board: PrintedBoard | None = None, *, colour: bool = False) -> RenderOptions:
+    """Random render options made hard the way real images are: defocus blur (sigma 0.6-1.6 px),
+    uneven light with vignetting, glare or a shadow half of the time (:func:`~handeye.mocks.world.hard_lighting`),
+    more sensor noise (read noise 1.5-4 DN), a darker or brighter exposure, and JPEG at quality 60-90."""
+    exposure = float(rng.uniform(0.6, 1.1))
+    return RenderOptions(blur_sigma_px=float(rng.uniform(0.6, 1.6)), read_noise_dn=float(rng.uniform(1.5, 4.0)),
+                         shot_noise=0.05, black=28.0 * exposure + 5.0, white=min(250.0, 215.0 * exposure),
+                         background=105.0 * exposure, colour=colour, lighting=hard_lighting(rng, board),
+                         jpeg_quality=int(rng.integers(60, 91)))
 
 
 def render_views(target2cam, model: StereoModel | None = None, board: PrintedBoard | None = None,

@@ -1,8 +1,16 @@
 """A simulated ABB IRB 1400 for the mock controller: limits, synchronised moves, kinematics, tool data.
 
+The controller's RAPID program (run by the interpreter, ``mocks/controller``) moves it with
+``MoveAbsJ``, reads it with ``CJointT``/``CRobT`` and keeps the camera's tool data in its PERS
+tooldata (:attr:`SimulatedRobot.tool` reads it there once a program is attached); the world zones
+the program defines are kept in :attr:`SimulatedRobot.world_zones`.
+
 The arm moves between joint configurations with all axes starting and stopping together
 (a synchronised ``MoveAbsJ``): the move lasts ``max_i |Δq_i| / (speed_fraction * max_speed_i)``,
-axes interpolated linearly in time (no acceleration ramps, no path planning, no collisions). The
+axes interpolated linearly in time (no acceleration ramps, no path planning). A cell can be given
+(``guard``: a :class:`~handeye.calibration.clearance.CellGuard`): a move whose joint-interpolated
+path takes the wrist or what the flange carries into one of its volumes is refused before the arm
+moves (:class:`ZoneViolation`), as a real cell's world zones would stop it. The
 flange pose comes from the kinematics model (``calibration.kinematics``: the parallel-arm coupling
 of axes 2 and 3 included). ``time_scale`` shrinks wall-clock motion time for tests (0.01 = 100x).
 
@@ -18,13 +26,33 @@ from typing import Callable
 
 import numpy as np
 
+from ..calibration.errors import HandEyeError
 from ..calibration.kinematics import load_robot
 from ..drivers.controller.types import FlangePose, ToolData
 
-__all__ = ["SimulatedRobot", "DEFAULT_TOOL"]
+__all__ = ["SimulatedRobot", "DEFAULT_TOOL", "ZoneViolation"]
 
 #: What a fresh PERS tooldata holds before calibration: tool0's frame, 1 kg at the flange.
 DEFAULT_TOOL = ToolData((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0), 1.0, (0.0, 0.0, 0.0))
+
+
+class ZoneViolation(HandEyeError):
+    """A move refused because its path enters a volume of the cell (what world zones would stop).
+
+    Attributes
+    ----------
+    violation : handeye.calibration.clearance.Violation
+        What would have entered which volume, and where along the move.
+    target_deg : ndarray, shape (dof,)
+    """
+
+    def __init__(self, violation, target_deg, posture: int = 0):
+        where = f"posture {posture}" if posture else "the target"
+        super().__init__(f"world zone: {violation.body} would enter '{violation.volume}' on the way to {where} "
+                         f"({violation.describe()} at {violation.at:.0%} of the move); the arm did not move")
+        self.violation = violation
+        self.target_deg = np.asarray(target_deg, float)
+        self.posture = posture
 
 
 class SimulatedRobot:
@@ -32,7 +60,7 @@ class SimulatedRobot:
 
     Parameters
     ----------
-    postures : array-like, shape (n, 6)
+    postures : array-like, shape (n, dof)
         Approved postures (controller angles, deg), 1-based for :meth:`start_posture`.
     model : str
         Robot model name or YAML path (default ``IRB1400``).
@@ -40,19 +68,29 @@ class SimulatedRobot:
         Fraction of each axis' maximum speed used by moves (default 0.25).
     time_scale : float
         Wall-clock seconds per simulated second (default 1; tests use e.g. 0.001).
-    start_joints : array-like, shape (6,), optional
+    start_joints : array-like, shape (dof,), optional
         Initial configuration (default: all zero).
     clock : callable
         Monotonic time source in seconds (default ``time.monotonic``).
+    guard : CellGuard, optional
+        The cell: moves whose path enters one of its volumes are refused (:class:`ZoneViolation`).
 
     Attributes
     ----------
     arrival_hooks : list of callable
         Each is called as ``hook(k, joints_deg)`` when a move to posture ``k`` ends.
+    guard : CellGuard or None
+        The cell the moves are checked against (may be replaced at any time).
+    refusals : list of ZoneViolation
+        The moves refused so far.
+    world_zones : dict
+        World zones the controller's program defined (number -> zone), checked by its moves.
+    tool_source : callable or None
+        Where :attr:`tool` reads the camera's tool data (the program's PERS tooldata).
     """
 
     def __init__(self, postures, model: str = "IRB1400", speed_fraction: float = 0.25, time_scale: float = 1.0,
-                 start_joints=None, clock: Callable[[], float] = time.monotonic):
+                 start_joints=None, clock: Callable[[], float] = time.monotonic, guard=None):
         self.model = load_robot(model)
         self.postures = np.array(postures, dtype=float).reshape(-1, self.model.dof)
         for i, row in enumerate(self.postures, start=1):
@@ -79,8 +117,12 @@ class SimulatedRobot:
         self._arrival_reported = True
         self._tool = DEFAULT_TOOL
         self.arrival_hooks: list[Callable[[int, np.ndarray], None]] = []
+        self.world_zones: dict = {}
+        self.tool_source: Callable[[], ToolData] | None = None
         #: Number of moves started (for tests).
         self.moves = 0
+        self.guard = guard
+        self.refusals: list[ZoneViolation] = []
 
     def load_program(self, postures) -> None:
         """Replace the approved postures, as loading a newly generated RAPID program does.
@@ -111,6 +153,8 @@ class SimulatedRobot:
         ------
         ValueError
             If the target is outside the joint limits (the controller would refuse it too).
+        ZoneViolation
+            If the path enters a volume of the cell (``guard``); the arm stays where it is.
         """
         target = np.asarray(target_deg, dtype=float)
         problems = self.model.limit_violations(target)
@@ -120,6 +164,7 @@ class SimulatedRobot:
             self._settle()
             now = self._clock()
             start = self._joints_at(now)
+            self._check_path(start, target, posture)
             delta = np.abs(target - start)
             self._duration = float(np.max(delta / (self.speed_fraction * self.model.max_speed_deg_s))) * self.time_scale
             self._from, self._to, self._t0 = start, target.copy(), now
@@ -128,6 +173,16 @@ class SimulatedRobot:
             self._arrival_reported = False
             self.moves += 1
             return self._duration
+
+    def _check_path(self, start: np.ndarray, target: np.ndarray, posture: int) -> None:
+        """Refuse (ZoneViolation) a move whose joint-interpolated path enters a volume of the cell."""
+        if self.guard is None:
+            return
+        violation = self.guard.path_violation(start, target)
+        if violation is not None:
+            refusal = ZoneViolation(violation, target, posture)
+            self.refusals.append(refusal)
+            raise refusal
 
     def start_posture(self, k: int) -> float:
         """Start the move to approved posture ``k`` (1-based); returns the wall-clock duration."""
@@ -189,7 +244,7 @@ class SimulatedRobot:
     # ------------------------------------------------------------------ state
     @property
     def current_joints(self) -> np.ndarray:
-        """Controller axis angles now (deg), shape (6,)."""
+        """Controller axis angles now (deg), shape (dof,)."""
         with self._lock:
             self._settle()
             return self._joints_at(self._clock())
@@ -208,7 +263,10 @@ class SimulatedRobot:
 
     @property
     def tool(self) -> ToolData:
-        """The PERS tooldata of the camera."""
+        """The PERS tooldata of the camera (the program's, once one is attached)."""
+        source = self.tool_source
+        if source is not None:
+            return source()
         with self._lock:
             return self._tool
 

@@ -3,8 +3,9 @@ XB3 on its flange looking at a printed board, with a hidden true camera mount.
 
 What makes it honest:
 
-- The controller is a real server on 127.0.0.1 (socket, serial-over-TCP or Modbus TCP) driving the
-  simulated arm; the PC talks to it with the real drivers.
+- The controller is a real server on 127.0.0.1 (socket, serial-over-TCP or Modbus TCP) that runs
+  the generated RAPID program in the interpreter, driving the simulated arm; the PC talks to it with
+  the real drivers. A capture's modules (``SESSION/rapid``) are loaded into it and executed.
 - The camera renders real XB3 frames (``mocks.camera``) that go through the real decoding,
   detection and triangulation.
 - The arm is not the nominal model: its true kinematics differ from the nominal DH table by small
@@ -12,6 +13,9 @@ What makes it honest:
   reports joints and the NOMINAL flange pose, like a real controller; the camera sees the board from
   the TRUE flange pose. So the calibration meets the kind of systematic error a station meets.
 - The camera mount (``cam2tool0``) is hidden from the PC; only :attr:`MockStation.truth` holds it.
+- The cell is physical: given one (``MockStationSpec.cell``), the arm refuses any move whose
+  joint-interpolated path takes the wrist or what the flange carries into a keep-out volume or the
+  board's stand (built around the TRUE board), as a real cell's world zones would stop it.
 """
 
 from __future__ import annotations
@@ -22,6 +26,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..calibration.cell import CellModel
+from ..calibration.clearance import CellGuard
 from ..calibration.compact_points import BoardGeometry
 from ..calibration.kinematics import RobotModel, load_robot
 from ..calibration.transforms import transform_from_rotation_translation
@@ -31,7 +37,8 @@ from .controller import start_mock_controller
 from .robot import SimulatedRobot
 from .world import PrintedBoard
 
-__all__ = ["DEFAULT_BOARD", "DEFAULT_MOUNT", "DEFAULT_START", "MockStation", "MockStationSpec", "perturbed_robot"]
+__all__ = ["DEFAULT_BOARD", "DEFAULT_MOUNT", "DEFAULT_START", "MockStation", "MockStationSpec", "perturbed_robot",
+           "flange_camera"]
 
 
 def _pose(rotvec_deg, translation) -> np.ndarray:
@@ -91,6 +98,12 @@ class MockStationSpec:
     write_key : str, optional
         The write key the controller expects for tool writes (``controller.write_key``); None: a
         random key for this run, handed to the PC through :meth:`MockStation.controller_options`.
+    cell : CellModel, optional
+        The cell around the arm (``cell`` of the station config); its board stand is built around the
+        true board. None: an empty cell, every move allowed.
+    zone_tcp_mm : tuple of float, shape (3,), optional
+        With world zones: the TCP (tool0) the controller's zones watch; moves taking it into a zone
+        (as the controller sees the volumes) are refused too.
     """
 
     protocol: str = "socket"
@@ -108,6 +121,8 @@ class MockStationSpec:
     seed: int = 7
     idle_timeout_s: float = 5.0
     write_key: str | None = field(default=None, repr=False)
+    cell: CellModel | None = None
+    zone_tcp_mm: tuple | None = None
 
 
 class MockStation:
@@ -125,22 +140,24 @@ class MockStation:
     def __init__(self, spec: MockStationSpec = MockStationSpec()):
         self.spec = spec
         self.nominal = load_robot(spec.robot)
-        self.true_robot = perturbed_robot(self.nominal, spec.kinematic_error_mm, spec.kinematic_error_deg, spec.seed)
         start = np.asarray(spec.start_joints_deg, float)
         self.arm = SimulatedRobot([start], model=spec.robot, speed_fraction=spec.speed_fraction,
-                                  time_scale=spec.time_scale, start_joints=start)
+                                  time_scale=spec.time_scale, start_joints=start, guard=self._cell_guard(spec))
         self.server = None
         # The station's key, or one made for this run: the server and the PC's options share it.
         self._write_key = spec.write_key if spec.write_key is not None else secrets.token_hex(16)
-        mount = np.asarray(spec.cam2tool0, float)
+        self.camera, self.truth = flange_camera(spec, self.arm)
+        self.true_robot = self.truth["true_robot"]
 
-        def cam2base():
-            return self.true_robot.forward_transform(self.arm.current_joints) @ mount
-
-        model = spec.stereo if spec.stereo is not None else nominal_xb3_model()
-        self.camera = MockCamera(model=model, board=PrintedBoard(spec.board), target2base=spec.board2base,
-                                 cam2base=cam2base, options=spec.render, seed=spec.seed)
-        self.truth = {"cam2tool0": mount, "board2base": np.asarray(spec.board2base, float), "true_robot": self.true_robot}
+    def _cell_guard(self, spec: MockStationSpec) -> CellGuard | None:
+        """The physical cell: entering a volume (margin 0) is refused, moves sampled every 5 mm."""
+        if spec.cell is None:
+            return None
+        zones = None
+        if spec.zone_tcp_mm is not None:
+            zones = (spec.zone_tcp_mm, spec.cell.world_zone_volumes(spec.board2base, spec.board))
+        return CellGuard(self.nominal, spec.cell.volumes(spec.board2base, spec.board), spec.cell.carried, margin_mm=0.0,
+                         step_mm=5.0, tcp_zones=zones)
 
     def start(self) -> MockStation:
         if self.server is None:
@@ -164,6 +181,36 @@ class MockStation:
         """Keyword arguments for ``drivers.controller.open_controller(spec.protocol, ...)`` (write key included)."""
         return dict(self.server.client_options())
 
-    def load_program(self, postures) -> None:
-        """Load a generated program's approved postures into the simulated controller."""
-        self.arm.load_program(postures)
+    @property
+    def write_key(self) -> str:
+        """The key its controller's HeKey.sys holds (the station's, or one made for this run)."""
+        return self._write_key
+
+    def load_program(self, program) -> None:
+        """Load a generated program (a folder of modules, e.g. ``SESSION/rapid``) into the controller and
+        run it; HeKey.sys stays loaded."""
+        self.server.load_program(program)
+
+
+def flange_camera(spec: MockStationSpec, arm: SimulatedRobot) -> tuple[MockCamera, dict]:
+    """The simulated XB3 on ``arm``'s flange, and the hidden truth it is rendered from.
+
+    The camera sees the board from the TRUE flange pose: the arm's joints through the perturbed
+    kinematics (the controller reports the nominal one), times the hidden mount ``spec.cam2tool0``.
+
+    Returns
+    -------
+    camera : MockCamera
+    truth : dict
+        ``cam2tool0``, ``board2base`` and ``true_robot``.
+    """
+    true_robot = perturbed_robot(load_robot(spec.robot), spec.kinematic_error_mm, spec.kinematic_error_deg, spec.seed)
+    mount = np.asarray(spec.cam2tool0, float)
+
+    def cam2base():
+        return true_robot.forward_transform(arm.current_joints) @ mount
+
+    model = spec.stereo if spec.stereo is not None else nominal_xb3_model()
+    camera = MockCamera(model=model, board=PrintedBoard(spec.board), target2base=spec.board2base,
+                        cam2base=cam2base, options=spec.render, seed=spec.seed)
+    return camera, {"cam2tool0": mount, "board2base": np.asarray(spec.board2base, float), "true_robot": true_robot}

@@ -15,7 +15,8 @@ from scipy.spatial.transform import Rotation
 
 from ..calibration.compact_points import BoardGeometry
 
-__all__ = ["PrintedBoard", "look_at", "board_view", "sample_board_views", "sheet_in_view"]
+__all__ = ["PrintedBoard", "Lighting", "BoardOperator", "look_at", "board_view", "sample_board_views", "sheet_in_view",
+           "hard_lighting"]
 
 
 @dataclass(frozen=True)
@@ -66,6 +67,102 @@ class PrintedBoard:
                  np.c_[u1 - (u1 - u0) * t, np.full_like(t, v1)], np.c_[np.full_like(t, u0), v1 - (v1 - v0) * t]]
         pts = np.concatenate(edges)
         return np.c_[pts, np.zeros(len(pts))]
+
+
+@dataclass(frozen=True)
+class Lighting:
+    """How the sheet is lit, the way a real cell is (uneven, with glare and shadows).
+
+    Effects on the sheet are given in board coordinates (target frame, mm), so both cameras see them
+    at the same place on the board; vignetting is an effect of the lens, in image coordinates.
+
+    Attributes
+    ----------
+    gradient : float
+        Fractional fall of the light across the sheet along ``gradient_deg`` (0.5: the far side gets half).
+    gradient_deg : float
+        Direction of the fall in the board plane (0 = along the board's x).
+    glare_uv_mm : tuple of float or None
+        Centre ``(u, v)`` of a specular glare spot on the sheet (mm, target frame).
+    glare_radius_mm : float
+        Gaussian radius (sigma) of the glare spot.
+    glare_dn : float
+        Grey levels added at the spot's centre (saturates the sensor when large).
+    shadow_line : tuple of float or None
+        ``(u, v, angle_deg)``: a point on the shadow's edge and the edge's direction; the sheet to the
+        left of the edge (seen along the direction, x right and y down in the board) is in shadow.
+    shadow_depth : float
+        Fraction of the light left in the shadow.
+    shadow_soft_mm : float
+        Width of the shadow's soft edge (penumbra).
+    vignetting : float
+        Fraction of the light lost at the image corners (cos^4-like fall, image coordinates).
+    """
+
+    gradient: float = 0.0
+    gradient_deg: float = 0.0
+    glare_uv_mm: tuple | None = None
+    glare_radius_mm: float = 40.0
+    glare_dn: float = 0.0
+    shadow_line: tuple | None = None
+    shadow_depth: float = 0.5
+    shadow_soft_mm: float = 10.0
+    vignetting: float = 0.0
+
+    @property
+    def is_even(self) -> bool:
+        """No effect at all (the renderer then skips the light computation)."""
+        return (self.gradient == 0 and (self.glare_uv_mm is None or self.glare_dn == 0)
+                and self.shadow_line is None and self.vignetting == 0)
+
+    def on_board(self, u, v, board: "PrintedBoard"):
+        """``(gain, added)`` of the light at board coordinates ``(u, v)`` (arrays of mm, same shape)."""
+        gain = np.ones(np.shape(u), np.float32)
+        added = np.zeros(np.shape(u), np.float32)
+        if self.gradient:
+            su0, su1, sv0, sv1 = board.sheet_bounds()
+            a = np.radians(self.gradient_deg)
+            direction = np.array([np.cos(a), np.sin(a)])
+            corners = np.array([[su0, sv0], [su1, sv0], [su0, sv1], [su1, sv1]]) @ direction
+            lo, hi = corners.min(), corners.max()
+            along = ((u * direction[0] + v * direction[1]) - lo) / max(hi - lo, 1e-9)
+            gain *= (1.0 - self.gradient * np.clip(along, 0, 1)).astype(np.float32)
+        if self.shadow_line is not None:
+            u0, v0, angle = self.shadow_line
+            a = np.radians(angle)
+            # signed distance to the edge, positive on its left (normal (sin, -cos) of the direction)
+            side = (u - u0) * np.sin(a) - (v - v0) * np.cos(a)
+            t = np.clip(0.5 + side / max(self.shadow_soft_mm, 1e-6), 0.0, 1.0)
+            gain *= (1.0 - (1.0 - self.shadow_depth) * t).astype(np.float32)
+        if self.glare_uv_mm is not None and self.glare_dn:
+            gu, gv = self.glare_uv_mm
+            r2 = ((u - gu) ** 2 + (v - gv) ** 2) / (2.0 * self.glare_radius_mm**2)
+            added += (self.glare_dn * np.exp(-r2)).astype(np.float32)
+        return gain, added
+
+    def in_image(self, width: int, height: int) -> np.ndarray:
+        """Vignetting gain ``(h, w)`` float32 (1 at the centre)."""
+        if not self.vignetting:
+            return np.ones((height, width), np.float32)
+        y, x = np.mgrid[0:height, 0:width].astype(np.float32)
+        r2 = ((x - (width - 1) / 2) ** 2 + (y - (height - 1) / 2) ** 2) / (((width - 1) / 2) ** 2 + ((height - 1) / 2) ** 2)
+        return (1.0 - self.vignetting * r2 ** 2).astype(np.float32)
+
+
+def hard_lighting(rng, board: "PrintedBoard" = None) -> Lighting:
+    """Random uneven lighting of a real cell: a gradient across the sheet and vignetting always, a glare
+    spot on the squares a third of the time and a shadow across part of them a third of the time."""
+    board = board or PrintedBoard()
+    cu0, cu1, cv0, cv1 = board.checker_bounds()
+    glare = shadow = None
+    if rng.random() < 1 / 3:
+        glare = (float(rng.uniform(cu0, cu1)), float(rng.uniform(cv0, cv1)))
+    if rng.random() < 1 / 3:
+        shadow = (float(rng.uniform(cu0, cu1)), float(rng.uniform(cv0, cv1)), float(rng.uniform(0, 360)))
+    return Lighting(gradient=float(rng.uniform(0.2, 0.5)), gradient_deg=float(rng.uniform(0, 360)),
+                    glare_uv_mm=glare, glare_radius_mm=float(rng.uniform(15, 40)), glare_dn=float(rng.uniform(60, 160)),
+                    shadow_line=shadow, shadow_depth=float(rng.uniform(0.45, 0.7)),
+                    shadow_soft_mm=float(rng.uniform(3, 30)), vignetting=float(rng.uniform(0.2, 0.45)))
 
 
 def look_at(eye, target, up=(0.0, -1.0, 0.0)) -> np.ndarray:
@@ -127,13 +224,15 @@ def sheet_in_view(target2cam: np.ndarray, model, board: PrintedBoard = PrintedBo
 
 def sample_board_views(n: int, model, board: PrintedBoard = PrintedBoard(), *, distance_mm=(700.0, 1200.0),
                        tilt_deg=(0.0, 40.0), roll_deg=45.0, offset_px=80.0, seed=None,
-                       views=("left", "right", "centre"), max_tries: int = 10000) -> list[np.ndarray]:
+                       views=("left", "right", "centre"), border_px: float = 4.0,
+                       max_tries: int = 10000) -> list[np.ndarray]:
     """``n`` random board poses ``target2cam`` with the whole sheet in view of every camera.
 
     Distances uniform in ``distance_mm``, tilt uniform in ``tilt_deg`` at a uniform azimuth, roll
     uniform in ``[-roll_deg, roll_deg]`` plus a half turn half of the time (so the board appears
     upside down as often as not), board centre moved up to ``offset_px`` from the image centre of
-    the left camera shifted half a baseline (the head's middle).
+    the left camera shifted half a baseline (the head's middle). ``border_px`` is the smallest gap
+    between the sheet and the image edge (small gaps with a large ``offset_px`` put boards near the edge).
     """
     rng = np.random.default_rng(seed)
     out = []
@@ -147,8 +246,77 @@ def sample_board_views(n: int, model, board: PrintedBoard = PrintedBoard(), *, d
         half_disp = 0.5 * model.baseline_mm * f / dist
         off = rng.uniform(-offset_px, offset_px, 2) + np.array([half_disp, 0.0])
         pose = board_view(dist, rng.uniform(*tilt_deg), rng.uniform(0, 360), roll, board, off, f)
-        if sheet_in_view(pose, model, board, views):
+        if sheet_in_view(pose, model, board, views, border_px):
             out.append(pose)
     if len(out) < n:
         raise RuntimeError(f"only {len(out)} of {n} board views fit in the images; relax the ranges")
     return out
+
+
+class BoardOperator:
+    """A simulated operator who holds the board where a guided capture asks (the mock camera's scene).
+
+    :meth:`follow` takes a hint of the stereo calibration's guided loop (an object with ``side``,
+    ``cell`` = ``(row, col)`` of a 3 x 3 grid, and ``tilt``, a tilt class of
+    :func:`handeye.drivers.camera.coverage.tilt_class`) and returns a board pose ``target2cam`` that
+    puts the board's centre in that cell of that image with that tilt, the whole sheet in view of
+    both cameras when it can (of that camera alone otherwise); ``None`` hints ask for any new view.
+
+    Parameters
+    ----------
+    model : StereoModel
+    board : PrintedBoard
+    distance_mm : (float, float)
+        Range of distances to hold the board at.
+    seed : int, optional
+    """
+
+    def __init__(self, model, board: PrintedBoard = PrintedBoard(), distance_mm=(550.0, 1100.0), seed=None):
+        self.model = model
+        self.board = board
+        self.distance_mm = distance_mm
+        self.rng = np.random.default_rng(seed)
+
+    def _candidate(self, tilt_range) -> np.ndarray:
+        w, h = self.model.image_size
+        f = float(self.model.K1[0, 0])
+        dist = self.rng.uniform(*self.distance_mm)
+        roll = self.rng.uniform(-30, 30) + (180.0 if self.rng.random() < 0.5 else 0.0)
+        off = (self.rng.uniform(-0.45 * w, 0.45 * w), self.rng.uniform(-0.45 * h, 0.45 * h))
+        return board_view(dist, self.rng.uniform(*tilt_range), self.rng.uniform(0, 360), roll, self.board, off, f)
+
+    def pose_for(self, hint, tries: int = 4000) -> np.ndarray:
+        """A board pose satisfying ``hint`` as well as can be found in ``tries`` random poses."""
+        from ..drivers.camera.coverage import tilt_class  # the class names of the guided loop
+
+        side = getattr(hint, "side", None)
+        cell = getattr(hint, "cell", None)
+        tilt = getattr(hint, "tilt", None)
+        tilt_range = (0.0, 8.0) if tilt == "facing" else (25.0, 40.0) if tilt else (0.0, 40.0)
+        w, h = self.model.image_size
+        centre = self.board.centre()
+        fallback = None
+        for k in range(tries):
+            pose = self._candidate(tilt_range)
+            if tilt and tilt_class(pose)[0] != tilt:
+                continue
+            views = ("left", "right") if k < tries // 2 else ((side,) if side else ("left", "right"))
+            if not sheet_in_view(pose, self.model, self.board, views, border_px=6.0):
+                continue
+            if cell is not None and side is not None:
+                x, y = self.model.project(pose[:3, :3] @ centre + pose[:3, 3], side)[0]
+                if (min(int(3 * y / h), 2), min(int(3 * x / w), 2)) != tuple(cell):
+                    fallback = fallback if fallback is not None else pose
+                    continue
+            return pose
+        if fallback is not None:
+            return fallback
+        return sample_board_views(1, self.model, self.board, seed=int(self.rng.integers(1 << 30)),
+                                  views=("left", "right"))[0]
+
+    def follow(self, camera, hint) -> np.ndarray:
+        """Move the board of a :class:`~handeye.mocks.camera.MockCamera` (camera frame = base frame) as
+        ``hint`` asks; returns the pose."""
+        pose = self.pose_for(hint)
+        camera.set_scene(target2base=pose, cam2base=np.eye(4))
+        return pose

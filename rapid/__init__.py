@@ -1,0 +1,46 @@
+"""The RAPID side: the station settings a program is rendered from, the modules (posture
+sequencing, the link to the PC by protocol, the camera's tooldata, the write key), and their checks.
+
+Names load on first use (importing the package is cheap)::
+
+    from handeye.rapid import default_station, render_program, write_modules
+    write_modules(render_program(default_station(), protocol="socket"), "rapid_out")
+
+``rapid`` never imports the drivers: its table of link modules (:data:`LINK_MODULES`) is its own,
+and a test holds it to the drivers' registry of controller back ends.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ..calibration.lazy import lazy_exports
+
+_EXPORTS = {
+    "LINK_MODULES": "links",
+    "PROTOCOLS": "links",
+    "RapidStation": "station",
+    "default_station": "station",
+    "load_station": "station",
+    "station_from_dict": "station",
+    "check_postures": "station",
+    "RapidModule": "generate",
+    "render_program": "generate",
+    "render_main": "generate",
+    "render_link": "generate",
+    "render_tool": "generate",
+    "render_key": "generate",
+    "write_modules": "generate",
+    "check_program": "checks",
+    "RapidError": "errors",
+    "ConfigError": "errors",
+}
+__all__ = list(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+
+if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
+    from .checks import check_program  # noqa: F401
+    from .errors import ConfigError, RapidError  # noqa: F401
+    from .generate import RapidModule, render_key, render_link, render_main, render_program, render_tool, write_modules  # noqa: F401
+    from .links import LINK_MODULES, PROTOCOLS  # noqa: F401
+    from .station import RapidStation, check_postures, default_station, load_station, station_from_dict  # noqa: F401

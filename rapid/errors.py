@@ -1,15 +1,19 @@
-"""Exceptions of the RAPID side: a station config that cannot be used, a program that fails its checks."""
+"""Exceptions of the RAPID side: a program that cannot be generated or fails its checks.
+
+A station config that cannot be used raises the package's one :class:`ConfigError`
+(``StationConfigError`` is its old name here).
+"""
 
 from __future__ import annotations
 
-from ..calibration.errors import HandEyeError
+from ..calibration.errors import ConfigError, HandEyeError
 
-__all__ = ["RapidError", "StationConfigError"]
+__all__ = ["RapidError", "ConfigError", "StationConfigError"]
 
 
 class RapidError(HandEyeError):
     """RAPID modules cannot be generated (postures outside limits, a check failed)."""
 
 
-class StationConfigError(RapidError):
-    """The station config file is missing, malformed or holds values that cannot be used."""
+#: The name this module used for :class:`ConfigError` (kept for code that imports it).
+StationConfigError = ConfigError

@@ -94,11 +94,17 @@ def tooldata_literal(transform, mass_kg: float, cog_mm=(0.0, 0.0, 0.0), robhold:
             f"[{format_num(mass, MASS_DECIMALS)},[{_nums(cog, POSITION_DECIMALS)}],[1,0,0,0],0,0,0]]")
 
 
+#: Axes of RAPID's ``robjoint`` (``rax_1`` .. ``rax_6``): fixed by the data type, not taken from the
+#: robot model; the generated program is for robots of six axes (the line protocol's JOINTS reply and
+#: the Modbus map's ``joints`` registers hold six values too).
+ROBJOINT_AXES = 6
+
+
 def jointtarget_literal(joints_deg) -> str:
     """``[[j1,...,j6],[9E9,9E9,9E9,9E9,9E9,9E9]]`` (degrees, 0.0001 deg; external axes unused)."""
     joints = np.asarray(joints_deg, dtype=float)
-    if joints.shape != (6,):
-        raise ValueError(f"a jointtarget needs 6 robot axes; got shape {joints.shape}")
+    if joints.shape != (ROBJOINT_AXES,):
+        raise ValueError(f"a jointtarget needs {ROBJOINT_AXES} robot axes (RAPID robjoint); got shape {joints.shape}")
     return f"[[{_nums(joints, ANGLE_DECIMALS)}],[9E9,9E9,9E9,9E9,9E9,9E9]]"
 
 

@@ -12,6 +12,23 @@ For each posture of the plan (1-based ``k`` on the controller, ``k - 1`` in the 
 Interrupted anywhere (Ctrl-C, a kill, a lost link), running the same command again reads the
 session, skips the postures already on disk, acknowledges a posture the robot is still waiting at if
 its file was written, and goes on: every posture ends up on disk exactly once.
+
+:func:`capture` runs four steps, each a function of its own, on the connected station
+(``station.runtime.StationLink``):
+
+- plan or resume (:func:`open_capture`): :func:`plan_session` measures the board at the start
+  posture, plans and scores the postures and creates the session with its capture record
+  (``capture.station: mock|real``); :func:`resume_session` reads that record back and refuses to
+  resume a session of the other station;
+  A new plan keeps clear of the cell (``cell`` of the station config, ``station.cell_plan``), and
+  its preview (``station.preview``) is written to ``SESSION/preview.png``;
+- program (:func:`install_program`): the RAPID modules written once into ``SESSION/rapid``, loaded
+  when the station can, and the wait until the controller runs them (``plan_only`` stops before:
+  plan, preview and program on disk, nothing moved);
+- confirmation: at a real station the first move waits for the operator's yes (``confirm``); the
+  embedded mock moves without asking and says so;
+- release (:func:`release_waiting_posture`): the posture the robot may still wait at is acknowledged;
+- posture loop (:func:`visit_postures`): steps 1-5 above for every posture not yet on disk.
 """
 
 from __future__ import annotations
@@ -25,7 +42,9 @@ import numpy as np
 
 from ..calibration.compact_points import BoardGeometry, compact_points_from_corners
 from ..calibration.errors import HandEyeError
+from ..calibration.files import remove_stale_temporaries
 from ..calibration.kinematics import load_robot
+from ..calibration.quality_words import MAX_AXIS_SPREAD_DEG
 from ..calibration.session import (
     Posture,
     Session,
@@ -40,12 +59,36 @@ from ..drivers.camera.errors import CameraError, SquareSizeMismatch
 from ..drivers.camera.triangulate import triangulate_images
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
-from .planning import PosturePlan, plan_postures
+from .cell_plan import cell_check
+from .planning import PlanScore, PosturePlan, plan_postures
+from .quality import config_thresholds
+from .runtime import StationLink
 
-__all__ = ["CaptureError", "CaptureSummary", "PostureReport", "capture", "measure_board", "stereo_views"]
+__all__ = [
+    "CaptureError",
+    "CaptureRun",
+    "CaptureSummary",
+    "PostureReport",
+    "capture",
+    "confirm_motion",
+    "install_program",
+    "measure_board",
+    "measure_with_retries",
+    "measurement_line",
+    "read_flange",
+    "store_posture",
+    "open_capture",
+    "plan_line",
+    "plan_session",
+    "release_waiting_posture",
+    "resume_session",
+    "stereo_views",
+    "visit_postures",
+    "write_program",
+]
 
 
-_STATION_NAMES = {MOCK: "embedded mock station", REAL: "real station"}
+_STATION_NAMES = {MOCK: "mock station (embedded, or a rehearsal)", REAL: "real station"}
 
 
 class CaptureError(HandEyeError):
@@ -129,6 +172,12 @@ def _quality_problem(result, config: StationConfig) -> str | None:
     return None
 
 
+def _station_kind(config: StationConfig) -> str:
+    """``mock`` or ``real``: the station a capture runs on, as the capture record says it (a rehearsal
+    against ``handeye mock controller`` is a mock station: its session is never written to a robot)."""
+    return MOCK if config.is_mock or config.is_rehearsal else REAL
+
+
 def _session_record(session_dir: Path) -> Session | None:
     if (session_dir / "session.yaml").exists():
         return read_session(session_dir)
@@ -139,15 +188,16 @@ def _write_header(session_dir: Path, session: Session) -> None:
     write_yaml_atomic(session_dir / "session.yaml", session.header())
 
 
-def _new_plan(config: StationConfig, controller, camera, model, progress) -> PosturePlan:
+def _new_plan(config: StationConfig, link: StationLink, progress) -> PosturePlan:
+    """Measure the board at the start posture and plan the postures around it (``station.planning``)."""
     robot = load_robot(config.robot)
-    here = controller.read_joints()
+    here = link.controller.read_joints()
     start = np.asarray(config.plan.start_joints_deg, float) if config.plan.start_joints_deg is not None else here
     if np.max(np.abs(start - here)) > 0.05:
         raise CaptureError(f"the robot stands at {np.round(here, 2).tolist()}, not at plan.start_joints_deg "
                            f"{np.round(start, 2).tolist()}: jog it there (board in view), then run capture again")
     try:
-        measured, _ = measure_board(camera, model, config.target, config.camera.grab_timeout_s)
+        measured, _ = measure_board(link.camera, link.stereo_model, config.target, config.camera.grab_timeout_s)
     except SquareSizeMismatch as exc:
         raise CaptureError(f"at the start posture: {exc}") from None
     except CameraError as exc:
@@ -164,107 +214,141 @@ def _new_plan(config: StationConfig, controller, camera, model, progress) -> Pos
     if np.linalg.norm(side) > 1e-6:
         sampling = ViewSampling(**{**sampling.__dict__, "side": tuple(side / np.linalg.norm(side))})
     return plan_postures(robot, start, compact.target2cam[0], config.camera.nominal_mount_transform(), config.target,
-                         p.postures, sampling, stereo_views(model), p.seed)
+                         p.postures, sampling, stereo_views(link.stereo_model), p.seed,
+                         thresholds=config_thresholds(config), cell=cell_check(config))
 
 
-def capture(
-    config: StationConfig,
-    session_dir,
-    controller,
-    camera,
-    stereo_model,
-    load_program: Callable[[np.ndarray, Path], None] | None = None,
-    progress: Callable[[str], None] = lambda message: None,
-    on_posture: Callable[[PostureReport], None] = lambda report: None,
-    stop_after: int | None = None,
-) -> CaptureSummary:
-    """Run (or resume) a guided capture into ``session_dir``.
+@dataclass
+class CaptureRun:
+    """The session a capture works on and its plan (new, or read back when resuming).
 
-    Parameters
+    Attributes
     ----------
-    config : StationConfig
-    session_dir : path
-        New or existing session (resumed when it holds a capture plan).
-    controller : drivers.controller.Controller
-        Connected.
-    camera : drivers.camera.Camera
-        Connected.
-    stereo_model : drivers.camera.stereo.StereoModel
-    load_program : callable, optional
-        ``load_program(postures, rapid_dir)``: puts the generated program on the controller (the mock
-        station does it directly). Without it, the operator loads ``rapid_dir/*.mod`` and the capture
-        waits until the controller reports the plan's posture count.
-    progress : callable
-        Receives one-line messages.
-    on_posture : callable
-        Receives a :class:`PostureReport` after each posture.
-    stop_after : int, optional
-        Stop after this many postures of this run (tests of the resume).
-
-    Raises
-    ------
-    CaptureError, ControllerError, CameraError
+    session : Session
+        As on disk when the run started; its capture record (``extra['capture']``) is updated and
+        rewritten after each posture.
+    plan_joints : ndarray, shape (n, dof)
+        Planned joint angles (deg), rounded as embedded in the RAPID program; posture ``k`` (1-based)
+        is row ``k - 1``.
+    plan_score : dict
+        The plan's :class:`~handeye.station.planning.PlanScore` as recorded in the session.
     """
+
+    session: Session
+    plan_joints: np.ndarray
+    plan_score: dict
+
+    @property
+    def board2base(self) -> np.ndarray | None:
+        """The board estimate the plan was made for (its stand is a world zone), when recorded."""
+        estimate = self.session.extra["capture"].get("board_estimate")
+        return None if estimate is None else transform_from_pose(estimate["position_mm"], estimate["quaternion_wxyz"])
+
+    @property
+    def done(self) -> set:
+        """Session indices (0-based) of the postures on disk."""
+        return {p.index for p in self.session.postures}
+
+
+def plan_line(score: PlanScore, postures: int) -> str:
+    """The plan as the operator reads it, in the verdict's quality words (``calibration.quality_words``),
+    and what the cell check rejected."""
+    rejected = (f"; clear of the cell: {score.rejected_postures} postures and {score.rejected_moves} moves rejected "
+                f"({'; '.join(score.rejections)})" if score.rejections else "; clear of the cell, nothing rejected")
+    return (f"plan: {postures} postures; rotation-axis spread {score.rotation_axis_spread_deg:.1f} deg "
+            f"({MAX_AXIS_SPREAD_DEG:.1f} = even over the sphere); relative rotation angle between postures median "
+            f"{score.median_pair_angle_deg:.0f} deg (min {score.min_pair_angle_deg:.0f}); motion "
+            f"{score.motion_time_s:.0f} s at full speed; expected accuracy about {score.predicted_sigma_mm:.2f} mm / "
+            f"{score.predicted_sigma_deg:.3f} deg (simulated){rejected}")
+
+
+def plan_session(config: StationConfig, session_dir: Path, link: StationLink, progress) -> CaptureRun:
+    """Plan the postures and create the session with its capture record (``capture.station: mock|real``)."""
+    plan = _new_plan(config, link, progress)
+    plan_score = plan.score.to_dict()
+    progress(plan_line(plan.score, len(plan.joints_deg)))
+    for note in plan.notes:
+        progress(f"plan warning: {note}")
+    session = Session(setup="eye_in_hand", robot=config.robot, target=config.target, extra={"capture": {
+        "station": _station_kind(config),
+        "plan_joints_deg": [[round(float(v), 4) for v in row] for row in plan.joints_deg],
+        "plan_score": plan_score,
+        "board_estimate": pose_from_transform(plan.board2base),
+        "nominal_mount": pose_from_transform(plan.cam2tool0),
+        "skipped": {},
+        "config": config.to_dict(),
+    }})
+    create_session(session_dir, session)
+    from .preview import write_preview
+
+    progress(f"plan preview (the cell from above and from the side, the flange path, the numbered postures): "
+             f"{write_preview(session_dir / 'preview.png', load_robot(config.robot), plan)}")
+    return CaptureRun(session, np.round(plan.joints_deg, 4), plan_score)  # as embedded in the RAPID program
+
+
+def resume_session(config: StationConfig, session_dir: Path, session: Session, progress) -> CaptureRun:
+    """Read the plan of a capture on disk; refuse one made on the other station (mock vs real)."""
+    record = session.extra["capture"]
+    if record.get("mode") == "guided":
+        raise CaptureError(f"{session_dir} was captured in guided mode: resume it with capture --guided, or start a new "
+                           "session folder")
+    recorded = session_origin(session)
+    if recorded in (MOCK, REAL) and recorded != _station_kind(config):
+        raise CaptureError(f"{session_dir} was captured on the {_STATION_NAMES[recorded]}; resume it on the same "
+                           f"station ({'--mock, or the rehearsal config' if recorded == MOCK else '--config STATION.yaml with the real hardware'}) "
+                           "or start a new session folder")
+    plan_joints = np.array(record["plan_joints_deg"], float)
+    remove_stale_temporaries(session_dir)  # a killed run may leave one beside the (whole) file it was replacing
+    progress(f"resuming {session_dir}: {len(session.postures)} of {len(plan_joints)} postures on disk")
+    return CaptureRun(session, plan_joints, record.get("plan_score", {}))
+
+
+def open_capture(config: StationConfig, session_dir: Path, link: StationLink, progress) -> CaptureRun:
+    """The capture's session: resumed when ``session_dir`` holds a capture, else planned and created."""
+    session = _session_record(session_dir)
+    if session is None:
+        return plan_session(config, session_dir, link, progress)
+    if "capture" not in session.extra:
+        raise CaptureError(f"{session_dir} holds a session that was not made by capture; choose a new folder")
+    return resume_session(config, session_dir, session, progress)
+
+
+def write_program(config: StationConfig, session_dir: Path, plan_joints: np.ndarray, progress,
+                  board2base=None, link: StationLink | None = None) -> Path:
+    """Write the RAPID program into ``SESSION/rapid`` (once; with ``cell.world_zones`` the keep-out
+    volumes and the stand of the board at ``board2base`` as world zones); returns the folder. On the
+    embedded mock station (``link``) the program asks the mock's HeKey for the write key."""
     from ..rapid.generate import render_program, write_modules
     from ..rapid.station import station_from_dict
 
-    started = time.monotonic()
-    session_dir = Path(session_dir)
-    session = _session_record(session_dir)
-    robot = load_robot(config.robot)
-    station_kind = MOCK if config.is_mock else REAL
-    if session is not None and "capture" in session.extra:
-        record = session.extra["capture"]
-        recorded = session_origin(session)
-        if recorded in (MOCK, REAL) and recorded != station_kind:
-            raise CaptureError(f"{session_dir} was captured on the {_STATION_NAMES[recorded]}; resume it on the same "
-                               f"station ({'--mock' if recorded == MOCK else '--config STATION.yaml with the real hardware'}) "
-                               "or start a new session folder")
-        plan_joints = np.array(record["plan_joints_deg"], float)
-        plan_score = record.get("plan_score", {})
-        progress(f"resuming {session_dir}: {len(session.postures)} of {len(plan_joints)} postures on disk")
-    elif session is not None:
-        raise CaptureError(f"{session_dir} holds a session that was not made by capture; choose a new folder")
-    else:
-        plan = _new_plan(config, controller, camera, stereo_model, progress)
-        plan_joints = plan.joints_deg
-        plan_score = {k: float(v) for k, v in plan.score.__dict__.items()}
-        sc = plan.score
-        progress(f"plan: {len(plan_joints)} postures; rotation-axis spread {sc.axis_spread:.2f} (1 = even); rotation "
-                 f"between postures median {sc.median_pair_angle_deg:.0f} deg (min {sc.min_pair_angle_deg:.0f}); "
-                 f"motion {sc.motion_time_s:.0f} s at full speed; expected accuracy about {sc.predicted_sigma_mm:.2f} mm / "
-                 f"{sc.predicted_sigma_deg:.3f} deg (simulated)")
-        for note in plan.notes:
-            progress(f"plan warning: {note}")
-        session = Session(setup="eye_in_hand", robot=config.robot, target=config.target, extra={"capture": {
-            "station": station_kind,
-            "plan_joints_deg": [[round(float(v), 4) for v in row] for row in plan_joints],
-            "plan_score": plan_score,
-            "board_estimate": pose_from_transform(plan.board2base),
-            "nominal_mount": pose_from_transform(plan.cam2tool0),
-            "skipped": {},
-            "config": config.to_dict(),
-        }})
-        create_session(session_dir, session)
-        plan_joints = np.round(plan_joints, 4)  # as embedded in the RAPID program
     rapid_dir = session_dir / "rapid"
     if not rapid_dir.is_dir():
-        station = station_from_dict(config.rapid_dict(plan_joints), config.source)
+        data = config.rapid_dict(plan_joints, board2base)
+        if link is not None and link.is_mock and data["controller"]["write_key"] is None:
+            # the embedded station's controller holds a key of its own (HeKey.sys, handed to the PC): its
+            # link module asks HeKey for it. The key itself never goes into the program modules.
+            data["controller"]["write_key"] = link.mock.write_key
+        station = station_from_dict(data, config.source)
         write_modules(render_program(station, plan_joints), rapid_dir)
         progress(f"RAPID program written to {rapid_dir}")
-    total = len(plan_joints)
-    if load_program is not None:
-        load_program(plan_joints, rapid_dir)
-        controller.close()  # the posture count is read at connect: read it again
-        controller.connect()
-    _wait_for_program(controller, total, rapid_dir, progress)
-    done = {p.index for p in session.postures}
-    already = sorted(k + 1 for k in done)
-    skipped: dict = {}
-    captured: list = []
-    record = session.extra["capture"]
+    return rapid_dir
 
-    # A robot still waiting at a posture (a run stopped between the grab and the ACK).
+
+def install_program(config: StationConfig, session_dir: Path, plan_joints: np.ndarray, link: StationLink,
+                    progress, board2base=None) -> None:
+    """Write the RAPID program (:func:`write_program`), load it when the station can, and wait until the
+    controller runs a program with the plan's posture count."""
+    rapid_dir = write_program(config, session_dir, plan_joints, progress, board2base, link)
+    if link.load_program is not None:
+        link.load_program(plan_joints, rapid_dir)
+        link.controller.close()  # the posture count is read at connect: read it again
+        link.controller.connect()
+    _wait_for_program(link.controller, len(plan_joints), rapid_dir, progress)
+
+
+def release_waiting_posture(controller, done: set, progress) -> None:
+    """Resume: a robot still waiting at a posture whose file is on disk (a run stopped between the
+    grab and the ACK) is acknowledged, so the program takes the next request."""
     status = controller.status()
     if status.moving:
         status = controller.wait_at_rest()
@@ -273,6 +357,18 @@ def capture(
         if (k - 1) in done:
             controller.acknowledge(k)
             progress(f"posture {k} was already on disk: acknowledged")
+
+
+def visit_postures(config: StationConfig, session_dir: Path, run: CaptureRun, link: StationLink, on_posture,
+                   stop_after: int | None = None) -> tuple[list, dict]:
+    """The posture loop: move, measure, write each posture not yet on disk, record skips, acknowledge.
+
+    Returns the plan indices (1-based) captured in this run and ``{plan index: reason}`` of those skipped.
+    """
+    controller, robot = link.controller, load_robot(config.robot)
+    total, done = len(run.plan_joints), run.done
+    record = run.session.extra["capture"]
+    captured, skipped = [], {}
     remaining = [k for k in range(1, total + 1) if (k - 1) not in done]
     for n, k in enumerate(remaining):
         if stop_after is not None and n >= stop_after:
@@ -280,9 +376,8 @@ def capture(
         t0 = time.monotonic()
         status = controller.status()
         if not (status.awaiting_ack and status.posture == k):
-            controller.goto_posture(k, expected_joints=plan_joints[k - 1])
-        report = _capture_posture(config, session_dir, controller, camera, stereo_model, robot, k, total,
-                                  plan_joints[k - 1])
+            controller.goto_posture(k, expected_joints=run.plan_joints[k - 1])
+        report = _capture_posture(config, session_dir, link, robot, k, total, run.plan_joints[k - 1])
         report.elapsed_s = time.monotonic() - t0
         if report.ok:
             captured.append(k)
@@ -290,11 +385,90 @@ def capture(
         else:
             skipped[k] = report.message
             record["skipped"][str(k)] = report.message
-        session.extra["capture"] = record
-        _write_header(session_dir, session)
+        run.session.extra["capture"] = record
+        _write_header(session_dir, run.session)
         controller.acknowledge(k)
         on_posture(report)
-    return CaptureSummary(session_dir, total, captured, already, skipped, time.monotonic() - started, plan_score)
+    return captured, skipped
+
+
+def capture(
+    config: StationConfig,
+    session_dir,
+    link: StationLink,
+    progress: Callable[[str], None] = lambda message: None,
+    on_posture: Callable[[PostureReport], None] = lambda report: None,
+    stop_after: int | None = None,
+    plan_only: bool = False,
+    confirm: Callable[[str], bool] | None = None,
+) -> CaptureSummary:
+    """Run (or resume) a capture into ``session_dir``: plan (or resume), program, confirm, release a
+    posture left waiting, visit the postures.
+
+    Parameters
+    ----------
+    config : StationConfig
+    session_dir : path
+        New or existing session (resumed when it holds a capture plan).
+    link : StationLink
+        The connected station (``station.runtime.open_station``): its controller and camera, the
+        stereo model, and ``load_program(postures, rapid_dir)`` when the station can put the generated
+        program on the controller itself (the mock can). Without it, the operator loads
+        ``rapid_dir/*.mod`` and the capture waits until the controller reports the plan's posture count.
+    progress : callable
+        Receives one-line messages.
+    on_posture : callable
+        Receives a :class:`PostureReport` after each posture.
+    stop_after : int, optional
+        Stop after this many postures of this run (tests of the resume).
+    plan_only : bool
+        Plan (or read the plan back), write the preview and the RAPID program, and stop: nothing moves.
+    confirm : callable, optional
+        ``confirm(question) -> bool``, asked once before the first move of this run at a real station
+        (the operator's yes). Without it a real station refuses to move; the embedded mock moves
+        without asking and says so.
+
+    Raises
+    ------
+    CaptureError, ControllerError, CameraError
+    """
+    started = time.monotonic()
+    session_dir = Path(session_dir)
+    run = open_capture(config, session_dir, link, progress)
+    if plan_only:
+        write_program(config, session_dir, run.plan_joints, progress, run.board2base, link)
+        progress(f"plan only: nothing moved; look at {session_dir / 'preview.png'}, then run the same command "
+                 "without --plan-only to capture")
+        return CaptureSummary(session_dir, len(run.plan_joints), [], sorted(k + 1 for k in run.done), {},
+                              time.monotonic() - started, run.plan_score)
+    install_program(config, session_dir, run.plan_joints, link, progress, run.board2base)
+    confirm_motion(config, session_dir, run, link, confirm, progress)
+    already = sorted(k + 1 for k in run.done)
+    release_waiting_posture(link.controller, run.done, progress)
+    captured, skipped = visit_postures(config, session_dir, run, link, on_posture, stop_after)
+    return CaptureSummary(session_dir, len(run.plan_joints), captured, already, skipped, time.monotonic() - started,
+                          run.plan_score)
+
+
+def confirm_motion(config: StationConfig, session_dir: Path, run: CaptureRun, link: StationLink,
+                   confirm: Callable[[str], bool] | None, progress) -> None:
+    """Before the first move of a run: a real station asks the operator (``confirm``) and refuses without a
+    yes; the embedded mock moves without asking and says so. Nothing to move: nothing asked."""
+    left = len(run.plan_joints) - len(run.done)
+    if left <= 0:
+        return
+    speed = f"{config.motion.speed_override_pct:g} % of {config.motion.speed_tcp_mm_s:g} mm/s"
+    if link.is_mock:
+        progress(f"moving the mock robot through {left} postures at {speed} without asking (mock station; "
+                 "a real station asks first)")
+        return
+    question = (f"move the robot through {left} postures at {speed}, MoveAbsJ, checked against the cell "
+                f"(preview: {session_dir / 'preview.png'})?")
+    if confirm is None:
+        raise CaptureError("motion needs the operator's confirmation: answer the prompt at a terminal, or give --yes "
+                           "to move without asking (scripts)")
+    if not confirm(question):
+        raise CaptureError("not confirmed: nothing moved; run the same command again when ready (it resumes)")
 
 
 def _wait_for_program(controller, total: int, rapid_dir: Path, progress, timeout_s: float = 600.0) -> None:
@@ -313,45 +487,71 @@ def _wait_for_program(controller, total: int, rapid_dir: Path, progress, timeout
     raise CaptureError(f"the controller never reported the plan's {total} postures; load {rapid_dir}/*.mod and retry")
 
 
-def _capture_posture(config, session_dir, controller, camera, model, robot, k, total, planned) -> PostureReport:
-    joints = controller.read_joints()
-    pose = controller.read_tool0_pose()
+def read_flange(config: StationConfig, link: StationLink, robot, label: str) -> tuple[np.ndarray, np.ndarray]:
+    """Joints and flange pose (``tool02base``) of the robot at rest, the pose checked against our kinematics
+    of the joints (CaptureError naming ``label`` when they disagree)."""
+    joints = link.controller.read_joints()
+    pose = link.controller.read_tool0_pose()
     tool02base = transform_from_pose(pose.position_mm, pose.quaternion_wxyz)
     expected = robot.forward_transform(joints)
     mismatch = float(translation_error_mm(expected, tool02base))
     if mismatch > config.capture.max_pose_mismatch_mm or rotation_error_deg(expected, tool02base) > 0.05:
-        raise CaptureError(f"posture {k}: the controller's flange pose is {mismatch:.2f} mm from our {robot.name} "
+        raise CaptureError(f"{label}: the controller's flange pose is {mismatch:.2f} mm from our {robot.name} "
                            "kinematics of its joints: check the robot model, and that CRobT uses tool0 and wobj0")
-    if np.max(np.abs(joints - planned)) > 0.05:
-        raise CaptureError(f"posture {k}: the robot stands at {np.round(joints, 3).tolist()}, not at the planned "
-                           f"{np.round(planned, 3).tolist()}: is the right program loaded?")
+    return joints, tool02base
+
+
+def measure_with_retries(config: StationConfig, link: StationLink):
+    """Grab and triangulate until the quality holds (``capture.retries`` more tries): ``(result, frame,
+    problem, attempts)``, ``problem`` None when the measurement is good."""
     problem = "no frame"
     result = frame = None
     attempts = 0
     for attempts in range(1, config.capture.retries + 2):
         try:
-            result, frame = measure_board(camera, model, config.target, config.camera.grab_timeout_s)
+            result, frame = measure_board(link.camera, link.stereo_model, config.target, config.camera.grab_timeout_s)
         except CameraError as exc:
             problem = str(exc)
             continue
         problem = _quality_problem(result, config)
         if problem is None:
             break
-    if problem is not None:
-        return PostureReport(k, total, False, f"posture {k} skipped after {attempts} attempt(s): {problem}",
-                             result.quality if result is not None else {}, attempts)
+    return result, frame, problem, attempts
+
+
+def store_posture(config: StationConfig, session_dir: Path, index: int, joints, tool02base, result, frame,
+                  **extra) -> None:
+    """Write posture ``index`` (0-based) of the session atomically: pose, joints, corners, quality, ``extra``
+    (and the images when ``capture.save_images``)."""
     extra = {"quality": {key: (round(v, 4) if isinstance(v, float) else v) for key, v in result.quality.items()},
-             "plan_index": k, "captured_at": time.strftime("%Y-%m-%dT%H:%M:%S")}
+             **extra, "captured_at": time.strftime("%Y-%m-%dT%H:%M:%S")}
     if config.capture.save_images and frame is not None:
         import cv2
 
         images = session_dir / "images"
         images.mkdir(exist_ok=True)
-        cv2.imwrite(str(images / f"{k - 1:03d}_left.png"), frame.left)
-        cv2.imwrite(str(images / f"{k - 1:03d}_right.png"), frame.right)
-        extra["images"] = [f"images/{k - 1:03d}_left.png", f"images/{k - 1:03d}_right.png"]
-    write_posture(session_dir, Posture(index=k - 1, tool0_in_base=tool02base, joints_deg=joints,
+        cv2.imwrite(str(images / f"{index:03d}_left.png"), frame.left)
+        cv2.imwrite(str(images / f"{index:03d}_right.png"), frame.right)
+        extra["images"] = [f"images/{index:03d}_left.png", f"images/{index:03d}_right.png"]
+    write_posture(session_dir, Posture(index=index, tool0_in_base=tool02base, joints_deg=joints,
                                        points_mm=result.points_mm, extra=extra))
-    q = result.quality
-    return PostureReport(k, total, True, f"posture {k}: {q['corners']} corners at {q['distance_mm']:.0f} mm, "
-                         f"rows {q['row_disagreement_max_px']:.2f} px, plane {q['plane_rms_mm']:.2f} mm", q, attempts)
+
+
+def measurement_line(quality: dict) -> str:
+    """``104 corners at 912 mm, rows 0.08 px, plane 0.14 mm``."""
+    return (f"{quality['corners']} corners at {quality['distance_mm']:.0f} mm, rows "
+            f"{quality['row_disagreement_max_px']:.2f} px, plane {quality['plane_rms_mm']:.2f} mm")
+
+
+def _capture_posture(config, session_dir, link: StationLink, robot, k, total, planned) -> PostureReport:
+    """Steps 2-4 at posture ``k`` (the robot at rest there): check the pose, measure, write the posture file."""
+    joints, tool02base = read_flange(config, link, robot, f"posture {k}")
+    if np.max(np.abs(joints - planned)) > 0.05:
+        raise CaptureError(f"posture {k}: the robot stands at {np.round(joints, 3).tolist()}, not at the planned "
+                           f"{np.round(planned, 3).tolist()}: is the right program loaded?")
+    result, frame, problem, attempts = measure_with_retries(config, link)
+    if problem is not None:
+        return PostureReport(k, total, False, f"posture {k} skipped after {attempts} attempt(s): {problem}",
+                             result.quality if result is not None else {}, attempts)
+    store_posture(config, session_dir, k - 1, joints, tool02base, result, frame, plan_index=k)
+    return PostureReport(k, total, True, f"posture {k}: {measurement_line(result.quality)}", result.quality, attempts)

@@ -1,155 +1,321 @@
 """The station configuration: one YAML file, validated on load, with the mock station built in.
 
-Sections (``station/example_station.yaml`` documents each one). A file must name its hardware:
-``controller.protocol`` and ``camera.backend`` are required, so a config never runs on the built-in
-mock station by accident; ``mock`` for both (or ``--mock`` on the command line) selects the embedded
-mock station, and every output then says MOCK. Every other key is optional and keeps the built-in value.
+A file must name its hardware: ``controller.protocol`` and ``camera.backend`` are required, so a
+config never runs on the built-in mock station by accident; ``mock`` for both (or ``--mock`` on the
+command line) selects the embedded mock station, and every output then says MOCK. Every other key is
+optional and keeps the built-in value.
 
-``robot``       model name or robot YAML path (joint limits, kinematics)
-``controller``  protocol (socket | serial | modbus | mock), host, port, serial_url, modbus_map, timeout_s,
-                motion_timeout_s, and for the generated RAPID: pc_address, controller_address,
-                serial_channel, ack_timeout_s; for both: idle_timeout_s, write_key (a secret: never
-                printed, never stored in a session)
-``camera``      backend (xb3 | mock), stereo_model (OpenCV FileStorage; none = nominal XB3 pair),
-                nominal_mount (camera in tool0 from the drawing, for planning only), grab_timeout_s
-``target``      corners [nx, ny], square_mm
-``plan``        postures, start_joints_deg (none = where the robot stands), distance_mm [min, max],
-                cone_deg, roll_deg, aim_mm, joint_margin_deg, seed
-``motion``      speed_tcp_mm_s, speed_ori_deg_s
-``tool``        name, mass_kg, cog_mm
-``capture``     per-posture quality: max_row_disagreement_px, max_plane_rms_mm, distance_mm [min, max],
-                max_pose_mismatch_mm, retries, save_images
-``quality``     thresholds of the calibration verdict (see ``station.quality``)
-``output``      folder (where new sessions go)
-``mock``        the embedded mock station: protocol (its controller link), seed, kinematic_error_mm,
-                kinematic_error_deg, time_scale (used by --mock, a config whose back ends are mock, and the demo)
-``postures``    optional fixed approved postures for ``handeye rapid generate`` (capture plans its own)
+Every key is declared once, below, on the settings dataclasses (:func:`~handeye.station.schema.setting`):
+its default, its rule (type, range or choices), its unit and what it is for. The choices of
+``controller.protocol``, ``camera.backend`` and ``mock.protocol`` are the registered back ends
+(:mod:`handeye.drivers.controller.backends`, :mod:`handeye.drivers.camera.backends`), plug-ins
+included. ``station/example_station.yaml`` documents every key (a test holds it to the schema);
+:func:`describe_keys` lists them.
+
+Sections: ``robot``, ``controller`` (the link and the generated RAPID program), ``camera``,
+``target``, ``plan`` (posture planning), ``motion``, ``tool`` (the PERS tooldata written back),
+``capture`` (per-posture quality), ``cell`` and ``guided`` (the cell's keep-out volumes and
+carried geometry, the operator-guided capture: ``station.cell_settings``), ``quality`` (the
+verdict's thresholds, see ``station.quality``), ``output``, ``mock`` (the embedded mock station) and ``postures`` (fixed approved postures for
+``handeye rapid generate``; capture plans its own).
 """
 
 from __future__ import annotations
 
 import math
 import re
-import sys
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
 import numpy as np
 
 from ..calibration.compact_points import BoardGeometry
-from ..calibration.errors import HandEyeError, brief
+from ..calibration.errors import ConfigError, HandEyeError, brief
 from ..calibration.files import read_text_file
 from ..calibration.kinematics import load_robot
 from ..calibration.session import parse_yaml
 from ..calibration.transforms import pose_from_transform, transform_from_pose
+from .cell_settings import CellSettings, GuidedSettings
+from .schema import (
+    Custom,
+    Flag,
+    Number,
+    Numbers,
+    Optional,
+    Range,
+    Text,
+    check_section,
+    numbers,
+    rule_of,
+    schema_keys,
+    secret_fields,
+    section,
+    setting,
+    text,
+)
 
-__all__ = ["EXAMPLE_FILE", "ConfigError", "StationConfig", "config_from_dict", "default_config", "load_config"]
+__all__ = ["EXAMPLE_FILE", "MOCK", "ConfigError", "StationConfig", "config_from_dict", "default_config", "load_config",
+           "describe_keys", "controller_protocols", "camera_backends", "mock_protocols"]
 
 EXAMPLE_FILE = Path(__file__).with_name("example_station.yaml")
 
-
-class ConfigError(HandEyeError):
-    """The station configuration file is missing, malformed, or holds a bad value (named by key)."""
-
-
 #: The back-end name that selects the embedded mock station (controller and camera alike).
 MOCK = "mock"
-#: Controller link protocols of a real station.
-CONTROLLER_PROTOCOLS = ("socket", "serial", "modbus")
-#: Camera back ends of a real station.
-CAMERA_BACKENDS = ("xb3",)
-#: Keys a station file must name: without them a config would silently run on the built-in mock.
-REQUIRED_KEYS = (("controller", "protocol", CONTROLLER_PROTOCOLS), ("camera", "backend", CAMERA_BACKENDS))
+#: Bounds of every ``seed``.
+SEED_MAX = 2**31
 
 
+def controller_protocols() -> tuple[str, ...]:
+    """Controller link protocols of a real station: every registered controller back end."""
+    from ..drivers.controller.backends import CONTROLLERS
+
+    return CONTROLLERS.names()
+
+
+def camera_backends() -> tuple[str, ...]:
+    """Camera back ends of a real station: every registered camera back end that is not simulated."""
+    from ..drivers.camera.backends import CAMERAS
+
+    return CAMERAS.names(lambda backend: not backend.simulated)
+
+
+def mock_protocols() -> tuple[str, ...]:
+    """Controller links the embedded mock station can speak: the back ends a mock serves."""
+    from ..mocks.backends import mock_protocols
+
+    return mock_protocols()
+
+
+# ---------------------------------------------------------------------------------- checks of their own
+def _write_key(value, key: str, context) -> str | None:
+    """The write key, checked without ever echoing it (one protocol word, one RAPID string)."""
+    if value is None:
+        return None
+    if not isinstance(value, str):
+        raise ConfigError(f"{key} must be a text of 8 to 32 letters, digits, '_' or '-' (quote it in YAML); "
+                          f"got a {type(value).__name__}")
+    if not re.fullmatch(r"[A-Za-z0-9_-]{8,32}", value):
+        raise ConfigError(f"{key} must be 8 to 32 letters, digits, '_' or '-'; got another value of {len(value)} "
+                          "characters (the key itself is never printed)")
+    return value
+
+
+def _mount(value, key: str, context) -> tuple:
+    if not isinstance(value, dict) or "position_mm" not in value or "quaternion_wxyz" not in value:
+        raise ConfigError(f"{key} needs position_mm and quaternion_wxyz")
+    position = numbers(value["position_mm"], f"{key}.position_mm", 3, -1000, 1000)
+    quaternion = numbers(value["quaternion_wxyz"], f"{key}.quaternion_wxyz", 4, -1, 1)
+    if abs(math.sqrt(sum(q * q for q in quaternion)) - 1) > 1e-3:
+        raise ConfigError(f"{key}.quaternion_wxyz must have norm 1; got {list(quaternion)}")
+    return position, quaternion
+
+
+def _joints(value, key: str, context) -> tuple:
+    """One posture: as many angles as the config's robot has axes, within its joint limits."""
+    robot = load_robot(context["robot"])
+    joints = numbers(value, key, robot.dof, -360, 360)
+    problems = robot.limit_violations(joints)
+    if problems:
+        raise ConfigError(f"{key}: {problems[0]}")
+    return joints
+
+
+def _mock_arm(value, key: str, context) -> str:
+    """``HOST:PORT`` of a standalone mock controller's camera port."""
+    address = text(value, key)
+    host, sep, port = address.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ConfigError(f"{key} must be HOST:PORT (where `handeye mock controller --camera-port PORT` serves its "
+                          f"camera); got {brief(value)}")
+    return address
+
+
+def _rapid_name(value, key: str, context) -> str:
+    name = text(value, key)
+    if not (name[0].isalpha() and name.replace("_", "a").isalnum() and len(name) <= 32):
+        raise ConfigError(f"{key} must be a RAPID identifier (letter first, letters/digits/_, <= 32); got {name!r}")
+    return name
+
+
+def _robot(value, key: str, context) -> str:
+    name = text(value, key)
+    try:
+        load_robot(name)
+    except ValueError as exc:
+        raise ConfigError(f"robot: {exc}") from None
+    context["robot"] = name  # the keys checked after it (postures, start joints) use its model
+    return name
+
+
+def _corners(value, key: str, context) -> tuple:
+    if (not isinstance(value, list) or len(value) != 2
+            or not all(isinstance(c, int) and not isinstance(c, bool) and c >= 2 for c in value)):
+        raise ConfigError(f"{key} must be two whole numbers >= 2; got {brief(value)}")
+    return max(value), min(value)
+
+
+def _quality(value, key: str, context) -> dict:
+    quality = value or {}
+    if not isinstance(quality, dict):
+        raise ConfigError(f"quality must be a mapping of thresholds; got {brief(quality)}")
+    return dict(quality)
+
+
+def _postures(value, key: str, context) -> tuple:
+    robot = load_robot(context["robot"])
+    if not isinstance(value, list) or not value:
+        axes = ", ..., ".join(f"a{i}" for i in (1, robot.dof))
+        raise ConfigError(f"postures must be a list of joint-angle rows [{axes}]")
+    checked = []
+    for i, row in enumerate(value):
+        joints = numbers(row, f"postures[{i}]", robot.dof, -360, 360)
+        problems = robot.limit_violations(joints)
+        if problems:
+            raise ConfigError(f"posture {i + 1}: {problems[0]} (postures are numbered from 1)")
+        checked.append(joints)
+    return tuple(checked)
+
+
+def _as_is(value, key: str, context):
+    return value
+
+
+# ---------------------------------------------------------------------------------- the sections
 @dataclass(frozen=True)
 class ControllerSettings:
-    protocol: str = MOCK
-    host: str = "127.0.0.1"
-    port: int = 1025
-    serial_url: str = "socket://127.0.0.1:1026"
-    modbus_map: str | None = None
-    timeout_s: float = 2.0
-    motion_timeout_s: float = 120.0
-    pc_address: str = "127.0.0.1"
-    controller_address: str = "127.0.0.1"
-    serial_channel: str = "sio1:"
-    ack_timeout_s: float = 30.0
-    idle_timeout_s: float = 5.0
-    write_key: str | None = field(default=None, repr=False)  # a secret: masked in to_dict, never printed
+    """``controller``: the robot controller's link, and the settings of the generated RAPID program."""
+
+    protocol: str = setting(MOCK, Text(lambda: controller_protocols() + (MOCK,)),
+                            "link protocol: a registered back end (socket, serial, modbus), or mock", required=True)
+    host: str = setting("127.0.0.1", Text(), "controller (socket) or gateway (modbus) address")
+    port: int = setting(1025, Number(1, 65535, integer=True), "RAPID socket server port (modbus: the gateway's port)")
+    serial_url: str = setting("socket://127.0.0.1:1026", Text(), "serial: device or pyserial URL")
+    modbus_map: str | None = setting(None, Optional(Text()), "modbus: register map YAML (null: the built-in one)")
+    timeout_s: float = setting(2.0, Number(0.001, 3600), "budget of one request", "s")
+    motion_timeout_s: float = setting(120.0, Number(0.001, 3600), "budget for a move to a posture", "s")
+    pc_address: str = setting("127.0.0.1", Text(), "RAPID: the only client the socket server accepts (this PC)")
+    controller_address: str = setting("127.0.0.1", Text(), "RAPID: address the server binds (auto: GetSysInfo)")
+    serial_channel: str = setting("sio1:", Text(), "RAPID: the serial variant's channel")
+    ack_timeout_s: float = setting(30.0, Number(0.001, 3600), "RAPID: warn (LATE) when a posture is not acknowledged",
+                                   "s")
+    idle_timeout_s: float = setting(5.0, Number(0.1, 10), "RAPID and PC: a link silent this long is dropped", "s")
+    write_key: str | None = setting(None, Custom(_write_key), "the secret tool-data writes need (8-32 letters, "
+                                    "digits, _ or -; HeKey.sys)", secret=True)
 
 
 @dataclass(frozen=True)
 class CameraSettings:
-    backend: str = MOCK
-    stereo_model: str | None = None
-    nominal_mount: tuple = ((-115.0, 30.0, 95.0), (0.7071068, 0.0, 0.0, 0.7071068))
-    grab_timeout_s: float = 2.0
+    """``camera``: the stereo head."""
+
+    backend: str = setting(MOCK, Text(lambda: camera_backends() + (MOCK,)),
+                           "camera back end: a registered one (xb3), or mock", required=True)
+    stereo_model: str | None = setting(None, Optional(Text()), "OpenCV FileStorage of the stereo pair "
+                                       "(null: the nominal XB3 model)")
+    nominal_mount: tuple = setting(((-115.0, 30.0, 95.0), (0.7071068, 0.0, 0.0, 0.7071068)), Custom(_mount),
+                                   "camera in tool0 from the drawing, for planning only (position_mm, "
+                                   "quaternion_wxyz)", "mm")
+    grab_timeout_s: float = setting(2.0, Number(0.001, 60), "budget of one grab", "s")
+    mock_arm: str | None = setting(None, Optional(Custom(_mock_arm)), "rehearsal only (backend mock with a real "
+                                   "controller protocol): HOST:PORT where `handeye mock controller --camera-port` "
+                                   "serves the simulated XB3 on its arm")
 
     def nominal_mount_transform(self) -> np.ndarray:
         return transform_from_pose(self.nominal_mount[0], self.nominal_mount[1])
 
 
 @dataclass(frozen=True)
+class TargetSettings:
+    """``target``: the checkerboard (kept as a :class:`BoardGeometry`)."""
+
+    type: str = setting("checkerboard", Custom(_as_is), "checkerboard (the only target; accepted as in session.yaml)")
+    corners: tuple = setting((13, 8), Custom(_corners), "inner corners along x (the long side), along y")
+    square_mm: float = setting(30.0, Number(1, 500), "square size", "mm")
+
+
+@dataclass(frozen=True)
 class PlanSettings:
-    postures: int = 30
-    start_joints_deg: tuple | None = None
-    distance_mm: tuple = (700.0, 1200.0)
-    cone_deg: float = 35.0
-    roll_deg: float = 40.0
-    aim_mm: float = 80.0
-    joint_margin_deg: float = 5.0
-    seed: int = 0
+    """``plan``: how capture plans its postures."""
+
+    postures: int = setting(30, Number(3, 255, integer=True), "postures to plan")
+    start_joints_deg: tuple | None = setting(None, Optional(Custom(_joints)), "where planning starts (null: where "
+                                             "the robot stands)", "deg")
+    distance_mm: tuple = setting((700.0, 1200.0), Range(100, 5000), "camera to board centre [min, max]", "mm")
+    cone_deg: float = setting(35.0, Number(0, 90), "largest view angle from the board normal", "deg")
+    roll_deg: float = setting(40.0, Number(0, 90), "largest roll about the optical axis", "deg")
+    aim_mm: float = setting(80.0, Number(0, 500), "spread of the aim point over the board", "mm")
+    joint_margin_deg: float = setting(5.0, Number(0, 45), "distance kept from every joint limit", "deg")
+    seed: int = setting(0, Number(0, SEED_MAX, integer=True), "seed of the planner")
 
 
 @dataclass(frozen=True)
 class MotionSettings:
-    speed_tcp_mm_s: float = 200.0
-    speed_ori_deg_s: float = 100.0
+    """``motion``: the speed of the posture moves (RAPID speeddata)."""
+
+    speed_tcp_mm_s: float = setting(200.0, Number(1, 7000), "TCP speed", "mm/s")
+    speed_ori_deg_s: float = setting(100.0, Number(1, 1000), "reorientation speed", "deg/s")
+    speed_override_pct: float = setting(100.0, Number(1, 100), "RAPID VelSet override of the posture moves "
+                                        "(100: as programmed)", "%")
 
 
 @dataclass(frozen=True)
 class ToolSettings:
-    name: str = "tHeCamera"
-    mass_kg: float = 1.8
-    cog_mm: tuple = (-60.0, 20.0, 60.0)
+    """``tool``: the PERS tooldata of the camera, written back after calibration."""
+
+    name: str = setting("tHeCamera", Custom(_rapid_name), "the PERS tooldata's name (a RAPID identifier)")
+    mass_kg: float = setting(1.8, Number(1e-3, 100), "camera and bracket", "kg")
+    cog_mm: tuple = setting((-60.0, 20.0, 60.0), Numbers(3, -1000, 1000), "centre of gravity in tool0", "mm")
 
 
 @dataclass(frozen=True)
 class CaptureSettings:
-    max_row_disagreement_px: float = 0.5
-    max_plane_rms_mm: float = 1.0
-    distance_mm: tuple = (500.0, 1500.0)
-    max_pose_mismatch_mm: float = 0.5
-    retries: int = 2
-    save_images: bool = False
+    """``capture``: when a posture's measurement is good enough (else retried, then skipped)."""
+
+    max_row_disagreement_px: float = setting(0.5, Number(0, 1000), "left/right corner rows after rectification", "px")
+    max_plane_rms_mm: float = setting(1.0, Number(0, 1000), "corners off their fitted plane", "mm")
+    distance_mm: tuple = setting((500.0, 1500.0), Range(100, 5000), "board distance [min, max]", "mm")
+    max_pose_mismatch_mm: float = setting(0.5, Number(0, 1000), "controller flange pose vs our kinematics", "mm")
+    retries: int = setting(2, Number(0, 10, integer=True), "grabs again before a posture is skipped")
+    save_images: bool = setting(False, Flag(), "keep the left/right PNGs in SESSION/images")
 
 
 @dataclass(frozen=True)
 class MockSettings:
-    protocol: str = "socket"
-    seed: int = 7
-    kinematic_error_mm: float = 0.05
-    kinematic_error_deg: float = 0.002
-    time_scale: float = 0.02
+    """``mock``: the embedded mock station (``--mock``, mock back ends, the demo)."""
+
+    protocol: str = setting("socket", Text(mock_protocols), "its controller link: a back end a mock serves")
+    seed: int = setting(7, Number(0, SEED_MAX, integer=True), "seeds the arm's errors and the sensor noise")
+    kinematic_error_mm: float = setting(0.05, Number(0, 10), "the simulated arm's DH length errors", "mm")
+    kinematic_error_deg: float = setting(0.002, Number(0, 10), "the simulated arm's DH angle errors", "deg")
+    time_scale: float = setting(0.02, Number(1e-4, 10), "wall-clock seconds per simulated second of motion")
+
+
+def _target(value, key: str, context) -> BoardGeometry:
+    checked = check_section(TargetSettings, value or {}, key, context)
+    default = TargetSettings()
+    return BoardGeometry(checked.get("corners", default.corners), checked.get("square_mm", default.square_mm))
 
 
 @dataclass(frozen=True)
 class StationConfig:
-    """The whole station (see the module docstring for the YAML)."""
+    """The whole station; each field is a top-level key of the YAML (``source``: where it was read)."""
 
-    robot: str = "IRB1400"
-    controller: ControllerSettings = ControllerSettings()
-    camera: CameraSettings = CameraSettings()
-    target: BoardGeometry = BoardGeometry((13, 8), 30.0)
-    plan: PlanSettings = PlanSettings()
-    motion: MotionSettings = MotionSettings()
-    tool: ToolSettings = ToolSettings()
-    capture: CaptureSettings = CaptureSettings()
-    quality: dict = field(default_factory=dict)
-    output: str = "sessions"
-    mock: MockSettings = MockSettings()
-    postures: tuple | None = None
+    robot: str = setting("IRB1400", Custom(_robot), "robot model (calibration/robots/*.yaml) or a robot YAML path")
+    controller: ControllerSettings = section(ControllerSettings, "the controller")
+    camera: CameraSettings = section(CameraSettings, "the camera")
+    target: BoardGeometry = setting(BoardGeometry((13, 8), 30.0), Custom(_target), "the checkerboard",
+                                    keys=TargetSettings)
+    plan: PlanSettings = section(PlanSettings, "posture planning")
+    motion: MotionSettings = section(MotionSettings, "posture moves")
+    tool: ToolSettings = section(ToolSettings, "the camera's tooldata")
+    capture: CaptureSettings = section(CaptureSettings, "per-posture quality")
+    cell: CellSettings = section(CellSettings, "keep-out volumes, carried geometry, path checks")
+    guided: GuidedSettings = section(GuidedSettings, "operator-guided capture")
+    quality: dict = setting(None, Custom(_quality), "verdict thresholds (station/quality_thresholds.yaml)",
+                            factory=dict)
+    output: str = setting("sessions", Text(), "folder of new sessions")
+    mock: MockSettings = section(MockSettings, "the embedded mock station")
+    postures: tuple | None = setting(None, Optional(Custom(_postures)), "fixed approved postures for rapid generate "
+                                     "(null: the built-in station's)", "deg")
     source: str = "built-in mock station"
 
     @property
@@ -157,37 +323,57 @@ class StationConfig:
         """True when this configuration runs the embedded mock station (both back ends are ``mock``)."""
         return self.controller.protocol == MOCK
 
+    @property
+    def is_rehearsal(self) -> bool:
+        """True for a rehearsal station: a real controller link to ``handeye mock controller`` and the
+        mock camera on its arm (``camera.backend: mock`` with ``camera.mock_arm``)."""
+        return self.controller.protocol != MOCK and self.camera.backend == MOCK and self.camera.mock_arm is not None
+
     def as_mock(self) -> "StationConfig":
         """The same settings on the embedded mock station (what ``--mock`` does to a config)."""
-        return replace(self, controller=replace(self.controller, protocol=MOCK), camera=replace(self.camera, backend=MOCK))
+        return replace(self, controller=replace(self.controller, protocol=MOCK),
+                       camera=replace(self.camera, backend=MOCK, mock_arm=None))
 
     @property
     def link_protocol(self) -> str:
         """The controller link actually spoken: the mock station's own protocol when mocked."""
         return self.mock.protocol if self.is_mock else self.controller.protocol
 
-    def rapid_dict(self, postures) -> dict:
-        """The mapping ``rapid.station.station_from_dict`` reads, with the given approved postures."""
+    def rapid_dict(self, postures, board2base=None) -> dict:
+        """The mapping ``rapid.station.station_from_dict`` reads, with the given approved postures; with
+        ``cell.world_zones`` the keep-out volumes (and the board's stand when ``board2base`` is given)
+        as world zones on the camera's nominal TCP."""
         c = self.controller
-        return {
+        out = {
             "robot": self.robot,
             "controller": {"protocol": self.link_protocol, "pc_address": c.pc_address, "controller_address": c.controller_address,
                            "port": c.port, "serial_channel": c.serial_channel, "ack_timeout_s": c.ack_timeout_s,
                            "idle_timeout_s": c.idle_timeout_s, "write_key": c.write_key},
-            "motion": {"speed_tcp_mm_s": self.motion.speed_tcp_mm_s, "speed_ori_deg_s": self.motion.speed_ori_deg_s},
+            "motion": {"speed_tcp_mm_s": self.motion.speed_tcp_mm_s, "speed_ori_deg_s": self.motion.speed_ori_deg_s,
+                       "speed_override_pct": self.motion.speed_override_pct},
             "tool": {"name": self.tool.name, "mass_kg": self.tool.mass_kg, "cog_mm": list(self.tool.cog_mm)},
             "postures": [[round(float(v), 4) for v in row] for row in np.asarray(postures, float)],
         }
+        if self.cell.world_zones:
+            volumes = self.cell.model().world_zone_volumes(board2base, self.target)
+            position, quaternion = self.camera.nominal_mount
+            out["world_zones"] = {"tcp": {"position_mm": list(position), "quaternion_wxyz": list(quaternion)},
+                                  "zones": [_plain(v.world_zone()) for v in volumes]}
+        return out
 
     def to_dict(self) -> dict:
-        """A YAML-ready mapping of the whole configuration (for the session record)."""
+        """A YAML-ready mapping of the whole configuration (for the session record); secrets are
+        ``"<set>"`` or None, never their value."""
         out = {"robot": self.robot, "output": self.output, "quality": dict(self.quality),
                "target": {"corners": list(self.target.corners), "square_mm": self.target.square_mm}}
-        for name in ("controller", "camera", "plan", "motion", "tool", "capture", "mock"):
-            section = {f.name: getattr(getattr(self, name), f.name) for f in fields(getattr(self, name))}
+        for name in ("controller", "camera", "plan", "motion", "tool", "capture", "guided", "mock"):
+            settings = getattr(self, name)
+            section = {f.name: getattr(settings, f.name) for f in fields(settings)}
+            for secret in secret_fields(type(settings)):
+                section[secret] = None if section[secret] is None else "<set>"  # never the secret
             out[name] = _plain(section)
-        out["controller"]["write_key"] = None if self.controller.write_key is None else "<set>"  # never the secret
         out["camera"]["nominal_mount"] = pose_from_transform(self.camera.nominal_mount_transform())
+        out["cell"] = _plain(self.cell.to_dict())
         return out
 
 
@@ -201,78 +387,8 @@ def _plain(value):
     return value
 
 
-#: Largest finite float: ``abs(v) <= _FLOAT_MAX`` is false for NaN, inf and integers too large for a
-#: float (where ``math.isfinite`` would raise OverflowError).
-_FLOAT_MAX = sys.float_info.max
-
-
-def _number(value, key: str, low: float = -math.inf, high: float = math.inf, integer: bool = False):
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not abs(value) <= _FLOAT_MAX:
-        raise ConfigError(f"{key} must be a {'whole ' if integer else ''}number; got {brief(value)}")
-    if integer and int(value) != value:
-        raise ConfigError(f"{key} must be a whole number; got {brief(value)}")
-    if not low <= value <= high:
-        raise ConfigError(f"{key} must be between {low:g} and {high:g}; got {brief(value)}")
-    return int(value) if integer else float(value)
-
-
-def _numbers(value, key: str, count: int, low=-math.inf, high=math.inf) -> tuple:
-    if not isinstance(value, (list, tuple)) or len(value) != count:
-        raise ConfigError(f"{key} must be a list of {count} numbers; got {brief(value)}")
-    return tuple(_number(v, f"{key}[{i}]", low, high) for i, v in enumerate(value))
-
-
-def _range(value, key: str, low=0.0, high=math.inf) -> tuple:
-    pair = _numbers(value, key, 2, low, high)
-    if pair[0] >= pair[1]:
-        raise ConfigError(f"{key} must be [min, max] with min < max; got {list(value)!r}")
-    return pair
-
-
-def _text(value, key: str, choices=None) -> str:
-    if not isinstance(value, str) or not value:
-        raise ConfigError(f"{key} must be a text; got {brief(value)}")
-    if choices and value not in choices:
-        raise ConfigError(f"{key} must be one of {', '.join(choices)}; got {brief(value)}")
-    return value
-
-
-def _write_key(value, key: str) -> str | None:
-    """The write key, checked without ever echoing it (one protocol word, one RAPID string)."""
-    if value is None:
-        return None
-    if not isinstance(value, str):
-        raise ConfigError(f"{key} must be a text of 8 to 32 letters, digits, '_' or '-' (quote it in YAML); "
-                          f"got a {type(value).__name__}")
-    if not re.fullmatch(r"[A-Za-z0-9_-]{8,32}", value):
-        raise ConfigError(f"{key} must be 8 to 32 letters, digits, '_' or '-'; got another value of {len(value)} "
-                          "characters (the key itself is never printed)")
-    return value
-
-
-def _section(data: dict, name: str, allowed) -> dict:
-    section = data.get(name) or {}
-    if not isinstance(section, dict):
-        raise ConfigError(f"{name} must be a mapping of keys; got {brief(section)}")
-    unknown = sorted(set(section) - set(allowed), key=brief)
-    if unknown:
-        key = unknown[0] if isinstance(unknown[0], str) and unknown[0].isprintable() else brief(unknown[0])
-        raise ConfigError(f"unknown key {name}.{key}; known keys of {name}: {', '.join(sorted(allowed))}")
-    return section
-
-
-def _mount(value, key: str) -> tuple:
-    if not isinstance(value, dict) or "position_mm" not in value or "quaternion_wxyz" not in value:
-        raise ConfigError(f"{key} needs position_mm and quaternion_wxyz")
-    position = _numbers(value["position_mm"], f"{key}.position_mm", 3, -1000, 1000)
-    quaternion = _numbers(value["quaternion_wxyz"], f"{key}.quaternion_wxyz", 4, -1, 1)
-    if abs(math.sqrt(sum(q * q for q in quaternion)) - 1) > 1e-3:
-        raise ConfigError(f"{key}.quaternion_wxyz must have norm 1; got {list(quaternion)}")
-    return position, quaternion
-
-
-TOP_LEVEL = {"robot", "controller", "camera", "target", "plan", "motion", "tool", "capture", "quality", "output", "mock",
-             "postures"}
+#: The top-level keys, in the order they are checked (``robot`` first: other keys use its model).
+TOP_LEVEL = tuple(f.name for f in fields(StationConfig) if rule_of(f) is not None)
 
 
 def config_from_dict(data: dict, source: str = "configuration") -> StationConfig:
@@ -285,152 +401,62 @@ def config_from_dict(data: dict, source: str = "configuration") -> StationConfig
     """
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: the file must hold a mapping of sections")
-    unknown = sorted(set(data) - TOP_LEVEL, key=brief)
+    unknown = sorted(set(data) - set(TOP_LEVEL), key=brief)
     if unknown:
         raise ConfigError(f"unknown section {brief(unknown[0])}; known: {', '.join(sorted(TOP_LEVEL))}")
-    base = StationConfig(source=source)
-    changes: dict = {}
-    if "robot" in data:
-        name = _text(data["robot"], "robot")
-        try:
-            load_robot(name)
-        except ValueError as exc:
-            raise ConfigError(f"robot: {exc}") from None
-        changes["robot"] = name
-
-    def settings(name, cls, convert):
-        section = _section(data, name, {f.name for f in fields(cls)})
-        values = {key: convert(key, value, f"{name}.{key}") for key, value in section.items()}
-        return replace(getattr(base, name), **values)
-
-    def controller_value(key, value, path):
-        if key == "protocol":
-            return _text(value, path, CONTROLLER_PROTOCOLS + (MOCK,))
-        if key == "port":
-            return _number(value, path, 1, 65535, integer=True)
-        if key in ("timeout_s", "motion_timeout_s", "ack_timeout_s"):
-            return _number(value, path, 0.001, 3600)
-        if key == "idle_timeout_s":
-            return _number(value, path, 0.1, 10)
-        if key == "write_key":
-            return _write_key(value, path)
-        if key == "modbus_map":
-            return None if value is None else _text(value, path)
-        return _text(value, path)
-
-    def camera_value(key, value, path):
-        if key == "backend":
-            return _text(value, path, CAMERA_BACKENDS + (MOCK,))
-        if key == "stereo_model":
-            return None if value is None else _text(value, path)
-        if key == "nominal_mount":
-            return _mount(value, path)
-        return _number(value, path, 0.001, 60)
-
-    def plan_value(key, value, path):
-        if key == "postures":
-            return _number(value, path, 3, 255, integer=True)
-        if key == "seed":
-            return _number(value, path, 0, 2**31, integer=True)
-        if key == "start_joints_deg":
-            if value is None:
-                return None
-            joints = _numbers(value, path, 6, -360, 360)
-            problems = load_robot(changes.get("robot", base.robot)).limit_violations(joints)
-            if problems:
-                raise ConfigError(f"{path}: {problems[0]}")
-            return joints
-        if key == "distance_mm":
-            return _range(value, path, 100, 5000)
-        if key in ("cone_deg", "roll_deg"):
-            return _number(value, path, 0, 90)
-        if key == "aim_mm":
-            return _number(value, path, 0, 500)
-        return _number(value, path, 0, 45)
-
-    def motion_value(key, value, path):
-        return _number(value, path, 1, 7000 if key == "speed_tcp_mm_s" else 1000)
-
-    def tool_value(key, value, path):
-        if key == "name":
-            name = _text(value, path)
-            if not (name[0].isalpha() and name.replace("_", "a").isalnum() and len(name) <= 32):
-                raise ConfigError(f"{path} must be a RAPID identifier (letter first, letters/digits/_, <= 32); got {name!r}")
-            return name
-        if key == "mass_kg":
-            return _number(value, path, 1e-3, 100)
-        return _numbers(value, path, 3, -1000, 1000)
-
-    def capture_value(key, value, path):
-        if key == "distance_mm":
-            return _range(value, path, 100, 5000)
-        if key == "retries":
-            return _number(value, path, 0, 10, integer=True)
-        if key == "save_images":
-            if not isinstance(value, bool):
-                raise ConfigError(f"{path} must be true or false; got {brief(value)}")
-            return value
-        return _number(value, path, 0, 1000)
-
-    def mock_value(key, value, path):
-        if key == "protocol":
-            return _text(value, path, CONTROLLER_PROTOCOLS)
-        if key == "seed":
-            return _number(value, path, 0, 2**31, integer=True)
-        if key == "time_scale":
-            return _number(value, path, 1e-4, 10)
-        return _number(value, path, 0, 10)
-
-    changes["controller"] = settings("controller", ControllerSettings, controller_value)
-    changes["camera"] = settings("camera", CameraSettings, camera_value)
-    changes["plan"] = settings("plan", PlanSettings, plan_value)
-    changes["motion"] = settings("motion", MotionSettings, motion_value)
-    changes["tool"] = settings("tool", ToolSettings, tool_value)
-    changes["capture"] = settings("capture", CaptureSettings, capture_value)
-    changes["mock"] = settings("mock", MockSettings, mock_value)
-    if "target" in data:
-        target = _section(data, "target", {"corners", "square_mm", "type"})
-        corners = target.get("corners", list(base.target.corners))
-        if (not isinstance(corners, list) or len(corners) != 2
-                or not all(isinstance(c, int) and not isinstance(c, bool) and c >= 2 for c in corners)):
-            raise ConfigError(f"target.corners must be two whole numbers >= 2; got {brief(corners)}")
-        square = _number(target.get("square_mm", base.target.square_mm), "target.square_mm", 1, 500)
-        changes["target"] = BoardGeometry((max(corners), min(corners)), square)
-    if "quality" in data:
-        quality = data["quality"] or {}
-        if not isinstance(quality, dict):
-            raise ConfigError(f"quality must be a mapping of thresholds; got {brief(quality)}")
-        changes["quality"] = dict(quality)
-    if "output" in data:
-        changes["output"] = _text(data["output"], "output")
-    if data.get("postures") is not None:
-        rows = data["postures"]
-        if not isinstance(rows, list) or not rows:
-            raise ConfigError("postures must be a list of joint-angle rows [a1, ..., a6]")
-        robot = load_robot(changes.get("robot", base.robot))
-        checked = []
-        for i, row in enumerate(rows):
-            joints = _numbers(row, f"postures[{i}]", robot.dof, -360, 360)
-            problems = robot.limit_violations(joints)
-            if problems:
-                raise ConfigError(f"posture {i + 1}: {problems[0]} (postures are numbered from 1)")
-            checked.append(joints)
-        changes["postures"] = tuple(checked)
-    config = replace(base, **changes)
+    context = {"robot": StationConfig.robot}
+    rules = {f.name: rule_of(f) for f in fields(StationConfig)}
+    changes = {name: rules[name](data[name], name, context) for name in TOP_LEVEL if name in data}
+    config = replace(StationConfig(source=source), **changes)
     _check_quality(config.quality)
     _check_hardware_named(data, config)
+    _check_cell(config)
     return config
+
+
+def _required_keys():
+    """``(section, key, real choices)`` of every key a file must name (its choices without ``mock``)."""
+    for path, f in schema_keys(StationConfig):
+        if f.metadata.get("required"):
+            name, key = path.split(".")
+            yield name, key, tuple(c for c in rule_of(f).choices() if c != MOCK)
 
 
 def _check_hardware_named(data: dict, config: StationConfig) -> None:
     """Refuse a config that names no controller or camera, or mixes the mock with real hardware."""
-    for section, key, real in REQUIRED_KEYS:
-        if not isinstance(data.get(section), dict) or key not in data[section]:
-            raise ConfigError(f"{section}.{key} is missing: name the station's {section} ({' | '.join(real)}), "
+    for name, key, real in _required_keys():
+        if not isinstance(data.get(name), dict) or key not in data[name]:
+            raise ConfigError(f"{name}.{key} is missing: name the station's {name} ({' | '.join(real)}), "
                               f"or {MOCK} for the embedded mock station")
-    if (config.controller.protocol == MOCK) != (config.camera.backend == MOCK):
-        raise ConfigError(f"controller.protocol is {config.controller.protocol} but camera.backend is {config.camera.backend}: "
-                          f"the mock camera only sees the mock robot; set both to {MOCK}, or neither")
+    controller_mock, camera_mock = config.controller.protocol == MOCK, config.camera.backend == MOCK
+    if config.camera.mock_arm is not None and not (camera_mock and not controller_mock):
+        raise ConfigError(f"camera.mock_arm is for a rehearsal: camera.backend {MOCK} with a real controller protocol "
+                          f"(socket, serial, modbus) pointing at `handeye mock controller`; here controller.protocol is "
+                          f"{config.controller.protocol} and camera.backend {config.camera.backend}")
+    if controller_mock and not camera_mock:
+        raise ConfigError(f"controller.protocol is {MOCK} but camera.backend is {config.camera.backend}: the embedded mock "
+                          f"station has its own camera; set both to {MOCK}, or neither")
+    if camera_mock and not controller_mock and config.camera.mock_arm is None:
+        raise ConfigError(f"camera.backend is {MOCK} but controller.protocol is {config.controller.protocol}: the mock camera "
+                          f"only sees the mock robot: set both to {MOCK} (the embedded mock station), or rehearse against "
+                          "`handeye mock controller --camera-port PORT` with camera.mock_arm: HOST:PORT")
+
+
+def _check_cell(config: StationConfig) -> None:
+    """The cell's keys that depend on each other: the path step within the margin, and the carried
+    geometry where the camera is mounted."""
+    cell = config.cell
+    if cell.path_step_mm > cell.margin_mm:
+        raise ConfigError(f"cell.path_step_mm ({cell.path_step_mm:g}) must not exceed cell.margin_mm ({cell.margin_mm:g}): "
+                          "between two samples of a move the clearance may drop by half the step")
+    if not cell.carried:
+        return
+    camera = np.asarray(config.camera.nominal_mount[0], float)
+    gaps = [float(body.signed_distance(camera)) if hasattr(body, "signed_distance")
+            else float(np.linalg.norm(camera - np.asarray(body.centre_mm)) - body.radius_mm) for body in cell.carried]
+    if min(gaps) > cell.margin_mm:
+        raise ConfigError(f"camera.nominal_mount puts the camera {min(gaps):.0f} mm from every body of cell.carried: "
+                          "describe the camera and its bracket in tool0 where they are mounted")
 
 
 def _check_quality(quality: dict) -> None:
@@ -445,6 +471,15 @@ def _check_quality(quality: dict) -> None:
         raise ConfigError(f"quality: {exc}") from None
 
 
+def describe_keys() -> list[str]:
+    """One line per key of the station YAML: ``controller.port: ... [unit]``, from the schema."""
+    lines = []
+    for path, f in schema_keys(StationConfig):
+        unit = f" [{f.metadata['unit']}]" if f.metadata.get("unit") else ""
+        lines.append(f"{path}: {f.metadata['doc']}{unit}{' (REQUIRED)' if f.metadata.get('required') else ''}")
+    return lines
+
+
 def load_config(path) -> StationConfig:
     """Read and validate a station YAML file.
 
@@ -453,9 +488,9 @@ def load_config(path) -> StationConfig:
     ConfigError
     """
     path = Path(path)
-    text = read_text_file(path, "station configuration", ConfigError,
-                          missing=f"no station configuration at {path}; start from {EXAMPLE_FILE}")
-    data = parse_yaml(text, path, ConfigError)
+    text_ = read_text_file(path, "station configuration", ConfigError,
+                           missing=f"no station configuration at {path}; start from {EXAMPLE_FILE}")
+    data = parse_yaml(text_, path, ConfigError)
     return config_from_dict(data or {}, str(path))
 
 

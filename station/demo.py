@@ -16,12 +16,14 @@ from pathlib import Path
 
 from ..calibration.errors import HandEyeError
 from ..calibration.files import make_folder, write_failure, write_text_atomic
-from ..calibration.session import read_session
-from ..calibration.solve import calibrate, problem_from_session
 from ..calibration.transforms import pose_from_transform, rotation_error_deg, translation_error_mm
+from .assessment import COMPARISON_METHODS, Assessment, assess
+from .calibrate import calibrate_session_folder
 from .capture import capture
 from .config import StationConfig, default_config
 from .origin import MOCK
+from .quality import config_thresholds
+from .report import write_report
 from .runtime import open_station
 from .writeback import writeback
 
@@ -67,19 +69,13 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
     with open_station(config, mock=True) as link:
         progress(f"mock station up: IRB 1400 on {link.controller.address} ({options.protocol}), XB3 serial "
                  f"{link.camera.serial}")
-        summary = capture(config, session_dir, link.controller, link.camera, link.stereo_model, link.load_program,
-                          progress=progress, on_posture=on_posture)
+        summary = capture(config, session_dir, link, progress=progress, on_posture=on_posture)
         captured_s = time.monotonic() - started
-        session = read_session(session_dir)
-        problem = problem_from_session(session)
-        result = calibrate(problem)
-        progress(f"calibrated {problem.n} postures in {result.runtime_s * 1000:.0f} ms (the default estimator), "
-                 f"outliers: {result.outliers or 'none'}")
-        verdict = station_verdict(result, problem, config)
-        progress(verdict.line())
+        assessment = _assess(session_dir, config, options.report, progress)
+        result, verdict = assessment.result, assessment.verdict
         report_path = None
         if options.report:
-            report_path = _report(session_dir, problem, result, verdict, config)
+            report_path = write_report(session_dir / "report.html", assessment, title="handeye demo: mock station")
             progress(f"report written to {report_path}")
         outcome = writeback(session_dir, config, result, link.controller, verdict_passed=verdict.passed,
                             verdict_reason=verdict.line(), progress=progress, origin=MOCK, mock_controller=True)
@@ -108,21 +104,16 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
     }
 
 
-def station_verdict(result, problem, config):
-    """The quality verdict against the configuration's thresholds (``station.quality``)."""
-    from .quality import QualityThresholds, verdict
-
-    return verdict(result, problem, QualityThresholds.from_dict(config.quality))
-
-
-def _report(session_dir, problem, result, verdict, config):
-    from ..calibration.diagnostics import diagnose_session
-    from ..calibration.session import read_session
+def _assess(session_dir: Path, config: StationConfig, compare: bool, progress) -> Assessment:
+    """Calibrate the captured session (the default estimator) and assess it against the config's thresholds,
+    with the method comparison when the report is wanted."""
     from ..rapid.literals import tooldata_literal
-    from .report import comparison_results, write_report
 
-    findings = diagnose_session(read_session(session_dir))
-    return write_report(session_dir / "report.html", session_dir, problem, result,
-                        comparison_results(problem, known={result.method: result}), verdict,
-                        tooldata_literal(result.x, config.tool.mass_kg, config.tool.cog_mm), title="handeye demo: mock station",
-                        findings=findings)
+    outcome = calibrate_session_folder(session_dir)
+    result = outcome.result
+    progress(f"calibrated {outcome.problem.n} postures in {result.runtime_s * 1000:.0f} ms (the default estimator), "
+             f"outliers: {result.outliers or 'none'}")
+    assessment = assess(outcome, config_thresholds(config), methods=COMPARISON_METHODS if compare else (),
+                        tooldata_literal=tooldata_literal(result.x, config.tool.mass_kg, config.tool.cog_mm))
+    progress(assessment.verdict.line())
+    return assessment

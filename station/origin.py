@@ -3,8 +3,9 @@
 A calibration of simulated data can look perfect; the report, the text summary and the JSON say so,
 so that nobody takes it for a calibration of the robot in front of them.
 
-- ``mock``: captured on the embedded mock station (``handeye capture --mock``, ``handeye demo``):
-  ``session.yaml`` says ``capture: {station: mock}``. Sessions captured before that key existed are
+- ``mock``: captured on a mock station: the embedded one (``handeye capture --mock``, ``handeye demo``)
+  or a rehearsal against ``handeye mock controller`` (``camera.mock_arm``): ``session.yaml`` says
+  ``capture: {station: mock}``. Sessions captured before that key existed are
   recognised by their recorded station configuration (``capture.config.camera.backend: mock``).
 - ``real``: ``capture: {station: real}``, written by a capture on the real controller and camera.
 - ``simulated``: ``session.yaml`` says ``origin: simulated``, or ``truth.yaml`` lies beside it
@@ -23,7 +24,8 @@ MOCK, REAL, SIMULATED, UNKNOWN = "mock", "real", "simulated", "unknown"
 ORIGINS = (MOCK, REAL, SIMULATED, UNKNOWN)
 
 _BANNERS = {
-    "mock": ("MOCK SESSION", "captured on the embedded mock station; not a calibration of a real robot"),
+    "mock": ("MOCK SESSION", "captured on a mock station (embedded, or a rehearsal); not a calibration of a real "
+                             "robot"),
     "simulated": ("SIMULATED SESSION", "synthetic data with a known truth (truth.yaml); not a calibration of a "
                                        "real robot"),
 }

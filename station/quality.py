@@ -6,19 +6,20 @@ there shows in four kinds of figures, each checked against a threshold of :class
 - **Consistency of the data** under the solved ``X``: the board points carried into the frame the
   board is fixed in (``base`` eye-in-hand) should sit on top of each other for every posture.
   ``d_org`` and each posture's residual (the same per posture) measure it. ``d_org`` has ONE
-  definition, :func:`station_d_org`, used by the verdict, the HTML report (header, method table and
-  chart, metrics) and the text summary alike: eq. 22 of the paper (mean distance of a point from its
-  mean position) over the postures the chosen result kept (its inliers), on the session's board
-  points (every board corner when the postures hold corners, else the three compact points of the
-  board poses), the same points and postures for every method compared. Over all postures, outliers
-  included, the same figure is called ``d_org incl. outliers``.
+  definition, ``calibration.quality_words.result_d_org``, used by the verdict, the HTML report
+  (header, method table and chart, metrics) and the text summary alike: eq. 22 of the paper (mean
+  distance of a point from its mean position) over the postures the chosen result kept (its
+  inliers), on the session's board points (every board corner when the postures hold corners, else
+  the three compact points of the board poses), the same points and postures for every method
+  compared. Over all postures, outliers included, the same figure is called ``d_org incl. outliers``.
 - **Where the camera is**: eye-in-hand, the camera's optical centre cannot sit inside the flange
   (a session written in metres solves to a frame a fraction of a millimetre from it) nor metres away.
-- **Precision of X**: the one-sigma uncertainty of the robust default method (translation per axis in
+- **Precision of X**: the one-sigma uncertainty of the default method (translation per axis in
   mm, rotation about each axis of the camera frame in degrees).
 - **Motion that determines X**: enough consistent postures, few outliers, relative flange rotations
-  that are sizeable and turn about every direction (``AX = XB`` is blind about an axis it never sees
-  the flange turn about).
+  that are sizeable (median relative rotation angle) and turn about every direction (rotation-axis
+  spread; ``AX = XB`` is blind about an axis it never sees the flange turn about). Both words are
+  defined once, in ``calibration.quality_words``.
 
 Every failed check carries advice on what to do next at the station.
 """
@@ -34,30 +35,28 @@ from typing import NamedTuple
 import numpy as np
 
 from ..calibration.errors import HandEyeError, brief
-from ..calibration.metrics import d_org, fixed_points
 from ..calibration.problem import EYE_IN_HAND, HandEyeProblem
-from ..calibration.triplets import relative_motions
+from ..calibration.quality_words import (
+    MAX_AXIS_SPREAD_DEG,
+    AxisCoverage,
+    DOrg,
+    kept_postures,
+    result_d_org,
+    rotation_axis_coverage,
+)
 
 __all__ = [
     "CHECK_LABELS",
-    "AxisCoverage",
     "Check",
-    "D_ORG_ALL_NAME",
-    "DOrg",
+    "QualityFigures",
     "QualityThresholds",
     "ThresholdError",
     "Verdict",
-    "kept_postures",
+    "config_thresholds",
     "load_thresholds",
-    "rotation_axis_coverage",
-    "station_d_org",
+    "quality_figures",
     "verdict",
 ]
-
-#: Relative rotations smaller than this have no usable axis; they are left out of the coverage.
-MIN_AXIS_ANGLE_DEG = 2.0
-#: The largest possible axis spread (axes spread evenly over the sphere): asin(sqrt(1/3)).
-MAX_AXIS_SPREAD_DEG = math.degrees(math.asin(math.sqrt(1.0 / 3.0)))
 
 
 class ThresholdError(HandEyeError):
@@ -72,7 +71,7 @@ class QualityThresholds:
     Attributes
     ----------
     max_d_org_mm : float
-        Largest ``d_org`` (eq. 22, :func:`station_d_org`): mean distance of a board point in ``base``
+        Largest ``d_org`` (eq. 22, ``calibration.quality_words.result_d_org``): mean distance of a board point in ``base``
         from its mean position, over the postures the result kept, every board corner of each (the
         three compact points when the session holds board poses only). It adds up the camera's 3-D
         corner noise (~0.15-0.4 mm for the XB3 wide pair at 1 m), the robot's repeatability and any kinematic or stereo calibration
@@ -98,13 +97,15 @@ class QualityThresholds:
         Largest share of postures the method rejected as outliers. Default 0.2: a few misdetections
         happen, more hint at a systematic problem (pairing of poses and images, units, board orientation).
     min_rotation_axis_spread_deg : float
-        Smallest spread of the relative rotation axes about their least exercised direction: how far
-        the axes rise out of their best-fitting plane (asin of the RMS sine of that elevation), weighted
-        by ``sin^2(angle / 2)`` so that small rotations count little. 0 when the flange only ever turned about axes in one plane,
-        35.3 deg when the axes cover the sphere evenly. Default 10 deg (the synthetic 30-posture plan
-        reaches ~19 deg).
+        Smallest rotation-axis spread (``calibration.quality_words.rotation_axis_spread``) of the
+        kept postures: how far the relative rotation axes rise out of the plane they lie closest to
+        (asin of the RMS sine of that elevation, weighted by ``sin^2(angle / 2)`` so that small
+        rotations count little). 0 when the flange only ever turned about axes in one plane, 35.3 deg
+        when the axes cover the sphere evenly. Default 10 deg (the synthetic 30-posture plan reaches
+        ~19 deg); the capture plan warns below it too.
     min_median_rotation_deg : float
-        Smallest median rotation angle between two postures. Default 15 deg: small rotations leave the
+        Smallest median relative rotation angle between two kept postures
+        (``calibration.quality_words.relative_rotation_angles_deg``). Default 15 deg: small rotations leave the
         rotation axes (and so X) poorly determined; the method likes 20-45 deg.
     min_camera_offset_mm : float
         Eye-in-hand only: smallest distance of the camera frame (the left camera's optical centre)
@@ -214,145 +215,6 @@ def load_thresholds(path) -> QualityThresholds:
     return QualityThresholds.from_dict(data if data is not None else {}, str(path))
 
 
-@dataclass(frozen=True)
-class AxisCoverage:
-    """Directions of the relative flange rotations of all posture pairs.
-
-    Attributes
-    ----------
-    axes : ndarray, shape (p, 3)
-        Unit rotation axes of ``A_ij = A_i^-1 A_j`` (pairs ``i < j`` rotating more than
-        :data:`MIN_AXIS_ANGLE_DEG`), in the hand frame: ``tool0`` eye-in-hand, ``base`` eye-to-hand.
-    angles_deg : ndarray, shape (p,)
-        Rotation angles of those pairs, in [0, 180].
-    all_angles_deg : ndarray, shape (P,)
-        Angles of every pair (also those too small for an axis).
-    spread_deg : float
-        Elevation of the axes out of their best-fitting plane (asin of the RMS sine), weighted by
-        ``sin^2(angle/2)`` (0 = all in one plane, 35.3 = even over the sphere).
-    weakest_direction : ndarray, shape (3,)
-        The least exercised direction (normal of that plane), sign chosen with its largest component > 0.
-    rms_about_axes_deg : ndarray, shape (3,)
-        RMS over pairs of the rotation-vector component about the frame's x, y and z axes, degrees.
-    frame : str
-        ``tool0`` or ``base``.
-    """
-
-    axes: np.ndarray
-    angles_deg: np.ndarray
-    all_angles_deg: np.ndarray
-    spread_deg: float
-    weakest_direction: np.ndarray
-    rms_about_axes_deg: np.ndarray
-    frame: str
-
-    @property
-    def median_angle_deg(self) -> float:
-        return float(np.median(self.all_angles_deg)) if self.all_angles_deg.size else 0.0
-
-
-def rotation_axis_coverage(problem: HandEyeProblem) -> AxisCoverage:
-    """:class:`AxisCoverage` of a problem's hand motions (all posture pairs)."""
-    frame = "tool0" if problem.setup == EYE_IN_HAND else "base"
-    motions = relative_motions(problem)
-    q = motions.q_a  # (p, 4), w >= 0: angle in [0, 180]
-    angles = motions.angle_a_deg
-    vectors = q[:, 1:]
-    rotvec_deg = angles[:, None] * vectors / np.maximum(np.linalg.norm(vectors, axis=1, keepdims=True), 1e-15)
-    rms = np.sqrt(np.mean(rotvec_deg**2, axis=0)) if len(angles) else np.zeros(3)
-    keep = angles >= MIN_AXIS_ANGLE_DEG
-    vectors = vectors[keep]
-    axes = vectors / np.linalg.norm(vectors, axis=1, keepdims=True) if len(vectors) else np.zeros((0, 3))
-    weight = float(np.sum(vectors**2))
-    if weight > 0:
-        scatter = vectors.T @ vectors / weight  # sum of sin^2(a/2) n n^T over the sum of sin^2(a/2)
-        eigenvalues, eigenvectors = np.linalg.eigh(scatter)
-        spread = math.degrees(math.asin(math.sqrt(min(max(eigenvalues[0], 0.0), 1.0))))
-        weakest = eigenvectors[:, 0]
-        weakest = weakest * np.sign(weakest[np.argmax(np.abs(weakest))])
-    else:
-        spread, weakest = 0.0, np.array([0.0, 0.0, 1.0])
-    return AxisCoverage(axes, angles[keep], angles, spread, weakest, rms, frame)
-
-
-#: The name of d_org over every posture, outliers included (the report's second figure).
-D_ORG_ALL_NAME = "d_org incl. outliers"
-
-
-def kept_postures(problem: HandEyeProblem, result) -> np.ndarray:
-    """Boolean mask ``(n,)`` of the postures ``result`` kept (all but its outliers)."""
-    outliers = {int(i) for i in result.outliers}
-    return np.array([int(i) not in outliers for i in problem.posture_ids], dtype=bool)
-
-
-@dataclass(frozen=True)
-class DOrg:
-    """``d_org`` as the station reports it (see :func:`station_d_org`).
-
-    Attributes
-    ----------
-    mm : float
-        Eq. 22 over the kept postures.
-    incl_outliers_mm : float or None
-        Eq. 22 over every posture (:data:`D_ORG_ALL_NAME`); ``None`` when no posture was left out.
-    postures : int
-        Postures it is computed over.
-    outliers : int
-        Postures left out.
-    points_per_posture : int
-        Board points per posture.
-    corners : bool
-        The points are the measured board corners (else the three compact points of the board poses).
-    """
-
-    mm: float
-    incl_outliers_mm: float | None
-    postures: int
-    outliers: int
-    points_per_posture: int
-    corners: bool
-
-    def basis(self) -> str:
-        """Which postures and points: ``over the 28 inlier postures (2 outliers left out), 104 board
-        corners per posture``."""
-        postures = (f"over the {self.postures} inlier postures ({self.outliers} outlier"
-                    f"{'s' if self.outliers != 1 else ''} left out)" if self.outliers else
-                    f"over all {self.postures} postures (no outliers)")
-        points = (f"{self.points_per_posture} board corners per posture" if self.corners else
-                  f"{self.points_per_posture} compact points per posture (board centre and one point along each "
-                  f"board axis, from the board poses)")
-        return f"{postures}, {points}"
-
-
-def station_d_org(problem: HandEyeProblem, result, x=None) -> DOrg:
-    """THE d_org of the station: eq. 22 over the postures ``result`` kept, on the session's board points.
-
-    Every place the operator reads d_org (verdict, HTML header, method table and chart, metrics table,
-    text summary) calls this, so they show the same number for the same result.
-
-    Parameters
-    ----------
-    problem : HandEyeProblem
-    result : CalibrationResult
-        The chosen result: its outliers decide the postures.
-    x : ndarray, shape (4, 4), optional
-        Another solution of the same problem (a compared method) to measure on the SAME postures and
-        points; ``result.x`` when omitted.
-
-    Returns
-    -------
-    DOrg
-    """
-    x = result.x if x is None else np.asarray(x, float)
-    kept = kept_postures(problem, result)
-    fixed = fixed_points(problem.hand, x, problem.points_cam)
-    n_kept = int(kept.sum())
-    value = d_org(fixed[kept]) if n_kept >= 1 else float("nan")
-    left_out = problem.n - n_kept
-    return DOrg(value, d_org(fixed) if left_out else None, n_kept, left_out, int(problem.points_cam.shape[1]),
-                bool(problem.points_cam.shape[1] > 3))
-
-
 def direction_name(direction, frame: str) -> str:
     """``'tool0 z'`` when a unit vector lies within 30 deg of a frame axis, else its components."""
     direction = np.asarray(direction, float)
@@ -385,8 +247,8 @@ CHECK_LABELS = {
     "max_sigma_rotation_deg": ("camera rotation uncertainty, largest one-sigma axis", "deg", "{:.4f}"),
     "min_inlier_postures": ("consistent postures (not outliers)", "", "{:.0f}"),
     "max_outlier_fraction": ("share of postures rejected as outliers", "", "{:.0%}"),
-    "min_rotation_axis_spread_deg": ("spread of the rotation axes about the least exercised direction", "deg", "{:.1f}"),
-    "min_median_rotation_deg": ("median rotation between two postures", "deg", "{:.1f}"),
+    "min_rotation_axis_spread_deg": ("rotation-axis spread (about the least exercised direction)", "deg", "{:.1f}"),
+    "min_median_rotation_deg": ("median relative rotation angle between two postures", "deg", "{:.1f}"),
     "min_camera_offset_mm": ("camera frame's distance from the flange (not inside it)", "mm", "{:.1f}"),
     "max_camera_offset_mm": ("camera frame's distance from the flange (not far off)", "mm", "{:.1f}"),
 }
@@ -457,7 +319,42 @@ def _check(name: str, value, limit, advice_if_failed: str, note: str = "") -> Ch
     return Check(name, float(value), limit, bool(passed), note if passed else advice_if_failed)
 
 
-def verdict(result, problem: HandEyeProblem, thresholds: QualityThresholds | None = None) -> Verdict:
+@dataclass(frozen=True)
+class QualityFigures:
+    """The quality words of one result, computed once (``calibration.quality_words``) for the verdict
+    and every presenter.
+
+    Attributes
+    ----------
+    d_org : DOrg
+        ``result_d_org``: eq. 22 over the kept postures, every board point.
+    coverage : AxisCoverage
+        Rotation-axis coverage of the kept postures (spread, least exercised direction, angles).
+    units : UnitsAdvice or None
+        What to tell the operator when the poses' lengths do not look like millimetres
+        (``station.units_advice``); ``None`` when they do.
+    """
+
+    d_org: DOrg
+    coverage: AxisCoverage
+    units: object | None
+
+
+def quality_figures(problem: HandEyeProblem, result) -> QualityFigures:
+    """:class:`QualityFigures` of ``result`` on ``problem``."""
+    from .units_advice import units_advice
+
+    return QualityFigures(result_d_org(problem, result),
+                          rotation_axis_coverage(problem, kept_postures(problem, result)), units_advice(problem))
+
+
+def config_thresholds(config) -> QualityThresholds:
+    """The thresholds of a station configuration's ``quality`` section (defaults for keys left out)."""
+    return QualityThresholds.from_dict(config.quality)
+
+
+def verdict(result, problem: HandEyeProblem, thresholds: QualityThresholds | None = None,
+            figures: QualityFigures | None = None) -> Verdict:
     """Judge a calibration against thresholds.
 
     Parameters
@@ -467,6 +364,9 @@ def verdict(result, problem: HandEyeProblem, thresholds: QualityThresholds | Non
     problem : HandEyeProblem
     thresholds : QualityThresholds, optional
         Defaults when omitted.
+    figures : QualityFigures, optional
+        The result's quality words when already computed (``station.assessment`` does); computed
+        here when omitted.
 
     Returns
     -------
@@ -476,103 +376,120 @@ def verdict(result, problem: HandEyeProblem, thresholds: QualityThresholds | Non
         (``station.units_advice``) every failed check's advice, and the verdict's ``cause``, say which
         units to fix instead of what to re-capture.
     """
-    from .units_advice import units_advice
-
     t = thresholds or QualityThresholds()
-    ids = [int(i) for i in problem.posture_ids]
+    figures = figures or quality_figures(problem, result)
     outliers = [int(i) for i in result.outliers]
-    inlier_mask = kept_postures(problem, result)
-    residuals = {int(k): float(v) for k, v in result.residuals_mm.items()}
-    n, n_in = len(ids), int(inlier_mask.sum())
-    checks = []
-
-    # consistency
-    worst = sorted(((i, residuals[i]) for i in ids if i in residuals and i not in outliers), key=lambda item: -item[1])
-    high = [(i, r) for i, r in worst if r > t.max_posture_residual_mm]
-    scatter = station_d_org(problem, result)
-    d_org_value = scatter.mm if math.isfinite(scatter.mm) else None
-    blame = (f"postures {_postures_text(high[:5])} stand out: re-capture or remove them first" if high else
-             "all postures share it: check the stereo calibration (STEREO.yaml, baseline in mm), that the robot "
-             "stood still (fine point) at each capture, and that tool0 poses come from CRobT with tool0/wobj0")
-    checks.append(_check("max_d_org_mm", d_org_value, t.max_d_org_mm,
-                         f"board points scatter {d_org_value or 0.0:.2f} mm in the fixed frame "
-                         f"(d_org {scatter.basis()}); {blame}"))
-    checks.append(_check(
-        "max_posture_residual_mm", worst[0][1] if worst else 0.0, t.max_posture_residual_mm,
-        f"check postures {_postures_text(high[:8])}: board partly hidden or misdetected, robot not at rest, "
-        f"or pose and image from different postures? re-capture or delete them"))
-
-    # precision
-    u = result.uncertainty
-    no_sigma = (f"method {result.method} gives no uncertainty; run without --method (the robust default) "
-                f"to judge the precision")
-    if u is None:
-        checks.append(_check("max_sigma_translation_mm", None, t.max_sigma_translation_mm, no_sigma))
-        checks.append(_check("max_sigma_rotation_deg", None, t.max_sigma_rotation_deg, no_sigma))
-    else:
-        st, sr = np.asarray(u["translation_mm"], float), np.asarray(u["rotation_deg"], float)
-        more = (f"; with {n_in} postures, more postures shrink it roughly as 1/sqrt(n) (the plan takes 30)"
-                if n_in < 30 else "")
-        checks.append(_check(
-            "max_sigma_translation_mm", float(st.max()), t.max_sigma_translation_mm,
-            f"camera position uncertain to +-{st.max():.3f} mm along camera {'xyz'[int(st.argmax())]}: add postures "
-            f"with larger rotations (20-45 deg) about different axes and the board nearer (0.7-0.9 m){more}"))
-        checks.append(_check(
-            "max_sigma_rotation_deg", float(sr.max()), t.max_sigma_rotation_deg,
-            f"camera rotation uncertain to +-{sr.max():.4f} deg about camera {'xyz'[int(sr.argmax())]}: add postures "
-            f"that tilt the camera further (20-45 deg) about different axes, with the board filling the image{more}"))
-
-    # motion
-    checks.append(_check("min_inlier_postures", n_in, t.min_inlier_postures,
-                         f"only {n_in} consistent postures: capture at least {t.min_inlier_postures - n_in} more "
-                         f"(the capture plan takes 30)"))
-    outlier_text = _postures_text((i, residuals.get(i, float("nan"))) for i in outliers)
-    fraction = len(outliers) / n if n else 0.0
-    checks.append(_check(
-        "max_outlier_fraction", fraction, t.max_outlier_fraction,
-        f"{len(outliers)} of {n} postures rejected ({outlier_text}): that many hints at a systematic problem; check "
-        f"that each pose and image belong to the same posture, units (mm) and the board orientation, "
-        f"then re-capture",
-        note=(f"{'posture' if len(outliers) == 1 else 'postures'} {outlier_text} "
-              f"{'was' if len(outliers) == 1 else 'were'} left out of the solution; check "
-              f"{'it' if len(outliers) == 1 else 'them'} (board partly hidden or misdetected?)") if outliers else ""))
-    coverage = rotation_axis_coverage(problem.subset(inlier_mask)) if n_in >= 2 else None
-    if coverage is None:
-        checks.append(_check("min_rotation_axis_spread_deg", None, t.min_rotation_axis_spread_deg,
-                             "too few consistent postures to judge the rotation axes"))
-        checks.append(_check("min_median_rotation_deg", None, t.min_median_rotation_deg,
-                             "too few consistent postures to judge the rotations"))
-    else:
-        direction = direction_name(coverage.weakest_direction, coverage.frame)
-        hint = " (axis 6 alone turns the flange about tool0 z)" if direction == "tool0 z" else ""
-        checks.append(_check(
-            "min_rotation_axis_spread_deg", coverage.spread_deg, t.min_rotation_axis_spread_deg,
-            f"the flange hardly ever rotated about the {direction} axis: add postures rotating about it{hint}, "
-            f"keeping the board in view"))
-        checks.append(_check(
-            "min_median_rotation_deg", coverage.median_angle_deg, t.min_median_rotation_deg,
-            f"postures differ by only {coverage.median_angle_deg:.1f} deg of rotation (median): turn the flange "
-            f"by 20-45 deg between postures, keeping the board in view"))
-
-    # where the camera is
-    if problem.setup == EYE_IN_HAND:
-        offset = float(np.linalg.norm(result.x[:3, 3]))
-        checks.append(_check(
-            "min_camera_offset_mm", offset, t.min_camera_offset_mm,
-            f"the camera frame is {offset:.1f} mm from the flange, inside it: the session's lengths look like metres; "
-            f"lengths must be in mm (robot poses, board points and the stereo baseline)"))
-        checks.append(_check(
-            "max_camera_offset_mm", offset, t.max_camera_offset_mm,
-            f"the camera frame is {offset:.0f} mm from the flange, more than {t.max_camera_offset_mm:g} mm: check the "
-            f"session's units (mm on both sides) and set-up (eye-in-hand?), or raise max_camera_offset_mm if the "
-            f"camera really sits that far"))
-
+    checks = (_consistency_checks(result, problem, t, figures.d_org)
+              + _precision_checks(result, t, figures.d_org.postures)
+              + _motion_checks(result, problem, t, figures)
+              + _placement_checks(result, problem, t))
     passed = all(c.passed for c in checks)
-    units = units_advice(problem)
+    units = figures.units
     if units is None:
         return Verdict(passed, checks, t)
     checks = [_with_units(c, units, outliers) for c in checks]
     return Verdict(passed, checks, t, cause="" if passed else units.text)
+
+
+def _inlier_residuals(result, problem: HandEyeProblem) -> list:
+    """``[(posture, residual mm)]`` of the kept postures, largest first."""
+    outliers = {int(i) for i in result.outliers}
+    residuals = {int(k): float(v) for k, v in result.residuals_mm.items()}
+    return sorted(((i, residuals[i]) for i in (int(i) for i in problem.posture_ids)
+                   if i in residuals and i not in outliers), key=lambda item: -item[1])
+
+
+def _consistency_checks(result, problem: HandEyeProblem, t: QualityThresholds, scatter: DOrg) -> list:
+    """``max_d_org_mm`` and ``max_posture_residual_mm``: the board points' consistency under X."""
+    worst = _inlier_residuals(result, problem)
+    high = [(i, r) for i, r in worst if r > t.max_posture_residual_mm]
+    d_org_value = scatter.mm if math.isfinite(scatter.mm) else None
+    blame = (f"postures {_postures_text(high[:5])} stand out: re-capture or remove them first" if high else
+             "all postures share it: check the stereo calibration (STEREO.yaml, baseline in mm), that the robot "
+             "stood still (fine point) at each capture, and that tool0 poses come from CRobT with tool0/wobj0")
+    return [
+        _check("max_d_org_mm", d_org_value, t.max_d_org_mm,
+               f"board points scatter {d_org_value or 0.0:.2f} mm in the fixed frame "
+               f"(d_org {scatter.basis()}); {blame}"),
+        _check("max_posture_residual_mm", worst[0][1] if worst else 0.0, t.max_posture_residual_mm,
+               f"check postures {_postures_text(high[:8])}: board partly hidden or misdetected, robot not at rest, "
+               f"or pose and image from different postures? re-capture or delete them"),
+    ]
+
+
+def _precision_checks(result, t: QualityThresholds, n_in: int) -> list:
+    """``max_sigma_translation_mm`` and ``max_sigma_rotation_deg``: the one-sigma uncertainty of X."""
+    u = result.uncertainty
+    if u is None:
+        no_sigma = (f"method {result.method} gives no uncertainty; run without --method (the default) "
+                    f"to judge the precision")
+        return [_check("max_sigma_translation_mm", None, t.max_sigma_translation_mm, no_sigma),
+                _check("max_sigma_rotation_deg", None, t.max_sigma_rotation_deg, no_sigma)]
+    st, sr = np.asarray(u["translation_mm"], float), np.asarray(u["rotation_deg"], float)
+    more = (f"; with {n_in} postures, more postures shrink it roughly as 1/sqrt(n) (the plan takes 30)"
+            if n_in < 30 else "")
+    return [
+        _check("max_sigma_translation_mm", float(st.max()), t.max_sigma_translation_mm,
+               f"camera position uncertain to +-{st.max():.3f} mm along camera {'xyz'[int(st.argmax())]}: add postures "
+               f"with larger rotations (20-45 deg) about different axes and the board nearer (0.7-0.9 m){more}"),
+        _check("max_sigma_rotation_deg", float(sr.max()), t.max_sigma_rotation_deg,
+               f"camera rotation uncertain to +-{sr.max():.4f} deg about camera {'xyz'[int(sr.argmax())]}: add postures "
+               f"that tilt the camera further (20-45 deg) about different axes, with the board filling the image{more}"),
+    ]
+
+
+def _motion_checks(result, problem: HandEyeProblem, t: QualityThresholds, figures: QualityFigures) -> list:
+    """Postures and outliers, then the rotation-axis spread and the median relative rotation angle
+    (``calibration.quality_words``) of the kept postures."""
+    n, n_in = problem.n, figures.d_org.postures
+    outliers = [int(i) for i in result.outliers]
+    residuals = {int(k): float(v) for k, v in result.residuals_mm.items()}
+    outlier_text = _postures_text((i, residuals.get(i, float("nan"))) for i in outliers)
+    one = len(outliers) == 1
+    checks = [
+        _check("min_inlier_postures", n_in, t.min_inlier_postures,
+               f"only {n_in} consistent postures: capture at least {t.min_inlier_postures - n_in} more "
+               f"(the capture plan takes 30)"),
+        _check("max_outlier_fraction", len(outliers) / n if n else 0.0, t.max_outlier_fraction,
+               f"{len(outliers)} of {n} postures rejected ({outlier_text}): that many hints at a systematic problem; "
+               f"check that each pose and image belong to the same posture, units (mm) and the board orientation, "
+               f"then re-capture",
+               note=(f"{'posture' if one else 'postures'} {outlier_text} {'was' if one else 'were'} left out of the "
+                     f"solution; check {'it' if one else 'them'} (board partly hidden or misdetected?)")
+               if outliers else ""),
+    ]
+    if n_in < 2:
+        return checks + [
+            _check("min_rotation_axis_spread_deg", None, t.min_rotation_axis_spread_deg,
+                   "too few consistent postures to judge the rotation axes"),
+            _check("min_median_rotation_deg", None, t.min_median_rotation_deg,
+                   "too few consistent postures to judge the rotations")]
+    coverage = figures.coverage
+    direction = direction_name(coverage.weakest_direction, coverage.frame)
+    hint = " (axis 6 alone turns the flange about tool0 z)" if direction == "tool0 z" else ""
+    return checks + [
+        _check("min_rotation_axis_spread_deg", coverage.spread_deg, t.min_rotation_axis_spread_deg,
+               f"the flange hardly ever rotated about the {direction} axis: add postures rotating about it{hint}, "
+               f"keeping the board in view"),
+        _check("min_median_rotation_deg", coverage.median_angle_deg, t.min_median_rotation_deg,
+               f"postures differ by only {coverage.median_angle_deg:.1f} deg of rotation (median): turn the flange "
+               f"by 20-45 deg between postures, keeping the board in view")]
+
+
+def _placement_checks(result, problem: HandEyeProblem, t: QualityThresholds) -> list:
+    """Eye-in-hand: the camera frame's distance from the flange (not inside it, not far off)."""
+    if problem.setup != EYE_IN_HAND:
+        return []
+    offset = float(np.linalg.norm(result.x[:3, 3]))
+    return [
+        _check("min_camera_offset_mm", offset, t.min_camera_offset_mm,
+               f"the camera frame is {offset:.1f} mm from the flange, inside it: the session's lengths look like metres; "
+               f"lengths must be in mm (robot poses, board points and the stereo baseline)"),
+        _check("max_camera_offset_mm", offset, t.max_camera_offset_mm,
+               f"the camera frame is {offset:.0f} mm from the flange, more than {t.max_camera_offset_mm:g} mm: check the "
+               f"session's units (mm on both sides) and set-up (eye-in-hand?), or raise max_camera_offset_mm if the "
+               f"camera really sits that far"),
+    ]
 
 
 def _with_units(check: Check, units, outliers) -> Check:

@@ -8,9 +8,13 @@ Contents: a banner when the data come from the embedded mock station or a simula
 PASS; greyed out, struck through and not selectable under "FAIL - do not write this into the robot"
 on a FAIL), its uncertainty and the outliers; the quality checks with advice; five figures and
 tables (per-posture residuals, rotation-axis coverage, method comparison, repeatability of the board
-corners in the fixed frame, quality metrics and truth errors); the data checks made before solving.
-d_org is everywhere the one of ``station.quality.station_d_org``, and the header says which postures
-and points it is computed over.
+corners in the fixed frame, quality metrics and truth errors); the data checks made before solving;
+the capture plan's preview of the cell when the session holds one (``SESSION/preview.png``).
+d_org is everywhere the one of ``calibration.quality_words.result_d_org``, and the header says which
+postures and points it is computed over.
+
+A presenter of ``station.assessment.Assessment``: every figure and table shows what the assessment
+holds (the verdict, the quality words, the method comparison, the repeatability); nothing here solves.
 
 Plots use matplotlib's object API (``Figure`` + Agg canvas): no pyplot, no global backend change.
 No two texts of a figure may overlap (tests/test_report_figures.py checks every figure).
@@ -27,115 +31,18 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..calibration.errors import CalibrationError, HandEyeError
-from ..calibration.metrics import fixed_points
+from ..calibration.errors import HandEyeError
 from ..calibration.problem import EYE_IN_HAND, HandEyeProblem
+from ..calibration.quality_words import D_ORG_ALL_NAME, AxisCoverage, hand_frame
 from ..calibration.session import write_text_atomic
-from ..calibration.transforms import rotation_error_deg
 from ..rapid.literals import pose_literal, rounded_pose
-from .origin import origin_banner, session_origin
-from .quality import (
-    CHECK_LABELS,
-    D_ORG_ALL_NAME,
-    Verdict,
-    direction_name,
-    format_check_value,
-    kept_postures,
-    rotation_axis_coverage,
-    station_d_org,
-)
+from .assessment import Assessment
+from .origin import origin_banner
+from .quality import CHECK_LABELS, Verdict, direction_name, format_check_value
 
-__all__ = ["COMPARISON_METHODS", "comparison_results", "method_comparison", "write_report"]
-
-#: Methods the report compares by default (the result's own method is always added): the robust
-#: pipeline, the paper's mcb and mc, three classics.
-COMPARISON_METHODS = ("robust", "mcb", "mc", "park", "tsai", "daniilidis")
+__all__ = ["write_report"]
 
 _BLUE, _RED, _ORANGE, _GREY = "#1f5fa8", "#c62828", "#ef8a17", "#8a8a8a"
-
-
-# --------------------------------------------------------------------------------------- numbers
-def comparison_results(problem: HandEyeProblem, methods=COMPARISON_METHODS, truth: dict | None = None,
-                       known: dict | None = None) -> dict:
-    """Solve ``problem`` with several methods: ``{method: CalibrationResult}``.
-
-    Methods that raise :class:`CalibrationError` on these data are left out.
-
-    Parameters
-    ----------
-    problem : HandEyeProblem
-    methods : sequence of str
-    truth : dict, optional
-        ``{'x', 'target2fixed'}`` of a synthetic session (fills ``truth_errors``).
-    known : dict, optional
-        Results already computed (``{method: result}``), reused instead of solving again.
-    """
-    from ..calibration.solve import calibrate
-
-    known = dict(known or {})
-    out = {}
-    for method in methods:
-        if method in known:
-            out[method] = known[method]
-            continue
-        try:
-            out[method] = calibrate(problem, method, truth)
-        except CalibrationError:
-            continue
-    for method, result in known.items():
-        out.setdefault(method, result)
-    return out
-
-
-def method_comparison(problem: HandEyeProblem, chosen, comparison: dict) -> list[dict]:
-    """One row per method: pose, differences from ``chosen`` and ``d_org`` on the same data.
-
-    ``d_org_mm`` is the station's d_org (``station.quality.station_d_org``) of each method's X over
-    the postures the CHOSEN result kept and the same board points, so the chosen method's row shows
-    the very figure of the report's header and the verdict. ``d_org_incl_outliers_mm`` is the same over
-    every posture (``None`` when the chosen result left none out).
-    """
-    rows = []
-    for name, r in comparison.items():
-        scatter = station_d_org(problem, chosen, r.x)
-        rows.append({
-            "method": name,
-            "position_mm": [float(v) for v in r.x[:3, 3]],
-            "d_position_mm": float(np.linalg.norm(r.x[:3, 3] - chosen.x[:3, 3])),
-            "d_rotation_deg": float(rotation_error_deg(r.x, chosen.x)),
-            "d_org_mm": scatter.mm,
-            "d_org_incl_outliers_mm": scatter.incl_outliers_mm,
-            "outliers": [int(i) for i in r.outliers],
-            "runtime_s": float(r.runtime_s),
-            "truth_errors": r.truth_errors,
-            "chosen": r is chosen or (r.method == chosen.method and np.allclose(r.x, chosen.x)),
-        })
-    return rows
-
-
-def corner_repeatability(problem: HandEyeProblem, result) -> dict:
-    """Board points in the fixed frame, their deviations from the mean over the inliers, per-point RMS.
-
-    Returns
-    -------
-    dict
-        ``deviations`` (n, m, 3) mm, ``centre_deviation`` (n, 3) mm (mean of a posture's deviations =
-        deviation of the board centre), ``inliers`` (n,) bool, ``rms_per_point`` (m,) mm over the
-        inliers, ``mean_points`` (m, 3), ``frame`` (``base`` or ``tool0``).
-    """
-    fixed = fixed_points(problem.hand, result.x, problem.points_cam)
-    inliers = kept_postures(problem, result)
-    mean = fixed[inliers].mean(axis=0)
-    deviations = fixed - mean
-    rms = np.sqrt(np.mean(np.sum(deviations[inliers] ** 2, axis=-1), axis=0))
-    return {
-        "deviations": deviations,
-        "centre_deviation": deviations.mean(axis=1),
-        "inliers": inliers,
-        "rms_per_point": rms,
-        "mean_points": mean,
-        "frame": "base" if problem.setup == EYE_IN_HAND else "tool0",
-    }
 
 
 # ----------------------------------------------------------------------------------------- plots
@@ -245,11 +152,9 @@ def _hemisphere(ax, axes, angles, centre: int, frame: str, vmax: float, weakest)
     return sc
 
 
-def plot_axis_coverage(problem: HandEyeProblem, result) -> tuple[bytes, object]:
+def plot_axis_coverage(coverage: AxisCoverage) -> bytes:
     """Rotation axes of the relative flange motions (inlier postures) on two hemispheres, plus the RMS
-    rotation about each axis of the hand frame."""
-    inliers = kept_postures(problem, result)
-    coverage = rotation_axis_coverage(problem.subset(inliers))
+    rotation about each axis of the hand frame (``calibration.quality_words.AxisCoverage``)."""
     vmax = max(90.0, float(coverage.angles_deg.max()) if coverage.angles_deg.size else 90.0)
     fig = _figure(12.5, 4.9)
     grid = fig.add_gridspec(2, 3, width_ratios=[1, 1, 0.8], height_ratios=[1, 0.045], wspace=0.3, hspace=0.12)
@@ -269,7 +174,7 @@ def plot_axis_coverage(problem: HandEyeProblem, result) -> tuple[bytes, object]:
     ax3.set_ylim(0, max(coverage.rms_about_axes_deg.max() * 1.2, 1.0))
     _style(ax3)
     ax3.grid(False, axis="x")
-    return _png(fig), coverage
+    return _png(fig)
 
 
 def _readable_value_axis(axis, nbins: int = 4) -> None:
@@ -476,7 +381,7 @@ def _kv(pairs) -> str:
 #: What the report says about where the data come from (``station.origin``).
 _ORIGIN_FACTS = {
     "real": "the real station (capture record in session.yaml)",
-    "mock": "the embedded mock station (simulated robot and camera)",
+    "mock": "a mock station, embedded or a rehearsal (simulated robot and camera)",
     "simulated": "a simulation (truth.yaml beside the session)",
     "unknown": "not recorded (imported or hand-written session)",
 }
@@ -506,28 +411,22 @@ def _literals(x, tooldata_literal, label: str, verdict) -> list[str]:
             "<code>handeye writeback</code> refuses a failed result.</div></div>"]
 
 
-def _summary(result, problem, verdict, tooldata_literal, session_path, origin: str = "unknown") -> str:
-    x = result.x
-    position, quaternion = rounded_pose(x)
-    euler = Rotation.from_matrix(x[:3, :3]).as_euler("ZYX", degrees=True)
-    eye_in_hand = result.setup == EYE_IN_HAND
-    n = problem.n
-    outliers = [int(i) for i in result.outliers]
+def _verdict_banner(verdict: Verdict | None) -> str:
     if verdict is None:
-        banner = '<div class="verdict none">NO VERDICT</div><div class="verdict-line">no thresholds were applied</div>'
-    else:
-        cls, word = ("pass", "PASS") if verdict.passed else ("fail", "FAIL")
-        failed = verdict.failed
-        line = ("every quality check passed" if verdict.passed else
-                (f"{verdict.cause}. " if verdict.cause else "")
-                + f"{len(failed)} of {len(verdict.checks)} checks failed: " + ", ".join(c.name for c in failed)
-                + " (see the advice below)")
-        banner = f'<div class="verdict {cls}">{word}</div><div class="verdict-line">{_e(line)}</div>'
-    literal_label = "tframe (camera in tool0)" if eye_in_hand else "camera pose in base"
-    parts = [_origin_banner(origin), banner] + _literals(x, tooldata_literal, literal_label, verdict)
-    if eye_in_hand and not tooldata_literal and (verdict is None or verdict.passed):
-        parts.append('<div class="note">tooldata: the load (mass, centre of gravity) comes from the station '
-                     'configuration; <code>handeye writeback</code> writes the full tooldata with this tframe.</div>')
+        return '<div class="verdict none">NO VERDICT</div><div class="verdict-line">no thresholds were applied</div>'
+    cls, word = ("pass", "PASS") if verdict.passed else ("fail", "FAIL")
+    failed = verdict.failed
+    line = ("every quality check passed" if verdict.passed else
+            (f"{verdict.cause}. " if verdict.cause else "")
+            + f"{len(failed)} of {len(verdict.checks)} checks failed: " + ", ".join(c.name for c in failed)
+            + " (see the advice below)")
+    return f'<div class="verdict {cls}">{word}</div><div class="verdict-line">{_e(line)}</div>'
+
+
+def _pose_facts(result) -> list:
+    """The camera pose and its uncertainty, as (label, HTML) pairs."""
+    position, quaternion = rounded_pose(result.x)
+    euler = Rotation.from_matrix(result.x[:3, :3]).as_euler("ZYX", degrees=True)
     pose = [
         ("position", f"x {position[0]:.3f} &nbsp; y {position[1]:.3f} &nbsp; z {position[2]:.3f} mm"),
         ("quaternion q1..q4", " &nbsp; ".join(f"{v:.6f}" for v in quaternion)),
@@ -547,27 +446,45 @@ def _summary(result, problem, verdict, tooldata_literal, session_path, origin: s
                      + (f"; the noise model predicts {cv['predicted_rms_mm']:.3f} mm" if "predicted_rms_mm" in cv else "")))
         if cv.get("systematic"):
             pose.append(("systematic error", _e(cv.get("advice", ""))))
+    return pose
+
+
+def _session_facts(a: Assessment) -> list:
+    """Session, origin, method, postures, outliers, d_org (and d_org incl. outliers), times, truth errors."""
+    result, n, scatter = a.result, a.problem.n, a.d_org
+    outliers = [int(i) for i in result.outliers]
     residual_text = ", ".join(f"{i} ({result.residuals_mm.get(i, float('nan')):.2f} mm)" for i in outliers)
-    scatter = station_d_org(problem, result)
     facts = [
-        ("session", f"<code>{_e(session_path)}</code>"),
-        ("data from", _e(_ORIGIN_FACTS.get(origin, origin))),
+        ("session", f"<code>{_e(a.session_path)}</code>"),
+        ("data from", _e(_ORIGIN_FACTS.get(a.origin, a.origin))),
         ("set-up", _e(result.setup.replace("_", "-"))),
         ("method", _e(result.method)),
         ("postures", f"{n} captured, {n - len(outliers)} used, {len(outliers)} outlier{'s' if len(outliers) != 1 else ''}"),
         ("outliers (residual)", _e(residual_text) if outliers else "none"),
         ("d_org", f'<span class="num" data-d-org="header">{scatter.mm:.3f} mm</span><br>'
                   f'<span class="note">{_e(scatter.basis())} (eq. 22)</span>'),
-        ("solve time", f"{1000 * result.runtime_s:.1f} ms"),
     ]
+    if scatter.incl_outliers_mm is not None:
+        facts.append((D_ORG_ALL_NAME, f"{scatter.incl_outliers_mm:.3f} mm (the same over all {n} postures)"))
+    facts.append(("solve time", f"{1000 * result.runtime_s:.1f} ms"))
     if result.truth_errors is not None:
         errors = result.truth_errors
         text = f"{errors['translation_error_mm']:.3f} mm, {errors['rotation_error_deg']:.4f} deg (synthetic session)"
         facts.append(("error vs truth", text))
-    if scatter.incl_outliers_mm is not None:
-        facts.insert(facts.index(next(f for f in facts if f[0] == "d_org")) + 1,
-                     (D_ORG_ALL_NAME, f"{scatter.incl_outliers_mm:.3f} mm (the same over all {n} postures)"))
-    return ("<section>" + "".join(parts) + '<div class="grid">' + _kv(pose) + _kv(facts) + "</div></section>")
+    return facts
+
+
+def _summary(a: Assessment) -> str:
+    """The head of the report: origin banner, verdict, RAPID literals, pose and session facts."""
+    verdict, eye_in_hand = a.verdict, a.result.setup == EYE_IN_HAND
+    literal_label = "tframe (camera in tool0)" if eye_in_hand else "camera pose in base"
+    parts = [_origin_banner(a.origin), _verdict_banner(verdict)] + _literals(a.result.x, a.tooldata_literal,
+                                                                             literal_label, verdict)
+    if eye_in_hand and not a.tooldata_literal and (verdict is None or verdict.passed):
+        parts.append('<div class="note">tooldata: the load (mass, centre of gravity) comes from the station '
+                     'configuration; <code>handeye writeback</code> writes the full tooldata with this tframe.</div>')
+    return ("<section>" + "".join(parts) + '<div class="grid">' + _kv(_pose_facts(a.result))
+            + _kv(_session_facts(a)) + "</div></section>")
 
 
 def _checks_table(verdict: Verdict) -> str:
@@ -612,9 +529,9 @@ def _comparison_table(rows: list[dict]) -> str:
     return "".join(out) + "</table>"
 
 
-def _metrics_table(result, problem: HandEyeProblem) -> str:
+def _metrics_table(a: Assessment) -> str:
+    result, scatter = a.result, a.d_org
     m = result.metrics
-    scatter = station_d_org(problem, result)
     rows = [
         ("d_org", f"{scatter.mm:.3f} mm", "mean distance of a board point from its mean position in the fixed frame (eq. 22)"),
         ("d_back", f"{m['d_back_mm']:.3f} mm", "mean distance between the same board point seen from two postures (eq. 23)"),
@@ -623,129 +540,83 @@ def _metrics_table(result, problem: HandEyeProblem) -> str:
     ]
     if scatter.incl_outliers_mm is not None:
         rows.insert(1, (D_ORG_ALL_NAME, f"{scatter.incl_outliers_mm:.3f} mm",
-                        f"d_org over all {problem.n} postures, the outliers included"))
+                        f"d_org over all {a.problem.n} postures, the outliers included"))
     if result.truth_errors is not None:
         rows += [("rotation error", f"{result.truth_errors['rotation_error_deg']:.4f} deg", "against the synthetic truth"),
                  ("translation error", f"{result.truth_errors['translation_error_mm']:.3f} mm", "against the synthetic truth")]
-    body = "".join(f'<tr><td>{_e(a)}</td><td class="num">{_e(b)}</td><td>{_e(c)}</td></tr>' for a, b, c in rows)
+    body = "".join(f'<tr><td>{_e(x)}</td><td class="num">{_e(y)}</td><td>{_e(z)}</td></tr>' for x, y, z in rows)
     return (f'<table><tr><th>metric</th><th>value</th><th>meaning</th></tr>{body}</table>'
             f'<p class="note">d_org and d_back are computed {_e(scatter.basis())}; dR and dt over the pairs of the '
             f'same postures. Lower is better.</p>')
 
 
-def write_report(path_html, session_path, problem: HandEyeProblem, result, comparison: dict | None = None,
-                 verdict: Verdict | None = None, tooldata_literal: str | None = None,
-                 title: str = "Hand-eye calibration report", findings=None, origin: str | None = None) -> Path:
-    """Write the calibration report as one self-contained HTML file.
+# -------------------------------------------------------------------------------------- sections
+def _checks_section(verdict: Verdict) -> str:
+    return ("<h2>Quality checks</h2><section>" + _checks_table(verdict)
+            + '<p class="note">Thresholds: defaults of <code>handeye.station.quality.QualityThresholds</code>'
+              " unless a thresholds file was given (handeye calibrate --thresholds FILE.yaml).</p></section>")
 
-    Parameters
-    ----------
-    path_html : str or Path
-        The file to write (written atomically; its folder must exist).
-    session_path : str or Path
-        Shown in the report.
-    problem : HandEyeProblem
-        The data ``result`` was solved from.
-    result : CalibrationResult
-        The calibration to report (normally the default estimator).
-    comparison : dict, optional
-        ``{method: CalibrationResult}`` on the same problem (see :func:`comparison_results`); adds the
-        method comparison.
-    verdict : Verdict, optional
-        From :func:`handeye.station.quality.verdict`; adds the PASS/FAIL banner and the checks.
-    tooldata_literal : str, optional
-        The full RAPID tooldata literal when the load data are known.
-    title : str
-    findings : list of Finding, optional
-        Data checks made before solving (``calibration.diagnostics.diagnose_session``).
-    origin : str, optional
-        Where the data come from: ``mock``, ``real``, ``simulated`` or ``unknown``
-        (``station.origin.session_origin``); read from the folder ``session_path`` when omitted. Mock
-        and simulated sessions get a banner saying they are not a calibration of a real robot.
 
-    Returns
-    -------
-    Path
-
-    Raises
-    ------
-    HandEyeError
-        When the folder does not exist or the file cannot be written.
-    """
-    path = Path(path_html)
-    if not path.parent.is_dir():
-        raise HandEyeError(f"cannot write the report {path}: folder {path.parent} does not exist")
-    limit = verdict.thresholds.max_posture_residual_mm if verdict is not None else None
-    fixed_frame = "base" if problem.setup == EYE_IN_HAND else "tool0"
-    hand_frame = "tool0" if problem.setup == EYE_IN_HAND else "base"
-    now = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z")
-    subtitle = (f'<div class="sub">{_e(session_path)} &middot; {_e(result.setup.replace("_", "-"))} &middot; '
-                f"method {_e(result.method)} &middot; generated {_e(now)}</div>")
-    if origin is None:
-        origin = session_origin(path=session_path)
-    sections = [f"<h1>{_e(title)}</h1>", subtitle,
-                _summary(result, problem, verdict, tooldata_literal, session_path, origin)]
-    if verdict is not None:
-        sections.append("<h2>Quality checks</h2><section>" + _checks_table(verdict)
-                        + '<p class="note">Thresholds: defaults of <code>handeye.station.quality.QualityThresholds</code>'
-                          " unless a thresholds file was given (handeye calibrate --thresholds FILE.yaml).</p></section>")
-
-    # 1 residuals
+def _residuals_section(a: Assessment, fixed_frame: str) -> str:
+    result = a.result
+    limit = a.verdict.thresholds.max_posture_residual_mm if a.verdict is not None else None
     points_text = ("three board points (the fitted board's centre and one point along each board axis)"
                    if result.method == "robust" else "board points")
     outliers = [int(i) for i in result.outliers]
     residual_note = ("Outliers (left out of the solution): "
                      + ", ".join(f"posture {i}: {result.residuals_mm.get(i, float('nan')):.2f} mm" for i in outliers)
                      if outliers else "No posture was left out as an outlier.")
-    sections.append(
+    return (
         "<h2>1. Per-posture residuals</h2><section>"
         f'<p class="how">Each bar: the mean distance of that posture\'s {points_text}, carried into {fixed_frame} '
         f"with the solved camera pose, from their mean positions. Bars should be about equal; a bar well above "
         f"the others is a posture to check (board partly hidden or misdetected, robot not at rest)."
         + (f" Dashed line: the limit max_posture_residual_mm = {limit:g} mm." if limit is not None else "") + "</p>"
-        + _img(plot_residuals(result, problem, limit), "per-posture residuals")
+        + _img(plot_residuals(result, a.problem, limit), "per-posture residuals")
         + f'<p class="note">{_e(residual_note)}</p></section>')
 
-    # 2 rotation-axis coverage
-    png, coverage = plot_axis_coverage(problem, result)
-    sections.append(
+
+def _coverage_section(a: Assessment) -> str:
+    coverage, frame = a.coverage, hand_frame(a.problem.setup)
+    return (
         "<h2>2. Rotation-axis coverage</h2><section>"
-        f'<p class="how">Every dot is the rotation axis of the flange motion between two used postures, in {hand_frame} '
+        f'<p class="how">Every dot is the rotation axis of the flange motion between two used postures, in {frame} '
         f"coordinates, drawn on a unit sphere seen from two sides (an axis and its opposite are the same, so each "
         f"view shows every axis once); colour and size grow with the rotation angle. Regions without dots are "
         f"directions the flange never turned about; the red ring marks the least exercised direction "
         f"({_e(direction_name(coverage.weakest_direction, coverage.frame))}). Right: how much the flange turned "
-        f"about each {hand_frame} axis.</p>"
-        + _img(png, "rotation-axis coverage")
-        + f'<p class="note">{len(coverage.axes)} posture pairs with a usable axis; median rotation between two '
-          f"postures {coverage.median_angle_deg:.1f} deg; axis spread {coverage.spread_deg:.1f} deg "
+        f"about each {frame} axis.</p>"
+        + _img(plot_axis_coverage(coverage), "rotation-axis coverage")
+        + f'<p class="note">{len(coverage.axes)} posture pairs with a usable axis; median relative rotation angle '
+          f"between two postures {coverage.median_angle_deg:.1f} deg; rotation-axis spread {coverage.spread_deg:.1f} deg "
           f"(0 = all axes in one plane, 35.3 = even over the sphere).</p></section>")
 
-    # 3 method comparison
-    if comparison:
-        rows = method_comparison(problem, result, comparison)
-        sections.append(
-            "<h2>3. Method comparison</h2><section>"
-            '<p class="how">The same data solved by other methods. &Delta; = difference from the chosen result '
-            "(position distance, rotation angle). d_org (eq. 22) is computed for every method on the same data, "
-            f"{_e(station_d_org(problem, result).basis())}, as in the header and the verdict, so the column compares "
-            "like with like"
-            + (f"; {_e(D_ORG_ALL_NAME)}: the same over all {problem.n} postures. " if result.outliers else ". ")
-            + "Methods that agree within a few tenths of a millimetre confirm the result; one far off is usually a "
-            "method thrown by outliers or weak geometry.</p>"
-            + _comparison_table(rows) + _img(plot_method_comparison(rows), "method comparison") + "</section>")
-    else:
-        sections.append('<h2>3. Method comparison</h2><section><p class="note">Not computed '
-                        "(no comparison results were given).</p></section>")
 
-    # 4 repeatability
-    rep = corner_repeatability(problem, result)
+def _comparison_section(a: Assessment) -> str:
+    if not a.comparison:
+        return ('<h2>3. Method comparison</h2><section><p class="note">Not computed '
+                "(no comparison results were given).</p></section>")
+    rows = a.comparison
+    return (
+        "<h2>3. Method comparison</h2><section>"
+        '<p class="how">The same data solved by other methods. &Delta; = difference from the chosen result '
+        "(position distance, rotation angle). d_org (eq. 22) is computed for every method on the same data, "
+        f"{_e(a.d_org.basis())}, as in the header and the verdict, so the column compares "
+        "like with like"
+        + (f"; {_e(D_ORG_ALL_NAME)}: the same over all {a.problem.n} postures. " if a.result.outliers else ". ")
+        + "Methods that agree within a few tenths of a millimetre confirm the result; one far off is usually a "
+        "method thrown by outliers or weak geometry.</p>"
+        + _comparison_table(rows) + _img(plot_method_comparison(rows), "method comparison") + "</section>")
+
+
+def _repeatability_section(a: Assessment, fixed_frame: str) -> str:
+    rep = a.repeatability
     rms = rep["rms_per_point"]
     radial = np.linalg.norm(rep["centre_deviation"][rep["inliers"]], axis=1)
-    scatter_png, clipped = plot_repeatability(problem, result, rep)
+    scatter_png, clipped = plot_repeatability(a.problem, a.result, rep)
     clipped_note = (f" Outlier postures whose board lies beyond the plotted frame: {', '.join(map(str, clipped))}."
                     if clipped else "")
-    sections.append(
+    return (
         f"<h2>4. Repeatability of the board corners in {fixed_frame}</h2><section>"
         f'<p class="how">The board does not move, so with the right camera pose every posture should put each board '
         f"corner at the same place in {fixed_frame}. The plots show each corner's deviation from its mean position "
@@ -760,21 +631,72 @@ def write_report(path_html, session_path, problem: HandEyeProblem, result, compa
           "target origin): a uniform level is camera noise; a "
           "gradient across the board points at a rotation error of the camera pose or a scale error of the stereo "
           "model; single hot corners are detection problems.</p>"
-        + _img(plot_point_rms(problem, rep), "per-corner RMS deviation")
+        + _img(plot_point_rms(a.problem, rep), "per-corner RMS deviation")
         + f'<p class="note">Per-corner RMS: median {np.median(rms):.3f} mm, largest {rms.max():.3f} mm '
           f"(point {int(np.argmax(rms))}).</p></section>")
 
-    # 5 metrics
-    sections.append("<h2>5. Quality metrics</h2><section>" + _metrics_table(result, problem) + "</section>")
 
-    if findings is not None:
-        items = "".join(f"<li>{_e(f)}</li>" for f in findings)
-        body = f"<ul>{items}</ul>" if findings else '<p class="note">Nothing odd found in the poses.</p>'
-        sections.append("<h2>Data checks before solving</h2><section>" + body + "</section>")
-    sections.append(
-        "<footer>Units: mm and degrees; quaternions q1..q4 = (w, x, y, z), scalar first. The camera frame is the left "
-        "camera of the stereo head (x right, y down, z forward). Uncertainties are one sigma from the robust "
-        "refinement's covariance; with few postures they tend to be pessimistic. Report written by handeye.</footer>")
+def _preview_section(png: bytes) -> str:
+    return ("<h2>Capture plan: the cell</h2><section>"
+            '<p class="how">The preview written before the robot moved: the keep-out volumes and the board\'s stand, the '
+            "board, the path the flange ran and the numbered postures, from above and from the side (base frame, "
+            "mm).</p>" + _img(png, "capture plan preview: the cell from above and from the side") + "</section>")
+
+
+def _findings_section(findings) -> str:
+    items = "".join(f"<li>{_e(f)}</li>" for f in findings)
+    body = f"<ul>{items}</ul>" if findings else '<p class="note">Nothing odd found in the poses.</p>'
+    return "<h2>Data checks before solving</h2><section>" + body + "</section>"
+
+
+_FOOTER = (
+    "<footer>Units: mm and degrees; quaternions q1..q4 = (w, x, y, z), scalar first. The camera frame is the left "
+    "camera of the stereo head (x right, y down, z forward). Uncertainties are one sigma from the "
+    "estimator's covariance (random errors); the cross-validated accuracy also shows systematic ones. Report "
+    "written by handeye.</footer>")
+
+
+def write_report(path_html, assessment: Assessment, title: str = "Hand-eye calibration report") -> Path:
+    """Write the calibration report of an assessment as one self-contained HTML file.
+
+    Parameters
+    ----------
+    path_html : str or Path
+        The file to write (written atomically; its folder must exist).
+    assessment : Assessment
+        From ``station.assessment.assess``: the result, its verdict (the PASS/FAIL banner and the
+        checks, when judged), the method comparison (when compared), the data checks, the origin (mock
+        and simulated sessions get a banner saying they are not a calibration of a real robot).
+    title : str
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    HandEyeError
+        When the folder does not exist or the file cannot be written.
+    """
+    path = Path(path_html)
+    if not path.parent.is_dir():
+        raise HandEyeError(f"cannot write the report {path}: folder {path.parent} does not exist")
+    a = assessment
+    fixed_frame = "base" if a.problem.setup == EYE_IN_HAND else "tool0"
+    now = _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z")
+    sections = [f"<h1>{_e(title)}</h1>",
+                f'<div class="sub">{_e(a.session_path)} &middot; {_e(a.result.setup.replace("_", "-"))} &middot; '
+                f"method {_e(a.result.method)} &middot; generated {_e(now)}</div>", _summary(a)]
+    if a.verdict is not None:
+        sections.append(_checks_section(a.verdict))
+    sections += [_residuals_section(a, fixed_frame), _coverage_section(a), _comparison_section(a),
+                 _repeatability_section(a, fixed_frame),
+                 "<h2>5. Quality metrics</h2><section>" + _metrics_table(a) + "</section>"]
+    if a.findings is not None:
+        sections.append(_findings_section(a.findings))
+    if a.plan_preview is not None:
+        sections.append(_preview_section(a.plan_preview))
+    sections.append(_FOOTER)
     document = ("<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
                 f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"><title>{_e(title)}</title>"
                 f"<style>{_CSS}</style></head><body><main>" + "\n".join(sections) + "</main></body></html>\n")

@@ -1,14 +1,18 @@
-"""The plain-text calibration summary an engineer reads at the station."""
+"""The plain-text calibration summary an engineer reads at the station: a presenter of
+``station.assessment.Assessment``. It formats what the assessment holds (the pose written as a
+literal, quaternion and Euler angles) and never solves or judges."""
 
 from __future__ import annotations
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..calibration.quality_words import D_ORG_ALL_NAME
 from ..rapid.literals import pose_literal, rounded_pose
-from .calibrate import CalibrationOutcome
+from .assessment import Assessment
 from .origin import origin_banner
-from .quality import D_ORG_ALL_NAME, station_d_org
+
+__all__ = ["calibration_summary"]
 
 _BAR = 30
 
@@ -34,50 +38,25 @@ def _origin_lines(origin: str) -> list[str]:
     return [f"*** {word} - {text} ***", ""]
 
 
-def calibration_summary(outcome: CalibrationOutcome, verdict=None) -> str:
-    """Human-readable report of one calibration.
-
-    Parameters
-    ----------
-    outcome : CalibrationOutcome
-    verdict : Verdict, optional
-        When given and failed, the tframe literal is marked as not to be written into the robot.
-    """
-    r = outcome.result
-    position, quaternion = rounded_pose(r.x)
-    euler = Rotation.from_matrix(r.x[:3, :3]).as_euler("ZYX", degrees=True)
-    frame = "tool0 (RAPID tooldata.tframe)" if r.parent == "tool0" else "base (camera fixed beside the robot)"
+def _quality_lines(assessment: Assessment) -> list[str]:
+    r, scatter = assessment.result, assessment.d_org
     m = r.metrics
-    literal = pose_literal(r.x)
-    if verdict is not None and not verdict.passed:
-        literal = f"FAIL - do not write this into the robot (verdict below): {literal}"
-    lines = _origin_lines(outcome.origin) + [
-        f"Session {outcome.session_path}: {len(r.residuals_mm)} postures"
-        + (f" ({m['postures']} used)" if r.outliers else "") + f", {r.setup}, method {r.method}",
-        "",
-        f"Camera pose in {frame}:",
-        f"  {literal}",
-        f"  position  x {position[0]:.3f}  y {position[1]:.3f}  z {position[2]:.3f} mm",
-        f"  rotation  q1..q4 {quaternion[0]:.6f} {quaternion[1]:.6f} {quaternion[2]:.6f} {quaternion[3]:.6f}"
-        f"   (EulerZYX z {euler[0]:.4f}  y {euler[1]:.4f}  x {euler[2]:.4f} deg)",
-        "",
-        "Quality (lower is better):",
-    ]
-    if outcome.problem is not None:
-        scatter = station_d_org(outcome.problem, r)
-        lines += [f"  d_org   {scatter.mm:.3f} mm   mean distance of a board point from its mean position (eq. 22)",
-                  f"          {scatter.basis()}"]
-        if scatter.incl_outliers_mm is not None:
-            lines.append(f"  {D_ORG_ALL_NAME}  {scatter.incl_outliers_mm:.3f} mm   the same over all "
-                         f"{outcome.problem.n} postures")
-    else:
-        lines.append(f"  d_org   {m['d_org_mm']:.3f} mm   mean distance of a board point from its mean position (eq. 22)")
-    lines += [
+    lines = [f"  d_org   {scatter.mm:.3f} mm   mean distance of a board point from its mean position (eq. 22)",
+             f"          {scatter.basis()}"]
+    if scatter.incl_outliers_mm is not None:
+        lines.append(f"  {D_ORG_ALL_NAME}  {scatter.incl_outliers_mm:.3f} mm   the same over all "
+                     f"{assessment.problem.n} postures")
+    return lines + [
         f"  d_back  {m['d_back_mm']:.3f} mm   mean distance of a board point between two postures (eq. 23)",
         f"  dR      {m['delta_r']:.5f}     rotation residual of AX = XB, RMS over pairs (eq. 16)",
         f"  dt      {m['delta_t_mm']:.3f} mm   translation residual of AX = XB, RMS over pairs (eq. 16)",
         "  (d_back, dR and dt over the same postures as d_org)",
     ]
+
+
+def _closing_lines(r) -> list[str]:
+    """Uncertainty, truth errors, outliers, per-posture residuals and the solve time."""
+    lines = []
     if r.uncertainty is not None:
         u = r.uncertainty
         lines += ["", "Uncertainty (one sigma):",
@@ -98,8 +77,37 @@ def calibration_summary(outcome: CalibrationOutcome, verdict=None) -> str:
     if start.get("candidates"):
         extra = (f" ({start['candidates']} triplets, {start.get('exact_evaluations', 0)} scored exactly, "
                  f"chosen {start.get('selected_triplet')})")
-    lines += ["", f"Solve time {1000 * r.runtime_s:.1f} ms{extra}"]
-    return "\n".join(lines)
+    return lines + ["", f"Solve time {1000 * r.runtime_s:.1f} ms{extra}"]
+
+
+def calibration_summary(assessment: Assessment) -> str:
+    """Human-readable report of one calibration.
+
+    Parameters
+    ----------
+    assessment : Assessment
+        When it holds a failed verdict, the tframe literal is marked as not to be written into the robot.
+    """
+    r = assessment.result
+    position, quaternion = rounded_pose(r.x)
+    euler = Rotation.from_matrix(r.x[:3, :3]).as_euler("ZYX", degrees=True)
+    frame = "tool0 (RAPID tooldata.tframe)" if r.parent == "tool0" else "base (camera fixed beside the robot)"
+    literal = pose_literal(r.x)
+    if assessment.verdict is not None and not assessment.verdict.passed:
+        literal = f"FAIL - do not write this into the robot (verdict below): {literal}"
+    lines = _origin_lines(assessment.origin) + [
+        f"Session {assessment.session_path}: {len(r.residuals_mm)} postures"
+        + (f" ({r.metrics['postures']} used)" if r.outliers else "") + f", {r.setup}, method {r.method}",
+        "",
+        f"Camera pose in {frame}:",
+        f"  {literal}",
+        f"  position  x {position[0]:.3f}  y {position[1]:.3f}  z {position[2]:.3f} mm",
+        f"  rotation  q1..q4 {quaternion[0]:.6f} {quaternion[1]:.6f} {quaternion[2]:.6f} {quaternion[3]:.6f}"
+        f"   (EulerZYX z {euler[0]:.4f}  y {euler[1]:.4f}  x {euler[2]:.4f} deg)",
+        "",
+        "Quality (lower is better):",
+    ]
+    return "\n".join(lines + _quality_lines(assessment) + _closing_lines(r))
 
 
 def _cross_validation_lines(r) -> list[str]:

@@ -3,6 +3,12 @@
 Which one is decided by the configuration alone (:attr:`StationConfig.is_mock`): a real config opens
 the real controller and camera, and when they cannot be reached the call fails; it never falls back
 to the mock. ``--mock`` on the command line turns a config into the mock one (``config.as_mock()``).
+
+A rehearsal config (:attr:`StationConfig.is_rehearsal`: ``camera.backend: mock`` with
+``camera.mock_arm``) opens the real drivers of its controller link and the camera of a standalone
+``handeye mock controller --camera-port``; before anything moves, the camera's mock is asked which
+controller its arm belongs to, and a config whose ``controller`` section names another one is
+refused: the mock camera never silently watches a real robot.
 """
 
 from __future__ import annotations
@@ -26,10 +32,12 @@ class StationLink:
     camera : drivers.camera.Camera
     stereo_model : drivers.camera.stereo.StereoModel
     load_program : callable or None
-        Puts a generated program on the controller (the mock can; a real controller is loaded by
-        the operator).
+        ``load_program(postures, rapid_dir)`` puts a generated program on the controller (the mock
+        loads the modules of ``rapid_dir`` and runs them; a real controller is loaded by the operator).
     mock : mocks.station.MockStation or None
         The embedded station, with its hidden truth.
+    rehearsal : str or None
+        A rehearsal station: the ``HOST:PORT`` of the mock controller's camera (its truth stays there).
     """
 
     controller: object
@@ -37,6 +45,7 @@ class StationLink:
     stereo_model: object = None
     load_program: Callable | None = None
     mock: object = None
+    rehearsal: str | None = None
 
     @property
     def is_mock(self) -> bool:
@@ -48,17 +57,21 @@ class StationLink:
 
 
 def _controller_options(config: StationConfig) -> dict:
+    """The keyword options of ``open_controller`` for the config's controller: where it is, as its
+    back end's registry entry builds it from the ``controller`` section, and the link settings."""
+    from ..drivers.controller.backends import CONTROLLERS
+
     c = config.controller
     common = {"timeout": c.timeout_s, "motion_timeout": c.motion_timeout_s, "robot": config.robot,
               "idle_timeout": c.idle_timeout_s, "write_key": c.write_key}
-    if c.protocol == "socket":
-        return {"host": c.host, "port": c.port, **common}
-    if c.protocol == "serial":
-        return {"url": c.serial_url, **common}
-    options = {"host": c.host, "port": c.port, **common}
-    if c.modbus_map:
-        options["register_map"] = c.modbus_map
-    return options
+    return {**CONTROLLERS[config.link_protocol].link_options(c), **common}
+
+
+def _camera_options(config: StationConfig) -> dict:
+    """The keyword options of ``open_camera`` for the config's camera, as its back end builds them."""
+    from ..drivers.camera.backends import CAMERAS
+
+    return CAMERAS[config.camera.backend].options(config.camera)
 
 
 def mock_spec(config: StationConfig):
@@ -66,14 +79,63 @@ def mock_spec(config: StationConfig):
     from ..mocks.station import MockStationSpec
 
     m = config.mock
+    zone_tcp = tuple(config.camera.nominal_mount[0]) if config.cell.world_zones else None
     return MockStationSpec(protocol=m.protocol, board=config.target, kinematic_error_mm=m.kinematic_error_mm,
                            kinematic_error_deg=m.kinematic_error_deg, time_scale=m.time_scale, seed=m.seed,
-                           idle_timeout_s=config.controller.idle_timeout_s, write_key=config.controller.write_key)
+                           idle_timeout_s=config.controller.idle_timeout_s, write_key=config.controller.write_key,
+                           cell=config.cell.model(), zone_tcp_mm=zone_tcp)
 
 
 #: What every output says when the embedded mock station is in use.
 MOCK_BANNER = ("MOCK: the embedded mock station (a simulated IRB 1400 and XB3 on 127.0.0.1); nothing here moves, "
                "measures or writes a real robot")
+
+
+def rehearsal_banner(config: StationConfig) -> str:
+    """What every output of a rehearsal says first."""
+    return (f"MOCK: rehearsal: the camera is the simulated XB3 of `handeye mock controller` at {config.camera.mock_arm}, "
+            f"on the arm of that mock controller ({config.controller.protocol}); nothing here moves, measures or writes "
+            "a real robot")
+
+
+def _same_host(a: str, b: str) -> bool:
+    import socket
+
+    if a in ("0.0.0.0", "", "::") or b in ("0.0.0.0", "", "::"):
+        return True
+    try:
+        return socket.gethostbyname(a) == socket.gethostbyname(b)
+    except OSError:
+        return a == b
+
+
+def check_rehearsal(config: StationConfig) -> dict:
+    """The mock controller the rehearsal camera belongs to, checked against the config's controller.
+
+    Raises
+    ------
+    ConfigError
+        The camera's mock serves another controller than ``controller`` names (or none).
+    CameraError
+        No rehearsal camera answers at ``camera.mock_arm``.
+    """
+    from ..calibration.errors import ConfigError
+    from ..mocks.cell import cell_info
+
+    served = cell_info(config.camera.mock_arm)["controller"]
+    c = config.controller
+    if c.protocol == "serial":
+        same = served["protocol"] == "serial" and served.get("url") == c.serial_url
+        named = c.serial_url
+    else:
+        same = served["protocol"] == c.protocol and served["port"] == c.port and _same_host(served["host"], c.host)
+        named = f"{c.protocol} {c.host}:{c.port}"
+    if not same:
+        where = served.get("url") or f"{served['host']}:{served['port']}"
+        raise ConfigError(f"camera.mock_arm {config.camera.mock_arm} is the camera of the mock {served['protocol']} "
+                          f"controller at {where}, but the controller section names {named}: a rehearsal drives the mock "
+                          "controller whose arm the mock camera sees")
+    return served
 
 
 @contextmanager
@@ -101,15 +163,22 @@ def open_station(config: StationConfig, mock: bool = False):
         config = config.as_mock()
     if config.is_mock:
         with _mock_station(config) as (station, controller), station.camera as camera:
-            yield StationLink(controller, camera, camera.model, lambda postures, _dir: station.load_program(postures),
+            yield StationLink(controller, camera, camera.model, lambda _postures, rapid_dir: station.load_program(rapid_dir),
                               station)
         return
     from ..drivers.camera import open_camera
     from ..drivers.camera.stereo import load_stereo_model, nominal_xb3_model
     from ..drivers.controller import open_controller
 
+    if config.is_rehearsal:
+        check_rehearsal(config)
     model = load_stereo_model(config.camera.stereo_model) if config.camera.stereo_model else nominal_xb3_model()
-    with open_controller(config.controller.protocol, **_controller_options(config)) as controller, open_camera(config.camera.backend) as camera:
+    with open_controller(config.controller.protocol, **_controller_options(config)) as controller, \
+            open_camera(config.camera.backend, **_camera_options(config)) as camera:
+        if config.is_rehearsal:  # the mock plays the operator who loads SESSION/rapid into the task
+            yield StationLink(controller, camera, model, lambda _postures, rapid_dir: camera.load_program(rapid_dir),
+                              rehearsal=config.camera.mock_arm)
+            return
         yield StationLink(controller, camera, model)
 
 
@@ -126,5 +195,7 @@ def open_controller_link(config: StationConfig, mock: bool = False):
         return
     from ..drivers.controller import open_controller
 
+    if config.is_rehearsal:
+        check_rehearsal(config)
     with open_controller(config.controller.protocol, **_controller_options(config)) as controller:
-        yield StationLink(controller)
+        yield StationLink(controller, rehearsal=config.camera.mock_arm if config.is_rehearsal else None)

@@ -20,7 +20,7 @@ class SimulateOptions:
     sigma_rob_deg: float = 0.0
     sigma_cam_mm: float = 0.0
     camera_noise: str = "paper"
-    joint_offset_deg: tuple = (0.0,) * 6
+    joint_offset_deg: tuple | None = None  # one value per robot axis; None: no offset
     setup: str = "eye_in_hand"
     corners: tuple = (13, 8)
     square_mm: float = 30.0
@@ -31,11 +31,16 @@ class SimulateOptions:
 
 def simulate_session(options: SimulateOptions, progress=lambda message: None) -> Path:
     """Sample a scene, draw noise and write the session with ``truth.yaml``; returns the folder."""
+    from ..calibration.kinematics import load_robot
     from ..calibration.session import create_session, write_posture, write_truth
     from ..calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session, truth_dict
 
     if not 3 <= options.postures <= MAX_POSTURES:
         raise HandEyeError(f"postures must be between 3 and {MAX_POSTURES}; got {options.postures}")
+    robot = load_robot(SceneConfig.robot)
+    offset = (0.0,) * robot.dof if options.joint_offset_deg is None else tuple(options.joint_offset_deg)
+    if len(offset) != robot.dof:
+        raise HandEyeError(f"--joint-offset needs {robot.dof} values, one per axis of the {robot.name}; got {len(offset)}")
     if options.square_mm <= 0:
         raise HandEyeError(f"--square-mm must be positive; got {options.square_mm}")
     path = Path(options.output)
@@ -49,7 +54,7 @@ def simulate_session(options: SimulateOptions, progress=lambda message: None) ->
     except RuntimeError as exc:
         raise HandEyeError(str(exc)) from None
     noise = NoiseConfig(options.sigma_rob_deg, options.sigma_cam_mm, options.camera_noise,
-                        tuple(options.joint_offset_deg), options.seed)
+                        offset, options.seed)
     session = sample_session(scene, noise)
     session.extra["origin"] = SIMULATED
     create_session(path, session, overwrite=options.overwrite)

@@ -132,9 +132,9 @@ def check_session_origin(origin: str | None, mock_controller: bool) -> None:
 def check_camera_offset(cam2tool0, config: StationConfig) -> None:
     """Refuse a camera frame whose distance from the flange is outside the config's quality limits
     (``min_camera_offset_mm``, ``max_camera_offset_mm``): checked before every write, ``--force`` or not."""
-    from .quality import QualityThresholds
+    from .quality import config_thresholds
 
-    limits = QualityThresholds.from_dict(config.quality)
+    limits = config_thresholds(config)
     offset = float(np.linalg.norm(np.asarray(cam2tool0, float)[:3, 3]))
     if offset < limits.min_camera_offset_mm:
         raise WritebackError(f"the camera frame is {offset:.2f} mm from the flange, inside it (quality.min_camera_offset_mm "

@@ -54,3 +54,12 @@ class LinePeer:
     def close(self) -> None:
         self.file.close()
         self.sock.close()
+
+
+def assessed(problem, result, session_path="s", origin=None, **options):
+    """``station.assessment.assess`` of a result solved in the test (no session folder needed; the
+    origin is read from ``session_path`` when not given)."""
+    from handeye.station.assessment import assess
+    from handeye.station.calibrate import CalibrationOutcome
+
+    return assess(CalibrationOutcome(session_path, result, problem=problem, origin=origin), **options)

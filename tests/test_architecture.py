@@ -1,6 +1,7 @@
 """The import rules of ARCHITECTURE.md, checked on the source."""
 
 import ast
+import re
 import sys
 from pathlib import Path
 
@@ -57,4 +58,47 @@ def test_calibration_needs_only_numpy_scipy_yaml():
             top = name.split(".")[0]
             if top not in stdlib and top != "handeye" and top not in CALIBRATION_THIRD_PARTY:
                 bad.append(f"{file.relative_to(REPO)} imports {name}")
+    assert not bad, bad
+
+
+def _docstring_nodes(tree) -> set:
+    """The string constants that are docstrings (prose may name any room)."""
+    nodes = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and node.body:
+            first = node.body[0]
+            if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant) and isinstance(first.value.value, str):
+                nodes.add(id(first.value))
+    return nodes
+
+
+#: A module path into the mocks inside a string: "handeye.mocks.camera:MockCamera", f"{root}.mocks.camera".
+MOCKS_IN_A_STRING = re.compile(r"(^|[.\s'\"/])mocks([.:/]|$)")
+
+
+def test_drivers_name_no_mocks_in_strings():
+    # an import hidden in a "module:Class" string is an import all the same: the mocks register themselves
+    bad = []
+    for file in _files("drivers"):
+        tree = ast.parse(file.read_text())
+        docstrings = _docstring_nodes(tree)
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docstrings:
+                if MOCKS_IN_A_STRING.search(node.value):
+                    bad.append(f"{file.relative_to(REPO)}:{node.lineno} names the mocks in {node.value!r}")
+    assert not bad, bad
+
+
+def test_the_string_check_sees_a_hidden_import(tmp_path):
+    for text in ('T = "handeye.mocks.camera:MockCamera"', 'T = f"{ROOT}.mocks.camera:MockCamera"'):
+        tree = ast.parse(text)
+        found = [n.value for n in ast.walk(tree) if isinstance(n, ast.Constant) and isinstance(n.value, str)
+                 and MOCKS_IN_A_STRING.search(n.value)]
+        assert found, text
+
+
+@pytest.mark.parametrize("room", ROOMS)
+def test_no_room_reads_docstrings(room):
+    # what a method, a back end or a key is, is declared in a table, not parsed from a docstring
+    bad = [f"{file.relative_to(REPO)}" for file in _files(room) if "__doc__" in file.read_text()]
     assert not bad, bad

@@ -113,8 +113,13 @@ def test_no_board_half_board_and_wrong_counts_are_refused():
     half[:, img.shape[1] // 2:] = 110
     with pytest.raises(BoardNotFound, match="in the left image"):  # either message (the hint is heuristic)
         detect_board(half, (13, 8), what="left image")
-    for wrong in ((14, 8), (12, 8), (13, 7), (9, 6)):
-        with pytest.raises(BoardNotFound, match=f"not all of its {wrong[0]}x{wrong[1]} inner corners.*--board"):
+    # one corner off in either direction (or squares counted instead of corners): the count is named
+    for wrong in ((14, 8), (12, 8), (13, 7), (14, 9), (12, 7)):
+        with pytest.raises(BoardNotFound, match=f"has 13x8 inner corners, not {wrong[0]}x{wrong[1]}: give --board 13x8"):
+            detect_board(img, wrong)
+    # any other count: findChessboardCornersSB sees the whole board, OpenCV's detector confirms its count
+    for wrong in ((9, 6), (16, 10)):
+        with pytest.raises(BoardNotFound, match=f"has 13x8 inner corners, not {wrong[0]}x{wrong[1]}: give --board 13x8"):
             detect_board(img, wrong)
 
 
@@ -123,17 +128,17 @@ def test_a_grid_inside_a_larger_board_is_refused(monkeypatch):
     # version or detector), the squares beyond the grid still alternate and the detection is refused.
     img, truth = drawn_board(13, 8)
     sub = truth[:, :12].reshape(-1, 2)
-    monkeypatch.setattr(cb, "_find_grid", lambda gray, pattern, thorough=False: sub.copy())
+    monkeypatch.setattr(cb, "find_grid", lambda gray, pattern, search="full": cb.GridSearch(sub.copy(), "roi"))
     with pytest.raises(BoardNotFound, match="part of a larger checkerboard"):
         detect_board(img, (12, 8))
     full = truth.reshape(-1, 2)
-    monkeypatch.setattr(cb, "_find_grid", lambda gray, pattern, thorough=False: full.copy())
+    monkeypatch.setattr(cb, "find_grid", lambda gray, pattern, search="full": cb.GridSearch(full.copy(), "roi"))
     assert detect_board(img, (13, 8)).corners_px.shape == (104, 2)
 
 
 def test_low_contrast_is_refused_with_the_reason(monkeypatch):
     img, truth = drawn_board(13, 8, black=120, white=128, background=124, blur=0)
-    monkeypatch.setattr(cb, "_find_grid", lambda gray, pattern, thorough=False: truth.reshape(-1, 2).copy())
+    monkeypatch.setattr(cb, "find_grid", lambda gray, pattern, search="full": cb.GridSearch(truth.reshape(-1, 2).copy(), "roi"))
     with pytest.raises(BoardNotFound, match="grey levels"):
         detect_board(img, (13, 8), refine=False)
 
@@ -235,3 +240,26 @@ def test_conflicting_pattern_readings_are_refused(monkeypatch):
     monkeypatch.setattr(cb, "detect_board", misread_right)
     with pytest.raises(StereoMismatch, match="different board orientations"):
         observe_board(left, right, MODEL, BOARD.geometry)
+
+
+def test_a_larger_grid_seen_in_part_says_the_board_is_larger(monkeypatch):
+    # findChessboardCornersSB with CALIB_CB_LARGER may see only part of a larger board (glare, shadow); OpenCV's
+    # detector does not confirm that count, so the message says "at least" instead of naming a count
+    img, truth = drawn_board(13, 8)
+    part = truth[:3].reshape(-1, 1, 2).astype(np.float32)   # 3 rows of 13 corners
+    meta = np.zeros((3, 13), np.uint8)
+    monkeypatch.setattr(cb.cv2, "findChessboardCornersSBWithMeta", lambda *a, **k: (True, part, meta))
+    with pytest.raises(BoardNotFound, match="has more inner corners than 9x6 \\(13x3 seen at least\\): give its full"):
+        detect_board(img, (9, 6))
+
+
+def test_a_board_cut_by_the_image_edge_is_not_given_another_count():
+    # 13x8 board whose last two corner columns are outside the image: the 11x8 corners in view must not
+    # be taken for a whole 11x8 (or 12x8) board
+    img, truth = drawn_board(13, 8)
+    cut = int(truth[0, 10, 0] + SQ // 2)
+    part = np.ascontiguousarray(img[:, :cut])
+    for asked in ((13, 8), (12, 8)):
+        with pytest.raises(BoardNotFound) as info:
+            detect_board(part, asked)
+        assert "inner corners, not" not in str(info.value)

@@ -25,10 +25,12 @@ from handeye.calibration.transforms import (
 )
 from handeye.rapid.literals import pose_literal
 from handeye.station.cli import main
-from handeye.station.quality import QualityThresholds, ThresholdError, load_thresholds, rotation_axis_coverage, verdict
-from handeye.station.report import comparison_results, corner_repeatability, write_report
+from handeye.calibration.quality_words import rotation_axis_coverage
+from handeye.station.assessment import comparison_results, corner_repeatability
+from handeye.station.quality import QualityThresholds, ThresholdError, load_thresholds, verdict
+from handeye.station.report import write_report
 
-from helpers import scene
+from helpers import assessed, scene
 
 GOOD_NOISE = NoiseConfig(sigma_rob_deg=0.001, sigma_cam_mm=0.05, camera_model="gaussian", seed=1)
 PLOTS = ("per-posture residuals", "rotation-axis coverage", "method comparison",
@@ -124,8 +126,7 @@ def test_outlier_postures_are_listed_with_their_residuals_and_plotted_apart(tmp_
     outlier_check = next(c for c in judged.checks if c.name == "max_outlier_fraction")
     assert outlier_check.passed and "3 (" in outlier_check.advice and "8 (" in outlier_check.advice
 
-    comparison = comparison_results(problem, ("robust", "mcb", "tsai"), known={"robust": result})
-    path = write_report(tmp_path / "r.html", "synthetic", problem, result, comparison, judged)
+    path = write_report(tmp_path / "r.html", assessed(problem, result, "synthetic", methods=("robust", "mcb", "tsai")))
     page = path.read_text()
     _assert_self_contained(page)
     for index in (3, 8):
@@ -208,7 +209,7 @@ def test_verdict_follows_the_thresholds(good_session, tmp_path, capsys):
     assert {c.name for c in strict.failed} == {"min_inlier_postures", "max_sigma_translation_mm"}
     no_sigma = verdict(calibrate(problem, "mcb"), problem)
     sigma = next(c for c in no_sigma.checks if c.name == "max_sigma_translation_mm")
-    assert sigma.value is None and not sigma.passed and "robust" in sigma.advice
+    assert sigma.value is None and not sigma.passed and "without --method" in sigma.advice
 
     # a station config's quality section is read, the rest ignored
     config = tmp_path / "station.yaml"
@@ -382,7 +383,7 @@ def test_a_failed_result_is_greyed_out_and_says_do_not_write(tmp_path):
     assert not judged.passed
     literal = pose_literal(result.x)
     tool = "[TRUE,[[1,2,3],[1,0,0,0]],[1.8,[0,0,60],[1,0,0,0],0,0,0]]"
-    page = write_report(tmp_path / "fail.html", "s", problem, result, None, judged, tooldata_literal=tool).read_text()
+    page = write_report(tmp_path / "fail.html", assessed(problem, result, "s", tooldata_literal=tool)).read_text()
     assert "FAIL &ndash; do not write this into the robot" in page
     # no copyable literal left: both are struck through, grey and not selectable
     assert '<code class="literal">' not in page
@@ -398,7 +399,7 @@ def test_a_passed_result_stays_copyable(good_session, tmp_path):
     result = calibrate(problem)
     judged = verdict(result, problem)
     assert judged.passed
-    page = write_report(tmp_path / "pass.html", good_session, problem, result, None, judged).read_text()
+    page = write_report(tmp_path / "pass.html", assessed(problem, result, good_session)).read_text()
     assert f'<code class="literal">{pose_literal(result.x)}</code>' in page
     assert "do not write" not in page and 'class="void"' not in page and 'class="donotwrite"' not in page
     style = re.search(r"\n\.literal\{([^}]*)\}", page).group(1)

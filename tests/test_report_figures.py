@@ -12,10 +12,10 @@ import pytest
 import handeye.station.report as report
 from handeye.calibration.solve import calibrate, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, sample_session
-from handeye.station.quality import verdict
-from handeye.station.report import comparison_results, method_comparison, write_report
+from handeye.station.assessment import COMPARISON_METHODS, comparison_results, method_comparison
+from handeye.station.report import write_report
 
-from helpers import scene
+from helpers import assessed, scene
 
 GOOD_NOISE = NoiseConfig(sigma_rob_deg=0.001, sigma_cam_mm=0.05, camera_model="gaussian", seed=1)
 
@@ -96,8 +96,7 @@ CASES = {
 def test_no_text_overlaps_in_any_report_figure(case, figures, tmp_path):
     problem = _session(**CASES[case])
     result = calibrate(problem)
-    comparison = comparison_results(problem, known={"robust": result})
-    write_report(tmp_path / "r.html", "s", problem, result, comparison, verdict(result, problem))
+    write_report(tmp_path / "r.html", assessed(problem, result, "s", methods=COMPARISON_METHODS))
     assert len(figures) == 5
     for fig in figures:
         assert overlapping_texts(fig) == [], fig.axes[0].get_title()

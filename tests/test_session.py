@@ -90,3 +90,15 @@ def test_duplicate_index(tmp_path):
     (path / "postures" / "005.yaml").write_text((path / "postures" / "001.yaml").read_text())
     with pytest.raises(SessionError, match="appears twice"):
         read_session(path)
+
+
+def test_stale_temporaries_of_a_killed_writer_are_removed(tmp_path):
+    from handeye.calibration.files import remove_stale_temporaries, write_text_atomic
+
+    write_text_atomic(tmp_path / "postures" / "000.yaml", "index: 0\n")
+    stale = tmp_path / "postures" / ".000.yaml.abc123.tmp"
+    stale.write_text("index: 0\ntool0_in_")  # what a SIGKILL between write and rename leaves
+    keep = tmp_path / "notes.tmp"
+    keep.write_text("not ours")
+    assert remove_stale_temporaries(tmp_path) == [stale]
+    assert not stale.exists() and keep.exists() and (tmp_path / "postures" / "000.yaml").read_text() == "index: 0\n"

@@ -13,13 +13,12 @@ from handeye.calibration.solve import calibrate, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, sample_session, truth_dict
 from handeye.station.cli import main
 from handeye.station.origin import ORIGINS, session_origin
-from handeye.station.quality import verdict
 from handeye.station.report import write_report
 
-from helpers import scene
+from helpers import assessed, scene
 
 NOISE = NoiseConfig(sigma_rob_deg=0.001, sigma_cam_mm=0.05, camera_model="gaussian", seed=1)
-MOCK_BANNER = "MOCK SESSION</b> &ndash; captured on the embedded mock station; not a calibration of a real robot"
+MOCK_BANNER = "MOCK SESSION</b> &ndash; captured on a mock station (embedded, or a rehearsal); not a calibration of a real robot"
 
 
 def _session(tmp_path, name, capture=None, truth=False):
@@ -94,8 +93,7 @@ def test_write_report_reads_the_origin_from_the_session_folder(tmp_path):
     path = _session(tmp_path, "s", {"station": "mock"})
     problem = problem_from_session(read_session(path))
     result = calibrate(problem)
-    page = write_report(tmp_path / "r.html", path, problem, result, None, verdict(result, problem)).read_text()
+    page = write_report(tmp_path / "r.html", assessed(problem, result, path)).read_text()
     assert MOCK_BANNER in page
-    page = write_report(tmp_path / "r2.html", path, problem, result, None, verdict(result, problem),
-                        origin="real").read_text()
+    page = write_report(tmp_path / "r2.html", assessed(problem, result, path, origin="real")).read_text()
     assert "MOCK" not in page

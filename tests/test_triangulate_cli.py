@@ -81,8 +81,8 @@ def test_raw_xb3_frame_with_the_default_stereo_model(scene, capsys):
     [
         (["--left", "blank.png", "--right", "right.png"], "no checkerboard in the left image"),
         (["--left", "half.png", "--right", "right.png"], "checkerboard"),  # either message: a hint only
-        (["--left", "left.png", "--right", "right.png", "--board", "12x8"], "not all of its 12x8 inner corners"),
-        (["--left", "left.png", "--right", "right.png", "--board", "9x6"], "not all of its 9x6 inner corners"),
+        (["--left", "left.png", "--right", "right.png", "--board", "12x8"], "has 13x8 inner corners, not 12x8: give --board 13x8"),
+        (["--left", "left.png", "--right", "right.png", "--board", "9x6"], "has 13x8 inner corners, not 9x6: give --board 13x8"),
         (["--xb3-raw", "truncated.raw"], "2000000 bytes, but a 1280x960 3-sensor RGB8 XB3 frame has 3686400"),
         (["--left", "small.png", "--right", "right.png"], "left image is 640x480 but right image is 1280x960"),
         (["--left", "right.png", "--right", "left.png"], "swapped"),

@@ -22,8 +22,9 @@ import time
 from contextlib import contextmanager
 
 from handeye.drivers.controller import open_controller
+from handeye.mocks.backends import mock_protocols
 
-PROTOCOLS = ("socket", "serial", "modbus")
+PROTOCOLS = mock_protocols()  # every back end a mock serves
 TARGET_MS = 5.0
 
 

@@ -19,7 +19,6 @@ and the RMS of those ratios over all seeds and axes (honest: near 1).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import resource
 import tempfile

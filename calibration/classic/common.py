@@ -25,7 +25,8 @@ nearly 180 deg has an axis whose sign (and the sign of its quaternion's vector p
 fraction of a degree of noise, which breaks every solver that compares the axes of ``A_ij`` and
 ``B_ij``. Such pairs are dropped (for the rotation; the translation keeps the near-180 ones, which are
 its best-conditioned rows). If what is left cannot determine ``X`` (fewer than two usable pairs, all
-axes parallel) a :class:`~handeye.calibration.errors.CalibrationError` says so in one line.
+axes parallel: rotation-axis divergence of ``calibration.quality_words`` below
+``MIN_AXIS_DIVERGENCE_DEG``) a :class:`~handeye.calibration.errors.CalibrationError` says so in one line.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..errors import CalibrationError
+from ..quality_words import MIN_AXIS_DIVERGENCE_DEG, rotation_axis_divergence_deg
 from ..rotations import quaternion_from_matrix
 from ..transforms import invert_transforms, transform_from_rotation_translation
 
@@ -43,7 +45,7 @@ __all__ = [
     "MIN_POSTURES",
     "MIN_PAIR_ANGLE_DEG",
     "MAX_PAIR_ANGLE_DEG",
-    "MIN_AXIS_SPREAD_DEG",
+    "MIN_AXIS_DIVERGENCE_DEG",
     "MAX_DEFAULT_PAIRS",
     "Motions",
     "check_poses",
@@ -70,9 +72,6 @@ MIN_POSTURES = 3
 MIN_PAIR_ANGLE_DEG = 2.0
 #: Pairs rotating more than this (deg) have a sign-ambiguous axis: dropped for the rotation.
 MAX_PAIR_ANGLE_DEG = 175.0
-#: RMS angle (deg) of the kept pairs' rotation axes about their mean direction below which the axes
-#: count as parallel (the rotation about that direction is then undetermined).
-MIN_AXIS_SPREAD_DEG = 2.0
 #: Above this many pairs the default keeps an evenly spread subset of all pairs (memory stays ~100 MB).
 MAX_DEFAULT_PAIRS = 20000
 #: Largest accepted ``max |R^T R - I|`` of an input rotation before it is refused.
@@ -236,13 +235,10 @@ def rotation_angles_deg(rotation) -> np.ndarray:
     return np.degrees(Rotation.from_matrix(rotation.reshape(-1, 3, 3)).magnitude()).reshape(lead)
 
 
-def _axis_spread_deg(rotation) -> float:
-    """RMS angle (deg) of the rotation axes about their principal direction (sign-free)."""
+def _unit_axes(rotation) -> np.ndarray:
+    """Unit rotation axes ``(p, 3)`` of rotation matrices ``(p, 3, 3)`` (none of them the identity)."""
     axes = Rotation.from_matrix(rotation).as_rotvec()
-    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
-    scatter = axes.T @ axes / len(axes)
-    largest = np.linalg.eigvalsh(scatter)[-1]
-    return float(np.degrees(np.arcsin(np.sqrt(np.clip(1.0 - largest, 0.0, 1.0)))))
+    return axes / np.linalg.norm(axes, axis=1, keepdims=True)
 
 
 def prepare_motions(hand, target2cam, pairs=None) -> Motions:
@@ -280,10 +276,10 @@ def prepare_motions(hand, target2cam, pairs=None) -> Motions:
             f"only {int(keep.sum())} of {len(pairs)} posture pairs rotate by between {MIN_PAIR_ANGLE_DEG:g} and "
             f"{MAX_PAIR_ANGLE_DEG:g} deg; rotate the flange by 15-90 deg about different axes between postures"
         )
-    spread = _axis_spread_deg(a[keep, :3, :3])
-    if spread < MIN_AXIS_SPREAD_DEG:
+    divergence = rotation_axis_divergence_deg(_unit_axes(a[keep, :3, :3]))  # calibration.quality_words
+    if divergence < MIN_AXIS_DIVERGENCE_DEG:
         raise CalibrationError(
-            f"all relative rotations are about nearly parallel axes (spread {spread:.2f} deg); "
+            f"all relative rotations are about nearly parallel axes (rotation-axis divergence {divergence:.2f} deg); "
             f"rotate the flange about at least two different axes"
         )
     moving = angle_a >= MIN_PAIR_ANGLE_DEG

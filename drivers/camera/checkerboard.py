@@ -1,9 +1,28 @@
 """Checkerboard corners in images, in the canonical order of the target frame, and their 3D positions.
 
-Detection: ``cv2.findChessboardCorners`` (adaptive threshold, fast check: a few milliseconds at
-1280x960, found or not), retried on a half-size copy of large images (made with ``INTER_AREA``, so
-a half-size pixel ``x`` is full-size ``2x + 0.5``), then ``cv2.cornerSubPix`` on the full image with
-a half-window of 0.4 x the smallest corner spacing.
+Detection tries cheap searches first and OpenCV's exhaustive ones only when those fail, so that a
+board is found wherever ``cv2.findChessboardCorners`` with its default flags finds it, but usually in
+a fraction of its time (:data:`SEARCH_STAGES`, :func:`find_grid`):
+
+1. ``roi``: the board's region is located on a small copy of the image (where strong horizontal and
+   vertical gradients meet: the squares' corners), cropped at full size with a margin, and searched
+   by ``findChessboardCorners`` with the adaptive threshold alone. Without the global histogram
+   equalisation of ``CALIB_CB_NORMALIZE_IMAGE`` a glare spot or a shadow does not wash out the rest
+   of the board, and the crop keeps the search cheap (tens of ms at 1280x960), found or not.
+2. ``fast``: ``findChessboardCorners`` with the fast check (adaptive threshold, normalised image), on
+   a half-size copy of large images (``INTER_AREA``, so a half-size pixel ``x`` is full-size
+   ``2x + 0.5``): a few milliseconds when there is no board.
+3. ``full``: ``findChessboardCorners(image, pattern)`` exactly as OpenCV's default call, on the whole
+   image: the guarantee that nothing OpenCV finds is missed (slow when it fails: up to seconds).
+4. ``sb``: ``findChessboardCornersSB`` (normalised, exhaustive) on the region of stage 1 (or a
+   half-size copy of large images): another detector, which survives blur and noise.
+
+Then ``cv2.cornerSubPix`` on the full image with a half-window of 0.4 x the smallest corner spacing.
+``search="fast"`` stops after stage 1 (a live preview that must keep up with the camera). Measured
+on hard renders and real photographs: ``benchmarks/vision/bench_detection.py``. Every detection is
+checked for corners off the smooth grid through the others (:func:`off_grid_corners`): a glare spot
+or a shadow edge can move a corner by many pixels without the detector noticing; such corners are
+listed (``Detection.off_grid``) and :func:`observe_board` refuses the board.
 
 Canonical order (target frame of conventions.md): corner index ``k = row * nx + col``; the origin
 is a corner of the grid, x runs along the rows (``nx = corners[0]`` corners), y along the
@@ -24,7 +43,8 @@ grid continue the checker pattern (the board has more corners than asked for).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import time
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -38,6 +58,11 @@ __all__ = [
     "BoardObservation",
     "as_board",
     "detect_board",
+    "find_grid",
+    "off_grid_corners",
+    "GridSearch",
+    "board_region",
+    "SEARCH_STAGES",
     "canonical_orderings",
     "pattern_score",
     "board_pose_from_corners",
@@ -47,8 +72,17 @@ __all__ = [
 ]
 
 DETECT_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
-#: Images at least this wide are searched again at half size when the full-size search fails.
+#: OpenCV's default flags of ``findChessboardCorners`` (stage ``full``).
+OPENCV_DEFAULT_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
+#: Stage ``roi``: adaptive threshold without the global equalisation.
+ROI_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH
+SB_FLAGS = cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_EXHAUSTIVE
+#: The searches of :func:`find_grid`, in the order they are tried.
+SEARCH_STAGES = ("roi", "fast", "full", "sb")
+#: Images at least this wide are searched at half size in stages ``fast`` and ``sb``.
 HALF_SIZE_FROM_WIDTH = 1000
+#: The board region is located on a copy about this wide.
+REGION_WIDTH = 320
 SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-4)
 #: Refinement half-window as a fraction of the smallest corner spacing, and its bounds (px).
 WINDOW_FRACTION = 0.4
@@ -57,6 +91,9 @@ WINDOW_MIN, WINDOW_MAX = 2, 15
 MIN_CONTRAST = 12.0
 #: Alternation (as a fraction of the contrast) beyond the grid above which the board is larger than asked.
 MAX_OUTER_ALTERNATION = 0.5
+#: A corner further than this from the smooth grid through the others is off the grid (px, and as a
+#: fraction of the corner spacing): glare or a shadow edge moved it.
+OFF_GRID_PX, OFF_GRID_FRACTION = 1.5, 0.06
 #: Largest RMS rectified row disagreement (px) of a stereo detection before it is refused.
 MAX_ROW_DISAGREEMENT_PX = 2.0
 
@@ -109,6 +146,14 @@ class Detection:
         Mean white minus mean black grey level of the inner squares in this ordering (> 0).
     alternatives : tuple of ndarray
         The other ordering(s) with the right handedness (the 180-deg turn), for stereo matching.
+    stage : str
+        The search stage of :func:`find_grid` that found the board (``fast``, ``roi``, ``full``, ``sb``).
+    off_grid : tuple of int
+        Indices of corners that do not lie on the smooth grid through the others (:func:`off_grid_corners`:
+        glare or a shadow edge moved them); the detector found the board, but these corners are not
+        measurements. Triangulation refuses such a board; calibration leaves the view out.
+    off_grid_px : float
+        The largest distance of a corner from that grid.
     """
 
     corners_px: np.ndarray
@@ -117,6 +162,16 @@ class Detection:
     ambiguous: bool
     pattern_score: float
     alternatives: tuple = ()
+    stage: str = ""
+    off_grid: tuple = ()
+    off_grid_px: float = 0.0
+
+    def off_grid_message(self, what: str = "image") -> str:
+        """One line for a board whose corners are off its grid (empty when they are all on it)."""
+        if not self.off_grid:
+            return ""
+        return (f"{len(self.off_grid)} corner(s) of the board in the {what} are up to {self.off_grid_px:.1f} px off its "
+                f"grid (glare or a shadow edge on the board): move the light or turn the board")
 
     @property
     def grid(self) -> np.ndarray:
@@ -141,27 +196,241 @@ def _gray_u8(image: np.ndarray, what: str = "image") -> np.ndarray:
     return np.ascontiguousarray(image)
 
 
-def _find_grid(gray: np.ndarray, pattern: tuple[int, int], thorough: bool = False) -> np.ndarray | None:
-    """Detector corners ``(n, 2)`` at full-size pixel coordinates, or ``None``.
-
-    Tries the full image with the fast check (a few ms either way), then a half-size copy of large
-    images (corners mapped back with ``x = 2 x_half + 0.5``); ``thorough`` adds a search without the
-    fast check (slow when there is no board: up to seconds at 1280x960).
-    """
-    found, corners = cv2.findChessboardCorners(gray, pattern, flags=DETECT_FLAGS)
-    if found:
-        return corners.reshape(-1, 2).astype(np.float64)
+def _half(gray: np.ndarray) -> np.ndarray:
     h, w = gray.shape
-    if w >= HALF_SIZE_FROM_WIDTH:
-        small = cv2.resize(gray, (w // 2, h // 2), interpolation=cv2.INTER_AREA)
-        found, corners = cv2.findChessboardCorners(small, pattern, flags=DETECT_FLAGS)
-        if found:
-            return corners.reshape(-1, 2).astype(np.float64) * 2.0 + 0.5
-    if thorough:
-        found, corners = cv2.findChessboardCorners(gray, pattern, flags=DETECT_FLAGS & ~cv2.CALIB_CB_FAST_CHECK)
-        if found:
-            return corners.reshape(-1, 2).astype(np.float64)
-    return None
+    return cv2.resize(gray, (w // 2, h // 2), interpolation=cv2.INTER_AREA)
+
+
+def _opencv_grid(image: np.ndarray, pattern, flags: int) -> np.ndarray | None:
+    found, corners = cv2.findChessboardCorners(image, pattern, flags=flags)
+    return corners.reshape(-1, 2).astype(np.float64) if found else None
+
+
+def board_region(gray: np.ndarray) -> tuple[int, int, int, int] | None:
+    """Bounding box ``(x0, y0, x1, y1)`` (full-size pixels, ``x1``/``y1`` exclusive) of where the board
+    probably is, or ``None``.
+
+    On a copy about :data:`REGION_WIDTH` pixels wide, the corner energy ``min(blur|gx|, blur|gy|)``
+    (large where a square's vertical and horizontal edges meet, small along a single edge, a shadow's
+    border or in flat areas) is thresholded at a quarter of its maximum; the box holds every blob of
+    at least a fifth of the largest one's area (a shadow may cut the board in two), plus a margin of
+    10 % of its size and 8 px (OpenCV refuses corners within 8 px of the image's border).
+    """
+    h, w = gray.shape
+    scale = max(1, int(round(w / REGION_WIDTH)))
+    small = cv2.resize(gray, (max(1, w // scale), max(1, h // scale)), interpolation=cv2.INTER_AREA)
+    gx = np.abs(cv2.Sobel(small, cv2.CV_32F, 1, 0, ksize=3))
+    gy = np.abs(cv2.Sobel(small, cv2.CV_32F, 0, 1, ksize=3))
+    energy = cv2.blur(np.minimum(cv2.blur(gx, (5, 5)), cv2.blur(gy, (5, 5))), (9, 9))
+    peak = float(energy.max())
+    if peak < 4.0:  # flat image
+        return None
+    mask = (energy > 0.25 * peak).astype(np.uint8)
+    n, _, stats, _ = cv2.connectedComponentsWithStats(mask)
+    if n <= 1:
+        return None
+    areas = stats[1:, cv2.CC_STAT_AREA]
+    big = 1 + np.nonzero(areas >= 0.2 * areas.max())[0]
+    x0, y0 = stats[big, 0].min(), stats[big, 1].min()
+    x1 = (stats[big, 0] + stats[big, 2]).max()
+    y1 = (stats[big, 1] + stats[big, 3]).max()
+    margin = 0.1 * max(x1 - x0, y1 - y0) * scale + 8
+    box = (int(max(0, x0 * scale - margin)), int(max(0, y0 * scale - margin)),
+           int(min(w, x1 * scale + margin)), int(min(h, y1 * scale + margin)))
+    if box[2] - box[0] < 16 or box[3] - box[1] < 16:
+        return None
+    return box
+
+
+@dataclass(frozen=True)
+class GridSearch:
+    """What :func:`find_grid` found.
+
+    Attributes
+    ----------
+    corners : ndarray, shape (nx*ny, 2), or None
+        Detector corners at full-size pixel coordinates (not yet refined, in the detector's order).
+    stage : str
+        The stage of :data:`SEARCH_STAGES` that found them (``""`` when none did).
+    other_pattern : tuple of int or None
+        Inner corners ``(nx, ny)`` of a whole board found instead when the asked count was not (the
+        count given is wrong).
+    larger_seen : tuple of int or None
+        A grid of more inner corners than asked seen in the board's region (long side first): the
+        board is larger than the count given.
+    seconds : dict
+        Time spent per stage tried.
+    """
+
+    corners: np.ndarray | None
+    stage: str = ""
+    other_pattern: tuple | None = None
+    larger_seen: tuple | None = None
+    seconds: dict = field(default_factory=dict)
+
+
+def _neighbour_patterns(pattern) -> list[tuple[int, int]]:
+    """Counts one off the asked one (squares given for corners first), long side first, at least 3x3."""
+    nx, ny = pattern
+    out = []
+    for dx, dy in ((-1, -1), (1, 1), (-1, 0), (0, -1), (1, 0), (0, 1)):
+        a, b = nx + dx, ny + dy
+        if a >= b and b >= 3 and (a, b) not in out:
+            out.append((a, b))
+    return out
+
+
+def _whole_board(corners: np.ndarray, pattern, gray: np.ndarray) -> bool:
+    """Whether a grid found for ``pattern`` is a whole board of its own: its outer squares lie inside the
+    image (a board cut by the image's edge shows fewer corners than it has) and no checker pattern
+    continues beyond them."""
+    nx, ny = pattern
+    grid = corners.reshape(ny, nx, 2)
+    h, w = gray.shape
+    beyond = np.concatenate([2 * grid[:, 0] - grid[:, 1], 2 * grid[:, -1] - grid[:, -2],
+                             2 * grid[0] - grid[1], 2 * grid[-1] - grid[-2]])
+    if np.any(beyond < 2) or np.any(beyond[:, 0] > w - 3) or np.any(beyond[:, 1] > h - 3):
+        return False
+    candidates = canonical_orderings(grid)
+    if not candidates:
+        return False
+    contrast = max(abs(pattern_score(c, gray)) for c in candidates)
+    return bool(np.isfinite(contrast) and contrast >= MIN_CONTRAST
+                and _outer_alternation(candidates[0], gray, contrast) <= MAX_OUTER_ALTERNATION)
+
+
+def find_grid(gray: np.ndarray, pattern: tuple[int, int], search: str = "full") -> GridSearch:
+    """Search the board with the stages of :data:`SEARCH_STAGES` in turn (see the module docstring).
+
+    Parameters
+    ----------
+    gray : ndarray, shape (h, w), uint8
+    pattern : (nx, ny)
+        Inner corners.
+    search : {"full", "fast"}
+        ``"full"`` tries every stage before giving up; ``"fast"`` only the first (``roi``).
+
+    Returns
+    -------
+    GridSearch
+        With ``search="full"``, when the cheap stages fail but a checkerboard is in view, boards one
+        corner off in either direction are looked for in its region (a wrong count makes OpenCV's
+        exhaustive search take up to tens of seconds); a whole board found that way ends the search
+        with ``other_pattern`` set, and so does a grid larger than asked (``findChessboardCornersSB``
+        with ``CALIB_CB_LARGER``), with ``larger_seen``.
+    """
+    if search not in ("full", "fast"):
+        raise ValueError(f"search must be 'full' or 'fast'; got {search!r}")
+    h, w = gray.shape
+    large = w >= HALF_SIZE_FROM_WIDTH
+    seconds = {}
+    clock = time.perf_counter()
+
+    def lap(stage):
+        nonlocal clock
+        now = time.perf_counter()
+        seconds[stage] = now - clock
+        clock = now
+
+    region = board_region(gray)
+    crop = None
+    if region is not None:
+        x0, y0, x1, y1 = region
+        crop = np.ascontiguousarray(gray[y0:y1, x0:x1])
+        corners = _opencv_grid(crop, pattern, ROI_FLAGS)
+        lap("roi")
+        if corners is not None:
+            return GridSearch(corners + (x0, y0), "roi", seconds=seconds)
+    if search == "fast":
+        return GridSearch(None, seconds=seconds)
+    half = _half(gray) if large else None
+    corners = _opencv_grid(half if large else gray, pattern, DETECT_FLAGS)
+    lap("fast")
+    if corners is not None:
+        return GridSearch(corners * 2.0 + 0.5 if large else corners, "fast", seconds=seconds)
+    if crop is not None and cv2.checkChessboard(crop, pattern):
+        for other in _neighbour_patterns(pattern):
+            found = _opencv_grid(crop, other, ROI_FLAGS)
+            if found is not None and _whole_board(found + region[:2], other, gray):
+                lap("count")
+                return GridSearch(None, other_pattern=other, seconds=seconds)
+        # A grid larger than asked (findChessboardCornersSB may return more corners than its pattern):
+        # whatever OpenCV's exhaustive search could find would be part of that larger board.
+        ok, seen, meta = cv2.findChessboardCornersSBWithMeta(crop, (3, 3), flags=cv2.CALIB_CB_LARGER | SB_FLAGS)
+        lap("count")
+        if ok and meta is not None and seen is not None and len(seen) == meta.shape[0] * meta.shape[1]:
+            rows, cols = (int(v) for v in meta.shape[:2])
+            a, b = max(rows, cols), min(rows, cols)
+            if (a, b) != tuple(pattern) and a >= 3 and b >= 3:  # a whole board of another count? OpenCV confirms
+                found = _opencv_grid(crop, (a, b), ROI_FLAGS)
+                lap("count")
+                if found is not None and _whole_board(found + region[:2], (a, b), gray):
+                    return GridSearch(None, other_pattern=(a, b), seconds=seconds)
+            if a > pattern[0] or b > pattern[1]:
+                return GridSearch(None, larger_seen=(a, b), seconds=seconds)
+    corners = _opencv_grid(gray, pattern, OPENCV_DEFAULT_FLAGS)
+    lap("full")
+    if corners is not None:
+        return GridSearch(corners, "full", seconds=seconds)
+    # SB costs grow with the area searched: the region when it is small, else the half-size image
+    if region is not None and (region[2] - region[0]) * (region[3] - region[1]) < 0.25 * w * h:
+        found, corners = cv2.findChessboardCornersSB(crop, pattern, flags=SB_FLAGS)
+        offset, scale = np.array(region[:2], float), 1.0
+    else:
+        found, corners = cv2.findChessboardCornersSB(half if large else gray, pattern, flags=SB_FLAGS)
+        offset, scale = (np.array([0.5, 0.5]) if large else np.zeros(2)), (2.0 if large else 1.0)
+    lap("sb")
+    if found:
+        return GridSearch(corners.reshape(-1, 2).astype(np.float64) * scale + offset, "sb", seconds=seconds)
+    return GridSearch(None, seconds=seconds)
+
+
+def _monomials(u: np.ndarray, v: np.ndarray, degree: int) -> np.ndarray:
+    return np.column_stack([u**i * v**j for i in range(degree + 1) for j in range(degree + 1 - i)])
+
+
+def off_grid_corners(grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Corners that do not lie on the smooth grid through the others.
+
+    A polynomial map from grid indices to pixels (cubic for 30 corners or more, quadratic from 12:
+    perspective and lens distortion are smooth at the scale of a board) is fitted to all corners,
+    then refitted without the worst one while it is further than ``max(OFF_GRID_PX,
+    OFF_GRID_FRACTION x spacing)`` from the fit. Glare and shadow edges move single corners by
+    several pixels; good corners stay within a few tenths.
+
+    Parameters
+    ----------
+    grid : ndarray, shape (ny, nx, 2)
+
+    Returns
+    -------
+    indices : ndarray of int
+        Flat indices ``row * nx + col`` of the corners off the grid (empty when all fit).
+    residuals_px : ndarray, shape (nx*ny,)
+        Each corner's distance from the final fit.
+    """
+    ny, nx = grid.shape[:2]
+    n = nx * ny
+    degree = 3 if n >= 30 else 2 if n >= 12 else 0
+    pts = grid.reshape(-1, 2)
+    if degree == 0:
+        return np.zeros(0, int), np.zeros(n)
+    spacing = float(np.median(np.concatenate([np.linalg.norm(np.diff(grid, axis=1), axis=2).ravel(),
+                                              np.linalg.norm(np.diff(grid, axis=0), axis=2).ravel()])))
+    limit = max(OFF_GRID_PX, OFF_GRID_FRACTION * spacing)
+    cols, rows = np.meshgrid(np.arange(nx), np.arange(ny))
+    u = (cols.ravel() - (nx - 1) / 2) / max(nx - 1, 1)
+    v = (rows.ravel() - (ny - 1) / 2) / max(ny - 1, 1)
+    basis = _monomials(u, v, degree)
+    keep = np.ones(n, bool)
+    for _ in range(n // 4):
+        coef, *_ = np.linalg.lstsq(basis[keep], pts[keep], rcond=None)
+        residuals = np.linalg.norm(basis @ coef - pts, axis=1)
+        worst = int(np.argmax(np.where(keep, residuals, -1.0)))
+        if residuals[worst] <= limit or keep.sum() <= basis.shape[1] + 4:
+            break
+        keep[worst] = False
+    return np.nonzero(residuals > limit)[0], residuals
 
 
 def _refine(gray: np.ndarray, grid: np.ndarray) -> np.ndarray:
@@ -250,7 +519,7 @@ def _outer_alternation(grid: np.ndarray, image: np.ndarray, contrast: float) -> 
 
 
 def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside: bool = True,
-                 thorough: bool = False, what: str = "image") -> Detection:
+                 search: str = "full", what: str = "image") -> Detection:
     """Find the board's inner corners in one image and put them in canonical order.
 
     Parameters
@@ -262,8 +531,10 @@ def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside
         Sub-pixel refinement (``cornerSubPix``).
     check_outside : bool
         Refuse grids that are part of a larger board.
-    thorough : bool
-        Also search without OpenCV's fast check (finds hard boards; slow when there is none).
+    search : {"full", "fast"}
+        ``"full"``: every stage of :func:`find_grid` before the board is declared missing (finds
+        it wherever OpenCV's default ``findChessboardCorners`` does; slow when there is none);
+        ``"fast"``: the region search only (a live preview).
     what : str
         Name of the image in messages ("left image", ...).
 
@@ -279,7 +550,16 @@ def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside
     board = as_board(board)
     gray = _gray_u8(image, what)
     nx, ny = board.corners
-    found = _find_grid(gray, (nx, ny), thorough)
+    result = find_grid(gray, (nx, ny), search)
+    if result.other_pattern is not None:
+        a, b = result.other_pattern
+        raise BoardNotFound(f"the board in the {what} has {a}x{b} inner corners, not {nx}x{ny}: give --board {a}x{b} "
+                            f"(inner corners, long side first)")
+    if result.larger_seen is not None:
+        a, b = result.larger_seen
+        raise BoardNotFound(f"the board in the {what} has more inner corners than {nx}x{ny} ({a}x{b} seen at least): "
+                            f"give its full inner-corner count (--board, long side first)")
+    found, stage = result.corners, result.stage
     if found is None:
         if cv2.checkChessboard(gray, (nx, ny)):
             raise BoardNotFound(
@@ -319,7 +599,9 @@ def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside
             )
     others = tuple(c.reshape(-1, 2) for k, c in enumerate(candidates) if k != best)
     h, w = gray.shape
-    return Detection(chosen.reshape(-1, 2), board, (w, h), ambiguous, float(scores[best]), others)
+    off, residuals = off_grid_corners(chosen)
+    return Detection(chosen.reshape(-1, 2), board, (w, h), ambiguous, float(scores[best]), others, stage,
+                     tuple(int(i) for i in off), float(residuals.max()) if len(off) else 0.0)
 
 
 def board_pose_from_corners(corners_px, board, camera_matrix, dist_coeffs=None) -> tuple[np.ndarray, float]:
@@ -432,7 +714,8 @@ def observe_board(left: np.ndarray, right: np.ndarray, model: StereoModel, board
     FrameError
         Image sizes differ from each other or from the model.
     BoardNotFound
-        The board is not (completely) seen in one of the images.
+        The board is not (completely) seen in one of the images, or some of its corners are off its
+        grid (glare, a shadow edge: :attr:`Detection.off_grid`).
     StereoMismatch
         The two detections do not agree with the stereo model.
     """
@@ -453,6 +736,9 @@ def observe_board(left: np.ndarray, right: np.ndarray, model: StereoModel, board
         )
     det_left = detect_board(left, board, what="left image")
     det_right = detect_board(right, board, what="right image")
+    for det, name in ((det_left, "left image"), (det_right, "right image")):
+        if det.off_grid:
+            raise BoardNotFound(det.off_grid_message(name))
     # Make the right ordering agree with the left one: among the right image's orderings with the
     # correct handedness, corresponding corners share rectified rows and have positive disparity.
     options = [det_right.corners_px, *det_right.alternatives]
@@ -480,7 +766,7 @@ def observe_board(left: np.ndarray, right: np.ndarray, model: StereoModel, board
     if best != 0:
         rest = tuple(o for k, o in enumerate(options) if k != best)
         det_right = Detection(right_corners, board, det_right.image_size, det_right.ambiguous,
-                              det_right.pattern_score, rest)
+                              det_right.pattern_score, rest, det_right.stage)
     tri = model.triangulate(det_left.corners_px, right_corners)
     quality = board_quality(tri.points_mm, board, tri.row_disagreement_px)
     quality["corners_left"] = int(len(det_left.corners_px))

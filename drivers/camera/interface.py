@@ -4,17 +4,18 @@ A back end connects, grabs :class:`StereoFrame` objects and closes; it is a cont
 
     with open_camera("xb3") as camera:          # the real Bumblebee XB3 (libdc1394)
         frame = camera.grab(timeout_s=2.0)
-    with open_camera("mock", seed=1) as camera: # the simulated XB3 of handeye.mocks.camera
+    with open_camera("mock", seed=1) as camera: # the simulated XB3 (registered by handeye.mocks)
         frame = camera.grab()
 
-Back ends are found by name in :data:`BACKENDS` ("module:Class", imported only when asked for),
-the way pyvisa finds ``pyvisa-sim``: the drivers do not import the mocks; the mock registers
-itself under the name ``mock``. :func:`register_backend` adds more.
+Back ends are found by name in :data:`~handeye.drivers.camera.backends.CAMERAS` (their classes are
+imported only when opened), the way pyvisa finds ``pyvisa-sim``: the drivers do not import the
+mocks; the mocks register their camera under the name ``mock`` when ``handeye.mocks`` is imported.
+:func:`~handeye.drivers.camera.backends.register_backend` and the ``handeye.cameras`` entry points
+add more.
 """
 
 from __future__ import annotations
 
-import importlib
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
@@ -22,15 +23,7 @@ import numpy as np
 
 from .errors import CameraError
 
-__all__ = ["StereoFrame", "Camera", "BACKENDS", "register_backend", "open_camera"]
-
-_ROOT = __package__.rsplit(".", 2)[0]  # "handeye"
-
-#: Back-end name -> "module:Class"; the module is imported by :func:`open_camera` only.
-BACKENDS: dict[str, str] = {
-    "xb3": f"{_ROOT}.drivers.camera.xb3:XB3Camera",
-    "mock": f"{_ROOT}.mocks.camera:MockCamera",
-}
+__all__ = ["StereoFrame", "Camera", "open_camera"]
 
 
 @dataclass
@@ -112,30 +105,14 @@ class Camera(ABC):
         self.close()
 
 
-def register_backend(name: str, target) -> None:
-    """Register a back end: ``target`` is a Camera sub-class or a ``"module:Class"`` string."""
-    BACKENDS[name.lower()] = target
-
-
-def _resolve(name: str):
-    try:
-        target = BACKENDS[name.lower()]
-    except KeyError:
-        raise CameraError(f"unknown camera back end {name!r}; choose one of {', '.join(sorted(BACKENDS))}") from None
-    if not isinstance(target, str):
-        return target
-    module_name, _, class_name = target.partition(":")
-    module = importlib.import_module(module_name)
-    return getattr(module, class_name)
-
-
 def open_camera(backend_name: str = "xb3", *, connect: bool = True, **options) -> Camera:
     """Create (and by default connect) the camera back end ``backend_name``.
 
     Parameters
     ----------
     backend_name : str
-        ``"xb3"`` (Bumblebee XB3 on libdc1394) or ``"mock"`` (simulated XB3), or a registered name.
+        ``"xb3"`` (Bumblebee XB3 on libdc1394), ``"mock"`` (simulated XB3, once ``handeye.mocks`` is
+        imported), or another registered name.
     connect : bool
         Connect before returning (a failure raises and leaves nothing open).
     **options
@@ -145,8 +122,13 @@ def open_camera(backend_name: str = "xb3", *, connect: bool = True, **options) -
     ------
     CameraError
     """
-    cls = _resolve(backend_name)
-    camera = cls(**options)
+    from .backends import CAMERAS
+
+    try:
+        backend = CAMERAS[backend_name]
+    except KeyError:
+        raise CameraError(CAMERAS.unknown(backend_name)) from None
+    camera = backend.load()(**options)
     if connect:
         camera.connect()
     return camera

@@ -407,8 +407,12 @@ def load_stereo_model(path) -> StereoModel:
     return model
 
 
-def save_stereo_model(path, model: StereoModel) -> Path:
-    """Write ``model`` as an OpenCV FileStorage YAML file; returns the path."""
+def save_stereo_model(path, model: StereoModel, extra: dict | None = None) -> Path:
+    """Write ``model`` as an OpenCV FileStorage YAML file; returns the path.
+
+    ``extra`` adds entries after the model's (numbers or strings, e.g. the calibration's RMS error);
+    :func:`load_stereo_model` ignores them.
+    """
     path = Path(path)
     fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
     try:
@@ -417,6 +421,15 @@ def save_stereo_model(path, model: StereoModel) -> Path:
                 fs.write(key, int(value))
             else:
                 fs.write(key, np.asarray(value, dtype=np.float64))
+        for key, value in (extra or {}).items():
+            if isinstance(value, str):
+                fs.write(key, value)
+            elif isinstance(value, (bool, np.bool_)):
+                fs.write(key, int(value))
+            elif isinstance(value, (int, np.integer)):
+                fs.write(key, int(value))
+            else:
+                fs.write(key, float(value))
     finally:
         fs.release()
     return path

@@ -1,45 +1,38 @@
-"""Exceptions of the controller link, shared by every back end.
+"""Exceptions of the controller link: the shared kinds of ``drivers/errors.py``, under the names the
+controller side uses. Every back end raises these same classes with its name (``.backend``)::
 
-The tree (each back end adds its own leaves, e.g. ``SocketTimeout``)::
-
-    ControllerError (drivers/errors.py)
+    StationError (drivers/errors.py)
      +-- ProtocolError                 a reply that cannot be understood (garbage, wrong id)
-     +-- ControllerTimeout             no answer within the timeout
-     +-- ControllerConnectionError     cannot connect, or the link dropped and reconnecting failed
-     +-- ControllerRefused             the controller answered with an error (``code``)
-     +-- InvalidRequest (ValueError)   refused on the PC side before anything was sent
+     +-- ControllerTimeout             no answer within the timeout            (= LinkTimeout)
+     +-- ControllerConnectionError     cannot connect, or reconnecting failed  (= LinkConnectionError)
+     +-- ControllerRefused             the controller answered with an error (``code``)  (= Refused)
+     +-- ControllerError               anything else on the controller's side
+          +-- InvalidRequest (ValueError)   refused on the PC side before anything was sent
+    ConfigError                        a bad option, back-end name or register map
 """
 
 from __future__ import annotations
 
-from ..errors import ControllerError, ControllerTimeout, ProtocolError
+from ..errors import (
+    ConfigError,
+    ControllerConnectionError,
+    ControllerError,
+    ControllerRefused,
+    ControllerTimeout,
+    ProtocolError,
+    StationError,
+)
 
 __all__ = [
+    "StationError",
     "ControllerError",
     "ProtocolError",
     "ControllerTimeout",
     "ControllerConnectionError",
     "ControllerRefused",
+    "ConfigError",
     "InvalidRequest",
 ]
-
-
-class ControllerConnectionError(ControllerError):
-    """The controller cannot be reached, or the link dropped and could not be re-established."""
-
-
-class ControllerRefused(ControllerError):
-    """The controller understood the request and refused it.
-
-    Attributes
-    ----------
-    code : int
-        The error code of the reply (see ``protocol.ERROR_CODES``).
-    """
-
-    def __init__(self, message: str, code: int = 0):
-        super().__init__(message)
-        self.code = int(code)
 
 
 class InvalidRequest(ControllerError, ValueError):

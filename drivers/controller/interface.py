@@ -17,7 +17,6 @@ Example
 
 from __future__ import annotations
 
-import importlib
 import logging
 import threading
 import time
@@ -39,16 +38,9 @@ from .types import (
     robot_model,
 )
 
-__all__ = ["Controller", "Deadline", "LinkDown", "BACKENDS", "open_controller", "read_robot_state"]
+__all__ = ["Controller", "Deadline", "LinkDown", "open_controller", "read_robot_state"]
 
 log = logging.getLogger(__name__)
-
-#: Back-end name -> "module:Class" (imported lazily, so serial/modbus libraries load only when used).
-BACKENDS = {
-    "socket": "socket_client:SocketController",
-    "serial": "serial_client:SerialController",
-    "modbus": "modbus_client:ModbusController",
-}
 
 
 class LinkDown(Exception):
@@ -93,7 +85,7 @@ class Controller(ABC):
         First wait before reconnecting, doubled after each failure up to the maximum.
     robot : str
         Robot model for joint-limit checks (default ``IRB1400``).
-    postures : array-like, shape (n, 6), optional
+    postures : array-like, shape (n, dof), optional
         The approved postures the PC expects (the plan the RAPID program was generated from):
         checked against the joint limits at construction and before each move.
     max_tool_mass_kg : float
@@ -107,13 +99,21 @@ class Controller(ABC):
         controller). :meth:`set_tool` refuses to write without it. Never printed.
     """
 
-    #: Back-end name; set by subclasses.
+    #: Back-end name; set by subclasses (the name it is registered under).
     protocol = "abstract"
-    # Exception classes raised by this back end (subclasses override with their own leaves).
-    connection_error = ControllerConnectionError
-    timeout_error = ControllerTimeout
-    protocol_error = ProtocolError
-    refused_error = ControllerRefused
+
+    # The shared error kinds (drivers/errors.py), named after this back end.
+    def connection_error(self, message: str) -> ControllerConnectionError:
+        return ControllerConnectionError(message, backend=self.protocol)
+
+    def timeout_error(self, message: str) -> ControllerTimeout:
+        return ControllerTimeout(message, backend=self.protocol)
+
+    def protocol_error(self, message: str) -> ProtocolError:
+        return ProtocolError(message, backend=self.protocol)
+
+    def refused_error(self, message: str, code: int = 0) -> ControllerRefused:
+        return ControllerRefused(message, code, backend=self.protocol)
 
     def __init__(self, *, timeout: float = 2.0, motion_timeout: float = 120.0, retries: int = 3,
                  backoff_s: float = 0.05, backoff_max_s: float = 1.0, robot: str = "IRB1400",
@@ -274,7 +274,7 @@ class Controller(ABC):
         ----------
         k : int
             Index into the postures embedded in the RAPID program.
-        expected_joints : array-like, shape (6,), optional
+        expected_joints : array-like, shape (dof,), optional
             The joint angles the PC expects at ``k``: refused if outside the joint limits.
         wait : bool
             Return only when the robot stands still at ``k`` (default); else return None as soon as
@@ -357,10 +357,12 @@ class Controller(ABC):
 
 
 def open_controller(name: str, *, connect: bool = True, **options) -> Controller:
-    """A controller back end by name (``socket``, ``serial``, ``modbus``), connected unless ``connect=False``.
+    """A controller back end by name (``socket``, ``serial``, ``modbus``, or a registered one), connected
+    unless ``connect=False``.
 
     Options are the back end's keyword arguments (``host``, ``port``, ``url``, ``register_map``,
-    ``timeout`` ...) plus those of :class:`Controller`.
+    ``timeout`` ...) plus those of :class:`Controller`. The names come from
+    :data:`~handeye.drivers.controller.backends.CONTROLLERS`.
 
     Raises
     ------
@@ -369,11 +371,13 @@ def open_controller(name: str, *, connect: bool = True, **options) -> Controller
     ControllerError
         The controller cannot be reached.
     """
-    target = BACKENDS.get(str(name).lower())
-    if target is None:
-        raise InvalidRequest(f"unknown controller protocol {name!r}; choose one of {', '.join(BACKENDS)}")
-    module_name, class_name = target.split(":")
-    cls = getattr(importlib.import_module(f"{__package__}.{module_name}"), class_name)
+    from .backends import CONTROLLERS
+
+    try:
+        backend = CONTROLLERS[name]
+    except KeyError:
+        raise InvalidRequest(CONTROLLERS.unknown(name)) from None
+    cls = backend.load()
     try:
         controller = cls(**options)
     except TypeError as exc:

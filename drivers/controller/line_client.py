@@ -15,7 +15,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from . import protocol as P
-from .errors import ControllerRefused, InvalidRequest
+from .errors import ControllerRefused, ControllerTimeout, InvalidRequest
 from .interface import Controller, Deadline, LinkDown
 from .types import AT, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_posture_index
 
@@ -179,7 +179,7 @@ class LineController(Controller):
             try:
                 results.append(P.decode_values(command, reply))
             except P.ProtocolError as exc:
-                raise self.protocol_error(f"bad {command} reply from {self.address}: {exc}") from None
+                raise self.protocol_error(f"bad {command} reply from {self.address}: {exc.detail}") from None
         return results
 
     def _read_line(self, command: str, deadline: Deadline) -> bytes:
@@ -187,16 +187,16 @@ class LineController(Controller):
         try:
             return self._transport.read_line(deadline)
         except P.ProtocolError as exc:
-            raise self.protocol_error(f"{command}: {exc}") from None
-        except self.timeout_error as exc:
+            raise self.protocol_error(f"{command}: {exc.detail}") from None
+        except ControllerTimeout as exc:
             raise self.timeout_error(f"{command}: no reply from the controller at {self.address} within "
-                                     f"{deadline.seconds:g} s ({exc})") from None
+                                     f"{deadline.seconds:g} s ({exc.detail})") from None
 
     def _parse_reply(self, raw: bytes, command: str) -> P.Reply:
         try:
             return P.parse_reply(raw)
         except P.ProtocolError as exc:
-            raise self.protocol_error(f"garbage from the controller at {self.address} after {command}: {exc}") from None
+            raise self.protocol_error(f"garbage from the controller at {self.address} after {command}: {exc.detail}") from None
 
     def _read_reply(self, request_id: int, command: str, deadline: Deadline) -> P.Reply:
         while True:

@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from .errors import ControllerConnectionError, ControllerError, ControllerRefused, ControllerTimeout, InvalidRequest, ProtocolError
+from .errors import InvalidRequest, ProtocolError, StationError
 from .interface import Controller, Deadline, LinkDown
 from .modbus_map import STATE_NAMES, load_register_map
 from .protocol import E_AUTH, E_BUSY, E_STATE, E_TOOL, ERROR_CODES, KEY_TRIES, PROTOCOL_VERSION, write_key_code
@@ -27,12 +27,7 @@ from .types import ACKED, AT, ERROR, LATE, MOVING, READY, ControllerInfo, Contro
 
 __all__ = [
     "ModbusController",
-    "ModbusControllerError",
-    "ModbusConnectionError",
-    "ModbusTimeout",
-    "ModbusProtocolError",
     "ModbusExceptionResponse",
-    "ModbusRefused",
     "EXCEPTION_NAMES",
 ]
 
@@ -49,23 +44,7 @@ EXCEPTION_NAMES = {
 }
 
 
-class ModbusControllerError(ControllerError):
-    """Any failure of the Modbus back end."""
-
-
-class ModbusConnectionError(ModbusControllerError, ControllerConnectionError):
-    """The gateway cannot be reached, or the connection dropped for good."""
-
-
-class ModbusTimeout(ModbusControllerError, ControllerTimeout):
-    """No Modbus response in time, or the robot program's heartbeat stopped."""
-
-
-class ModbusProtocolError(ModbusControllerError, ProtocolError):
-    """Garbage instead of a Modbus frame, or register values that make no sense."""
-
-
-class ModbusExceptionResponse(ModbusProtocolError):
+class ModbusExceptionResponse(ProtocolError):
     """The gateway answered with a Modbus exception response.
 
     Attributes
@@ -74,12 +53,8 @@ class ModbusExceptionResponse(ModbusProtocolError):
     """
 
     def __init__(self, message: str, exception_code: int):
-        super().__init__(message)
+        super().__init__(message, backend="modbus")
         self.exception_code = exception_code
-
-
-class ModbusRefused(ModbusControllerError, ControllerRefused):
-    """The RAPID program refused a request (posture out of range, bad tool data)."""
 
 
 class ModbusController(Controller):
@@ -102,10 +77,6 @@ class ModbusController(Controller):
     """
 
     protocol = "modbus"
-    connection_error = ModbusConnectionError
-    timeout_error = ModbusTimeout
-    protocol_error = ModbusProtocolError
-    refused_error = ModbusRefused
 
     def __init__(self, host: str = "127.0.0.1", port: int = 502, *, register_map=None,
                  heartbeat_timeout: float = 1.0, poll_s: float = 0.005, **options):
@@ -393,7 +364,7 @@ class ModbusController(Controller):
         try:
             self._call("clear tool_key", lambda d: self._write_named(d, {"tool_key": 0}), deadline=Deadline(
                 max(deadline.remaining(), min(self.timeout, 0.5))))
-        except ControllerError as exc:
+        except StationError as exc:
             log.info("could not clear tool_key at %s: %s", self.address, exc)
 
     def read_tool(self, timeout=None) -> ToolData:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ...calibration.files import parse_yaml, read_text_file
-from .errors import InvalidRequest
+from .errors import ConfigError
 
 __all__ = ["Register", "RegisterMap", "load_register_map", "DEFAULT_MAP", "STATE_CODES", "STATE_NAMES",
            "floats_to_registers", "registers_to_floats", "REQUIRED"]
@@ -143,7 +143,7 @@ class RegisterMap:
 
 
 def _bad(source, message):
-    return InvalidRequest(f"register map {source}: {message}")
+    return ConfigError(f"register map {source}: {message}", backend="modbus")
 
 
 def load_register_map(path=None) -> RegisterMap:
@@ -151,14 +151,14 @@ def load_register_map(path=None) -> RegisterMap:
 
     Raises
     ------
-    InvalidRequest
+    ConfigError
         Missing registers, wrong types or counts, overlapping addresses, bad word order.
     """
     if isinstance(path, RegisterMap):
         return path
     file = Path(path) if path is not None else DEFAULT_MAP
     source = str(file) if path is not None else "built-in"
-    data = parse_yaml(read_text_file(file, "register map", InvalidRequest), f"register map {source}", InvalidRequest)
+    data = parse_yaml(read_text_file(file, "register map", ConfigError), f"register map {source}", ConfigError)
     if not isinstance(data, dict) or data.get("format") != "handeye-modbus-map/1":
         raise _bad(source, "expected 'format: handeye-modbus-map/1'")
     word_order = data.get("word_order")

@@ -9,38 +9,13 @@ earlier PC left on the line (an unfinished request, late replies) never mixes wi
 
 from __future__ import annotations
 
-from .errors import ControllerConnectionError, ControllerError, ControllerRefused, ControllerTimeout, InvalidRequest, ProtocolError
+from .errors import InvalidRequest
 from .interface import Deadline, LinkDown
 from .line_client import LineBuffer, LineController, LineTransport
 
 __all__ = [
     "SerialController",
-    "SerialControllerError",
-    "SerialConnectionError",
-    "SerialTimeout",
-    "SerialProtocolError",
-    "SerialRefused",
 ]
-
-
-class SerialControllerError(ControllerError):
-    """Any failure of the serial back end."""
-
-
-class SerialConnectionError(SerialControllerError, ControllerConnectionError):
-    """The serial port cannot be opened, or it failed for good."""
-
-
-class SerialTimeout(SerialControllerError, ControllerTimeout):
-    """No reply on the serial line within the timeout."""
-
-
-class SerialProtocolError(SerialControllerError, ProtocolError):
-    """Garbage or a malformed reply on the serial line (line noise, wrong baud rate)."""
-
-
-class SerialRefused(SerialControllerError, ControllerRefused):
-    """The RAPID program answered ERR."""
 
 
 class _SerialTransport(LineTransport):
@@ -130,10 +105,6 @@ class SerialController(LineController):
     """
 
     protocol = "serial"
-    connection_error = SerialConnectionError
-    timeout_error = SerialTimeout
-    protocol_error = SerialProtocolError
-    refused_error = SerialRefused
 
     def __init__(self, url: str, baudrate: int = 9600, **options):
         if not isinstance(url, str) or not url:

@@ -4,42 +4,16 @@ from __future__ import annotations
 
 import socket
 
-from .errors import ControllerConnectionError, ControllerError, ControllerRefused, ControllerTimeout, ProtocolError
 from .interface import Deadline, LinkDown
 from .line_client import LineBuffer, LineController, LineTransport
 
 __all__ = [
     "SocketController",
-    "SocketControllerError",
-    "SocketConnectionError",
-    "SocketTimeout",
-    "SocketProtocolError",
-    "SocketRefused",
     "DEFAULT_PORT",
 ]
 
 #: Default TCP port of the RAPID server module (any port above 1024 works on a controller).
 DEFAULT_PORT = 1025
-
-
-class SocketControllerError(ControllerError):
-    """Any failure of the socket back end."""
-
-
-class SocketConnectionError(SocketControllerError, ControllerConnectionError):
-    """The TCP connection cannot be made or dropped for good."""
-
-
-class SocketTimeout(SocketControllerError, ControllerTimeout):
-    """No reply over TCP within the timeout."""
-
-
-class SocketProtocolError(SocketControllerError, ProtocolError):
-    """Garbage or a malformed reply over TCP."""
-
-
-class SocketRefused(SocketControllerError, ControllerRefused):
-    """The RAPID server answered ERR."""
 
 
 class _TcpTransport(LineTransport):
@@ -119,10 +93,6 @@ class SocketController(LineController):
     """
 
     protocol = "socket"
-    connection_error = SocketConnectionError
-    timeout_error = SocketTimeout
-    protocol_error = SocketProtocolError
-    refused_error = SocketRefused
 
     def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT, **options):
         from .errors import InvalidRequest

@@ -221,7 +221,7 @@ def robot_model(name: str):
 
 
 def check_joints(joints_deg, robot: str = "IRB1400", what: str = "posture") -> np.ndarray:
-    """Controller axis angles (deg), shape (6,), finite and inside ``robot``'s joint limits.
+    """Controller axis angles (deg), shape (dof,) of ``robot``'s model, finite and inside its joint limits.
 
     Raises
     ------

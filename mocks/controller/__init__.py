@@ -1,96 +1,108 @@
-"""Mock ABB controller: real servers on 127.0.0.1 behaving like the generated RAPID program.
+"""Mock ABB controller: real servers on 127.0.0.1 that EXECUTE the generated RAPID program.
 
 ``start_mock_controller("socket" | "serial" | "modbus")`` builds a simulated IRB 1400
-(:class:`~handeye.mocks.robot.SimulatedRobot`), the program's state machine
-(:class:`RapidProgram`) and the server of that protocol, starts it and returns it. Use it as a
-context manager so threads and sockets are released::
+(:class:`~handeye.mocks.robot.SimulatedRobot`), loads the RAPID modules of that link into the
+interpreter (generated for the station, or ``program=DIR``), binds them to real TCP sockets, a serial
+line or a Modbus gateway and to the arm, and runs ``main``. Use it as a context manager so threads
+and sockets are released::
 
     with start_mock_controller("socket", time_scale=0.01) as server:
         with open_controller("socket", **server.client_options()) as robot:
             robot.goto_posture(1)
             assert np.allclose(robot.read_joints(), server.robot.current_joints, atol=1e-3)
 
-Every server has ``.robot`` (true state: ``current_joints``, ``tool0_pose()``, ``tool``,
-``arrival_hooks``), ``.program``, ``.faults`` (see :class:`Faults`), ``.host``, ``.port`` and
-``.client_options()`` (keyword arguments for ``open_controller``, the idle timeout and the write
-key included).
+Every server has ``.robot`` (true state: ``current_joints``, ``tool0_pose()``, ``tool`` (the
+program's PERS tooldata), ``arrival_hooks``), ``.program`` (the RAPID runner: ``.task``,
+``.pendant``, ``.error``), ``.faults`` (see :class:`Faults`), ``.host``, ``.port`` and
+``.client_options()`` (keyword arguments for ``open_controller``, the idle timeout and the write key
+included). A program the interpreter cannot run is refused at start with its module and line.
 """
 
 from __future__ import annotations
 
 from ...rapid.station import default_station
+from ..backends import mock_protocols, mock_server
 from ..robot import SimulatedRobot
 from .faults import Faults
-from .line_server import DEFAULT_IDLE_TIMEOUT_S, LineSession, SerialControllerServer, SocketControllerServer
+from .line_server import SerialControllerServer, SocketControllerServer
 from .modbus_server import ModbusControllerServer
-from .program import ProgramRefusal, RapidProgram
+from .runner import RapidRunner
+from .server import DEFAULT_IDLE_TIMEOUT_S, RapidControllerServer
+from .sources import ControllerProgram, generated_program, program_from_folder
 
 __all__ = [
     "start_mock_controller",
-    "MOCK_PROTOCOLS",
-    "DEFAULT_PORTS",
+    "mock_protocols",
+    "mock_server",
     "DEFAULT_IDLE_TIMEOUT_S",
     "Faults",
-    "RapidProgram",
-    "ProgramRefusal",
-    "LineSession",
+    "RapidRunner",
+    "RapidControllerServer",
+    "ControllerProgram",
+    "generated_program",
+    "program_from_folder",
     "SocketControllerServer",
     "SerialControllerServer",
     "ModbusControllerServer",
 ]
 
-MOCK_PROTOCOLS = ("socket", "serial", "modbus")
-#: Ports of ``handeye mock controller`` when none is given (unprivileged).
-DEFAULT_PORTS = {"socket": 1025, "serial": 1026, "modbus": 5020}
+
+def _program(protocol, program, station, postures, ack_timeout_s, idle_timeout_s, write_key, allowed_client):
+    if isinstance(program, ControllerProgram):
+        return program
+    if program is not None:
+        return program_from_folder(program, protocol)
+    return generated_program(protocol, station, postures=postures, ack_timeout_s=ack_timeout_s,
+                             idle_timeout_s=idle_timeout_s, write_key=write_key, pc_address=allowed_client)
 
 
 def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", port: int = 0, postures=None,
                           robot: SimulatedRobot | None = None, time_scale: float = 1.0, speed_fraction: float = 0.25,
                           ack_timeout_s: float | None = 30.0, allowed_client: str | None = None,
-                          register_map=None, faults: Faults | None = None, publish_period_s: float = 0.005,
+                          register_map=None, faults: Faults | None = None,
                           idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None,
-                          start: bool = True):
-    """A started mock controller server of ``protocol``.
+                          program=None, station=None, start: bool = True):
+    """A started mock controller of ``protocol`` running its RAPID program.
 
     Parameters
     ----------
     protocol : str
-        ``socket``, ``serial`` (TCP stream for pyserial's ``socket://`` URL) or ``modbus``.
+        ``socket``, ``serial`` (TCP stream for pyserial's ``socket://`` URL), ``modbus``, or any
+        back end a mock serves (:func:`mock_protocols`).
     host, port : str, int
         Where to listen (port 0: a free port; read ``server.port``).
-    postures : array-like, shape (n, 6), optional
-        Approved postures (default: the built-in station's 12).
+    postures : array-like, shape (n, dof), optional
+        Approved postures rendered into HeMain (default: the station's, the built-in 12).
     robot : SimulatedRobot, optional
-        An existing simulated robot (then ``postures``, ``time_scale``, ``speed_fraction`` are ignored).
+        An existing simulated arm (then ``time_scale`` and ``speed_fraction`` are ignored).
     time_scale : float
         Wall-clock seconds per simulated second of motion (tests: 0.001-0.01).
     ack_timeout_s : float or None
-        Posture acknowledgement timeout of the program (state LATE after it).
+        The program's acknowledgement timeout (state LATE after it; None: never, in practice).
     allowed_client : str, optional
-        Socket server only: the single client address accepted (the RAPID module's PC address).
+        Socket: the PC address the program accepts (``HE_PC_ADDRESS``; default 127.0.0.1).
     register_map : path or RegisterMap, optional
         Modbus only.
     idle_timeout_s : float
-        The link's idle timeout (``controller.idle_timeout_s``): socket closes a PC silent this
-        long, serial forgets the session, Modbus (the gateway) closes the silent connection.
+        The link's idle timeout rendered into the program (and the gateway's, for Modbus).
     write_key : str, optional
-        The station's write key: tool writes need it (``KEY`` / ``tool_key``); None refuses them.
+        The station's write key: rendered into HeKey.sys, loaded with the program; None: tool writes
+        are refused by the program.
+    program : ControllerProgram or path, optional
+        Run these modules (a folder of .mod/.sys files) instead of generating them.
+    station : RapidStation, optional
+        The station the modules are generated for (default: the built-in one).
     start : bool
         Start the server (default); else call ``server.start()`` or use ``with``.
     """
-    if protocol not in MOCK_PROTOCOLS:
-        raise ValueError(f"unknown mock protocol {protocol!r}; choose one of {', '.join(MOCK_PROTOCOLS)}")
+    mock = mock_server(protocol)
+    source = _program(protocol, program, station, postures, ack_timeout_s, idle_timeout_s, write_key,
+                      allowed_client)
     if robot is None:
-        if postures is None:
-            postures = default_station().postures
-        robot = SimulatedRobot(postures, time_scale=time_scale, speed_fraction=speed_fraction)
-    program = RapidProgram(robot, ack_timeout_s=ack_timeout_s)
-    link = {"idle_timeout_s": idle_timeout_s, "write_key": write_key}
-    if protocol == "socket":
-        server = SocketControllerServer(program, host, port, faults, allowed_client, **link)
-    elif protocol == "serial":
-        server = SerialControllerServer(program, host, port, faults, **link)
-    else:
-        server = ModbusControllerServer(program, host, port, register_map, faults, publish_period_s, **link)
-    server.protocol = protocol
+        robot = SimulatedRobot(postures if postures is not None else (station or default_station()).postures,
+                               time_scale=time_scale, speed_fraction=speed_fraction)
+    offered = {"register_map": register_map}
+    server = mock.load()(source, robot, host, port, faults=faults, idle_timeout_s=idle_timeout_s, write_key=write_key,
+                         **{name: offered[name] for name in mock.options})
+    server.protocol = str(protocol).lower()
     return server.start() if start else server

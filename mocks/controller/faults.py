@@ -7,7 +7,7 @@ Set attributes from a test (or the station's demo) and the next requests feel th
     server.faults.delay_s = 0.2        # answer every request 0.2 s late
     server.faults.garbage_next = 1     # answer the next request with garbage bytes
     server.faults.silent = True        # read requests and never answer (a hung controller)
-    server.faults.robot_stalled = True # Modbus: the gateway answers but the RAPID program stopped
+    server.faults.robot_stalled = True # the RAPID program is held (the Modbus gateway still answers)
     server.faults.modbus_exception = 4 # Modbus: answer every request with exception code 4
     server.faults.modbus_exception_next = 1   # ... only the next request (code modbus_exception or 4)
     server.faults.reset()
@@ -28,7 +28,24 @@ class Faults:
 
     def __init__(self):
         self._lock = threading.Lock()
+        self._watchers: list = []
+        self._stalled = False
         self.reset()
+
+    @property
+    def robot_stalled(self) -> bool:
+        """The RAPID program is held where it is (no statement, no interrupt runs)."""
+        return self._stalled
+
+    @robot_stalled.setter
+    def robot_stalled(self, value: bool) -> None:
+        self._stalled = bool(value)
+        for watcher in list(self._watchers):
+            watcher(self._stalled)
+
+    def watch_stall(self, watcher) -> None:
+        """Call ``watcher(stalled)`` whenever :attr:`robot_stalled` is set (the server holds its task)."""
+        self._watchers.append(watcher)
 
     def reset(self) -> None:
         """Switch every fault off."""

@@ -1,37 +1,36 @@
-"""Mock Modbus TCP gateway + the RAPID I/O-handshake program (``HeIo``), on a real pymodbus server.
+"""Mock Modbus TCP gateway on a real pymodbus server, and the generated HeIo program executed behind it.
 
-The server is pymodbus' ``ModbusTcpServer`` on 127.0.0.1 with one device whose holding registers
-follow the register map (``drivers/controller/modbus_map.yaml`` by default). A task in the same
-asyncio loop plays the RAPID program: every ``publish_period_s`` it publishes joints, flange pose
-and a heartbeat (as the RAPID timer interrupt does) and steps the handshake (request -> MOVING ->
-AT -> grabbed -> ACKED -> cleared -> READY; tool_command -> tool data applied -> tool_ack).
+The gateway is pymodbus' ``ModbusTcpServer`` with one device whose holding registers follow the
+register map (``drivers/controller/modbus_map.yaml`` by default). The register map names the
+controller signal each register is mapped to (``goHeState``, ``aoHeJ1..aoHeJ6`` ...): those are the
+I/O signals of the controller's configuration, which the RAPID program (``HeIo``, run by the
+interpreter) drives with ``SetGO``/``SetDO``/``SetAO`` and reads with ``GInput``/``DInput``/``AInput``/
+``WaitDI``/``WaitUntil``; its timer interrupt publishes joints, pose and the heartbeat. Nothing of
+the handshake is Python.
 
 Faults (see :class:`Faults`): delayed responses, exception responses, garbage instead of a
 response, dropped connections, a gateway that stops answering (``silent``) and a RAPID program
-that stops while the gateway still answers (``robot_stalled``: the heartbeat freezes).
+that is held while the gateway still answers (``robot_stalled``: the heartbeat freezes).
 
 The gateway serves several connections at once (a silent client blocks nobody) and closes a
 connection silent for ``idle_timeout_s``, as gateways commonly do, so a PC that vanished does not
-hold a connection slot. Tool data are applied only with the write key's code in ``tool_key``
-(``HeKey``); after :data:`~handeye.drivers.controller.protocol.KEY_TRIES` wrong codes every tool
-command is refused until the program restarts (a new mock).
+hold a connection slot.
 """
 
 from __future__ import annotations
 
 import asyncio
 import logging
+import re
 import threading
 import time
 
-from ...drivers.controller import protocol as P
-from ...drivers.controller.modbus_map import STATE_CODES, load_register_map
-from ...drivers.controller.types import ACKED, AT, ERROR, LATE, READY, ToolData, check_write_key, write_key_code
+from ...drivers.controller.modbus_map import load_register_map
+from ...rapid.interpreter import Bindings, IoBinding, RapidFatalError
 from .faults import Faults
-from .line_server import DEFAULT_IDLE_TIMEOUT_S
-from .program import ProgramRefusal, RapidProgram
+from .server import DEFAULT_IDLE_TIMEOUT_S, RapidControllerServer
 
-__all__ = ["ModbusControllerServer"]
+__all__ = ["ModbusControllerServer", "GatewayIo"]
 
 log = logging.getLogger(__name__)
 
@@ -76,45 +75,101 @@ def _server_classes():
     return FaultyTcpServer
 
 
-class ModbusControllerServer:
-    """A real Modbus TCP server playing gateway + RAPID I/O program.
+class GatewayIo(IoBinding):
+    """The controller signals a gateway maps onto the registers of ``register_map``.
+
+    A signal's type comes from its name's prefix (``di``, ``do``, ``gi``, ``go``, ``ai``, ``ao``, as
+    the map and HeIo name them); a range ``aoHeJ1..aoHeJ6`` maps one signal to each value of the
+    register. Group signals are as wide as their register (16 or 32 bits).
+    """
+
+    _TYPES = {"di": "signaldi", "do": "signaldo", "gi": "signalgi", "go": "signalgo", "ai": "signalai",
+              "ao": "signalao"}
+
+    def __init__(self, register_map, bank: list, lock: threading.Lock):
+        self.map, self.bank, self.lock = register_map, bank, lock
+        self.where: dict = {}  # signal name (lower case) -> (register name, index, signal name)
+        for reg in register_map.registers.values():
+            for i, name in enumerate(self._names(reg.signal, reg.count)):
+                self.where[name.lower()] = (reg.name, i, name)
+
+    @staticmethod
+    def _names(signal: str, count: int) -> list:
+        if not signal:
+            return []
+        m = re.fullmatch(r"([A-Za-z_]+?)(\d+)\.\.\1(\d+)", signal) or re.fullmatch(r"([A-Za-z_]+?)([A-Z])\.\.\1([A-Z])", signal)
+        if m is None:
+            return [signal]
+        first, last = m.group(2), m.group(3)
+        if first.isdigit():
+            names = [f"{m.group(1)}{i}" for i in range(int(first), int(last) + 1)]
+        else:
+            names = [f"{m.group(1)}{chr(c)}" for c in range(ord(first), ord(last) + 1)]
+        if len(names) != count:
+            raise ValueError(f"register signal {signal} names {len(names)} signals for {count} values")
+        return names
+
+    def signals(self) -> dict:
+        out = {}
+        for _, _, name in self.where.values():
+            kind = self._TYPES.get(name[:2].lower())
+            if kind is not None:
+                out[name] = kind
+        return out
+
+    def _locate(self, name: str):
+        try:
+            return self.where[name.lower()]
+        except KeyError:
+            raise RapidFatalError(f"signal {name} is not mapped by the gateway") from None
+
+    def read(self, name: str) -> float:
+        register, index, _ = self._locate(name)
+        reg = self.map[register]
+        with self.lock:
+            values = self.map.decode(register, self.bank[reg.address:reg.end], reg.address)
+        return float(values[index])
+
+    def write(self, name: str, value: float) -> None:
+        register, index, _ = self._locate(name)
+        reg = self.map[register]
+        with self.lock:
+            values = list(self.map.decode(register, self.bank[reg.address:reg.end], reg.address))
+            values[index] = value
+            self.bank[reg.address:reg.end] = self.map.encode(register, values)
+
+    def bits(self, name: str) -> int:
+        register, _, _ = self._locate(name)
+        return 32 if self.map[register].type == "uint32" else 16
+
+
+class ModbusControllerServer(RapidControllerServer):
+    """A real Modbus TCP gateway and the HeIo program behind it.
 
     Parameters
     ----------
-    program : RapidProgram
+    program : ControllerProgram
+    robot : SimulatedRobot
     host : str
     port : int
         0 picks a free port (see :attr:`port` after :meth:`start`).
-    register_map : path or RegisterMap, optional
     faults : Faults, optional
-    publish_period_s : float
-        Period of the RAPID program's timer (joints, pose, heartbeat, handshake); default 0.005 s.
+    register_map : path or RegisterMap, optional
     idle_timeout_s : float
         The gateway closes a connection silent this long.
     write_key : str, optional
-        The station's write key; tool commands need its code in ``tool_key`` (None: all refused).
+        The station's write key (its code goes into ``tool_key``; HeKey.sys holds it on the controller).
     """
 
     kind = "modbus"
 
-    def __init__(self, program: RapidProgram, host: str = "127.0.0.1", port: int = 0, register_map=None,
-                 faults: Faults | None = None, publish_period_s: float = 0.005, *,
-                 idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None):
-        if not (isinstance(idle_timeout_s, (int, float)) and 0 < idle_timeout_s < float("inf")):
-            raise ValueError(f"idle_timeout_s must be a positive number of seconds; got {idle_timeout_s!r}")
-        self.idle_timeout_s = float(idle_timeout_s)
-        key = check_write_key(write_key)
-        self._write_key = key
-        self._write_code = None if key is None else write_key_code(key)
-        self._key_failures = 0
+    def __init__(self, program, robot, host: str = "127.0.0.1", port: int = 0, faults: Faults | None = None, *,
+                 register_map=None, idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None):
+        super().__init__(program, robot, host, port, faults, idle_timeout_s=idle_timeout_s, write_key=write_key)
         #: Connections closed for idleness (for tests).
         self.idle_closes = 0
-        self.program = program
-        self.robot = program.robot
-        self.host, self._requested_port, self._port = host, port, None
+        self._port = None
         self.map = load_register_map(register_map)
-        self.faults = faults or Faults()
-        self.publish_period_s = float(publish_period_s)
         self._bank = [0] * self.map.size
         self._bank_lock = threading.Lock()
         self._thread: threading.Thread | None = None
@@ -122,8 +177,6 @@ class ModbusControllerServer:
         self._stop_event: asyncio.Event | None = None
         self._started = threading.Event()
         self._error: BaseException | None = None
-        self._heartbeat = 0
-        self._tool_seq = 0
         self.requests = 0
 
     # ------------------------------------------------------------------ lifecycle
@@ -131,28 +184,15 @@ class ModbusControllerServer:
     def port(self) -> int:
         return self._port if self._port is not None else self._requested_port
 
-    @property
-    def running(self) -> bool:
-        return self._thread is not None and self._thread.is_alive()
-
-    @property
-    def has_write_key(self) -> bool:
-        """True when the mock was given a write key (tool writes possible with its code)."""
-        return self._write_code is not None
-
     def client_options(self) -> dict:
-        options = {"host": self.host, "port": self.port, "register_map": self.map, "idle_timeout": self.idle_timeout_s}
-        if self._write_code is not None:
-            options["write_key"] = self._write_key
-        return options
+        return self._client_key({"host": self.host, "port": self.port, "register_map": self.map,
+                                 "idle_timeout": self.idle_timeout_s})
 
-    def start(self):
-        if self._thread is not None:
-            return self
+    def _open_endpoint(self) -> Bindings:
         self._started.clear()
         self._error = None
-        self._publish(initial=True)
-        self._thread = threading.Thread(target=self._thread_main, name=f"mock-modbus-{self._requested_port}", daemon=True)
+        self._thread = threading.Thread(target=self._thread_main, name=f"mock-modbus-{self._requested_port}",
+                                        daemon=True)
         self._thread.start()
         if not self._started.wait(10):
             raise RuntimeError("mock Modbus server did not start within 10 s")
@@ -160,9 +200,9 @@ class ModbusControllerServer:
             self._thread.join(5)
             self._thread = None
             raise OSError(f"mock Modbus server could not start on {self.host}:{self._requested_port}: {self._error}")
-        return self
+        return Bindings(io=GatewayIo(self.map, self._bank, self._bank_lock))
 
-    def stop(self) -> None:
+    def _close_endpoint(self) -> None:
         if self._thread is None:
             return
         if self._loop is not None and self._stop_event is not None:
@@ -172,12 +212,6 @@ class ModbusControllerServer:
                 pass
         self._thread.join(timeout=10)
         self._thread = None
-
-    def __enter__(self):
-        return self.start()
-
-    def __exit__(self, *exc) -> None:
-        self.stop()
 
     def _thread_main(self) -> None:
         try:
@@ -201,15 +235,13 @@ class ModbusControllerServer:
                 raise OSError("pymodbus could not listen")
             self._port = server.transport.sockets[0].getsockname()[1]
             self._started.set()
-            ticker = asyncio.create_task(self._robot_loop())
             watchdog = asyncio.create_task(self._close_idle(server))
             await self._stop_event.wait()
-            for task in (ticker, watchdog):
-                task.cancel()
-                try:
-                    await task
-                except asyncio.CancelledError:
-                    pass
+            watchdog.cancel()
+            try:
+                await watchdog
+            except asyncio.CancelledError:
+                pass
         finally:
             await server.shutdown()
             await asyncio.sleep(0)
@@ -243,22 +275,12 @@ class ModbusControllerServer:
     def _pc_writable(self, address: int) -> bool:
         return any(r.access == "pc" and r.address <= address < r.end for r in self.map.registers.values())
 
-    def _get(self, name: str) -> list:
+    def register(self, name: str) -> list:
+        """Current values of a register of the map (for tests and tools)."""
         reg = self.map[name]
         with self._bank_lock:
             return self.map.decode(name, self._bank[reg.address:reg.end], reg.address)
 
-    def _set(self, name: str, values) -> None:
-        reg = self.map[name]
-        regs = self.map.encode(name, values)
-        with self._bank_lock:
-            self._bank[reg.address:reg.end] = regs
-
-    def register(self, name: str) -> list:
-        """Current values of a register of the map (for tests and tools)."""
-        return self._get(name)
-
-    # ------------------------------------------------------------------ the RAPID program
     async def _close_idle(self, server) -> None:
         """Close connections silent for ``idle_timeout_s`` (the gateway's idle timeout)."""
         while True:
@@ -269,81 +291,3 @@ class ModbusControllerServer:
                     self.idle_closes += 1
                     log.info("mock Modbus gateway: connection silent for %.3g s closed", self.idle_timeout_s)
                     handler.close()
-
-    async def _robot_loop(self) -> None:
-        while True:
-            await asyncio.sleep(self.publish_period_s)
-            if self.faults.robot_stalled:
-                continue
-            try:
-                self._step()
-                self._publish()
-            except Exception:  # keep the program running; a bug shows in the log
-                log.exception("mock Modbus robot step failed")
-
-    def _step(self) -> None:
-        program = self.program
-        state, _ = program.status()
-        request = self._get("request")[0]
-        grabbed = self._get("grabbed")[0]
-        command = self._get("tool_command")[0]
-        if state == READY:
-            if command != self._tool_seq:  # HeIo checks the tool command first
-                self._apply_tool(command)
-            elif request != 0:
-                try:
-                    program.request(request)
-                except ProgramRefusal as refusal:
-                    program.mark_error(refusal.code)
-        elif state in (AT, LATE):
-            if grabbed == 1:
-                program.mark_acked()
-        elif state == ACKED:
-            if request == 0 and grabbed == 0:
-                program.mark_ready()
-        elif state == ERROR:
-            if request == 0:
-                program.mark_ready()
-
-    def _key_accepted(self) -> bool:
-        """HeIo's key gate: the code in ``tool_key`` against HeKey's; KEY_TRIES wrong codes lock it."""
-        if self._write_code is None or self._key_failures >= P.KEY_TRIES:
-            return False
-        if self._get("tool_key")[0] == self._write_code:
-            return True
-        self._key_failures += 1
-        log.info("mock Modbus program: tool data with a wrong key code refused (%d)", self._key_failures)
-        return False
-
-    def _apply_tool(self, command: int) -> None:
-        values = self._get("tool_values")
-        try:
-            if not self._key_accepted():
-                raise ProgramRefusal(P.E_AUTH, "wrong or missing key code")
-            self.program.apply_tool(ToolData.from_values(values))
-            error = 0
-        except ProgramRefusal as refusal:
-            error = refusal.code
-        except ValueError:
-            error = P.E_TOOL
-        self._tool_seq = command
-        self._set("tool_error", [error])
-        self._set("tool_ack", [command])
-
-    def _publish(self, initial: bool = False) -> None:
-        program, robot = self.program, self.robot
-        state, posture = program.status()
-        pose = robot.tool0_pose()
-        if not initial:
-            self._heartbeat = (self._heartbeat + 1) & 0xFFFF
-        self._set("protocol_version", [P.PROTOCOL_VERSION])
-        self._set("posture_count", [program.count])
-        self._set("joints", list(robot.current_joints))
-        self._set("tool0_position", list(pose.position_mm))
-        self._set("tool0_quaternion", list(pose.quaternion_wxyz))
-        self._set("tool_readback", robot.tool.values())
-        self._set("state", [STATE_CODES[state]])
-        self._set("posture", [posture])
-        self._set("at_posture", [1 if state in (AT, LATE) else 0])
-        self._set("error", [program.error_code])
-        self._set("heartbeat", [self._heartbeat])

@@ -1,4 +1,10 @@
-"""Run a mock controller standalone (what ``handeye mock controller`` calls)."""
+"""Run a mock controller standalone (what ``handeye mock controller`` calls).
+
+The mock runs RAPID: the modules generated for the chosen protocol (and the station's postures,
+timeouts and write key), or the modules of ``--program DIR``. A module the interpreter cannot run is
+refused at start, naming the module and line; a program that stops on an error later ends the mock
+with that error (exit status 1).
+"""
 
 from __future__ import annotations
 
@@ -8,7 +14,8 @@ import time
 from dataclasses import dataclass, field
 
 from ...rapid.station import IDLE_TIMEOUT_RANGE, RapidStation, default_station, load_station
-from . import DEFAULT_PORTS, MOCK_PROTOCOLS, start_mock_controller
+from ..backends import mock_protocols, mock_server
+from . import start_mock_controller
 
 __all__ = ["MockControllerOptions", "run_mock_controller", "is_loopback"]
 
@@ -20,9 +27,9 @@ class MockControllerOptions:
     Attributes
     ----------
     protocol : str
-        ``socket``, ``serial`` or ``modbus``.
+        ``socket``, ``serial``, ``modbus`` (any of :func:`~handeye.mocks.backends.mock_protocols`).
     port : int or None
-        None: the protocol's default (:data:`DEFAULT_PORTS`); 0: any free port.
+        None: the mock's default port (``mock_server(protocol).default_port``); 0: any free port.
     host : str
     config : str or None
         Station YAML (the ``rapid generate`` keys) for the approved postures, the acknowledgement
@@ -33,7 +40,7 @@ class MockControllerOptions:
     time_scale : float
         Wall-clock seconds per simulated second of motion.
     allowed_client : str or None
-        Socket only: accept only this client address, as the RAPID module does.
+        Socket only: the PC address rendered into the program (``HE_PC_ADDRESS``; None: the station's).
     register_map : str or None
         Modbus only: register map YAML.
     duration_s : float or None
@@ -43,6 +50,12 @@ class MockControllerOptions:
     write_key : str or None
         The key tool writes need (None: the station's; without any, tool writes are refused).
         Never printed.
+    program : str or None
+        A folder of RAPID modules to run instead of the generated ones (its HeKey.sys, if any, holds
+        the key; give the same key with ``write_key`` for the PC's side).
+    camera_port : int or None
+        Also serve the simulated XB3 on the flange (rendered frames) on this port for a rehearsal
+        station (0: a free port); None: no camera.
     """
 
     protocol: str = "socket"
@@ -56,6 +69,8 @@ class MockControllerOptions:
     idle_timeout_s: float | None = None
     write_key: str | None = field(default=None, repr=False)
     station: RapidStation | None = None
+    program: str | None = None
+    camera_port: int | None = None
 
 
 def is_loopback(host: str) -> bool:
@@ -70,7 +85,8 @@ def is_loopback(host: str) -> bool:
 
 def _banner(server, options: MockControllerOptions, postures: int, idle_timeout_s: float) -> str:
     where = f"{server.host}:{server.port}"
-    head = f"mock {options.protocol} controller (simulated IRB 1400, {postures} approved postures)"
+    runs = f"RAPID from {options.program}" if options.program else f"the RAPID generated for {options.protocol}"
+    head = f"mock {options.protocol} controller (simulated IRB 1400 running {runs}, {postures} approved postures)"
     if server.has_write_key:
         writes = "tool writes need the write key (KEY / tool_key)"
     else:
@@ -95,8 +111,8 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
     from ...drivers.controller.errors import InvalidRequest
     from ...drivers.controller.types import check_write_key
 
-    if options.protocol not in MOCK_PROTOCOLS:
-        raise InvalidRequest(f"unknown protocol {options.protocol!r}; choose one of {', '.join(MOCK_PROTOCOLS)}")
+    if options.protocol not in mock_protocols():
+        raise InvalidRequest(f"unknown protocol {options.protocol!r}; choose one of {', '.join(mock_protocols())}")
     if not options.time_scale > 0:
         raise InvalidRequest(f"--time-scale must be > 0; got {options.time_scale}")
     station = options.station or (load_station(options.config) if options.config else default_station())
@@ -105,26 +121,61 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
     if not low <= idle <= high:
         raise InvalidRequest(f"--idle-timeout must be {low:g} to {high:g} s; got {idle:g}")
     key = check_write_key(options.write_key if options.write_key is not None else station.write_key, "--write-key")
-    port = DEFAULT_PORTS[options.protocol] if options.port is None else options.port
+    port = mock_server(options.protocol).default_port if options.port is None else options.port
     if not is_loopback(options.host):
         warn(f"warning: the mock controller listens on {options.host}, not a loopback address: anyone on that network "
              "can move the robot's mock and write its tool data; it is for testing only")
+    robot = _rehearsal_arm(station, options) if options.camera_port is not None else None
     try:
         server = start_mock_controller(options.protocol, host=options.host, port=port, postures=station.postures,
+                                       robot=robot,
                                        time_scale=options.time_scale, ack_timeout_s=station.ack_timeout_s,
                                        allowed_client=options.allowed_client, register_map=options.register_map,
-                                       idle_timeout_s=idle, write_key=key)
+                                       idle_timeout_s=idle, write_key=key, station=station, program=options.program)
     except OSError as exc:
         raise InvalidRequest(f"cannot listen on {options.host}:{port} ({exc}); pick another --port "
                              "(0 = any free port)") from None
+    cell = None
     try:
-        announce(_banner(server, options, len(station.postures), idle))
-        end = None if options.duration_s is None else time.monotonic() + options.duration_s
-        while end is None or time.monotonic() < end:
-            time.sleep(0.1 if end is None else max(0.0, min(0.1, end - time.monotonic())))
+        if options.camera_port is not None:
+            cell = _start_cell(server, options)
+        announce(_banner(server, options, len(server.robot.postures), idle)
+                 + (f"\n{cell.banner()}" if cell is not None else ""))
+        failure = _serve(server, options.duration_s)
     except KeyboardInterrupt:
-        pass
+        failure = None
     finally:
+        if cell is not None:
+            cell.stop()
         server.stop()
+    if failure:
+        warn(f"the mock controller's RAPID program stopped: {failure}")
+        return 1
     announce("mock controller stopped")
     return 0
+
+
+def _serve(server, duration_s: float | None) -> str | None:
+    """Serve until Ctrl-C or ``duration_s``; the RAPID program's error if it stopped on one."""
+    end = None if duration_s is None else time.monotonic() + duration_s
+    while end is None or time.monotonic() < end:
+        if server.program_error:
+            return server.program_error
+        time.sleep(0.1 if end is None else max(0.0, min(0.1, end - time.monotonic())))
+    return server.program_error
+
+
+def _rehearsal_arm(station: RapidStation, options: MockControllerOptions):
+    """The arm of a mock with a camera: standing where the camera sees the board, as an operator leaves it."""
+    from ..robot import SimulatedRobot
+    from ..station import DEFAULT_START
+
+    return SimulatedRobot(station.postures, model=station.robot, time_scale=options.time_scale,
+                          start_joints=DEFAULT_START)
+
+
+def _start_cell(server, options: MockControllerOptions):
+    """The simulated XB3 on the arm's flange, served for a rehearsal station (``mocks.cell``)."""
+    from ..cell import CellService
+
+    return CellService(server, host=options.host, port=options.camera_port).start()

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["corners", "positive", "non_negative", "count", "whole_between", "port", "floats", "six_floats"]
+__all__ = ["corners", "positive", "non_negative", "count", "whole_between", "port", "floats"]
 
 
 def _number(text: str, kind=float, what: str = "a number"):
@@ -77,10 +77,3 @@ def floats(text: str) -> tuple:
         return tuple(float(v) for v in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected comma-separated numbers; got {text!r}") from None
-
-
-def six_floats(text: str) -> tuple:
-    values = floats(text)
-    if len(values) != 6:
-        raise argparse.ArgumentTypeError(f"expected six comma-separated numbers; got {len(values)}")
-    return values

@@ -79,17 +79,20 @@ def add_parser(sub):
 def run(args) -> int:
     import sys
 
-    from ..calibrate import calibrate_session_folder, judge_calibration, report_calibration, report_path_for
+    from ..assessment import COMPARISON_METHODS, assess
+    from ..calibrate import calibrate_session_folder, report_path_for
     from ..output import check_output_file, write_json
+    from ..report_json import calibration_json
     from ..report_text import calibration_summary
 
     if args.json:  # an unwritable --json fails before any solving
         check_output_file(args.json)
     wants_report = args.report is not None
+    thresholds = None
     if args.thresholds:  # a bad thresholds file fails before any solving
         from ..quality import load_thresholds
 
-        load_thresholds(args.thresholds)
+        thresholds = load_thresholds(args.thresholds)
     report_path = report_path_for(args.session, args.report) if wants_report else None
     if report_path is not None and not report_path.parent.is_dir():
         from ...calibration.errors import HandEyeError
@@ -99,19 +102,21 @@ def run(args) -> int:
 
     with delayed_progress("calibrate") as update:  # shown only when solving takes over a second
         outcome = calibrate_session_folder(args.session, args.method, args.units, progress=update)
-    verdict = judge_calibration(outcome, args.thresholds) if (wants_report or args.thresholds) else None
-    written = report_calibration(outcome, report_path, verdict=verdict).path if wants_report else None
+    assessment = assess(outcome, thresholds, judge=wants_report or bool(args.thresholds),
+                        methods=COMPARISON_METHODS if wants_report else ())
+    written = None
+    if wants_report:
+        from ..report import write_report
+
+        title = f"Hand-eye calibration report: {outcome.session_path.resolve().name}"
+        written = write_report(report_path, assessment, title=title)
     if args.json:
-        data = outcome.result.to_json()
-        data["station"] = outcome.origin  # mock | real | simulated | unknown
-        if verdict is not None:
-            data["verdict"] = verdict.to_json()
-        write_json(args.json, data)
+        write_json(args.json, calibration_json(assessment))
     stream = sys.stderr if args.json == "-" else sys.stdout
     if not args.quiet and args.json != "-":
-        print(calibration_summary(outcome, verdict))
-    if not args.quiet and verdict is not None:
+        print(calibration_summary(assessment))
+    if not args.quiet and assessment.verdict is not None:
         if written is not None:
             print(f"\nReport written to {written}", file=stream)
-        print(verdict.line(), file=stream)
+        print(assessment.verdict.line(), file=stream)
     return 0

@@ -11,48 +11,73 @@ HELP = "run a mock (simulated IRB 1400 controller on 127.0.0.1) until Ctrl-C"
 CONTROLLER_HELP = "run the mock robot controller (socket, serial or Modbus TCP) until Ctrl-C"
 
 CONTROLLER_EPILOG = """\
-The mock behaves like the RAPID program that `handeye rapid generate` writes: the robot goes only
-to the approved postures (the built-in station's 12, or those of --config), one at a time, and
-waits for the PC's acknowledgement at each; joints and flange pose come from the IRB 1400
-kinematics, motion time from the axis speeds (x --time-scale).
+The mock EXECUTES the RAPID program: the modules `handeye rapid generate` writes for --protocol
+(the built-in station's 12 postures, or those, timeouts, PC address and write key of --config), or
+the modules of --program DIR (e.g. a capture's SESSION/rapid), run by handeye's RAPID interpreter on
+a simulated IRB 1400: joints and flange pose from its kinematics, motion time from the axis speeds
+(x --time-scale). A module the interpreter cannot run is refused at start with its name and line;
+a program that stops on an error ends the mock with that error.
 
 Protocols and default ports:
-  socket   TCP line protocol (rapid/PROTOCOL.md), port 1025
-  serial   the same line protocol as a byte stream for pyserial's socket://HOST:PORT URL, port 1026
-  modbus   Modbus TCP gateway with the I/O handshake (drivers/controller/modbus_map.yaml), port 5020
+{protocols}
 --port 0 picks a free port; the line printed at start says where it listens.
 
 The link recovers as the RAPID modules do: a PC silent for --idle-timeout seconds (default: the
 config's controller.idle_timeout_s, else 5) is disconnected (socket) or its session forgotten
-(serial), and a new connection from the PC takes over at once. Tool writes need the station's
-write key (controller.write_key of --config, or --write-key); without one they are refused.
-The mock listens on 127.0.0.1: another --host lets anyone on that network drive it (a warning
-says so); it is for testing only.
+(serial), and a new connection from the PC takes over at once. The socket program accepts only
+its PC address (controller.pc_address of --config, --allow-client, default 127.0.0.1). Tool
+writes need the station's write key (controller.write_key of --config, or --write-key; HeKey.sys is
+generated and loaded with it); without one they are refused. The mock listens on 127.0.0.1:
+another --host lets the machines of that network reach it (a warning says so); it is for testing
+only.
+
+--camera-port PORT also serves the simulated XB3 on the arm's flange (frames rendered from where the
+arm really is, a hidden camera mount, a printed board) for a rehearsal station: a station config
+with camera.backend: mock and camera.mock_arm: HOST:PORT runs capture, calibrate and writeback
+against this mock exactly as on the real station; every output then says MOCK for the camera.
 
 Example:
   handeye mock controller --protocol modbus --port 5020 &
   handeye robot joints --protocol modbus --host 127.0.0.1 --port 5020 --json
+  handeye mock controller --program cal_2026_11_21/rapid --config station.yaml
 """
 
 
+def _protocols() -> tuple[str, str]:
+    """The protocols a mock serves (registry order) and their lines for the epilog."""
+    from ...mocks.backends import mock_protocols, mock_server
+
+    names = mock_protocols()
+    lines = [f"  {name:<8} {mock_server(name).help}, port {mock_server(name).default_port}" for name in names]
+    return names, "\n".join(lines)
+
+
 def add_parser(sub):
+    names, lines = _protocols()
     p = sub.add_parser("mock", help=HELP, description=HELP)
     targets = p.add_subparsers(dest="mock_target", metavar="TARGET")
-    c = targets.add_parser("controller", help=CONTROLLER_HELP, description=CONTROLLER_HELP, epilog=CONTROLLER_EPILOG,
+    c = targets.add_parser("controller", help=CONTROLLER_HELP, description=CONTROLLER_HELP,
+                           epilog=CONTROLLER_EPILOG.format(protocols=lines),
                            formatter_class=argparse.RawDescriptionHelpFormatter)
-    c.add_argument("--protocol", choices=("socket", "serial", "modbus"), default="socket", help="default socket")
+    c.add_argument("--protocol", choices=names, default="socket", help="default socket")
     c.add_argument("--port", type=argtypes.port, default=None, help="TCP port (defaults above; 0 = any free port)")
     c.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     c.add_argument("--config", metavar="STATION.yaml",
                    help="station config: approved postures, ack and idle timeouts, write key (controller.write_key)")
     c.add_argument("--time-scale", type=argtypes.positive, default=1.0, metavar="X",
                    help="wall-clock seconds per simulated second of motion (default 1; 0.1 = 10x faster)")
-    c.add_argument("--allow-client", metavar="IP", help="socket: accept only this client address, like the RAPID module")
+    c.add_argument("--allow-client", metavar="IP",
+                   help="socket: the PC address rendered into the generated program (HE_PC_ADDRESS; default: the "
+                        "config's controller.pc_address, 127.0.0.1); --program modules carry their own")
     c.add_argument("--register-map", metavar="MAP.yaml", help="modbus: register map (default: the built-in one)")
     c.add_argument("--duration", type=argtypes.positive, metavar="S", help="stop after S seconds (default: run until Ctrl-C)")
     c.add_argument("--idle-timeout", type=argtypes.positive, metavar="S",
                    help="drop a silent PC (socket) / forget its session (serial) after S seconds, 0.1..10 "
                         "(default: the config's, else 5)")
+    c.add_argument("--program", metavar="DIR",
+                   help="run the RAPID modules (.mod/.modx/.sys) of DIR instead of the generated ones")
+    c.add_argument("--camera-port", type=argtypes.port, metavar="PORT",
+                   help="also serve the simulated XB3 on the flange for a rehearsal station (0 = any free port)")
     c.add_argument("--write-key", metavar="KEY",
                    help="the key tool writes need (8-32 letters, digits, _ or -; default: the config's "
                         "controller.write_key). Visible in the process list: prefer --config")
@@ -79,6 +104,7 @@ def run(args) -> int:
     options = MockControllerOptions(protocol=args.protocol, port=args.port, host=args.host, station=station,
                                     time_scale=args.time_scale, allowed_client=args.allow_client,
                                     register_map=args.register_map, duration_s=args.duration,
-                                    idle_timeout_s=args.idle_timeout, write_key=args.write_key)
+                                    idle_timeout_s=args.idle_timeout, write_key=args.write_key,
+                                    program=args.program, camera_port=args.camera_port)
     return run_mock_controller(options, announce=lambda text: print(text, flush=True),
                                warn=lambda text: print(text, file=sys.stderr, flush=True))

@@ -8,24 +8,24 @@ from . import argtypes
 
 HELP = "read the robot through the controller link (joints, flange pose, status)"
 
-EPILOG = """\
-Link options (the same for every sub-command):
-  --protocol socket   TCP to the HeSocket RAPID module:   --host H --port P (default 1025)
-  --protocol serial   serial channel (HeSerial module):   --url DEVICE_OR_URL [--baudrate B]
-  --protocol modbus   Modbus TCP gateway (HeIo module):   --host H --port P (default 502) [--register-map MAP]
-
+EXAMPLE = """\
 Example (against `handeye mock controller`):
   handeye robot joints --protocol socket --host 127.0.0.1 --port 1025 --json
 prints {"joints_deg": [...], "tool0_in_base": {"position_mm": [...], "quaternion_wxyz": [...]}}.
 """
 
-DEFAULT_PORTS = {"socket": 1025, "modbus": 502}
+
+def _epilog(backends) -> str:
+    """Link options of every registered back end, then the example."""
+    lines = [f"  --protocol {name:<8} {backends[name].help}" for name in backends]
+    return "Link options (the same for every sub-command):\n" + "\n".join(lines) + "\n\n" + EXAMPLE
 
 
-def _link_options(p) -> None:
-    p.add_argument("--protocol", choices=("socket", "serial", "modbus"), default="socket", help="default socket")
+def _link_options(p, backends) -> None:
+    ports = ", ".join(f"{name} {backends[name].default_port}" for name in backends if backends[name].default_port)
+    p.add_argument("--protocol", choices=tuple(backends), default="socket", help="default socket")
     p.add_argument("--host", default="127.0.0.1", help="controller or gateway address (default 127.0.0.1)")
-    p.add_argument("--port", type=int, default=None, help="TCP port (default: socket 1025, modbus 502)")
+    p.add_argument("--port", type=int, default=None, help=f"TCP port (default: {ports})")
     p.add_argument("--url", help="serial: device (/dev/ttyUSB0, COM3) or pyserial URL (socket://127.0.0.1:1026)")
     p.add_argument("--baudrate", type=int, default=9600, help="serial: baud rate (default 9600)")
     p.add_argument("--register-map", metavar="MAP.yaml", help="modbus: register map (default: the built-in one)")
@@ -36,34 +36,32 @@ def _link_options(p) -> None:
 
 
 def add_parser(sub):
-    p = sub.add_parser("robot", help=HELP, description=HELP, epilog=EPILOG,
+    from ...drivers.controller.backends import CONTROLLERS
+
+    epilog = _epilog(CONTROLLERS)
+    p = sub.add_parser("robot", help=HELP, description=HELP, epilog=epilog,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     what = p.add_subparsers(dest="robot_command", metavar="COMMAND")
     j = what.add_parser("joints", help="joint angles and tool0 pose", description="read CJointT and CRobT(tool0, wobj0)",
-                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    _link_options(j)
+                        epilog=epilog, formatter_class=argparse.RawDescriptionHelpFormatter)
+    _link_options(j, CONTROLLERS)
     j.add_argument("--json", action="store_true", help="print JSON (joints_deg, tool0_in_base)")
-    s = what.add_parser("status", help="program state and current posture", epilog=EPILOG,
+    s = what.add_parser("status", help="program state and current posture", epilog=epilog,
                         formatter_class=argparse.RawDescriptionHelpFormatter)
-    _link_options(s)
+    _link_options(s, CONTROLLERS)
     s.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(_robot_parser=p)
     return p
 
 
 def _options(args) -> dict:
-    from ...drivers.controller.errors import InvalidRequest
+    """``open_controller`` options: where the controller is, as the back end's registry entry builds them."""
+    from ...drivers.controller.backends import CONTROLLERS, ControllerLink
 
+    link = ControllerLink(host=args.host, port=args.port, serial_url=args.url, modbus_map=args.register_map,
+                          baudrate=args.baudrate)
     options = {"timeout": args.timeout, "retries": 1, "idle_timeout": args.idle_timeout}
-    if args.protocol == "serial":
-        if not args.url:
-            raise InvalidRequest("--protocol serial needs --url (a device like /dev/ttyUSB0 or socket://HOST:PORT)")
-        options.update(url=args.url, baudrate=args.baudrate)
-    else:
-        options.update(host=args.host, port=args.port if args.port is not None else DEFAULT_PORTS[args.protocol])
-        if args.protocol == "modbus" and args.register_map:
-            options["register_map"] = args.register_map
-    return options
+    return {**CONTROLLERS[args.protocol].link_options(link), **options}
 
 
 def run(args) -> int:

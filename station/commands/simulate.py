@@ -35,8 +35,8 @@ def add_parser(sub):
     p.add_argument("--sigma-rob", type=argtypes.non_negative, default=0.0, metavar="DEG", help="joint-angle noise, degrees (default 0)")
     p.add_argument("--sigma-cam", type=argtypes.non_negative, default=0.0, metavar="MM", help="camera point noise, mm (default 0)")
     p.add_argument("--camera-noise", choices=("paper", "gaussian"), default="paper", help="camera noise model (default paper)")
-    p.add_argument("--joint-offset", type=argtypes.six_floats, default=(0.0,) * 6, metavar="A1,..,A6",
-                   help="systematic offset added to every reported joint angle, degrees")
+    p.add_argument("--joint-offset", type=argtypes.floats, default=None, metavar="A1,..,An",
+                   help="systematic offset added to every reported joint angle, degrees (one value per robot axis)")
     p.add_argument("--setup", choices=("eye_in_hand", "eye_to_hand"), default="eye_in_hand")
     p.add_argument("--corners", type=argtypes.corners, default=(13, 8), metavar="NXxNY", help="inner corners (default 13x8)")
     p.add_argument("--square-mm", type=float, default=30.0, help="square size in mm (default 30)")

@@ -17,8 +17,9 @@ controller keeps (0.001 mm, 1e-6).
 
 Only the controller is opened (the camera may be unplugged or on another PC). --config writes to
 the real controller it names and fails with the reason when it cannot be reached; --mock writes to
-the embedded mock station's controller, and the output says MOCK. A session captured on the mock
-station, or simulated, is never written to a real controller. If the link fails during the write,
+the embedded mock station's controller, and the output says MOCK; so does a rehearsal config (its
+controller is checked to be the standalone mock whose camera camera.mock_arm names). A session
+captured on a mock station, or simulated, is never written to a real controller. If the link fails during the write,
 the controller may hold either value: run the same command again; it reads back and says which.
 
 Examples:
@@ -45,11 +46,12 @@ def run(args) -> int:
     from ...calibration.errors import HandEyeError
     from ...calibration.plausibility import session_in_mm
     from ...calibration.session import read_session
-    from ...calibration.solve import calibrate, problem_from_session
+    from ..assessment import assess
+    from ..calibrate import solve_session
     from ..config import default_config, load_config
-    from ..demo import station_verdict
     from ..origin import origin_line, session_origin
-    from ..runtime import MOCK_BANNER, open_controller_link
+    from ..quality import config_thresholds
+    from ..runtime import MOCK_BANNER, check_rehearsal, open_controller_link, rehearsal_banner
     from ..writeback import check_session_origin, side_by_side, writeback
 
     if not args.dry_run and not args.config and not args.mock:
@@ -60,13 +62,16 @@ def run(args) -> int:
     session = read_session(args.session)
     origin = session_origin(session)
     session = session_in_mm(session, args.units)
+    mock_controller = config.is_mock
+    if not args.dry_run and config.is_rehearsal:
+        check_rehearsal(config)  # the controller named is the standalone mock's: a mock session may go there
+        mock_controller = True
     if not args.dry_run:
-        check_session_origin(origin, config.is_mock)
+        check_session_origin(origin, mock_controller)
     if origin_line(origin):
         print(origin_line(origin))
-    problem = problem_from_session(session)
-    result = calibrate(problem, args.method)
-    verdict = station_verdict(result, problem, config)
+    assessment = assess(solve_session(session, args.session, args.method, origin=origin), config_thresholds(config))
+    result, verdict = assessment.result, assessment.verdict
     print(f"calibration ({result.method}): {verdict.line()}")
     common = dict(verdict_passed=verdict.passed, verdict_reason=verdict.line(), force=args.force, origin=origin,
                   progress=lambda m: print(m, flush=True))
@@ -76,8 +81,10 @@ def run(args) -> int:
         return 0
     if config.is_mock:
         print(MOCK_BANNER, flush=True)
+    elif config.is_rehearsal:
+        print(rehearsal_banner(config), flush=True)
     with open_controller_link(config) as link:
-        outcome = writeback(args.session, config, result, link.controller, mock_controller=link.is_mock, **common)
+        outcome = writeback(args.session, config, result, link.controller, mock_controller=mock_controller, **common)
     tag = "MOCK " if outcome.mock else ""
     print(side_by_side(outcome.old, outcome.new))
     print(outcome.literal)

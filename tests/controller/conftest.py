@@ -8,9 +8,10 @@ import time
 import pytest
 
 from handeye.drivers.controller import open_controller
-from handeye.mocks.controller import start_mock_controller
+from handeye.mocks.controller import mock_protocols, start_mock_controller
 
-PROTOCOLS = ("socket", "serial", "modbus")
+#: Every controller back end a mock serves (the registry's, so a new back end is tested here at once).
+PROTOCOLS = mock_protocols()
 #: Wall-clock seconds per simulated second of motion in tests (moves take a few ms).
 TIME_SCALE = 0.002
 #: The write key of the test servers (their client_options() carry it to the clients).

@@ -109,14 +109,23 @@ def test_socket_takeover_starts_a_new_session_and_refuses_strangers(quick):
         old.close()
 
 
+def _stranger(server) -> socket.socket:
+    """A connection from 127.0.0.2: another host as far as the program's address check goes."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    sock.settimeout(2)
+    sock.bind(("127.0.0.2", 0))
+    sock.connect((server.host, server.port))
+    return sock
+
+
 def test_socket_takeover_accepts_only_the_configured_pc():
     with start_mock_controller("socket", time_scale=TIME_SCALE, idle_timeout_s=IDLE,
                                allowed_client="127.0.0.1") as server:
+        assert server.allowed_client == "127.0.0.1"  # the program's HE_PC_ADDRESS decides, not Python
         pc = LinePeer(server)
         try:
             assert pc.ask("1 PING") == "1 OK"
-            server.allowed_client = "10.11.12.13"  # from now on 127.0.0.1 is a stranger
-            stranger = socket.create_connection((server.host, server.port), timeout=2)
+            stranger = _stranger(server)
             try:
                 stranger.settimeout(2.0)
                 assert stranger.recv(16) == b""  # refused while the PC keeps its link

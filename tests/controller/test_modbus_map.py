@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from pymodbus.client import ModbusTcpClient
 
-from handeye.drivers.controller import InvalidRequest, ToolData
+from handeye.drivers.controller import ConfigError, ToolData
 from handeye.drivers.controller.modbus_map import (
     DEFAULT_MAP,
     floats_to_registers,
@@ -58,8 +58,9 @@ def _write_map(tmp_path, change):
     (lambda d: d.update(format="other"), "format"),
 ])
 def test_bad_maps_are_refused(tmp_path, change, message):
-    with pytest.raises(InvalidRequest, match=message):
+    with pytest.raises(ConfigError, match=message) as info:
         load_register_map(_write_map(tmp_path, change))
+    assert info.value.backend == "modbus" and str(info.value).startswith("modbus: register map ")
 
 
 def test_little_endian_gateway_end_to_end(tmp_path, connect_to):

@@ -24,8 +24,9 @@ from handeye.rapid.generate import (
     write_modules,
 )
 from handeye.rapid.station import default_station, load_station
+from handeye.rapid.links import LINK_MODULES
 
-PROTOCOLS = ("socket", "serial", "modbus")
+PROTOCOLS = tuple(LINK_MODULES)
 
 
 KEY = "Cell7-key_2024"

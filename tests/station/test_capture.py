@@ -31,14 +31,14 @@ def _indices(session_dir):
 def test_capture_plans_programs_and_measures(tmp_path, no_leaked_threads):
     config = _config(8)
     with open_station(config, mock=True) as link:
-        summary = capture(config, tmp_path / "s", link.controller, link.camera, link.stereo_model, link.load_program)
+        summary = capture(config, tmp_path / "s", link)
         truth = link.truth_cam2tool0
     assert summary.complete and summary.captured == list(range(1, 9)) and not summary.skipped
     session = read_session(tmp_path / "s")
     assert [p.index for p in session.postures] == list(range(8))
     assert all(p.points_mm.shape == (104, 3) and p.extra["quality"]["corners"] == 104 for p in session.postures)
     record = session.extra["capture"]
-    assert len(record["plan_joints_deg"]) == 8 and record["plan_score"]["axis_spread"] > 0
+    assert len(record["plan_joints_deg"]) == 8 and record["plan_score"]["rotation_axis_spread_deg"] > 0
     assert sorted(f.name for f in (tmp_path / "s" / "rapid").iterdir()) == ["HeMain.mod", "HeSocket.mod", "HeTool.mod"]
     # the joints the robot reported are the planned ones, and the measurements calibrate
     for p, planned in zip(session.postures, record["plan_joints_deg"]):
@@ -61,12 +61,12 @@ def test_resume_after_a_crash_between_grab_and_acknowledge(tmp_path, no_leaked_t
 
         link.controller.acknowledge = crash_on_third
         with pytest.raises(KeyboardInterrupt):
-            capture(config, tmp_path / "s", link.controller, link.camera, link.stereo_model, link.load_program)
+            capture(config, tmp_path / "s", link)
         assert _indices(tmp_path / "s") == [0, 1, 2]
         status = link.controller.status()
         assert status.awaiting_ack and status.posture == 3  # the robot still waits at posture 3
         link.controller.acknowledge = real_ack
-        summary = capture(config, tmp_path / "s", link.controller, link.camera, link.stereo_model, link.load_program)
+        summary = capture(config, tmp_path / "s", link)
     assert summary.already == [1, 2, 3] and summary.captured == [4, 5, 6]
     assert _indices(tmp_path / "s") == list(range(6))
 
@@ -74,13 +74,12 @@ def test_resume_after_a_crash_between_grab_and_acknowledge(tmp_path, no_leaked_t
 def test_postures_that_fail_quality_are_skipped_with_the_reason(tmp_path, no_leaked_threads):
     config = _config(5)
     with open_station(config, mock=True) as link:
-        first = capture(config, tmp_path / "s", link.controller, link.camera, link.stereo_model, link.load_program,
-                        stop_after=2)
+        first = capture(config, tmp_path / "s", link, stop_after=2)
         assert first.captured == [1, 2]
         board = link.mock.truth["board2base"].copy()
         board[:3, 3] += [0.0, 2000.0, 0.0]  # someone moved the board away
         link.camera.set_scene(target2base=board)
-        second = capture(config, tmp_path / "s", link.controller, link.camera, link.stereo_model, link.load_program)
+        second = capture(config, tmp_path / "s", link)
     assert second.captured == [] and sorted(second.skipped) == [3, 4, 5]
     assert all("skipped after 3 attempt(s)" in reason for reason in second.skipped.values())
     header = yaml.safe_load((tmp_path / "s" / "session.yaml").read_text())
@@ -102,12 +101,15 @@ def test_a_killed_capture_restarts_and_finishes_every_posture_once(tmp_path):
     finally:
         os.kill(process.pid, signal.SIGKILL)
         process.wait()
-    before = _indices(session)
+    before = _indices(session)  # reads and validates every file: none is half-written
     assert 3 <= len(before) < 10, before
-    assert not list(session.rglob("*.tmp"))  # no half-written files
+    yaml.safe_load((session / "session.yaml").read_text())
+    # a kill between writing a temporary file and renaming it may leave that temporary beside the whole
+    # target; the resume removes it
     again = subprocess.run(command, capture_output=True, text=True, timeout=180)
     assert again.returncode == 0, again.stderr
     assert "resuming" in again.stdout
+    assert not list(session.rglob("*.tmp"))
     assert _indices(session) == list(range(10))
     plan_index = [p.extra["plan_index"] for p in read_session(session).postures]
     assert plan_index == list(range(1, 11))

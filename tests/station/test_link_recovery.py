@@ -41,14 +41,13 @@ def test_a_half_open_connection_does_not_stop_the_capture_from_resuming(tmp_path
     config = _config(4, protocol)
     with open_station(config, mock=True) as link:
         server = link.mock.server
-        first = capture(config, tmp_path / "s", link.controller, link.camera, link.stereo_model, link.load_program,
-                        stop_after=2)
+        first = capture(config, tmp_path / "s", link, stop_after=2)
         assert first.captured == [1, 2]
         moves = server.robot.moves
         ghost = _lose_power(link.controller)
         try:
             assert not link.controller.is_connected
-            second = capture(config, tmp_path / "s", link.controller, link.camera, link.stereo_model, link.load_program)
+            second = capture(config, tmp_path / "s", link)
         finally:
             ghost.close()
         assert link.mock.server is server and server.running  # the same mock program, never restarted

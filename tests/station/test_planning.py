@@ -3,6 +3,7 @@ import pytest
 
 from handeye.calibration.compact_points import BoardGeometry, board_corners
 from handeye.calibration.kinematics import load_robot
+from handeye.calibration.quality_words import MAX_AXIS_SPREAD_DEG
 from handeye.calibration.transforms import invert_transforms
 from handeye.calibration.views import NOMINAL_XB3, ViewSampling, board_visible
 from handeye.mocks.station import DEFAULT_BOARD, DEFAULT_MOUNT, DEFAULT_START
@@ -33,7 +34,7 @@ def test_postures_are_reachable_with_margin_and_see_the_board(plan):
 
 def test_plan_is_scored(plan):
     s = plan.score
-    assert 0 < s.axis_spread <= 1 and s.median_pair_angle_deg > 15
+    assert 0 < s.rotation_axis_spread_deg <= MAX_AXIS_SPREAD_DEG and s.median_pair_angle_deg > 15
     assert 0 < s.predicted_sigma_mm < 2 and 0 < s.predicted_sigma_deg < 0.2
     assert s.motion_time_s > 0 and plan.notes == []
 

@@ -24,6 +24,7 @@ from handeye.station.capture import CaptureError, capture
 from handeye.station.cli import main
 from handeye.station.config import ConfigError, config_from_dict, default_config, load_config
 from handeye.station.origin import session_origin
+from handeye.station.runtime import StationLink
 from handeye.station.writeback import PENDING_FILE, WritebackError, writeback
 
 from helpers import scene
@@ -173,8 +174,8 @@ def test_a_mock_session_is_not_resumed_on_the_real_station(tmp_path):
     session = _synthetic(6)
     session.extra["capture"] = {"station": "mock", "plan_joints_deg": [[0.0] * 6] * 6}
     _write(tmp_path / "s", session)
-    with pytest.raises(CaptureError, match="captured on the embedded mock station"):
-        capture(config_from_dict(REAL_STATION), tmp_path / "s", None, None, None)
+    with pytest.raises(CaptureError, match="captured on the mock station"):
+        capture(config_from_dict(REAL_STATION), tmp_path / "s", StationLink(None))
 
 
 # ---------------------------------------------------------------------------------- lengths in millimetres

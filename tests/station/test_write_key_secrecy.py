@@ -67,7 +67,7 @@ def test_a_capture_and_writeback_with_a_key_leave_no_trace_of_it(tmp_path, no_le
     config = _keyed_config()
     session = tmp_path / "s"
     with open_station(config, mock=True) as link:
-        summary = capture(config, session, link.controller, link.camera, link.stereo_model, link.load_program)
+        summary = capture(config, session, link)
         assert summary.complete
         result = calibrate(problem_from_session(read_session(session)))
         outcome = writeback(session, config, result, link.controller)

@@ -36,13 +36,16 @@ def test_dry_run_prints_the_rapid_literal(tmp_path, capsys):
     assert not list(path.glob("tooldata_backup_*"))  # nothing touched
 
 
-def test_writes_reads_back_and_keeps_a_backup(tmp_path, no_leaked_threads):
+@pytest.mark.parametrize("protocol", ["socket", "serial", "modbus"])
+def test_writes_reads_back_and_keeps_a_backup(tmp_path, no_leaked_threads, protocol):
     from handeye.calibration.solve import calibrate
+    from handeye.mocks.station import MockStationSpec
 
     prob, truth, _ = synthetic_problem(20, sigma_cam=0.2, seed=3)
     result = calibrate(prob)
     config = default_config()
-    with MockStation() as station, open_controller("socket", **station.controller_options()) as controller:
+    with MockStation(MockStationSpec(protocol=protocol)) as station, \
+            open_controller(protocol, **station.controller_options()) as controller:
         old = controller.read_tool()
         outcome = writeback(tmp_path, config, result, controller)
         held = station.arm.tool
@@ -85,11 +88,12 @@ def test_bad_tool_values_are_refused_before_sending(tmp_path):
         writeback(tmp_path, replace(config, tool=replace(config.tool, mass_kg=0.0)), calibrate(prob), None, dry_run=True)
 
 
-@pytest.mark.parametrize("protocol, postures", [("socket", 30), ("modbus", 12)])
+@pytest.mark.parametrize("protocol, postures", [("socket", 30), ("serial", 12), ("modbus", 12)])
 def test_demo_recovers_the_hidden_mount(tmp_path, protocol, postures, capsys, no_leaked_threads):
+    """The demo on every link: the capture's own RAPID modules are loaded into the mock and executed."""
     out = tmp_path / "demo.json"
     code = main(["demo", "--session", str(tmp_path / "demo"), "--json", str(out), "--protocol", protocol,
-                 "--postures", str(postures)] + (["--no-report"] if protocol == "modbus" else []))
+                 "--postures", str(postures)] + (["--no-report"] if protocol != "socket" else []))
     result = json.loads(out.read_text())
     assert {"camera_pose", "truth_camera_pose", "postures_captured", "readback_ok"} <= set(result)
     assert result["postures_captured"] == postures and result["readback_ok"] is True

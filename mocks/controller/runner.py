@@ -1,0 +1,133 @@
+"""The controller's robot task: the RAPID program loaded, linked against the mock's bindings, and run.
+
+:class:`RapidRunner` is what a mock controller has instead of a program of its own: it loads a
+:class:`~handeye.mocks.controller.sources.ControllerProgram` into the interpreter (refused with the
+module and line when the interpreter cannot run it), takes the approved postures from the program's
+``CONST jointtarget`` data onto the simulated arm, makes the arm's tool data the program's ``PERS
+tooldata``, and runs ``main`` in a thread. Loading another program stops the running one first (its
+sockets and channels close), as loading modules into a stopped task does.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from ...drivers.controller.types import ToolData
+from ...rapid.errors import RapidError
+from ...rapid.interpreter import Program, Task, load_program
+
+__all__ = ["RapidRunner", "approved_postures", "tooldata_of"]
+
+log = logging.getLogger(__name__)
+
+#: How long a program may take from start until it first waits for the PC.
+START_TIMEOUT_S = 15.0
+
+
+def approved_postures(program: Program) -> np.ndarray:
+    """The program's CONST jointtargets in declaration order: the postures it can move to, (n, 6)."""
+    rows = []
+    for symbol in program.data:
+        if symbol.storage == "CONST" and symbol.type.name == "jointtarget" and not symbol.dims:
+            robax = symbol.box[0].fields["robax"].fields
+            rows.append([robax[f"rax_{i}"] for i in range(1, 7)])
+    return np.array(rows, float).reshape(-1, 6)
+
+
+def tooldata_of(record) -> ToolData:
+    """A RAPID tooldata value as the drivers' :class:`ToolData`."""
+    frame, load = record.fields["tframe"].fields, record.fields["tload"].fields
+    trans, rot, cog = frame["trans"].fields, frame["rot"].fields, load["cog"].fields
+    return ToolData(tuple(trans[c] for c in "xyz"), tuple(rot[c] for c in ("q1", "q2", "q3", "q4")),
+                    load["mass"], tuple(cog[c] for c in "xyz"))
+
+
+class RapidRunner:
+    """Loads and runs the RAPID program of a mock controller.
+
+    Parameters
+    ----------
+    robot : SimulatedRobot
+    bindings : Bindings
+        The mock's world (sockets, serial line, gateway signals, the arm, the pendant).
+    name : str
+        What log lines call the controller (``mock socket controller``).
+    """
+
+    def __init__(self, robot, bindings, name: str = "mock controller"):
+        self.robot, self.bindings, self.name = robot, bindings, name
+        self.program: Program | None = None
+        self.task: Task | None = None
+        self.loaded = None
+        self._tool_symbol = None
+
+    # ------------------------------------------------------------------ loading
+    def load(self, source) -> Program:
+        """Link ``source`` (a ControllerProgram); the arm takes its approved postures.
+
+        Raises
+        ------
+        RapidLoadError
+            The interpreter cannot run a module (its name and line in the message).
+        """
+        program = load_program(source.modules, signals=self.bindings.signals())
+        if program.main is None:
+            raise RapidError(f"{source.origin}: no module declares PROC main (load HeMain)")
+        postures = approved_postures(program)
+        if len(postures):
+            self.robot.load_program(postures)
+        self._tool_symbol = self._find_tool(program, source.tool_name)
+        self.program, self.loaded = program, source
+        self.robot.tool_source = self.tool if self._tool_symbol is not None else None
+        return program
+
+    @staticmethod
+    def _find_tool(program: Program, name: str | None):
+        tools = [s for s in program.data if s.storage == "PERS" and s.type.name == "tooldata" and not s.dims]
+        if name is not None:
+            tools = [s for s in tools if s.name.lower() == name.lower()] or tools
+        return tools[0] if tools else None
+
+    def tool(self) -> ToolData:
+        """The camera's tool data: the program's PERS tooldata now."""
+        return tooldata_of(self._tool_symbol.box[0])
+
+    # ------------------------------------------------------------------ running
+    def start(self, timeout: float = START_TIMEOUT_S) -> None:
+        """Run ``main`` until it first waits for the PC (or stops: then raise with the reason)."""
+        self.task = Task(self.program, self.bindings)
+        self.task.start()
+        if not self.task.wait_idle(timeout):
+            log.warning("%s: the RAPID program did not wait for the PC within %g s", self.name, timeout)
+        if self.task.state == "error":
+            raise RapidError(f"{self.name}: the RAPID program ({self.loaded.origin}) stopped at start: "
+                             f"{self.task.error}")
+
+    def stop(self) -> None:
+        if self.task is not None:
+            self.task.stop()
+
+    def reload(self, source) -> None:
+        """Stop the running program, load ``source`` and start it (the arm stays where it is)."""
+        self.stop()
+        self.load(source)
+        self.start()
+
+    def hold(self, held: bool) -> None:
+        if self.task is not None:
+            self.task.hold(held)
+
+    @property
+    def running(self) -> bool:
+        return self.task is not None and self.task.running
+
+    @property
+    def error(self) -> str | None:
+        """Why the program stopped on an error (None while it runs or after a normal stop)."""
+        return None if self.task is None else self.task.error
+
+    @property
+    def pendant(self) -> list:
+        return [] if self.task is None else list(self.task.pendant)

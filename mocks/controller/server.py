@@ -1,0 +1,154 @@
+"""What every mock controller server shares: the RAPID program run by the interpreter on the
+simulated arm, behind the endpoint of its link (TCP socket, serial line, Modbus gateway).
+
+A server is built from a :class:`~handeye.mocks.controller.sources.ControllerProgram` and a
+:class:`~handeye.mocks.robot.SimulatedRobot`; :meth:`start` opens the endpoint, loads the program
+(refused with the module and line when the interpreter cannot run it) and runs it until it waits for
+the PC. :meth:`load_program` replaces the program (what loading a capture's modules does).
+"""
+
+from __future__ import annotations
+
+import logging
+
+from ...drivers.controller.types import check_write_key
+from ...rapid.interpreter import Bindings
+from .arm import ArmBinding
+from .faults import Faults
+from .runner import RapidRunner
+from .sources import ControllerProgram, keep_system_modules, program_from_folder
+
+__all__ = ["RapidControllerServer", "DEFAULT_IDLE_TIMEOUT_S"]
+
+log = logging.getLogger(__name__)
+
+#: The RAPID modules' default idle timeout (``controller.idle_timeout_s``).
+DEFAULT_IDLE_TIMEOUT_S = 5.0
+
+
+class RapidControllerServer:
+    """Base of the mock servers (see the module docstring).
+
+    Parameters
+    ----------
+    program : ControllerProgram
+        The modules loaded into the robot task.
+    robot : SimulatedRobot
+    host, port : str, int
+        Where the link's endpoint listens (port 0: a free one; see :attr:`port` after :meth:`start`).
+    faults : Faults, optional
+    idle_timeout_s : float
+        The PC's idle timeout in :meth:`client_options` (the program's own is in its link module).
+    write_key : str, optional
+        The key the PC sends for tool writes (the program's HeKey.sys holds it; None: none).
+    """
+
+    kind = "controller"
+
+    def __init__(self, program, robot, host: str = "127.0.0.1", port: int = 0, faults: Faults | None = None, *,
+                 idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None):
+        if not (isinstance(idle_timeout_s, (int, float)) and 0 < idle_timeout_s < float("inf")):
+            raise ValueError(f"idle_timeout_s must be a positive number of seconds; got {idle_timeout_s!r}")
+        self.source, self.robot = program, robot
+        self.host, self._requested_port = host, port
+        self.faults = faults or Faults()
+        self.idle_timeout_s = float(idle_timeout_s)
+        self._write_key = check_write_key(write_key)
+        self.runner: RapidRunner | None = None
+        self.protocol = self.kind
+
+    # ------------------------------------------------------------------ what each link adds
+    def _open_endpoint(self) -> Bindings:
+        """Open the link's endpoint; return the program's bindings (the arm added by the caller)."""
+        raise NotImplementedError
+
+    def _close_endpoint(self) -> None:
+        raise NotImplementedError
+
+    def _arming(self) -> None:
+        """Just before a program starts (the socket server forgets that the last one listened)."""
+
+    def _wait_ready(self) -> None:
+        """Return once the program serves the link (the socket program listens ...)."""
+
+    def _run(self, program) -> None:
+        self._arming()
+        self.runner.load(program)
+        self.runner.start()
+        self._wait_ready()
+
+    # ------------------------------------------------------------------ lifecycle
+    def start(self):
+        if self.runner is not None:
+            return self
+        bindings = self._open_endpoint()
+        bindings.motion = ArmBinding(self.robot)
+        bindings.pendant = self._pendant
+        self.runner = RapidRunner(self.robot, bindings, f"mock {self.kind} controller")
+        try:
+            self._run(self.source)
+        except BaseException:
+            self.runner.stop()
+            self.runner = None
+            self._close_endpoint()
+            raise
+        self.faults.watch_stall(self._stall)
+        return self
+
+    def stop(self) -> None:
+        if self.runner is None:
+            return
+        self.runner.stop()
+        self._close_endpoint()
+        self.runner = None
+
+    def __enter__(self):
+        return self.start()
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+    def load_program(self, program) -> None:
+        """Stop the running program, load ``program`` (a ControllerProgram, or a folder of modules) and
+        start it; the system modules loaded before (HeKey.sys) stay, as on a controller. Loading the
+        modules that run already changes nothing (the program is not restarted)."""
+        if not isinstance(program, ControllerProgram):
+            program = program_from_folder(program, self.kind)
+        program = keep_system_modules(program, self.source)
+        if sorted((m.source, m.text) for m in program.modules) == sorted((m.source, m.text) for m in self.source.modules):
+            return  # the same modules are loaded already: the program keeps running (a resumed capture)
+        self.runner.stop()
+        self.source = program
+        self._run(program)
+
+    def _stall(self, stalled: bool) -> None:
+        if self.runner is not None:
+            self.runner.hold(stalled)
+
+    def _pendant(self, text: str) -> None:
+        log.info("mock %s controller, FlexPendant: %s", self.kind, text)
+
+    # ------------------------------------------------------------------ state
+    @property
+    def program(self):
+        """The running :class:`~handeye.mocks.controller.runner.RapidRunner`."""
+        return self.runner
+
+    @property
+    def running(self) -> bool:
+        return self.runner is not None and self.runner.running
+
+    @property
+    def program_error(self) -> str | None:
+        """Why the RAPID program stopped on an error, if it did."""
+        return None if self.runner is None else self.runner.error
+
+    @property
+    def has_write_key(self) -> bool:
+        """True when the mock was given a write key (tool writes possible after KEY / with tool_key)."""
+        return self._write_key is not None
+
+    def _client_key(self, options: dict) -> dict:
+        if self._write_key is not None:
+            options["write_key"] = self._write_key
+        return options

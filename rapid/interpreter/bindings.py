@@ -1,0 +1,191 @@
+"""The outside world of a RAPID program, as the interpreter asks for it.
+
+A controller gives a program sockets, serial channels, I/O signals, the arm and the FlexPendant.
+The interpreter asks for them through :class:`Bindings`; whoever runs a program provides them (the
+mock controller in ``handeye.mocks`` provides real TCP sockets with fault injection, a serial line,
+the Modbus gateway's signals and the simulated arm). Each binding is duck-typed; the classes below
+document what is asked and give simple implementations for tests.
+
+Blocking calls receive the :class:`~handeye.rapid.interpreter.runtime.Task`: they wait with
+``task.idle(seconds, readable=[socket, ...])`` so that interrupts run and a stop request ends the
+wait. Failures a program can handle are raised as ``RapidRuntimeError("ERR_...")``.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+from .errors import RapidFatalError
+
+__all__ = ["Bindings", "SocketBinding", "SerialBinding", "IoBinding", "MotionBinding", "MemoryIo", "FixedArm"]
+
+log = logging.getLogger(__name__)
+
+
+class SocketBinding:
+    """Sockets of the PC Interface option (``SocketCreate`` ...). Handles are the binding's own objects."""
+
+    def create(self, task):
+        raise NotImplementedError
+
+    def bind(self, handle, address: str, port: int) -> None:
+        raise NotImplementedError
+
+    def listen(self, handle) -> None:
+        raise NotImplementedError
+
+    def accept(self, task, handle, timeout: float | None) -> tuple:
+        """``(client handle, client address)``; ``ERR_SOCK_TIMEOUT`` when nobody came in time."""
+        raise NotImplementedError
+
+    def connect(self, task, handle, address: str, port: int, timeout: float | None) -> None:
+        raise NotImplementedError
+
+    def receive(self, task, handle, max_bytes: int, timeout: float | None, exact: bool = False) -> bytes:
+        """Whatever arrived, at most ``max_bytes`` (exactly that many with ``exact``); ``ERR_SOCK_TIMEOUT``,
+        ``ERR_SOCK_CLOSED``."""
+        raise NotImplementedError
+
+    def send(self, task, handle, data: bytes) -> None:
+        raise NotImplementedError
+
+    def close(self, handle) -> None:
+        raise NotImplementedError
+
+    def status(self, handle) -> str:
+        """``created``, ``bound``, ``listening``, ``connected`` or ``closed``."""
+        raise NotImplementedError
+
+
+class SerialBinding:
+    """Serial channels (``Open "sio1:", dev \\Bin`` ...)."""
+
+    def open(self, task, name: str, binary: bool):
+        raise NotImplementedError
+
+    def read_line(self, task, handle, timeout: float | None) -> bytes:
+        """One line without its LF (at most 80 characters); ``ERR_DEV_MAXTIME`` when none came in time."""
+        raise NotImplementedError
+
+    def write(self, task, handle, data: bytes) -> None:
+        raise NotImplementedError
+
+    def clear(self, handle) -> None:
+        raise NotImplementedError
+
+    def close(self, handle) -> None:
+        raise NotImplementedError
+
+
+class IoBinding:
+    """The I/O signals of the controller's configuration."""
+
+    def signals(self) -> dict:
+        """Signal name -> ``signaldi``, ``signaldo``, ``signalgi``, ``signalgo``, ``signalai`` or ``signalao``."""
+        raise NotImplementedError
+
+    def read(self, name: str) -> float:
+        raise NotImplementedError
+
+    def write(self, name: str, value: float) -> None:
+        raise NotImplementedError
+
+    def bits(self, name: str) -> int:
+        """Width of a group signal."""
+        return 16
+
+
+class MotionBinding:
+    """The robot arm."""
+
+    def joints(self) -> list:
+        """Axis angles now (deg, six of them)."""
+        raise NotImplementedError
+
+    def flange(self) -> tuple:
+        """``(position mm, quaternion w x y z)`` of tool0 in the base (world) frame now."""
+        raise NotImplementedError
+
+    def move_joints(self, task, joints, speed: dict, zone: dict, tool) -> None:
+        """Move all axes to ``joints`` and return when the arm stands still there (``task.idle`` meanwhile)."""
+        raise NotImplementedError
+
+    def world_zone(self, number: int, zone: dict | None) -> None:
+        """A world zone supervised from now on (``zone``), or no longer (``None``)."""
+
+
+@dataclass
+class Bindings:
+    """What a task can reach; ``None`` where the controller has nothing of that kind."""
+
+    sockets: SocketBinding | None = None
+    serial: SerialBinding | None = None
+    io: IoBinding | None = None
+    motion: MotionBinding | None = None
+    pendant: object = None  # callable(text) for TPWrite, or None to log it
+    sysinfo: dict = field(default_factory=lambda: {"LanIp": "127.0.0.1", "SystemName": "handeye",
+                                                    "RobotType": "IRB 1400", "SWVersion": "6.0",
+                                                    "CtrlId": "handeye-interpreter", "SerialNo": "0"})
+
+    def signals(self) -> dict:
+        return dict(self.io.signals()) if self.io is not None else {}
+
+    def write_pendant(self, text: str) -> None:
+        if self.pendant is not None:
+            self.pendant(text)
+        else:
+            log.info("TPWrite: %s", text)
+
+    def need(self, kind: str, what: str):
+        binding = getattr(self, kind)
+        if binding is None:
+            raise RapidFatalError(f"{what}: this controller has no {kind}")
+        return binding
+
+
+class MemoryIo(IoBinding):
+    """Signals held in a dict (tests): ``MemoryIo({"diStart": "signaldi", ...})``."""
+
+    def __init__(self, signals: dict, bits: int = 16):
+        self._types = dict(signals)
+        self.values = {name: 0.0 for name in signals}
+        self._bits = bits
+
+    def signals(self) -> dict:
+        return self._types
+
+    def read(self, name: str) -> float:
+        return self.values[name]
+
+    def write(self, name: str, value: float) -> None:
+        self.values[name] = float(value)
+
+    def bits(self, name: str) -> int:
+        return self._bits
+
+
+class FixedArm(MotionBinding):
+    """An arm that reaches every target at once (tests of programs, not of motion)."""
+
+    def __init__(self, joints=(0.0,) * 6, flange=((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))):
+        self._joints = list(joints)
+        self._flange = flange
+        self.moves: list = []
+        self.zones: dict = {}
+
+    def joints(self) -> list:
+        return list(self._joints)
+
+    def flange(self) -> tuple:
+        return self._flange
+
+    def move_joints(self, task, joints, speed, zone, tool) -> None:
+        self.moves.append(list(joints))
+        self._joints = list(joints)
+
+    def world_zone(self, number: int, zone) -> None:
+        if zone is None:
+            self.zones.pop(number, None)
+        else:
+            self.zones[number] = zone

@@ -1,0 +1,251 @@
+"""Compute once, present many times: everything the station says about one calibration.
+
+``solve -> assess -> presenters``. :func:`assess` takes a solved session (``station.calibrate``) and
+computes, in one place, all the figures any output shows: the quality words of the result
+(``calibration.quality_words`` through ``station.quality.quality_figures``: d_org, rotation-axis
+coverage, the units advice), the verdict against the thresholds, the method comparison (the only
+other solves), the data checks made before solving, the origin of the data and the repeatability of
+the board points. The presenters (``report_text`` for the terminal, ``report_json`` for ``--json``,
+``report`` for the HTML file) only format what an :class:`Assessment` holds; none of them solves.
+
+``handeye calibrate`` (text, ``--json``, ``--report``), ``handeye writeback`` (which acts on the
+verdict) and ``handeye demo`` all call :func:`assess`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..calibration.errors import CalibrationError, HandEyeError
+from ..calibration.metrics import fixed_points
+from ..calibration.problem import EYE_IN_HAND, HandEyeProblem
+from ..calibration.quality_words import AxisCoverage, DOrg, kept_postures, result_d_org
+from ..calibration.transforms import rotation_error_deg
+from .calibrate import CalibrationOutcome
+from .quality import QualityFigures, QualityThresholds, Verdict, quality_figures, verdict
+
+__all__ = [
+    "COMPARISON_METHODS",
+    "Assessment",
+    "assess",
+    "comparison_results",
+    "corner_repeatability",
+    "method_comparison",
+]
+
+#: Methods the report compares by default: the robust pipeline (the default before ml), the paper's mcb and mc, three classics.
+COMPARISON_METHODS = ("robust", "mcb", "mc", "park", "tsai", "daniilidis")
+
+
+@dataclass(frozen=True)
+class Assessment:
+    """What the station knows about one calibration, computed once by :func:`assess`.
+
+    Attributes
+    ----------
+    session_path : Path or str
+        The session folder (shown in every output).
+    problem : HandEyeProblem
+        The data the result was solved from.
+    result : CalibrationResult
+        The calibration judged (normally the default estimator).
+    origin : str
+        ``mock``, ``real``, ``simulated`` or ``unknown`` (``station.origin``).
+    figures : QualityFigures
+        The result's quality words: d_org, rotation-axis coverage of the kept postures, units advice.
+    verdict : Verdict or None
+        PASS/FAIL against the thresholds; ``None`` when no verdict was asked for.
+    comparison : list of dict or None
+        One row per compared method (:func:`method_comparison`); ``None`` when not compared.
+    findings : list or None
+        Data checks on the poses (``calibration.diagnostics``); ``None`` when they could not run.
+    repeatability : dict
+        The board points' deviations in the fixed frame (:func:`corner_repeatability`).
+    tooldata_literal : str or None
+        The full RAPID tooldata literal, when the tool's load is known (station configuration).
+    plan_preview : bytes or None
+        The capture plan's preview (``SESSION/preview.png``, ``station.preview``), when the session has one.
+    """
+
+    session_path: Path | str
+    problem: HandEyeProblem
+    result: object
+    origin: str
+    figures: QualityFigures
+    verdict: Verdict | None
+    comparison: list | None
+    findings: list | None
+    repeatability: dict
+    tooldata_literal: str | None = None
+    plan_preview: bytes | None = None
+
+    @property
+    def d_org(self) -> DOrg:
+        """THE d_org of the result (``calibration.quality_words.result_d_org``)."""
+        return self.figures.d_org
+
+    @property
+    def coverage(self) -> AxisCoverage:
+        """Rotation-axis coverage of the kept postures (``calibration.quality_words``)."""
+        return self.figures.coverage
+
+    @property
+    def units(self):
+        """The units advice (``station.units_advice.UnitsAdvice``), or ``None``."""
+        return self.figures.units
+
+
+def assess(outcome: CalibrationOutcome, thresholds: QualityThresholds | None = None, *, judge: bool = True,
+           methods: Sequence[str] = (), tooldata_literal: str | None = None) -> Assessment:
+    """Everything the outputs show about a solved session, computed once.
+
+    Parameters
+    ----------
+    outcome : CalibrationOutcome
+        The solved session (``station.calibrate``); ``outcome.problem`` is required.
+    thresholds : QualityThresholds, optional
+        For the verdict; the defaults when omitted.
+    judge : bool
+        Compute the verdict (``handeye calibrate`` without ``--report`` or ``--thresholds`` shows none).
+    methods : sequence of str
+        Methods to compare (e.g. :data:`COMPARISON_METHODS`); the outcome's own result is reused for
+        its method. Empty: no comparison (``Assessment.comparison`` is ``None``).
+    tooldata_literal : str, optional
+        The RAPID tooldata literal to show beside the pose.
+
+    Returns
+    -------
+    Assessment
+
+    Raises
+    ------
+    HandEyeError
+        When the outcome carries no problem.
+    """
+    from .origin import session_origin
+
+    if outcome.problem is None:
+        raise HandEyeError("the assessment needs the solved problem; use station.calibrate.calibrate_session_folder")
+    problem, result = outcome.problem, outcome.result
+    figures = quality_figures(problem, result)
+    judged = verdict(result, problem, thresholds, figures) if judge else None
+    comparison = None
+    if methods:
+        solved = comparison_results(problem, methods, outcome.truth, known={result.method: result})
+        comparison = method_comparison(problem, result, solved)
+    origin = outcome.origin if outcome.origin is not None else session_origin(path=outcome.session_path)
+    return Assessment(outcome.session_path, problem, result, origin, figures, judged, comparison,
+                      _findings(problem), corner_repeatability(problem, result), tooldata_literal,
+                      _plan_preview(outcome.session_path))
+
+
+def _plan_preview(session_path) -> bytes | None:
+    """The capture plan's preview PNG of the session folder, when there is one."""
+    from ..calibration.files import read_file_bytes
+
+    path = Path(session_path) / "preview.png" if session_path is not None else None
+    if path is None or not path.is_file():
+        return None
+    try:
+        return read_file_bytes(path, "plan preview", HandEyeError)
+    except HandEyeError:
+        return None
+
+
+def _findings(problem: HandEyeProblem) -> list | None:
+    """The data checks on the poses (``calibration.diagnostics.diagnose``), ``None`` if they fail."""
+    from ..calibration.diagnostics import diagnose
+    from ..calibration.problem import hand_poses
+
+    try:
+        tool0 = hand_poses(problem.hand, problem.setup)  # the map is its own inverse for either set-up
+        return diagnose(tool0, problem.target2cam, problem.setup, [int(i) for i in problem.posture_ids])
+    except HandEyeError:
+        return None
+
+
+def comparison_results(problem: HandEyeProblem, methods=COMPARISON_METHODS, truth: dict | None = None,
+                       known: dict | None = None) -> dict:
+    """Solve ``problem`` with several methods: ``{method: CalibrationResult}``.
+
+    Methods that raise :class:`CalibrationError` on these data are left out.
+
+    Parameters
+    ----------
+    problem : HandEyeProblem
+    methods : sequence of str
+    truth : dict, optional
+        ``{'x', 'target2fixed'}`` of a synthetic session (fills ``truth_errors``).
+    known : dict, optional
+        Results already computed (``{method: result}``), reused instead of solving again.
+    """
+    from ..calibration.solve import calibrate
+
+    known = dict(known or {})
+    out = {}
+    for method in methods:
+        if method in known:
+            out[method] = known[method]
+            continue
+        try:
+            out[method] = calibrate(problem, method, truth)
+        except CalibrationError:
+            continue
+    for method, result in known.items():
+        out.setdefault(method, result)
+    return out
+
+
+def method_comparison(problem: HandEyeProblem, chosen, comparison: dict) -> list[dict]:
+    """One row per method: pose, differences from ``chosen`` and ``d_org`` on the same data.
+
+    ``d_org_mm`` is THE d_org (``calibration.quality_words.result_d_org``) of each method's X over
+    the postures the CHOSEN result kept and the same board points, so the chosen method's row shows
+    the very figure of the report's header and the verdict. ``d_org_incl_outliers_mm`` is the same over
+    every posture (``None`` when the chosen result left none out).
+    """
+    rows = []
+    for name, r in comparison.items():
+        scatter = result_d_org(problem, chosen, r.x)
+        rows.append({
+            "method": name,
+            "position_mm": [float(v) for v in r.x[:3, 3]],
+            "d_position_mm": float(np.linalg.norm(r.x[:3, 3] - chosen.x[:3, 3])),
+            "d_rotation_deg": float(rotation_error_deg(r.x, chosen.x)),
+            "d_org_mm": scatter.mm,
+            "d_org_incl_outliers_mm": scatter.incl_outliers_mm,
+            "outliers": [int(i) for i in r.outliers],
+            "runtime_s": float(r.runtime_s),
+            "truth_errors": r.truth_errors,
+            "chosen": r is chosen or (r.method == chosen.method and np.allclose(r.x, chosen.x)),
+        })
+    return rows
+
+
+def corner_repeatability(problem: HandEyeProblem, result) -> dict:
+    """Board points in the fixed frame, their deviations from the mean over the inliers, per-point RMS.
+
+    Returns
+    -------
+    dict
+        ``deviations`` (n, m, 3) mm, ``centre_deviation`` (n, 3) mm (mean of a posture's deviations =
+        deviation of the board centre), ``inliers`` (n,) bool, ``rms_per_point`` (m,) mm over the
+        inliers, ``mean_points`` (m, 3), ``frame`` (``base`` or ``tool0``).
+    """
+    fixed = fixed_points(problem.hand, result.x, problem.points_cam)  # eq. 13
+    inliers = kept_postures(problem, result)
+    mean = fixed[inliers].mean(axis=0)
+    deviations = fixed - mean
+    rms = np.sqrt(np.mean(np.sum(deviations[inliers] ** 2, axis=-1), axis=0))
+    return {
+        "deviations": deviations,
+        "centre_deviation": deviations.mean(axis=1),
+        "inliers": inliers,
+        "rms_per_point": rms,
+        "mean_points": mean,
+        "frame": "base" if problem.setup == EYE_IN_HAND else "tool0",
+    }

@@ -1,0 +1,49 @@
+"""A third-party package as the tests see one: it adds a controller back end (``loopback``, the
+line protocol over TCP on another default port) and a camera back end (``blank``, grey frames)
+through the entry points of its ``.dist-info``, with no change to handeye.
+
+The controller is declared by a ``ControllerBackend`` (name, class, default port, help); the camera
+by its class alone (the registry describes it with the defaults).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from handeye.drivers.camera import Camera, StereoFrame
+from handeye.drivers.controller.backends import ControllerBackend
+from handeye.drivers.controller.socket_client import SocketController
+
+
+class LoopbackController(SocketController):
+    """The socket back end under another name: what a plug-in's own protocol would subclass."""
+
+    protocol = "loopback"
+
+
+CONTROLLER = ControllerBackend("loopback", f"{__name__}:LoopbackController", default_port=11025,
+                               help="the test plug-in's TCP link:   --host H --port P (default 11025)")
+
+
+class BlankCamera(Camera):
+    """A camera that sees nothing: grey 8 x 8 frames."""
+
+    name = "blank"
+
+    def __init__(self, grey: int = 128):
+        self.grey = grey
+        self._open = False
+
+    def connect(self) -> None:
+        self._open = True
+
+    def close(self) -> None:
+        self._open = False
+
+    @property
+    def is_connected(self) -> bool:
+        return self._open
+
+    def grab(self, timeout_s: float = 2.0) -> StereoFrame:
+        image = np.full((8, 8), self.grey, np.uint8)
+        return StereoFrame(image, image.copy())
