@@ -96,7 +96,7 @@ __all__ = [
     "solve_eiv",
     "ml_cross_validation",
     "angle_gaps_deg",
-    "spread_subset",
+    "varied_rotation_subset",
     "initial_board_pose",
 ]
 
@@ -710,7 +710,7 @@ def angle_gaps_deg(hand: np.ndarray, board: np.ndarray) -> np.ndarray:
     return np.degrees(np.nanmedian(gap, axis=1))
 
 
-def spread_subset(hand: np.ndarray, candidates: np.ndarray, size: int) -> np.ndarray:
+def varied_rotation_subset(hand: np.ndarray, candidates: np.ndarray, size: int) -> np.ndarray:
     """Indices (sorted) of ``size`` postures among ``candidates`` spread over the hand rotations.
 
     Farthest-point sampling on the rotation angle between hand orientations, from the posture
@@ -795,9 +795,9 @@ def _start(problem: HandEyeProblem, obs: Observations, gap_flags: np.ndarray) ->
     from .triplets import all_postures_solution  # noqa: PLC0415
 
     candidates = np.flatnonzero(~gap_flags)
-    attempts = [spread_subset(obs.hand, candidates, START_POSTURES)]
+    attempts = [varied_rotation_subset(obs.hand, candidates, START_POSTURES)]
     if len(candidates) > START_POSTURES:
-        attempts.append(spread_subset(obs.hand, np.arange(problem.n), START_POSTURES))
+        attempts.append(varied_rotation_subset(obs.hand, np.arange(problem.n), START_POSTURES))
     for subset in attempts:
         try:
             return _mcb_start(problem, subset)

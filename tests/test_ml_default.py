@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from handeye.calibration.compact_points import CompactPoints, board_corners
 from handeye.calibration.crossval import SYSTEMATIC_RATIO, CrossValidation, cross_validate
-from handeye.calibration.eiv import angle_gaps_deg, observations, solve_eiv, spread_subset
+from handeye.calibration.eiv import angle_gaps_deg, observations, solve_eiv, varied_rotation_subset
 from handeye.calibration.kinematics import load_robot
 from handeye.calibration.noise import (
     CornerNoise,
@@ -336,10 +336,10 @@ def test_many_postures_start_from_a_subset_and_report_progress():
     assert r.truth_errors["translation_error_mm"] < 1.0
 
 
-def test_spread_subset_picks_varied_rotations():
+def test_varied_rotation_subset_picks_far_apart_rotations():
     prob, _, _ = problem(30)
     hand = prob.hand
-    chosen = spread_subset(hand, np.arange(30), 10)
+    chosen = varied_rotation_subset(hand, np.arange(30), 10)
     assert len(chosen) == 10 and len(set(chosen)) == 10 and np.all(np.diff(chosen) > 0)
 
 
