@@ -3,7 +3,7 @@
 It runs on numpy and scipy alone. The names below load on first use (importing the package is cheap)::
 
     from handeye.calibration import calibrate_session, read_session
-    result = calibrate_session(read_session("cal_01"))            # the robust default method
+    result = calibrate_session(read_session("cal_01"))            # the default method (ml)
     print(result.x, result.metrics["d_org_mm"])
 
 Methods are the rows of :data:`METHODS` (``handeye.calibration.methods``); robots are the YAML

@@ -522,6 +522,6 @@ def diagnose_session(session, limits: DiagnosticLimits = DiagnosticLimits()) -> 
     """
     from .solve import problem_from_session  # local: solve imports much of the package
 
-    problem = problem_from_session(session)
+    problem = problem_from_session(session, check_consistency=False)  # diagnose, do not refuse
     tool0 = hand_poses(problem.hand, session.setup)  # the map is its own inverse for either set-up
     return diagnose(tool0, problem.target2cam, session.setup, [int(i) for i in problem.posture_ids], limits)

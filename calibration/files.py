@@ -37,6 +37,7 @@ __all__ = [
     "write_failure",
     "make_folder",
     "write_text_atomic",
+    "write_bytes_atomic",
 ]
 
 #: Largest file a reader accepts unless told otherwise (sessions, configs, imports are kilobytes).
@@ -313,6 +314,15 @@ def write_text_atomic(path, text: str, encoding: str = "utf-8", newline: str | N
         The folder cannot be created or written (permission, read-only, a file in the way, full
         disk), or ``path`` is a folder; one line naming the path. Nothing is left behind.
     """
+    return _write_atomic(path, lambda fd: os.fdopen(fd, "w", encoding=encoding, newline=newline), text, encoding)
+
+
+def write_bytes_atomic(path, data: bytes) -> Path:
+    """Write ``data`` (an image) to ``path`` atomically, as :func:`write_text_atomic` writes text."""
+    return _write_atomic(path, lambda fd: os.fdopen(fd, "wb"), bytes(data), "bytes")
+
+
+def _write_atomic(path, opener, content, encoding: str) -> Path:
     path = Path(path)
     if path.is_dir():
         raise OutputError(f"cannot write {path}: it is a folder; give a file name")
@@ -325,11 +335,11 @@ def write_text_atomic(path, text: str, encoding: str = "utf-8", newline: str | N
     except OSError as exc:
         raise write_failure(path, exc) from None
     try:
-        with os.fdopen(fd, "w", encoding=encoding, newline=newline) as handle:
+        with opener(fd) as handle:
             umask = os.umask(0)
             os.umask(umask)
             os.fchmod(handle.fileno(), 0o666 & ~umask)
-            handle.write(text)
+            handle.write(content)
             handle.flush()
             os.fsync(handle.fileno())
         os.replace(tmp, path)

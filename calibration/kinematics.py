@@ -35,6 +35,7 @@ from .rotations import (
 from .transforms import transform_from_rotation_translation
 
 __all__ = [
+    "LinkBody",
     "RobotModel",
     "load_robot",
     "known_robots",
@@ -81,6 +82,26 @@ def dh_transforms(dh_table, theta_rad) -> np.ndarray:
     return out
 
 
+@dataclass(frozen=True)
+class LinkBody:
+    """A capsule around part of the arm, for the cell checks (``calibration.clearance``).
+
+    Attributes
+    ----------
+    name : str
+        How the operator reads it (``link 5``).
+    start, end : int
+        Points of the chain (:meth:`RobotModel.chain_points`) the capsule's axis joins: 0 on axis 1,
+        ``i`` on axis ``i + 1``, ``k`` (the axis count) the tool0 origin. Both on one rigid link.
+    radius_mm : float
+    """
+
+    name: str
+    start: int
+    end: int
+    radius_mm: float
+
+
 @dataclass(frozen=True, eq=False)
 class RobotModel:
     """A serial robot in the paper's quaternion chain form.
@@ -102,6 +123,9 @@ class RobotModel:
     max_speed_deg_s : ndarray, shape (k,)
     dh : ndarray, shape (k, 4)
         The source table, kept for checks.
+    bodies : tuple of LinkBody
+        Capsules around the links the cell checks watch (the wrist end); empty when the robot file
+        names none.
     """
 
     name: str
@@ -113,14 +137,16 @@ class RobotModel:
     joint_limits_deg: np.ndarray
     max_speed_deg_s: np.ndarray
     dh: np.ndarray
+    bodies: tuple = ()
 
     @property
     def dof(self) -> int:
         return int(self.axes.shape[0])
 
     @classmethod
-    def from_dh(cls, name, dh, coupling_rows=(), joint_limits_deg=None, max_speed_deg_s=None) -> "RobotModel":
-        """Build the chain from a standard DH table (rows ``d, a, alpha_deg, theta_offset_deg``)."""
+    def from_dh(cls, name, dh, coupling_rows=(), joint_limits_deg=None, max_speed_deg_s=None, bodies=()) -> "RobotModel":
+        """Build the chain from a standard DH table (rows ``d, a, alpha_deg, theta_offset_deg``);
+        ``bodies``: :class:`LinkBody` capsules, or mappings ``{name, from, to, radius_mm}``."""
         dh = np.asarray(dh, dtype=float)
         k = dh.shape[0]
         frames = np.eye(4)[None].repeat(k + 1, axis=0)
@@ -145,6 +171,7 @@ class RobotModel:
             joint_limits_deg=limits,
             max_speed_deg_s=speeds,
             dh=dh,
+            bodies=tuple(_link_body(b, k) for b in bodies),
         )
 
     def serial_angles_rad(self, joints_deg) -> np.ndarray:
@@ -174,6 +201,29 @@ class RobotModel:
             q = quaternion_multiply(q, quaternion_from_axis_angle(self.axes[i], theta[..., i]))  # eq. 11
             p = p + rotate_vectors(q, self.links[i])  # eq. 12
         return p, canonical_quaternions(quaternion_multiply(q, self.tool0_home))
+
+    def chain_points(self, joints_deg) -> np.ndarray:
+        """Points of the chain in base: ``P(0)`` on axis 1 (``D_0``), ``P(i)`` on axis ``i + 1``
+        (eq. 12), ``P(k)`` the tool0 origin.
+
+        Parameters
+        ----------
+        joints_deg : array-like, shape (..., k)
+            Controller axis angles in degrees.
+
+        Returns
+        -------
+        ndarray, shape (..., k + 1, 3)
+            mm.
+        """
+        theta = self.serial_angles_rad(joints_deg)
+        lead = theta.shape[:-1]
+        q = np.broadcast_to(np.array([1.0, 0.0, 0.0, 0.0]), lead + (4,))
+        points = [np.broadcast_to(self.base_offset, lead + (3,))]
+        for i in range(self.dof):
+            q = quaternion_multiply(q, quaternion_from_axis_angle(self.axes[i], theta[..., i]))  # eq. 11
+            points.append(points[-1] + rotate_vectors(q, self.links[i]))  # eq. 12
+        return np.stack(points, axis=-2)
 
     def forward_transform(self, joints_deg) -> np.ndarray:
         """tool02base ``(..., 4, 4)`` for controller angles ``(..., k)`` in degrees."""
@@ -212,6 +262,15 @@ class RobotModel:
         return out
 
 
+def _link_body(body, dof: int) -> LinkBody:
+    """A :class:`LinkBody` from itself or a robot file's mapping ``{name, from, to, radius_mm}``."""
+    if not isinstance(body, LinkBody):
+        body = LinkBody(str(body["name"]), int(body["from"]), int(body["to"]), float(body["radius_mm"]))
+    if not (0 <= body.start <= dof and 0 <= body.end <= dof and body.radius_mm > 0):
+        raise ValueError(f"body {body.name!r}: chain points must be 0..{dof} and the radius > 0")
+    return body
+
+
 def _normalise_name(name: str) -> str:
     return "".join(ch for ch in name.lower() if ch.isalnum())
 
@@ -241,6 +300,7 @@ def _load_path(path: Path) -> RobotModel:
             data.get("coupling", ()),
             data.get("joint_limits_deg"),
             data.get("max_speed_deg_s"),
+            data.get("bodies", ()),
         )
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"robot file {path} is not a valid robot model: {exc}") from None

@@ -9,8 +9,11 @@ Kinds
 ``paper``
     The variants of Algorithm 1 of Deniz & Cakir: a candidate from every posture triplet (or all
     postures at once for ``mc``) and one selection criterion (``triplets``, ``selection``).
+``ml``
+    The recommended default: maximum likelihood with errors in variables (``eiv``), started by mcb,
+    noise levels estimated from the data, cross-validated accuracy (solved in ``solve``).
 ``robust``
-    The recommended default: the paper's mcb start, outlier postures out, robust refinement of
+    The default before ``ml``: the paper's mcb start, outlier postures out, robust refinement of
     the point consistency, one-sigma uncertainty (solved in ``solve``).
 ``classic``
     A published ``AX = XB`` solver, ``solver(hand, target2cam, pairs=None) -> X (4, 4)``
@@ -36,7 +39,7 @@ from .classic import (
 __all__ = ["Method", "METHODS", "KINDS", "DEFAULT_METHOD", "method_names", "get_method"]
 
 #: The kinds of method, in the order the table lists them.
-KINDS = ("paper", "robust", "classic")
+KINDS = ("paper", "ml", "robust", "classic")
 
 _PAPER = ('C. Deniz and M. Cakir, "Solution to the hand-eye calibration in the manner of absolute orientation '
           'problem", Industrial Robot, 2018')
@@ -51,7 +54,7 @@ class Method:
     name : str
         The ``--method`` word.
     kind : str
-        ``robust``, ``paper`` or ``classic`` (see the module docstring).
+        ``ml``, ``robust``, ``paper`` or ``classic`` (see the module docstring).
     citation : str
         Authors and year, as the result's ``details["reference"]`` names it (``Tsai & Lenz (1989)``).
     summary : str
@@ -88,6 +91,10 @@ METHODS: dict[str, Method] = {m.name: m for m in (
     _paper("mcb", "best triplet by back-projection d_back (eq. 23)"),
     _paper("mco", "best triplet by d_org (eq. 22)"),
     _paper("mcy", "best triplet by the distance to the true board points (synthetic sessions only)"),
+    Method("ml", "ml", "handeye, after Deniz & Cakir (2018)", "maximum likelihood with errors in variables: X, "
+           "the board and per-posture robot and camera corrections weighted by noise levels estimated from the "
+           "data, kinematic deviations when a likelihood-ratio test finds them, outliers out, covariance and "
+           "cross-validated accuracy", source=_PAPER),
     Method("robust", "robust", "handeye, after Deniz & Cakir (2018)", "mcb, then outlier postures out, robust refinement "
            "of the point consistency and a one-sigma uncertainty", source=_PAPER),
     Method("tsai", "classic", "Tsai & Lenz (1989)", "", solve_tsai,
@@ -117,7 +124,7 @@ METHODS: dict[str, Method] = {m.name: m for m in (
 )}
 
 #: The method ``calibrate`` runs when none is named.
-DEFAULT_METHOD = "robust"
+DEFAULT_METHOD = "ml"
 
 
 def method_names(kind: str | None = None) -> tuple[str, ...]:

@@ -52,6 +52,11 @@ class HandEyeProblem:
         Posture indices as written in the session.
     target_points : ndarray, shape (m, 3) or None
         The full point set in the target frame, when known (board grid).
+    joints_deg : ndarray, shape (n, k) or None
+        Controller angles of every posture when the session holds them and names its robot
+        (the ML estimator propagates joint noise through the robot's flange Jacobian).
+    robot : str or None
+        The robot model of ``joints_deg``.
     """
 
     setup: str
@@ -61,6 +66,8 @@ class HandEyeProblem:
     posture_ids: np.ndarray
     target_points: np.ndarray | None = None
     notes: dict = field(default_factory=dict)
+    joints_deg: np.ndarray | None = None
+    robot: str | None = None
 
     @property
     def n(self) -> int:
@@ -75,5 +82,6 @@ class HandEyeProblem:
         keep = np.asarray(keep)
         c = self.compact
         compact = CompactPoints(c.points[keep], c.target_points, c.target2cam[keep], c.plane_rms_mm[keep], c.square_mm)
+        joints = None if self.joints_deg is None else self.joints_deg[keep]
         return HandEyeProblem(self.setup, self.hand[keep], compact, self.points_cam[keep],
-                              self.posture_ids[keep], self.target_points, dict(self.notes))
+                              self.posture_ids[keep], self.target_points, dict(self.notes), joints, self.robot)

@@ -36,6 +36,14 @@ rotation-axis divergence (deg)
 rotation-axis coverage
     :class:`AxisCoverage`: the axes and angles, the spread and the least exercised direction, and the
     RMS rotation about each axis of the hand frame (the report's hemispheres and bars).
+distance spread (mm)
+    How far apart the nearest and the farthest view of the board are: ``max - min`` over the postures
+    of the distance from the camera to the board's centre (the mean of its points in the camera
+    frame; :func:`distance_spread_mm`). Point consistency likes the board near and far.
+board position in the image
+    Which cells of a 3 x 3 grid over the reference camera's image the board's corners have been seen
+    in, over the postures (:func:`image_cells`, named by :data:`IMAGE_CELL_NAMES`: ``upper left`` ..
+    ``lower right``): the board seen all over the image, not always in the middle.
 d_org (mm)
     Eq. 22, the mean distance of a board point in the fixed frame from its mean position, over the
     postures the chosen result kept (its inliers), on every board point of the session (the board
@@ -57,6 +65,10 @@ from .rotations import canonical_quaternions, quaternion_conjugate, quaternion_f
 
 __all__ = [
     "D_ORG_ALL_NAME",
+    "IMAGE_CELL_NAMES",
+    "board_distances_mm",
+    "distance_spread_mm",
+    "image_cells",
     "MAX_AXIS_SPREAD_DEG",
     "MIN_AXIS_ANGLE_DEG",
     "MIN_AXIS_DIVERGENCE_DEG",
@@ -262,6 +274,51 @@ def rotation_axis_coverage(problem: HandEyeProblem, kept=None) -> AxisCoverage:
     """
     hand = problem.hand if kept is None else problem.hand[np.asarray(kept, bool)]
     return hand_axis_coverage(hand, hand_frame(problem.setup))
+
+
+# ------------------------------------------------------------------------------- where the board was
+#: The cells of the 3 x 3 image grid, by row (top first) and column (left first).
+IMAGE_CELL_NAMES = (("upper left", "upper middle", "upper right"), ("middle left", "centre", "middle right"),
+                    ("lower left", "lower middle", "lower right"))
+
+
+def board_distances_mm(points_cam) -> np.ndarray:
+    """Camera-to-board-centre distance of each posture, mm.
+
+    Parameters
+    ----------
+    points_cam : array-like, shape (n, m, 3)
+        The board's points in the camera frame, per posture.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    return np.linalg.norm(np.asarray(points_cam, float).mean(axis=1), axis=1)
+
+
+def distance_spread_mm(distances_mm) -> float:
+    """The distance spread: ``max - min`` of the camera-to-board distances (0 for fewer than two)."""
+    d = np.asarray(distances_mm, float)
+    return float(d.max() - d.min()) if d.size >= 2 else 0.0
+
+
+def image_cells(points_px, width: int, height: int) -> set:
+    """The cells ``(row, col)`` of the 3 x 3 image grid that image points fall in (points outside the
+    image or behind the camera count for none).
+
+    Parameters
+    ----------
+    points_px : array-like, shape (m, 2)
+        Board corners in the reference camera's image (u right, v down), of one posture or many.
+    width, height : int
+        Image size in pixels.
+    """
+    uv = np.asarray(points_px, float).reshape(-1, 2)
+    uv = uv[np.all(np.isfinite(uv), axis=1) & (uv[:, 0] >= 0) & (uv[:, 0] < width) & (uv[:, 1] >= 0) & (uv[:, 1] < height)]
+    cols = np.clip((uv[:, 0] * 3 // width).astype(int), 0, 2)
+    rows = np.clip((uv[:, 1] * 3 // height).astype(int), 0, 2)
+    return {(int(r), int(c)) for r, c in zip(rows, cols)}
 
 
 # ------------------------------------------------------------------------------------------ d_org

@@ -11,6 +11,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .compact_points import compact_points_from_corners, compact_points_from_poses
+from .eiv import solve_eiv
+from .consistency import check_consistent
 from .errors import CalibrationError
 from .kinematics import load_robot
 from .methods import METHODS, method_names
@@ -40,6 +42,7 @@ from .triplets import all_postures_solution, relative_motions, triplet_candidate
 __all__ = [
     "PAPER_METHODS",
     "ROBUST_METHOD",
+    "ML_METHOD",
     "DEFAULT_METHOD",
     "ALL_METHODS",
     "CalibrationResult",
@@ -52,11 +55,13 @@ __all__ = [
 
 #: The paper's variants (section 4): MC without selection, the others select among triplets.
 PAPER_METHODS = method_names("paper")
-#: The recommended default: mcb, outlier postures out, robust refinement, uncertainty.
+#: mcb, outlier postures out, robust point-consistency refinement, uncertainty (the default before ``ml``).
 ROBUST_METHOD = "robust"
-DEFAULT_METHOD = ROBUST_METHOD
-#: Every method name ``calibrate`` accepts (the table of ``methods``): the paper's, the robust default,
-#: the classic solvers.
+#: The recommended default: maximum likelihood with errors in variables (calibration/eiv.py).
+ML_METHOD = "ml"
+DEFAULT_METHOD = ML_METHOD
+#: Every method name ``calibrate`` accepts (the table of ``methods``): the paper's, the default, the
+#: robust pipeline, the classic solvers.
 ALL_METHODS = method_names()
 
 MIN_POSTURES = 3
@@ -88,6 +93,9 @@ class CalibrationResult:
         Errors against the known truth (synthetic sessions).
     uncertainty : dict or None
         One-sigma ``translation_mm`` (x, y, z) and ``rotation_deg`` (about x, y, z) of X.
+    cross_validation : dict or None
+        Posture-level cross-validation (``crossval.CrossValidation.to_dict``): held-out prediction
+        error of the board points, what the noise model predicts, and whether the error is systematic.
     """
 
     method: str
@@ -100,6 +108,7 @@ class CalibrationResult:
     details: dict = field(default_factory=dict)
     truth_errors: dict | None = None
     uncertainty: dict | None = None
+    cross_validation: dict | None = None
 
     @property
     def parent(self) -> str:
@@ -119,6 +128,8 @@ class CalibrationResult:
         }
         if self.uncertainty is not None:
             out["uncertainty"] = self.uncertainty
+        if self.cross_validation is not None:
+            out["cross_validation"] = self.cross_validation
         if self.truth_errors is not None:
             out["truth_errors"] = self.truth_errors
         return out
@@ -147,7 +158,8 @@ def _posture_tool0(session: Session) -> np.ndarray:
     return np.array(poses)
 
 
-def problem_from_session(session: Session, check_units: bool = True) -> HandEyeProblem:
+def problem_from_session(session: Session, check_units: bool = True,
+                         check_consistency: bool | None = None) -> HandEyeProblem:
     """Turn a validated session into arrays, checking what the solver needs.
 
     Parameters
@@ -157,6 +169,9 @@ def problem_from_session(session: Session, check_units: bool = True) -> HandEyeP
     check_units : bool
         Refuse lengths that are not plausible millimetres (``plausibility.check_plausible``;
         default). Only tests of the solvers on deliberately odd data switch it off.
+    check_consistency : bool, optional
+        Refuse poses that no rigid camera mount fits (``consistency.check_consistent``); default:
+        as ``check_units`` (both guard against data no real cell produces).
 
     Raises
     ------
@@ -165,15 +180,20 @@ def problem_from_session(session: Session, check_units: bool = True) -> HandEyeP
     UnitsError
         Lengths that look like metres, a posture in another unit, a flange out of the robot's reach,
         corners whose spacing does not match ``target.square_mm``.
+    InconsistentPosesError
+        Robot and board poses that no rigid camera mount fits (a wrong set-up, pose direction or
+        rotation convention), checked on the X-free invariants of AX = XB.
     """
     postures = session.postures
     if len(postures) < MIN_POSTURES:
         raise CalibrationError(f"at least {MIN_POSTURES} postures are needed; got {len(postures)}")
     ids = np.array([p.index for p in postures])
+    check_consistency = check_units if check_consistency is None else check_consistency
     tool02base = _posture_tool0(session)
     if check_units:
         check_plausible(session, tool02base)
     hand = hand_poses(tool02base, session.setup)
+    joints = _session_joints(session)
     with_points = [p for p in postures if p.points_mm is not None]
     if len(with_points) == len(postures):
         board = session.target
@@ -189,7 +209,8 @@ def problem_from_session(session: Session, check_units: bool = True) -> HandEyeP
         points = np.array([p.points_mm for p in postures])
         compact = compact_points_from_corners(points, board)
         target_points = board.grid(compact.square_mm)
-        return HandEyeProblem(session.setup, hand, compact, points, ids, target_points)
+        return _consistent(HandEyeProblem(session.setup, hand, compact, points, ids, target_points, joints_deg=joints,
+                                          robot=session.robot if joints is not None else None), check_consistency)
     missing = [p.index for p in postures if p.target_in_camera is None]
     if missing:
         raise CalibrationError(f"posture {missing[0]} holds neither points_mm nor target_in_camera like the others")
@@ -197,7 +218,26 @@ def problem_from_session(session: Session, check_units: bool = True) -> HandEyeP
     if session.target is not None and session.target.square_mm:
         length = (max(session.target.corners) - 1) * session.target.square_mm
     compact = compact_points_from_poses(np.array([p.target_in_camera for p in postures]), length)
-    return HandEyeProblem(session.setup, hand, compact, compact.points, ids, compact.target_points)
+    return _consistent(HandEyeProblem(session.setup, hand, compact, compact.points, ids, compact.target_points,
+                                      joints_deg=joints, robot=session.robot if joints is not None else None),
+                       check_consistency)
+
+
+def _session_joints(session: Session) -> np.ndarray | None:
+    """Every posture's joint angles when all hold them (same count) and the session names its robot."""
+    if not session.robot or any(p.joints_deg is None for p in session.postures):
+        return None
+    joints = [np.asarray(p.joints_deg, float) for p in session.postures]
+    if len({j.shape for j in joints}) != 1 or joints[0].ndim != 1:
+        return None
+    return np.array(joints)
+
+
+def _consistent(problem: HandEyeProblem, check: bool) -> HandEyeProblem:
+    """The problem, after ``consistency.check_consistent`` when ``check`` (the calibrate re-check)."""
+    if check:
+        check_consistent(problem.hand, problem.target2cam, problem.setup)
+    return problem
 
 
 def check_motion(problem: HandEyeProblem) -> None:
@@ -344,7 +384,8 @@ def _solve_robust(problem: HandEyeProblem):
     return x, details, flags, residuals, uncertainty
 
 
-def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | None = None) -> CalibrationResult:
+def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | None = None,
+              progress=None) -> CalibrationResult:
     """Solve ``AX = XB`` with one method.
 
     Parameters
@@ -355,6 +396,8 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
         :data:`~handeye.calibration.methods.METHODS`; ``None`` runs :data:`DEFAULT_METHOD`.
     truth : dict, optional
         ``{'x': 4x4, 'target2fixed': 4x4}`` of a synthetic data set: enables ``mcy`` and truth errors.
+    progress : callable, optional
+        ``progress(done, total, label)`` after each stage of the ``ml`` default (for a progress display).
 
     Raises
     ------
@@ -364,7 +407,7 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
     """
     try:
         with np.errstate(all="ignore"):  # what goes wrong is reported below, not as warnings
-            result = _calibrate(problem, method, truth)
+            result = _calibrate(problem, method, truth, progress)
     except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
         reason = (str(exc).splitlines() or [type(exc).__name__])[0]
         raise CalibrationError(f"the {method or DEFAULT_METHOD} solver failed on these data ({reason}); check the "
@@ -375,7 +418,8 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
     return result
 
 
-def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | None = None) -> CalibrationResult:
+def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | None = None,
+               progress=None) -> CalibrationResult:
     """:func:`calibrate` without its guard against numerical failures."""
     method = (method or DEFAULT_METHOD).lower()
     if method not in ALL_METHODS:
@@ -385,8 +429,17 @@ def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict |
     check_motion(problem)
     _warm_up_numerics()
     start = time.perf_counter()
-    outliers, uncertainty = [], None
-    if method == ROBUST_METHOD:
+    outliers, uncertainty, cross_validation = [], None, None
+    if method == ML_METHOD:
+        solution = solve_eiv(problem, progress)
+        runtime = time.perf_counter() - start
+        x, details, flags = solution.x, solution.details, solution.outliers
+        metrics, _ = _summarise(problem.subset(~flags), x)
+        residuals = {int(i): float(r) for i, r in zip(problem.posture_ids, solution.residuals_mm)}
+        outliers = [int(i) for i in problem.posture_ids[flags]]
+        uncertainty = solution.uncertainty
+        cross_validation = solution.cross_validation
+    elif method == ROBUST_METHOD:
         x, details, flags, posture_res, uncertainty = _solve_robust(problem)
         runtime = time.perf_counter() - start
         metrics, _ = _summarise(problem.subset(~flags), x)
@@ -402,12 +455,13 @@ def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict |
         runtime = time.perf_counter() - start
         metrics, residuals = _summarise(problem, x)
     result = CalibrationResult(method, problem.setup, x, metrics, residuals, outliers, runtime, details,
-                               uncertainty=uncertainty)
+                               uncertainty=uncertainty, cross_validation=cross_validation)
     if truth is not None:
         result.truth_errors = errors_against_truth(x, truth["x"])
     return result
 
 
-def calibrate_session(session: Session, method: str | None = None, truth: dict | None = None) -> CalibrationResult:
+def calibrate_session(session: Session, method: str | None = None, truth: dict | None = None,
+                      progress=None) -> CalibrationResult:
     """:func:`calibrate` on a session read from disk."""
-    return calibrate(problem_from_session(session), method, truth)
+    return calibrate(problem_from_session(session), method, truth, progress)

@@ -145,6 +145,34 @@ def ik_from_standard_seeds(robot: RobotModel, tool02base: np.ndarray, margin_deg
     return best
 
 
+def _view_point(rng: np.random.Generator, sampling: ViewSampling, centre, normal_out, frame, side) -> np.ndarray:
+    """One drawn camera pose ``cam2base``: within the cone about the board's outward normal (``frame``: two
+    unit vectors across it), on the robot's ``side``, at a drawn distance, rolled, aimed near the centre."""
+    e1, e2 = frame
+    distance = rng.uniform(*sampling.distance_mm)
+    tilt = np.radians(sampling.cone_deg) * np.sqrt(rng.uniform())
+    azimuth = rng.uniform(0, 2 * np.pi)
+    roll = np.radians(rng.uniform(-sampling.roll_deg, sampling.roll_deg))
+    aim = rng.normal(0.0, sampling.aim_mm, 3)
+    direction = np.cos(tilt) * normal_out + np.sin(tilt) * (np.cos(azimuth) * e1 + np.sin(azimuth) * e2)
+    lateral = direction - (direction @ normal_out) * normal_out
+    if lateral @ side < 0:  # keep the camera on the robot's side of the board
+        direction = direction - 2 * (lateral @ side) / (side @ side) * side
+    return look_at(centre + distance * direction, centre + aim, roll + np.pi / 2, up=(1.0, 0.0, 0.0))
+
+
+def _posture_near(robot: RobotModel, tool02base, anchor, sampling: ViewSampling):
+    """Joints reaching ``tool02base`` from ``anchor`` (or the standard seeds), within ``max_joint_jump_deg``
+    of the anchor; None when there are none."""
+    if anchor is None:
+        return ik_from_standard_seeds(robot, tool02base, sampling.joint_margin_deg)
+    ik = inverse_kinematics(robot, tool02base, anchor, margin_deg=sampling.joint_margin_deg)
+    found = ik.joints_deg if ik.success else ik_from_standard_seeds(robot, tool02base, sampling.joint_margin_deg)
+    if found is None or np.any(np.abs(found - anchor) > sampling.max_joint_jump_deg):
+        return None
+    return found
+
+
 def sample_eye_in_hand_postures(
     robot: RobotModel,
     cam2tool0,
@@ -156,6 +184,9 @@ def sample_eye_in_hand_postures(
     views=(NOMINAL_XB3_LEFT,),
     seed_joints=None,
     max_attempts: int | None = None,
+    veto=None,
+    min_count: int | None = None,
+    pose_veto=None,
 ) -> np.ndarray:
     """Controller angles ``(count, k)`` of postures from which ``views`` see the whole board.
 
@@ -177,11 +208,20 @@ def sample_eye_in_hand_postures(
         Configuration the inverse kinematics starts from (default: found from standard seeds).
     max_attempts : int, optional
         Give up after this many view points (default ``200 * count``).
+    veto : callable, optional
+        ``veto(joints) -> bool``: True keeps a posture that passed every other test (the cell's
+        clearance check); a vetoed one counts as an attempt and another is drawn.
+    min_count : int, optional
+        Fewest postures that will do when the attempts run out (default ``count``); the result may
+        then hold fewer than ``count`` rows.
+    pose_veto : callable, optional
+        ``pose_veto(tool02base) -> bool``: like ``veto``, on the flange pose, before the inverse
+        kinematics (what the flange carries needs no joints).
 
     Raises
     ------
     RuntimeError
-        When not enough postures are found.
+        When fewer than ``min_count`` postures are found.
     """
     x = np.asarray(cam2tool0, float)
     board = np.asarray(target2base, float)
@@ -201,29 +241,22 @@ def sample_eye_in_hand_postures(
     while len(joints) < count:
         attempts += 1
         if attempts > limit:
+            if len(joints) >= (count if min_count is None else min_count):
+                break
             raise RuntimeError(f"only {len(joints)} of {count} postures found; widen the distance or cone, or move the board")
-        distance = rng.uniform(*sampling.distance_mm)
-        tilt = np.radians(sampling.cone_deg) * np.sqrt(rng.uniform())
-        azimuth = rng.uniform(0, 2 * np.pi)
-        roll = np.radians(rng.uniform(-sampling.roll_deg, sampling.roll_deg))
-        aim = rng.normal(0.0, sampling.aim_mm, 3)
-        direction = np.cos(tilt) * normal_out + np.sin(tilt) * (np.cos(azimuth) * e1 + np.sin(azimuth) * e2)
-        lateral = direction - (direction @ normal_out) * normal_out
-        if lateral @ side < 0:  # keep the camera on the robot's side of the board
-            direction = direction - 2 * (lateral @ side) / (side @ side) * side
-        cam2base = look_at(centre + distance * direction, centre + aim, roll + np.pi / 2, up=(1.0, 0.0, 0.0))
+        cam2base = _view_point(rng, sampling, centre, normal_out, (e1, e2), side)
         tool02base = cam2base @ invert_transforms(x)
         if not robot.may_reach(tool02base[:3, 3]):
             continue
         if not board_visible(invert_transforms(cam2base) @ board, corners, views, sampling.margin_px):
             continue
-        if anchor is None:
-            found = ik_from_standard_seeds(robot, tool02base, sampling.joint_margin_deg)
-        else:
-            ik = inverse_kinematics(robot, tool02base, anchor, margin_deg=sampling.joint_margin_deg)
-            found = ik.joints_deg if ik.success else ik_from_standard_seeds(robot, tool02base, sampling.joint_margin_deg)
-        if found is None or (anchor is not None and np.any(np.abs(found - anchor) > sampling.max_joint_jump_deg)):
+        if pose_veto is not None and not pose_veto(tool02base):
+            continue
+        found = _posture_near(robot, tool02base, anchor, sampling)
+        if found is None:
+            continue
+        if veto is not None and not veto(found):
             continue
         anchor = found if anchor is None else anchor
         joints.append(found)
-    return np.array(joints)
+    return np.array(joints).reshape(len(joints), robot.dof)

@@ -7,7 +7,10 @@ the program defines are kept in :attr:`SimulatedRobot.world_zones`.
 
 The arm moves between joint configurations with all axes starting and stopping together
 (a synchronised ``MoveAbsJ``): the move lasts ``max_i |Δq_i| / (speed_fraction * max_speed_i)``,
-axes interpolated linearly in time (no acceleration ramps, no path planning, no collisions). The
+axes interpolated linearly in time (no acceleration ramps, no path planning). A cell can be given
+(``guard``: a :class:`~handeye.calibration.clearance.CellGuard`): a move whose joint-interpolated
+path takes the wrist or what the flange carries into one of its volumes is refused before the arm
+moves (:class:`ZoneViolation`), as a real cell's world zones would stop it. The
 flange pose comes from the kinematics model (``calibration.kinematics``: the parallel-arm coupling
 of axes 2 and 3 included). ``time_scale`` shrinks wall-clock motion time for tests (0.01 = 100x).
 
@@ -23,13 +26,33 @@ from typing import Callable
 
 import numpy as np
 
+from ..calibration.errors import HandEyeError
 from ..calibration.kinematics import load_robot
 from ..drivers.controller.types import FlangePose, ToolData
 
-__all__ = ["SimulatedRobot", "DEFAULT_TOOL"]
+__all__ = ["SimulatedRobot", "DEFAULT_TOOL", "ZoneViolation"]
 
 #: What a fresh PERS tooldata holds before calibration: tool0's frame, 1 kg at the flange.
 DEFAULT_TOOL = ToolData((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0), 1.0, (0.0, 0.0, 0.0))
+
+
+class ZoneViolation(HandEyeError):
+    """A move refused because its path enters a volume of the cell (what world zones would stop).
+
+    Attributes
+    ----------
+    violation : handeye.calibration.clearance.Violation
+        What would have entered which volume, and where along the move.
+    target_deg : ndarray, shape (dof,)
+    """
+
+    def __init__(self, violation, target_deg, posture: int = 0):
+        where = f"posture {posture}" if posture else "the target"
+        super().__init__(f"world zone: {violation.body} would enter '{violation.volume}' on the way to {where} "
+                         f"({violation.describe()} at {violation.at:.0%} of the move); the arm did not move")
+        self.violation = violation
+        self.target_deg = np.asarray(target_deg, float)
+        self.posture = posture
 
 
 class SimulatedRobot:
@@ -49,11 +72,17 @@ class SimulatedRobot:
         Initial configuration (default: all zero).
     clock : callable
         Monotonic time source in seconds (default ``time.monotonic``).
+    guard : CellGuard, optional
+        The cell: moves whose path enters one of its volumes are refused (:class:`ZoneViolation`).
 
     Attributes
     ----------
     arrival_hooks : list of callable
         Each is called as ``hook(k, joints_deg)`` when a move to posture ``k`` ends.
+    guard : CellGuard or None
+        The cell the moves are checked against (may be replaced at any time).
+    refusals : list of ZoneViolation
+        The moves refused so far.
     world_zones : dict
         World zones the controller's program defined (number -> zone), checked by its moves.
     tool_source : callable or None
@@ -61,7 +90,7 @@ class SimulatedRobot:
     """
 
     def __init__(self, postures, model: str = "IRB1400", speed_fraction: float = 0.25, time_scale: float = 1.0,
-                 start_joints=None, clock: Callable[[], float] = time.monotonic):
+                 start_joints=None, clock: Callable[[], float] = time.monotonic, guard=None):
         self.model = load_robot(model)
         self.postures = np.array(postures, dtype=float).reshape(-1, self.model.dof)
         for i, row in enumerate(self.postures, start=1):
@@ -92,6 +121,8 @@ class SimulatedRobot:
         self.tool_source: Callable[[], ToolData] | None = None
         #: Number of moves started (for tests).
         self.moves = 0
+        self.guard = guard
+        self.refusals: list[ZoneViolation] = []
 
     def load_program(self, postures) -> None:
         """Replace the approved postures, as loading a newly generated RAPID program does.
@@ -122,6 +153,8 @@ class SimulatedRobot:
         ------
         ValueError
             If the target is outside the joint limits (the controller would refuse it too).
+        ZoneViolation
+            If the path enters a volume of the cell (``guard``); the arm stays where it is.
         """
         target = np.asarray(target_deg, dtype=float)
         problems = self.model.limit_violations(target)
@@ -131,6 +164,7 @@ class SimulatedRobot:
             self._settle()
             now = self._clock()
             start = self._joints_at(now)
+            self._check_path(start, target, posture)
             delta = np.abs(target - start)
             self._duration = float(np.max(delta / (self.speed_fraction * self.model.max_speed_deg_s))) * self.time_scale
             self._from, self._to, self._t0 = start, target.copy(), now
@@ -139,6 +173,16 @@ class SimulatedRobot:
             self._arrival_reported = False
             self.moves += 1
             return self._duration
+
+    def _check_path(self, start: np.ndarray, target: np.ndarray, posture: int) -> None:
+        """Refuse (ZoneViolation) a move whose joint-interpolated path enters a volume of the cell."""
+        if self.guard is None:
+            return
+        violation = self.guard.path_violation(start, target)
+        if violation is not None:
+            refusal = ZoneViolation(violation, target, posture)
+            self.refusals.append(refusal)
+            raise refusal
 
     def start_posture(self, k: int) -> float:
         """Start the move to approved posture ``k`` (1-based); returns the wall-clock duration."""

@@ -13,6 +13,9 @@ What makes it honest:
   reports joints and the NOMINAL flange pose, like a real controller; the camera sees the board from
   the TRUE flange pose. So the calibration meets the kind of systematic error a station meets.
 - The camera mount (``cam2tool0``) is hidden from the PC; only :attr:`MockStation.truth` holds it.
+- The cell is physical: given one (``MockStationSpec.cell``), the arm refuses any move whose
+  joint-interpolated path takes the wrist or what the flange carries into a keep-out volume or the
+  board's stand (built around the TRUE board), as a real cell's world zones would stop it.
 """
 
 from __future__ import annotations
@@ -23,6 +26,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..calibration.cell import CellModel
+from ..calibration.clearance import CellGuard
 from ..calibration.compact_points import BoardGeometry
 from ..calibration.kinematics import RobotModel, load_robot
 from ..calibration.transforms import transform_from_rotation_translation
@@ -93,6 +98,12 @@ class MockStationSpec:
     write_key : str, optional
         The write key the controller expects for tool writes (``controller.write_key``); None: a
         random key for this run, handed to the PC through :meth:`MockStation.controller_options`.
+    cell : CellModel, optional
+        The cell around the arm (``cell`` of the station config); its board stand is built around the
+        true board. None: an empty cell, every move allowed.
+    zone_tcp_mm : tuple of float, shape (3,), optional
+        With world zones: the TCP (tool0) the controller's zones watch; moves taking it into a zone
+        (as the controller sees the volumes) are refused too.
     """
 
     protocol: str = "socket"
@@ -110,6 +121,8 @@ class MockStationSpec:
     seed: int = 7
     idle_timeout_s: float = 5.0
     write_key: str | None = field(default=None, repr=False)
+    cell: CellModel | None = None
+    zone_tcp_mm: tuple | None = None
 
 
 class MockStation:
@@ -129,12 +142,22 @@ class MockStation:
         self.nominal = load_robot(spec.robot)
         start = np.asarray(spec.start_joints_deg, float)
         self.arm = SimulatedRobot([start], model=spec.robot, speed_fraction=spec.speed_fraction,
-                                  time_scale=spec.time_scale, start_joints=start)
+                                  time_scale=spec.time_scale, start_joints=start, guard=self._cell_guard(spec))
         self.server = None
         # The station's key, or one made for this run: the server and the PC's options share it.
         self._write_key = spec.write_key if spec.write_key is not None else secrets.token_hex(16)
         self.camera, self.truth = flange_camera(spec, self.arm)
         self.true_robot = self.truth["true_robot"]
+
+    def _cell_guard(self, spec: MockStationSpec) -> CellGuard | None:
+        """The physical cell: entering a volume (margin 0) is refused, moves sampled every 5 mm."""
+        if spec.cell is None:
+            return None
+        zones = None
+        if spec.zone_tcp_mm is not None:
+            zones = (spec.zone_tcp_mm, spec.cell.world_zone_volumes(spec.board2base, spec.board))
+        return CellGuard(self.nominal, spec.cell.volumes(spec.board2base, spec.board), spec.cell.carried, margin_mm=0.0,
+                         step_mm=5.0, tcp_zones=zones)
 
     def start(self) -> MockStation:
         if self.server is None:

@@ -8,7 +8,9 @@
   what RAPID itself provides (instructions, functions, data types, ``tool0`` ...) is listed in
   :data:`RAPID_BUILTINS`, I/O signals from the I/O configuration are passed in as ``external``;
 - motion: the only move instruction is ``MoveAbsJ``, always to a ``CONST jointtarget`` whose value
-  is one of the approved postures (and inside the joint limits), with zone ``fine`` and ``tool0``.
+  is one of the approved postures (and inside the joint limits), with zone ``fine`` and ``tool0``
+  (or a tool named in ``move_tools``: with world zones, the camera's nominal tool of ``HeCell``,
+  whose TCP the zones watch; a jointtarget move goes to the same joints whatever the tool).
 
 The tokenizer understands what the generated modules use (comments, strings with ``""`` and
 ``\\hh`` escapes, numbers like ``9E9``); it is not a full RAPID parser.
@@ -38,11 +40,14 @@ RAPID_KEYWORDS = {
 }
 _DATA_TYPES = {"num", "dnum", "bool", "string", "jointtarget", "robtarget", "tooldata", "wobjdata", "speeddata",
                "zonedata", "socketdev", "iodev", "intnum", "clock", "pos", "orient", "pose", "loaddata", "robjoint",
-               "extjoint", "byte", "signaldi", "signaldo", "signalgi", "signalgo", "signalai", "signalao"}
+               "extjoint", "byte", "signaldi", "signaldo", "signalgi", "signalgo", "signalai", "signalao",
+               "shapedata", "wztemporary", "wzstationary"}
 #: Names RAPID provides (RobotWare 5/6 instructions, functions, predefined data) used by the modules.
 RAPID_BUILTINS = _DATA_TYPES | {
     # motion and positions
-    "MoveAbsJ", "CJointT", "CRobT", "tool0", "wobj0", "fine", "NOrient", "VectMagn",
+    "MoveAbsJ", "CJointT", "CRobT", "tool0", "wobj0", "fine", "NOrient", "VectMagn", "VelSet",
+    # world zones (option 608-1)
+    "WZBoxDef", "WZCylDef", "WZLimSup",
     # program flow and operator messages
     "TPWrite", "Stop", "WaitUntil", "WaitDI", "WaitTime",
     # strings and numbers
@@ -185,7 +190,7 @@ def _collect_globals(modules) -> tuple[dict, dict]:
     return data, routines
 
 
-def check_program(modules, approved=None, robot: str = "IRB1400", external=()) -> list[Finding]:
+def check_program(modules, approved=None, robot: str = "IRB1400", external=(), move_tools=("tool0",)) -> list[Finding]:
     """Findings of the checks on a set of modules (empty: all pass).
 
     Parameters
@@ -198,6 +203,8 @@ def check_program(modules, approved=None, robot: str = "IRB1400", external=()) -
         Robot model for the joint-limit check of the jointtargets.
     external : iterable of str
         Names declared outside RAPID code (I/O signals of the I/O configuration).
+    move_tools : iterable of str
+        Tools ``MoveAbsJ`` may use (``tool0``; with world zones also the camera's nominal tool).
     """
     modules = [(str(n), str(t)) for n, t in modules]
     findings: list[Finding] = []
@@ -214,11 +221,12 @@ def check_program(modules, approved=None, robot: str = "IRB1400", external=()) -
         except ValueError as exc:
             findings.append(Finding(name, 0, str(exc)))
             continue
-        findings += _check_module(name, tokens, global_data, routines, known_external, approved_arr, model)
+        findings += _check_module(name, tokens, global_data, routines, known_external, approved_arr, model,
+                                  tuple(move_tools))
     return findings
 
 
-def _check_module(module, tokens, global_data, routines, external, approved, model) -> list[Finding]:
+def _check_module(module, tokens, global_data, routines, external, approved, model, move_tools=("tool0",)) -> list[Finding]:
     out: list[Finding] = []
     module_scope: set = set()
     local_scope: set | None = None
@@ -311,7 +319,7 @@ def _check_module(module, tokens, global_data, routines, external, approved, mod
             i += 1
             continue
         if t.text.lower() in _MOVE_LOWER:
-            out += _check_move(module, tokens, i, jointtargets)
+            out += _check_move(module, tokens, i, jointtargets, move_tools)
         if not known(t.text):
             out.append(Finding(module, t.line, f"{t.text!r} is used before it is declared (or never declared)"))
         i += 1
@@ -320,7 +328,7 @@ def _check_module(module, tokens, global_data, routines, external, approved, mod
     return out
 
 
-def _check_move(module, tokens, i, jointtargets) -> list[Finding]:
+def _check_move(module, tokens, i, jointtargets, move_tools=("tool0",)) -> list[Finding]:
     t = tokens[i]
     if t.text != "MoveAbsJ":
         return [Finding(module, t.line, f"{t.text} is not allowed: the robot moves only with MoveAbsJ to approved postures")]
@@ -346,8 +354,9 @@ def _check_move(module, tokens, i, jointtargets) -> list[Finding]:
                                            "declared in this module may be targets"))
     if len(args) < 4 or [x.text for x in args[2]] != ["fine"]:
         out.append(Finding(module, t.line, "MoveAbsJ must stop exactly at the posture: zone 'fine'"))
-    if len(args) < 4 or not args[3] or args[3][0].text != "tool0":
-        out.append(Finding(module, t.line, "MoveAbsJ must use tool0 (the postures are flange configurations)"))
+    if len(args) < 4 or not args[3] or args[3][0].text not in move_tools:
+        out.append(Finding(module, t.line, f"MoveAbsJ must use {' or '.join(dict.fromkeys(move_tools))} (the postures "
+                                           "are flange configurations)"))
     return out
 
 

@@ -8,7 +8,10 @@ loaded together into the robot task:
 - a link module, by protocol: ``HeSocket`` (TCP server accepting only the PC's address),
   ``HeSerial`` (same line protocol on a serial channel) or ``HeIo`` (I/O handshake for a Modbus
   gateway: ``SetGO``/``SetDO``/``WaitDI \\MaxTime``);
-- ``HeTool`` : ``PERS tooldata`` of the camera (identity frame until calibrated).
+- ``HeTool`` : ``PERS tooldata`` of the camera (identity frame until calibrated);
+- ``HeCell`` (only when the station sets a speed override or world zones, :mod:`handeye.rapid.cell`):
+  ``VelSet`` and the keep-out world zones, set up by ``HeCellSetup``, which ``main`` then calls first;
+  with world zones the posture moves use the camera's nominal tool, whose TCP the zones watch.
 
 A station with a write key (``controller.write_key``) also gets ``HeKey.sys`` (:func:`render_key`):
 a system module holding the key, loaded once on the controller and never part of the program
@@ -32,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from ..calibration.session import write_text_atomic
+from .cell import CELL_MODULE, ZONE_TOOL, needs_cell_module, render_cell_text
 from .checks import check_program
 from .errors import RapidError
 from .literals import format_num, jointtarget_literal, speeddata_literal, tooldata_literal
@@ -46,6 +50,7 @@ __all__ = [
     "render_main",
     "render_link",
     "render_tool",
+    "render_cell",
     "render_key",
     "render_program",
     "write_key_code",
@@ -112,12 +117,35 @@ def render_main(station: RapidStation, postures=None) -> RapidModule:
     arr = check_postures(station.postures if postures is None else postures, station.robot,
                          "postures to render")
     consts = "\n".join(f"  CONST jointtarget jtHePost{k} := {jointtarget_literal(row)};" for k, row in enumerate(arr, 1))
-    cases = "\n".join(f"    CASE {k}:\n      MoveAbsJ jtHePost{k}, vHeMove, fine, tool0;" for k in range(1, len(arr) + 1))
+    tool = _move_tool(station)
+    cases = "\n".join(f"    CASE {k}:\n      MoveAbsJ jtHePost{k}, vHeMove, fine, {tool};" for k in range(1, len(arr) + 1))
+    cell_setup = ""
+    if needs_cell_module(station):  # the cell block: only for a station that asks for it (HeCell.mod)
+        cell_setup = "    ! cell guards (HeCell): speed override, world zones\n    HeCellSetup;\n"
     text = _template("HeMain.mod.tmpl").substitute(
         header=_header(station, f"Robot {station.robot}, {len(arr)} approved postures (controller axis angles, deg)."),
-        count=len(arr), postures=consts, cases=cases,
+        count=len(arr), postures=consts, cases=cases, cell_setup=cell_setup,
         speed=speeddata_literal(station.speed_tcp_mm_s, station.speed_ori_deg_s))
     return RapidModule("HeMain", text)
+
+
+def _move_tool(station: RapidStation) -> str:
+    """The tool of the posture moves: ``tool0``, or with world zones the camera's nominal tool (the zones
+    watch the TCP of the moving tool)."""
+    return ZONE_TOOL if station.zone_tcp is not None else "tool0"
+
+
+def render_cell(station: RapidStation) -> RapidModule:
+    """``HeCell``: the speed override and the world zones (:mod:`handeye.rapid.cell`).
+
+    Raises
+    ------
+    RapidError
+        The station asks for neither.
+    """
+    if not needs_cell_module(station):
+        raise RapidError("the station sets no speed override and no world zones: HeCell is not needed")
+    return RapidModule(CELL_MODULE, render_cell_text(station, _header(station)))
 
 
 def render_link(station: RapidStation, protocol: str | None = None) -> RapidModule:
@@ -197,7 +225,8 @@ def render_key(station: RapidStation) -> RapidModule:
 
 def render_program(station: RapidStation | None = None, postures=None, protocol: str | None = None,
                    cam2tool0=None) -> list[RapidModule]:
-    """``[HeMain, link module, HeTool]`` for the station (default: the built-in one), checked.
+    """``[HeMain, link module, HeTool]`` (and ``HeCell`` when the station needs it) for the station
+    (default: the built-in one), checked.
 
     Never ``HeKey``: with a write key the link module calls its routines, which the controller
     provides once the integrator loaded ``HeKey.sys`` (:func:`render_key`).
@@ -211,8 +240,11 @@ def render_program(station: RapidStation | None = None, postures=None, protocol:
     postures = station.postures if postures is None else postures
     approved = check_postures(postures, station.robot, "postures to render")
     modules = [render_main(station, approved), render_link(station, protocol), render_tool(station, cam2tool0)]
+    if needs_cell_module(station):
+        modules.append(render_cell(station))
     findings = check_program([(m.name, m.text) for m in modules], approved=np.round(approved, 4),
-                             robot=station.robot, external=IO_SIGNALS + list(KEY_ROUTINES))
+                             robot=station.robot, external=IO_SIGNALS + list(KEY_ROUTINES),
+                             move_tools=("tool0", _move_tool(station)))
     if findings:
         raise RapidError("generated RAPID failed its checks: " + "; ".join(map(str, findings[:5])))
     return modules

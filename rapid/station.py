@@ -16,6 +16,7 @@ rest of the station and ignored here)::
     motion:
       speed_tcp_mm_s: 200              # speeddata of the posture moves: TCP speed
       speed_ori_deg_s: 100             #   and reorientation speed
+      speed_override_pct: 100          # below 100: HeCell sets VelSet to it
     tool:
       name: tHeCamera                  # PERS tooldata holding the camera frame
       mass_kg: 1.0
@@ -23,6 +24,14 @@ rest of the station and ignored here)::
     postures:                          # approved postures, controller axis angles in degrees
       - [25.13, -38.52, -10.33, -11.31, 89.6, -102.64]
       - ...
+    world_zones:                       # optional (World Zones option): HeCell declares them (rapid.cell)
+      tcp: {position_mm: [x, y, z], quaternion_wxyz: [w, x, y, z]}    # the supervised TCP in tool0
+      zones:
+        - {type: box, name: fixture, min_mm: [x, y, z], max_mm: [x, y, z]}
+        - {type: cylinder, name: column, base_mm: [x, y, z], radius_mm: r, height_mm: h}
+
+(``handeye capture`` and ``rapid generate --config`` build ``world_zones`` from the station config's
+``cell`` section when ``cell.world_zones`` is true.)
 
 Every key is optional; a missing key takes the built-in station's value (``default_station.yaml``:
 the mock controller on 127.0.0.1).
@@ -41,6 +50,7 @@ import yaml
 
 from ..calibration.files import parse_yaml, read_text_file
 from ..calibration.kinematics import load_robot
+from .cell import check_world_zones
 from .errors import ConfigError
 from .links import PROTOCOLS
 
@@ -57,7 +67,7 @@ IDLE_TIMEOUT_RANGE = (0.1, 10.0)
 _SECTIONS = {
     "controller": {"protocol", "pc_address", "controller_address", "port", "serial_channel", "ack_timeout_s",
                    "idle_timeout_s", "write_key"},
-    "motion": {"speed_tcp_mm_s", "speed_ori_deg_s"},
+    "motion": {"speed_tcp_mm_s", "speed_ori_deg_s", "speed_override_pct"},
     "tool": {"name", "mass_kg", "cog_mm"},
 }
 
@@ -82,6 +92,9 @@ class RapidStation:
     tool_cog_mm: tuple = (0.0, 0.0, 0.0)
     postures: tuple = field(default_factory=tuple)
     source: str = "built-in"
+    speed_override_pct: float = 100.0
+    world_zones: tuple = ()
+    zone_tcp: tuple | None = None
 
     @property
     def postures_array(self) -> np.ndarray:
@@ -173,6 +186,9 @@ def _checked(station: RapidStation) -> RapidStation:
                                  "(the key itself is never printed)")
     tcp = _number(station.speed_tcp_mm_s, "motion.speed_tcp_mm_s", src, 0.0, 7000.0)
     ori = _number(station.speed_ori_deg_s, "motion.speed_ori_deg_s", src, 0.0, 1000.0)
+    override = _number(station.speed_override_pct, "motion.speed_override_pct", src, 0.0, 100.0)
+    if override < 1:
+        raise ConfigError(f"{src}: motion.speed_override_pct must be 1 to 100 %; got {station.speed_override_pct!r}")
     name = str(station.tool_name)
     if not RAPID_IDENTIFIER.fullmatch(name) or name.lower() in ("tool0", "tooldata"):
         raise ConfigError(f"{src}: tool.name must be a RAPID identifier (letter first, letters/digits/_, "
@@ -186,7 +202,7 @@ def _checked(station: RapidStation) -> RapidStation:
         raise ConfigError(f"{src}: tool.cog_mm must be three finite numbers within 1000 mm; got {station.tool_cog_mm!r}")
     postures = check_postures(station.postures, station.robot, src)
     return replace(station, pc_address=pc, controller_address=ctrl, ack_timeout_s=ack, idle_timeout_s=idle, speed_tcp_mm_s=tcp,
-                   speed_ori_deg_s=ori, tool_name=name, tool_mass_kg=mass, tool_cog_mm=cog,
+                   speed_ori_deg_s=ori, speed_override_pct=override, tool_name=name, tool_mass_kg=mass, tool_cog_mm=cog,
                    postures=tuple(tuple(float(v) for v in row) for row in postures))
 
 
@@ -212,6 +228,8 @@ def station_from_dict(data: dict, source: str = "station config", base: RapidSta
         changes["robot"] = data["robot"]
     if "postures" in data:
         changes["postures"] = data["postures"]
+    if "world_zones" in data:
+        changes["world_zones"], changes["zone_tcp"] = check_world_zones(data["world_zones"], source)
     return _checked(replace(station, **changes))
 
 

@@ -37,7 +37,7 @@ __all__ = [
     "method_comparison",
 ]
 
-#: Methods the report compares by default: the robust default, the paper's mcb and mc, three classics.
+#: Methods the report compares by default: the robust pipeline (the default before ml), the paper's mcb and mc, three classics.
 COMPARISON_METHODS = ("robust", "mcb", "mc", "park", "tsai", "daniilidis")
 
 
@@ -52,7 +52,7 @@ class Assessment:
     problem : HandEyeProblem
         The data the result was solved from.
     result : CalibrationResult
-        The calibration judged (normally the robust default).
+        The calibration judged (normally the default estimator).
     origin : str
         ``mock``, ``real``, ``simulated`` or ``unknown`` (``station.origin``).
     figures : QualityFigures
@@ -67,6 +67,8 @@ class Assessment:
         The board points' deviations in the fixed frame (:func:`corner_repeatability`).
     tooldata_literal : str or None
         The full RAPID tooldata literal, when the tool's load is known (station configuration).
+    plan_preview : bytes or None
+        The capture plan's preview (``SESSION/preview.png``, ``station.preview``), when the session has one.
     """
 
     session_path: Path | str
@@ -79,6 +81,7 @@ class Assessment:
     findings: list | None
     repeatability: dict
     tooldata_literal: str | None = None
+    plan_preview: bytes | None = None
 
     @property
     def d_org(self) -> DOrg:
@@ -136,7 +139,21 @@ def assess(outcome: CalibrationOutcome, thresholds: QualityThresholds | None = N
         comparison = method_comparison(problem, result, solved)
     origin = outcome.origin if outcome.origin is not None else session_origin(path=outcome.session_path)
     return Assessment(outcome.session_path, problem, result, origin, figures, judged, comparison,
-                      _findings(problem), corner_repeatability(problem, result), tooldata_literal)
+                      _findings(problem), corner_repeatability(problem, result), tooldata_literal,
+                      _plan_preview(outcome.session_path))
+
+
+def _plan_preview(session_path) -> bytes | None:
+    """The capture plan's preview PNG of the session folder, when there is one."""
+    from ..calibration.files import read_file_bytes
+
+    path = Path(session_path) / "preview.png" if session_path is not None else None
+    if path is None or not path.is_file():
+        return None
+    try:
+        return read_file_bytes(path, "plan preview", HandEyeError)
+    except HandEyeError:
+        return None
 
 
 def _findings(problem: HandEyeProblem) -> list | None:

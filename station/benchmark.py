@@ -1,5 +1,6 @@
 """The paper's section-4 study, reproduced: every method over sweeps of robot and camera noise and
-of the number of postures, many trials per cell, results as CSV, plots and a markdown table.
+of the number of postures, many trials per cell, results as CSV, plots and a markdown table; and
+the pose-noise model of OpenCV's own hand-eye test (``calibration/synthetic_poses.py``).
 
 Each trial draws its own scene (a posture set of the IRB 1400 around the 8x13 board, seed = trial)
 and its own noise. Errors are measured against the truth (rotation in degrees, translation in mm)
@@ -7,6 +8,8 @@ and by the point measures of the paper, d_org (eq. 22) and d_back (eq. 23), on a
 and on the three board points of the plane fit (section 3.1). On the corners every method looks the
 same once camera noise is large, because each corner carries its own noise; the three fitted points
 average it out and show the differences. ``truth`` is the true X scored by the same point measures.
+Methods that report an uncertainty (``ml``, ``robust``) also get ``z_rms``: the RMS over the six
+axes of error / one-sigma, whose RMS over the trials should be near 1.
 """
 
 from __future__ import annotations
@@ -24,9 +27,12 @@ from ..calibration.files import make_folder, write_text_atomic
 from ..calibration.metrics import d_back, d_org, errors_against_truth, fixed_points
 from ..calibration.solve import ALL_METHODS, calibrate, problem_from_session
 from ..calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session
+from ..calibration.synthetic_poses import opencv_test_problem
 from .opencv_reference import OPENCV_METHODS, opencv_available, solve_opencv
 
-SWEEPS = ("sigma_cam", "sigma_rob", "postures")
+SWEEPS = ("sigma_cam", "sigma_rob", "postures", "pose_noise")
+#: Sweeps summarised by the mean over trials (OpenCV's test reports means); the others by the median.
+MEAN_SWEEPS = ("pose_noise",)
 METRICS = (
     ("rotation_error_deg", "rotation error to truth (deg)"),
     ("translation_error_mm", "translation error to truth (mm)"),
@@ -47,9 +53,12 @@ class BenchmarkOptions:
         Folder for ``results.csv``, ``summary.md`` and the PNG plots.
     sweeps : tuple of str
         Any of ``sigma_cam`` (robot noise 0), ``sigma_rob`` (camera noise 0), ``postures``
-        (camera noise ``postures_sigma_cam``).
+        (camera noise ``postures_sigma_cam``), ``pose_noise`` (OpenCV's test model: random poses,
+        board poses only, noise on both poses).
     trials : int
         Trials per cell (each its own scene and noise).
+    pose_noise_trials, pose_noise_poses : int
+        Trials and poses per trial of the ``pose_noise`` sweep (OpenCV's test: 100 x 10).
     methods : tuple of str or None
         Method names (``None``: all of ours and, when available, OpenCV's as ``opencv_<name>``).
     """
@@ -58,8 +67,10 @@ class BenchmarkOptions:
     sweeps: tuple = SWEEPS
     trials: int = 20
     sigma_cam_values: tuple = (0.0, 2.5, 5.0, 10.0, 15.0, 20.0)
-    sigma_rob_values: tuple = (0.0, 0.1, 0.2, 0.3, 0.4)
-    postures_values: tuple = (10, 20, 30, 50)
+    sigma_rob_values: tuple = (0.0, 0.02, 0.05, 0.1, 0.2, 0.4)
+    postures_values: tuple = (8, 10, 12, 20, 30, 50)
+    pose_noise_trials: int = 100
+    pose_noise_poses: int = 10
     postures: int = 30
     postures_sigma_cam: float = 5.0
     camera_model: str = "paper"
@@ -81,18 +92,33 @@ def _cells(options: BenchmarkOptions):
         elif sweep == "postures":
             for v in options.postures_values:
                 yield sweep, v, NoiseConfig(0.0, options.postures_sigma_cam, options.camera_model), int(v)
+        elif sweep == "pose_noise":
+            yield sweep, options.pose_noise_poses, None, 0
         else:
             raise HandEyeError(f"unknown sweep {sweep!r}; use {', '.join(SWEEPS)}")
 
 
-def _row(sweep, value, trial, method, x, truth, problem, runtime, outliers=0):
+def _row(sweep, value, trial, method, x, truth, problem, runtime, outliers=0, uncertainty=None):
     fixed = fixed_points(problem.hand, x, problem.points_cam)
     fixed3 = fixed_points(problem.hand, x, problem.compact.points)
     e = errors_against_truth(x, truth["x"])
     return {"sweep": sweep, "value": value, "trial": trial, "method": method,
             "rotation_error_deg": e["rotation_error_deg"], "translation_error_mm": e["translation_error_mm"],
             "d_org3_mm": d_org(fixed3), "d_back3_mm": d_back(fixed3),
-            "d_org_mm": d_org(fixed), "d_back_mm": d_back(fixed), "runtime_s": runtime, "outliers": outliers}
+            "d_org_mm": d_org(fixed), "d_back_mm": d_back(fixed), "runtime_s": runtime, "outliers": outliers,
+            "z_rms": _z_rms(x, truth["x"], uncertainty)}
+
+
+def _z_rms(x, x_true, uncertainty) -> float:
+    """RMS over the six axes of error / reported one-sigma (NaN without an uncertainty)."""
+    if not uncertainty:
+        return float("nan")
+    from scipy.spatial.transform import Rotation
+
+    et = x[:3, 3] - x_true[:3, 3]
+    er = np.degrees(Rotation.from_matrix(x[:3, :3] @ x_true[:3, :3].T).as_rotvec())
+    z = np.concatenate([et / np.asarray(uncertainty["translation_mm"]), er / np.asarray(uncertainty["rotation_deg"])])
+    return float(np.sqrt(np.mean(z**2)))
 
 
 def run_benchmark(options: BenchmarkOptions, progress=None) -> list[dict]:
@@ -104,26 +130,21 @@ def run_benchmark(options: BenchmarkOptions, progress=None) -> list[dict]:
     ours = tuple(m for m in ours if not m.startswith("opencv_"))
     cells = list(_cells(options))
     largest = max(c[3] for c in cells)
-    total = len(cells) * options.trials
+    total = sum(options.pose_noise_trials if c[0] == "pose_noise" else options.trials for c in cells)
     scenes = {}
     rows: list[dict] = []
     done = 0
     for sweep, value, noise, postures in cells:
-        for trial in range(options.trials):
-            if trial not in scenes:
-                scenes[trial] = make_scene(SceneConfig(postures=largest, seed=options.seed + trial))
-            full = scenes[trial]
-            scene = replace(full, joints_deg=full.joints_deg[:postures], config=replace(full.config, postures=postures))
-            trial_noise = replace(noise, seed=zlib.crc32(f"{sweep}:{float(value)}:{trial}:{options.seed}".encode()))
-            problem = problem_from_session(sample_session(scene, trial_noise))
-            truth = {"x": scene.x_true, "target2fixed": scene.target2fixed}
-            rows.append(_row(sweep, value, trial, "truth", scene.x_true, truth, problem, 0.0))
+        for trial in range(options.pose_noise_trials if sweep == "pose_noise" else options.trials):
+            problem, truth = _trial_problem(options, scenes, largest, sweep, value, noise, postures, trial)
+            rows.append(_row(sweep, value, trial, "truth", truth["x"], truth, problem, 0.0))
             for method in ours:
                 try:
                     r = calibrate(problem, method, truth)
                 except CalibrationError:
                     continue
-                rows.append(_row(sweep, value, trial, method, r.x, truth, problem, r.runtime_s, len(r.outliers)))
+                rows.append(_row(sweep, value, trial, method, r.x, truth, problem, r.runtime_s, len(r.outliers),
+                                 r.uncertainty))
             for name in ocv:
                 start = time.perf_counter()
                 x = solve_opencv(problem.hand, problem.target2cam, name)
@@ -132,21 +153,39 @@ def run_benchmark(options: BenchmarkOptions, progress=None) -> list[dict]:
                     rows.append(_row(sweep, value, trial, f"opencv_{name}", x, truth, problem, runtime))
             done += 1
             if progress:
-                progress(done, total, f"{sweep} = {value:g}, trial {trial + 1}/{options.trials}")
+                progress(done, total, f"{sweep} = {value:g}, trial {trial + 1}")
     return rows
 
 
+def _trial_problem(options, scenes, largest, sweep, value, noise, postures, trial):
+    """The problem and truth of one trial: an IRB 1400 scene with noise, or OpenCV's random poses."""
+    seed = zlib.crc32(f"{sweep}:{float(value)}:{trial}:{options.seed}".encode())
+    if sweep == "pose_noise":
+        return opencv_test_problem(np.random.default_rng(seed), int(value))
+    if trial not in scenes:
+        scenes[trial] = make_scene(SceneConfig(postures=largest, seed=options.seed + trial))
+    full = scenes[trial]
+    scene = replace(full, joints_deg=full.joints_deg[:postures], config=replace(full.config, postures=postures))
+    # the plausibility checks are for real sessions: 20 mm of corner noise stretches the measured squares
+    problem = problem_from_session(sample_session(scene, replace(noise, seed=seed)), check_units=False)
+    return problem, {"x": scene.x_true, "target2fixed": scene.target2fixed}
+
+
 def medians(rows: list[dict]) -> dict:
-    """``{sweep: {method: {value: {metric: median}}}}``."""
+    """``{sweep: {method: {value: {metric: statistic}}}}``: the median over trials (the mean for
+    :data:`MEAN_SWEEPS`); ``z_rms`` is aggregated as the RMS over trials."""
     table: dict = {}
     for row in rows:
         cell = table.setdefault(row["sweep"], {}).setdefault(row["method"], {}).setdefault(row["value"], {})
-        for key, _ in METRICS + (("runtime_s", ""),):
-            cell.setdefault(key, []).append(row[key])
-    for sweep in table.values():
+        for key, _ in METRICS + (("runtime_s", ""), ("z_rms", "")):
+            cell.setdefault(key, []).append(row.get(key, float("nan")))
+    for name, sweep in table.items():
+        stat = np.mean if name in MEAN_SWEEPS else np.median
         for method in sweep.values():
             for value, cell in method.items():
-                method[value] = {k: float(np.median(v)) for k, v in cell.items()}
+                z = np.array(cell.pop("z_rms"), float)
+                method[value] = {k: float(stat(v)) for k, v in cell.items()}
+                method[value]["z_rms"] = float(np.sqrt(np.mean(z**2))) if np.all(np.isfinite(z)) and len(z) else float("nan")
     return table
 
 
@@ -160,15 +199,24 @@ def write_csv(rows: list[dict], path: Path) -> None:
 def markdown(table: dict, options: BenchmarkOptions) -> str:
     titles = {"sigma_cam": "camera noise sigma_cam (mm), robot noise 0",
               "sigma_rob": "robot joint noise sigma_rob (deg), camera noise 0",
-              "postures": f"number of postures, camera noise {options.postures_sigma_cam:g} mm"}
-    out = [f"# Method comparison (medians of {options.trials} trials per cell, {options.camera_model} camera noise)", ""]
+              "postures": f"number of postures, camera noise {options.postures_sigma_cam:g} mm",
+              "pose_noise": (f"poses per trial, OpenCV's test model (means of {options.pose_noise_trials} trials; "
+                             "0.002 rad / 5 mm on target2cam, 0.001 rad / 1 mm on gripper2base)")}
+    out = [f"# Method comparison (medians of {options.trials} trials per cell, {options.camera_model} camera noise; "
+           f"the pose-noise sweep: means)", ""]
     for sweep, methods in table.items():
         values = sorted(next(iter(methods.values())))
-        for key, label in METRICS:
+        for key, label in METRICS + (("z_rms", "RMS of error / reported one-sigma over the six axes (near 1 = honest)"),):
+            if key == "z_rms":
+                methods = {name: cells for name, cells in methods.items()
+                           if any(np.isfinite(c.get("z_rms", np.nan)) for c in cells.values())}
+                if not methods:
+                    continue
             out += [f"## {label} vs {titles[sweep]}", "",
                     "| method | " + " | ".join(f"{v:g}" for v in values) + " |",
                     "|---|" + "---|" * len(values)]
-            best = {v: min(m[v][key] for name, m in methods.items() if name != "truth" and v in m) for v in values}
+            best = {v: min((m[v][key] for name, m in methods.items() if name != "truth" and v in m), default=np.nan)
+                    for v in values}
             for name, cells in methods.items():
                 if name == "truth" and key.endswith("error_deg") or name == "truth" and key.endswith("error_mm"):
                     continue
@@ -178,7 +226,8 @@ def markdown(table: dict, options: BenchmarkOptions) -> str:
                         entries.append("-")
                         continue
                     text = f"{cells[v][key]:.4g}"
-                    entries.append(f"**{text}**" if name != "truth" and cells[v][key] == best[v] else text)
+                    bold = name != "truth" and cells[v][key] == best[v] and key != "z_rms"
+                    entries.append(f"**{text}**" if bold else text)
                 out.append(f"| {name} | " + " | ".join(entries) + " |")
             out.append("")
     return "\n".join(out)
@@ -194,29 +243,53 @@ def plot(table: dict, folder: Path) -> list[Path]:
     colours = plt.get_cmap("tab20").colors
     for sweep, methods in table.items():
         fig, axes = plt.subplots(2, 3, figsize=(18, 9))
+        statistic = "mean" if sweep in MEAN_SWEEPS else "median"
+        if len(next(iter(methods.values()))) == 1:  # one cell (the pose-noise model): bars per method
+            _bars(axes, methods, colours)
+            fig.suptitle(f"handeye benchmark: {sweep} ({statistic} over trials)")
+            fig.tight_layout()
+            path = folder / f"{sweep}.png"
+            fig.savefig(path, dpi=90)
+            plt.close(fig)
+            paths.append(path)
+            continue
         for ax, (key, label) in zip(axes.ravel(), METRICS):
             for index, (name, cells) in enumerate(methods.items()):
                 if name == "truth" and "error" in key:
                     continue
                 # the noise-free cell is exact for everyone (1e-12): leave it out of the noise plots
                 values = [v for v in sorted(cells) if sweep == "postures" or v > 0]
-                style = "-" if name.startswith("mc") or name == "robust" else ("--" if not name.startswith("opencv") else ":")
+                style = "-" if name.startswith("mc") or name in ("robust", "ml") else ("--" if not name.startswith("opencv") else ":")
                 if name == "truth":
                     style = "-."
-                width = 2.5 if name in ("mcb", "robust") else 1.2
+                width = 3.0 if name == "ml" else (2.0 if name in ("mcb", "robust") else 1.2)
+                colour = "black" if name == "truth" else ("red" if name == "ml" else colours[index % len(colours)])
                 ax.plot(values, [cells[v][key] for v in values], style, marker="o", markersize=3, linewidth=width,
-                        label=name, color="black" if name == "truth" else colours[index % len(colours)])
+                        label=name, color=colour)
             ax.set_xlabel(sweep)
             ax.set_title(label)
             ax.grid(True, which="both", alpha=0.3)
         axes[0, 0].legend(fontsize=7, ncol=2)
-        fig.suptitle(f"handeye benchmark: {sweep} sweep (median over trials)")
+        fig.suptitle(f"handeye benchmark: {sweep} sweep ({statistic} over trials)")
         fig.tight_layout()
         path = folder / f"{sweep}.png"
         fig.savefig(path, dpi=90)
         plt.close(fig)
         paths.append(path)
     return paths
+
+
+def _bars(axes, methods: dict, colours) -> None:
+    """One horizontal bar per method and metric (sweeps with a single cell)."""
+    for ax, (key, label) in zip(axes.ravel(), METRICS):
+        names = [n for n in methods if not (n == "truth" and "error" in key)]
+        values = [next(iter(methods[n].values()))[key] for n in names]
+        colour = ["black" if n == "truth" else ("red" if n == "ml" else colours[i % len(colours)]) for i, n in enumerate(names)]
+        ax.barh(names, values, color=colour)
+        ax.set_xscale("log")
+        ax.set_title(label)
+        ax.grid(True, axis="x", which="both", alpha=0.3)
+        ax.tick_params(axis="y", labelsize=7)
 
 
 def benchmark(options: BenchmarkOptions, progress=None) -> dict:

@@ -38,26 +38,28 @@ class CalibrationOutcome:
 
 
 def solve_session(session: Session, path, method: str | None = None, truth: dict | None = None,
-                  origin: str | None = None) -> CalibrationOutcome:
+                  origin: str | None = None, progress=None) -> CalibrationOutcome:
     """Solve a session already read (lengths in mm) with ``method`` (the recommended default when
-    ``None``); ``origin`` is read from the session when omitted."""
+    ``None``); ``origin`` is read from the session when omitted; ``progress(done, total, label)`` is
+    called after each stage of the default estimator."""
     from .origin import session_origin
 
     problem = problem_from_session(session)
-    result = calibrate(problem, method, truth)
+    result = calibrate(problem, method, truth, progress)
     return CalibrationOutcome(Path(path), result, truth is not None, session, problem, truth,
                               session_origin(session, path) if origin is None else origin)
 
 
-def calibrate_session_folder(path, method: str | None = None, units: str = "mm") -> CalibrationOutcome:
+def calibrate_session_folder(path, method: str | None = None, units: str = "mm", progress=None) -> CalibrationOutcome:
     """Read, validate and solve a session; uses ``truth.yaml`` when present (synthetic sessions).
 
     ``units`` declares the session's length unit (``mm``, the format's own, or ``m``: converted on
     reading); lengths that do not look like millimetres then are refused before solving.
+    ``progress(done, total, label)`` is called after each stage of the default estimator.
     """
     session = session_in_mm(read_session(path), units)
     truth = truth_from_dict(read_truth(path))
-    return solve_session(session, path, method, truth)
+    return solve_session(session, path, method, truth, progress=progress)
 
 
 def report_path_for(session_path, report: str | None) -> Path:

@@ -20,8 +20,13 @@ its file was written, and goes on: every posture ends up on disk exactly once.
   posture, plans and scores the postures and creates the session with its capture record
   (``capture.station: mock|real``); :func:`resume_session` reads that record back and refuses to
   resume a session of the other station;
+  A new plan keeps clear of the cell (``cell`` of the station config, ``station.cell_plan``), and
+  its preview (``station.preview``) is written to ``SESSION/preview.png``;
 - program (:func:`install_program`): the RAPID modules written once into ``SESSION/rapid``, loaded
-  when the station can, and the wait until the controller runs them;
+  when the station can, and the wait until the controller runs them (``plan_only`` stops before:
+  plan, preview and program on disk, nothing moved);
+- confirmation: at a real station the first move waits for the operator's yes (``confirm``); the
+  embedded mock moves without asking and says so;
 - release (:func:`release_waiting_posture`): the posture the robot may still wait at is acknowledged;
 - posture loop (:func:`visit_postures`): steps 1-5 above for every posture not yet on disk.
 """
@@ -54,6 +59,7 @@ from ..drivers.camera.errors import CameraError, SquareSizeMismatch
 from ..drivers.camera.triangulate import triangulate_images
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
+from .cell_plan import cell_check
 from .planning import PlanScore, PosturePlan, plan_postures
 from .quality import config_thresholds
 from .runtime import StationLink
@@ -64,8 +70,13 @@ __all__ = [
     "CaptureSummary",
     "PostureReport",
     "capture",
+    "confirm_motion",
     "install_program",
     "measure_board",
+    "measure_with_retries",
+    "measurement_line",
+    "read_flange",
+    "store_posture",
     "open_capture",
     "plan_line",
     "plan_session",
@@ -73,6 +84,7 @@ __all__ = [
     "resume_session",
     "stereo_views",
     "visit_postures",
+    "write_program",
 ]
 
 
@@ -203,7 +215,7 @@ def _new_plan(config: StationConfig, link: StationLink, progress) -> PosturePlan
         sampling = ViewSampling(**{**sampling.__dict__, "side": tuple(side / np.linalg.norm(side))})
     return plan_postures(robot, start, compact.target2cam[0], config.camera.nominal_mount_transform(), config.target,
                          p.postures, sampling, stereo_views(link.stereo_model), p.seed,
-                         thresholds=config_thresholds(config))
+                         thresholds=config_thresholds(config), cell=cell_check(config))
 
 
 @dataclass
@@ -227,24 +239,33 @@ class CaptureRun:
     plan_score: dict
 
     @property
+    def board2base(self) -> np.ndarray | None:
+        """The board estimate the plan was made for (its stand is a world zone), when recorded."""
+        estimate = self.session.extra["capture"].get("board_estimate")
+        return None if estimate is None else transform_from_pose(estimate["position_mm"], estimate["quaternion_wxyz"])
+
+    @property
     def done(self) -> set:
         """Session indices (0-based) of the postures on disk."""
         return {p.index for p in self.session.postures}
 
 
 def plan_line(score: PlanScore, postures: int) -> str:
-    """The plan as the operator reads it, in the verdict's quality words (``calibration.quality_words``)."""
+    """The plan as the operator reads it, in the verdict's quality words (``calibration.quality_words``),
+    and what the cell check rejected."""
+    rejected = (f"; clear of the cell: {score.rejected_postures} postures and {score.rejected_moves} moves rejected "
+                f"({'; '.join(score.rejections)})" if score.rejections else "; clear of the cell, nothing rejected")
     return (f"plan: {postures} postures; rotation-axis spread {score.rotation_axis_spread_deg:.1f} deg "
             f"({MAX_AXIS_SPREAD_DEG:.1f} = even over the sphere); relative rotation angle between postures median "
             f"{score.median_pair_angle_deg:.0f} deg (min {score.min_pair_angle_deg:.0f}); motion "
             f"{score.motion_time_s:.0f} s at full speed; expected accuracy about {score.predicted_sigma_mm:.2f} mm / "
-            f"{score.predicted_sigma_deg:.3f} deg (simulated)")
+            f"{score.predicted_sigma_deg:.3f} deg (simulated){rejected}")
 
 
 def plan_session(config: StationConfig, session_dir: Path, link: StationLink, progress) -> CaptureRun:
     """Plan the postures and create the session with its capture record (``capture.station: mock|real``)."""
     plan = _new_plan(config, link, progress)
-    plan_score = {k: float(v) for k, v in plan.score.__dict__.items()}
+    plan_score = plan.score.to_dict()
     progress(plan_line(plan.score, len(plan.joints_deg)))
     for note in plan.notes:
         progress(f"plan warning: {note}")
@@ -258,12 +279,19 @@ def plan_session(config: StationConfig, session_dir: Path, link: StationLink, pr
         "config": config.to_dict(),
     }})
     create_session(session_dir, session)
+    from .preview import write_preview
+
+    progress(f"plan preview (the cell from above and from the side, the flange path, the numbered postures): "
+             f"{write_preview(session_dir / 'preview.png', load_robot(config.robot), plan)}")
     return CaptureRun(session, np.round(plan.joints_deg, 4), plan_score)  # as embedded in the RAPID program
 
 
 def resume_session(config: StationConfig, session_dir: Path, session: Session, progress) -> CaptureRun:
     """Read the plan of a capture on disk; refuse one made on the other station (mock vs real)."""
     record = session.extra["capture"]
+    if record.get("mode") == "guided":
+        raise CaptureError(f"{session_dir} was captured in guided mode: resume it with capture --guided, or start a new "
+                           "session folder")
     recorded = session_origin(session)
     if recorded in (MOCK, REAL) and recorded != _station_kind(config):
         raise CaptureError(f"{session_dir} was captured on the {_STATION_NAMES[recorded]}; resume it on the same "
@@ -285,23 +313,32 @@ def open_capture(config: StationConfig, session_dir: Path, link: StationLink, pr
     return resume_session(config, session_dir, session, progress)
 
 
-def install_program(config: StationConfig, session_dir: Path, plan_joints: np.ndarray, link: StationLink,
-                    progress) -> None:
-    """Write the RAPID program into ``SESSION/rapid`` (once), load it when the station can, and wait
-    until the controller runs a program with the plan's posture count."""
+def write_program(config: StationConfig, session_dir: Path, plan_joints: np.ndarray, progress,
+                  board2base=None, link: StationLink | None = None) -> Path:
+    """Write the RAPID program into ``SESSION/rapid`` (once; with ``cell.world_zones`` the keep-out
+    volumes and the stand of the board at ``board2base`` as world zones); returns the folder. On the
+    embedded mock station (``link``) the program asks the mock's HeKey for the write key."""
     from ..rapid.generate import render_program, write_modules
     from ..rapid.station import station_from_dict
 
     rapid_dir = session_dir / "rapid"
     if not rapid_dir.is_dir():
-        data = config.rapid_dict(plan_joints)
-        if link.is_mock and data["controller"]["write_key"] is None:
+        data = config.rapid_dict(plan_joints, board2base)
+        if link is not None and link.is_mock and data["controller"]["write_key"] is None:
             # the embedded station's controller holds a key of its own (HeKey.sys, handed to the PC): its
             # link module asks HeKey for it. The key itself never goes into the program modules.
             data["controller"]["write_key"] = link.mock.write_key
         station = station_from_dict(data, config.source)
         write_modules(render_program(station, plan_joints), rapid_dir)
         progress(f"RAPID program written to {rapid_dir}")
+    return rapid_dir
+
+
+def install_program(config: StationConfig, session_dir: Path, plan_joints: np.ndarray, link: StationLink,
+                    progress, board2base=None) -> None:
+    """Write the RAPID program (:func:`write_program`), load it when the station can, and wait until the
+    controller runs a program with the plan's posture count."""
+    rapid_dir = write_program(config, session_dir, plan_joints, progress, board2base, link)
     if link.load_program is not None:
         link.load_program(plan_joints, rapid_dir)
         link.controller.close()  # the posture count is read at connect: read it again
@@ -362,8 +399,10 @@ def capture(
     progress: Callable[[str], None] = lambda message: None,
     on_posture: Callable[[PostureReport], None] = lambda report: None,
     stop_after: int | None = None,
+    plan_only: bool = False,
+    confirm: Callable[[str], bool] | None = None,
 ) -> CaptureSummary:
-    """Run (or resume) a guided capture into ``session_dir``: plan (or resume), program, release a
+    """Run (or resume) a capture into ``session_dir``: plan (or resume), program, confirm, release a
     posture left waiting, visit the postures.
 
     Parameters
@@ -382,6 +421,12 @@ def capture(
         Receives a :class:`PostureReport` after each posture.
     stop_after : int, optional
         Stop after this many postures of this run (tests of the resume).
+    plan_only : bool
+        Plan (or read the plan back), write the preview and the RAPID program, and stop: nothing moves.
+    confirm : callable, optional
+        ``confirm(question) -> bool``, asked once before the first move of this run at a real station
+        (the operator's yes). Without it a real station refuses to move; the embedded mock moves
+        without asking and says so.
 
     Raises
     ------
@@ -390,12 +435,40 @@ def capture(
     started = time.monotonic()
     session_dir = Path(session_dir)
     run = open_capture(config, session_dir, link, progress)
-    install_program(config, session_dir, run.plan_joints, link, progress)
+    if plan_only:
+        write_program(config, session_dir, run.plan_joints, progress, run.board2base, link)
+        progress(f"plan only: nothing moved; look at {session_dir / 'preview.png'}, then run the same command "
+                 "without --plan-only to capture")
+        return CaptureSummary(session_dir, len(run.plan_joints), [], sorted(k + 1 for k in run.done), {},
+                              time.monotonic() - started, run.plan_score)
+    install_program(config, session_dir, run.plan_joints, link, progress, run.board2base)
+    confirm_motion(config, session_dir, run, link, confirm, progress)
     already = sorted(k + 1 for k in run.done)
     release_waiting_posture(link.controller, run.done, progress)
     captured, skipped = visit_postures(config, session_dir, run, link, on_posture, stop_after)
     return CaptureSummary(session_dir, len(run.plan_joints), captured, already, skipped, time.monotonic() - started,
                           run.plan_score)
+
+
+def confirm_motion(config: StationConfig, session_dir: Path, run: CaptureRun, link: StationLink,
+                   confirm: Callable[[str], bool] | None, progress) -> None:
+    """Before the first move of a run: a real station asks the operator (``confirm``) and refuses without a
+    yes; the embedded mock moves without asking and says so. Nothing to move: nothing asked."""
+    left = len(run.plan_joints) - len(run.done)
+    if left <= 0:
+        return
+    speed = f"{config.motion.speed_override_pct:g} % of {config.motion.speed_tcp_mm_s:g} mm/s"
+    if link.is_mock:
+        progress(f"moving the mock robot through {left} postures at {speed} without asking (mock station; "
+                 "a real station asks first)")
+        return
+    question = (f"move the robot through {left} postures at {speed}, MoveAbsJ, checked against the cell "
+                f"(preview: {session_dir / 'preview.png'})?")
+    if confirm is None:
+        raise CaptureError("motion needs the operator's confirmation: answer the prompt at a terminal, or give --yes "
+                           "to move without asking (scripts)")
+    if not confirm(question):
+        raise CaptureError("not confirmed: nothing moved; run the same command again when ready (it resumes)")
 
 
 def _wait_for_program(controller, total: int, rapid_dir: Path, progress, timeout_s: float = 600.0) -> None:
@@ -414,19 +487,23 @@ def _wait_for_program(controller, total: int, rapid_dir: Path, progress, timeout
     raise CaptureError(f"the controller never reported the plan's {total} postures; load {rapid_dir}/*.mod and retry")
 
 
-def _capture_posture(config, session_dir, link: StationLink, robot, k, total, planned) -> PostureReport:
-    """Steps 2-4 at posture ``k`` (the robot at rest there): check the pose, measure, write the posture file."""
+def read_flange(config: StationConfig, link: StationLink, robot, label: str) -> tuple[np.ndarray, np.ndarray]:
+    """Joints and flange pose (``tool02base``) of the robot at rest, the pose checked against our kinematics
+    of the joints (CaptureError naming ``label`` when they disagree)."""
     joints = link.controller.read_joints()
     pose = link.controller.read_tool0_pose()
     tool02base = transform_from_pose(pose.position_mm, pose.quaternion_wxyz)
     expected = robot.forward_transform(joints)
     mismatch = float(translation_error_mm(expected, tool02base))
     if mismatch > config.capture.max_pose_mismatch_mm or rotation_error_deg(expected, tool02base) > 0.05:
-        raise CaptureError(f"posture {k}: the controller's flange pose is {mismatch:.2f} mm from our {robot.name} "
+        raise CaptureError(f"{label}: the controller's flange pose is {mismatch:.2f} mm from our {robot.name} "
                            "kinematics of its joints: check the robot model, and that CRobT uses tool0 and wobj0")
-    if np.max(np.abs(joints - planned)) > 0.05:
-        raise CaptureError(f"posture {k}: the robot stands at {np.round(joints, 3).tolist()}, not at the planned "
-                           f"{np.round(planned, 3).tolist()}: is the right program loaded?")
+    return joints, tool02base
+
+
+def measure_with_retries(config: StationConfig, link: StationLink):
+    """Grab and triangulate until the quality holds (``capture.retries`` more tries): ``(result, frame,
+    problem, attempts)``, ``problem`` None when the measurement is good."""
     problem = "no frame"
     result = frame = None
     attempts = 0
@@ -439,21 +516,42 @@ def _capture_posture(config, session_dir, link: StationLink, robot, k, total, pl
         problem = _quality_problem(result, config)
         if problem is None:
             break
-    if problem is not None:
-        return PostureReport(k, total, False, f"posture {k} skipped after {attempts} attempt(s): {problem}",
-                             result.quality if result is not None else {}, attempts)
+    return result, frame, problem, attempts
+
+
+def store_posture(config: StationConfig, session_dir: Path, index: int, joints, tool02base, result, frame,
+                  **extra) -> None:
+    """Write posture ``index`` (0-based) of the session atomically: pose, joints, corners, quality, ``extra``
+    (and the images when ``capture.save_images``)."""
     extra = {"quality": {key: (round(v, 4) if isinstance(v, float) else v) for key, v in result.quality.items()},
-             "plan_index": k, "captured_at": time.strftime("%Y-%m-%dT%H:%M:%S")}
+             **extra, "captured_at": time.strftime("%Y-%m-%dT%H:%M:%S")}
     if config.capture.save_images and frame is not None:
         import cv2
 
         images = session_dir / "images"
         images.mkdir(exist_ok=True)
-        cv2.imwrite(str(images / f"{k - 1:03d}_left.png"), frame.left)
-        cv2.imwrite(str(images / f"{k - 1:03d}_right.png"), frame.right)
-        extra["images"] = [f"images/{k - 1:03d}_left.png", f"images/{k - 1:03d}_right.png"]
-    write_posture(session_dir, Posture(index=k - 1, tool0_in_base=tool02base, joints_deg=joints,
+        cv2.imwrite(str(images / f"{index:03d}_left.png"), frame.left)
+        cv2.imwrite(str(images / f"{index:03d}_right.png"), frame.right)
+        extra["images"] = [f"images/{index:03d}_left.png", f"images/{index:03d}_right.png"]
+    write_posture(session_dir, Posture(index=index, tool0_in_base=tool02base, joints_deg=joints,
                                        points_mm=result.points_mm, extra=extra))
-    q = result.quality
-    return PostureReport(k, total, True, f"posture {k}: {q['corners']} corners at {q['distance_mm']:.0f} mm, "
-                         f"rows {q['row_disagreement_max_px']:.2f} px, plane {q['plane_rms_mm']:.2f} mm", q, attempts)
+
+
+def measurement_line(quality: dict) -> str:
+    """``104 corners at 912 mm, rows 0.08 px, plane 0.14 mm``."""
+    return (f"{quality['corners']} corners at {quality['distance_mm']:.0f} mm, rows "
+            f"{quality['row_disagreement_max_px']:.2f} px, plane {quality['plane_rms_mm']:.2f} mm")
+
+
+def _capture_posture(config, session_dir, link: StationLink, robot, k, total, planned) -> PostureReport:
+    """Steps 2-4 at posture ``k`` (the robot at rest there): check the pose, measure, write the posture file."""
+    joints, tool02base = read_flange(config, link, robot, f"posture {k}")
+    if np.max(np.abs(joints - planned)) > 0.05:
+        raise CaptureError(f"posture {k}: the robot stands at {np.round(joints, 3).tolist()}, not at the planned "
+                           f"{np.round(planned, 3).tolist()}: is the right program loaded?")
+    result, frame, problem, attempts = measure_with_retries(config, link)
+    if problem is not None:
+        return PostureReport(k, total, False, f"posture {k} skipped after {attempts} attempt(s): {problem}",
+                             result.quality if result is not None else {}, attempts)
+    store_posture(config, session_dir, k - 1, joints, tool02base, result, frame, plan_index=k)
+    return PostureReport(k, total, True, f"posture {k}: {measurement_line(result.quality)}", result.quality, attempts)

@@ -14,8 +14,9 @@ included. ``station/example_station.yaml`` documents every key (a test holds it 
 
 Sections: ``robot``, ``controller`` (the link and the generated RAPID program), ``camera``,
 ``target``, ``plan`` (posture planning), ``motion``, ``tool`` (the PERS tooldata written back),
-``capture`` (per-posture quality), ``quality`` (the verdict's thresholds, see ``station.quality``),
-``output``, ``mock`` (the embedded mock station) and ``postures`` (fixed approved postures for
+``capture`` (per-posture quality), ``cell`` and ``guided`` (the cell's keep-out volumes and
+carried geometry, the operator-guided capture: ``station.cell_settings``), ``quality`` (the
+verdict's thresholds, see ``station.quality``), ``output``, ``mock`` (the embedded mock station) and ``postures`` (fixed approved postures for
 ``handeye rapid generate``; capture plans its own).
 """
 
@@ -34,6 +35,7 @@ from ..calibration.files import read_text_file
 from ..calibration.kinematics import load_robot
 from ..calibration.session import parse_yaml
 from ..calibration.transforms import pose_from_transform, transform_from_pose
+from .cell_settings import CellSettings, GuidedSettings
 from .schema import (
     Custom,
     Flag,
@@ -251,6 +253,8 @@ class MotionSettings:
 
     speed_tcp_mm_s: float = setting(200.0, Number(1, 7000), "TCP speed", "mm/s")
     speed_ori_deg_s: float = setting(100.0, Number(1, 1000), "reorientation speed", "deg/s")
+    speed_override_pct: float = setting(100.0, Number(1, 100), "RAPID VelSet override of the posture moves "
+                                        "(100: as programmed)", "%")
 
 
 @dataclass(frozen=True)
@@ -304,6 +308,8 @@ class StationConfig:
     motion: MotionSettings = section(MotionSettings, "posture moves")
     tool: ToolSettings = section(ToolSettings, "the camera's tooldata")
     capture: CaptureSettings = section(CaptureSettings, "per-posture quality")
+    cell: CellSettings = section(CellSettings, "keep-out volumes, carried geometry, path checks")
+    guided: GuidedSettings = section(GuidedSettings, "operator-guided capture")
     quality: dict = setting(None, Custom(_quality), "verdict thresholds (station/quality_thresholds.yaml)",
                             factory=dict)
     output: str = setting("sessions", Text(), "folder of new sessions")
@@ -333,31 +339,41 @@ class StationConfig:
         """The controller link actually spoken: the mock station's own protocol when mocked."""
         return self.mock.protocol if self.is_mock else self.controller.protocol
 
-    def rapid_dict(self, postures) -> dict:
-        """The mapping ``rapid.station.station_from_dict`` reads, with the given approved postures."""
+    def rapid_dict(self, postures, board2base=None) -> dict:
+        """The mapping ``rapid.station.station_from_dict`` reads, with the given approved postures; with
+        ``cell.world_zones`` the keep-out volumes (and the board's stand when ``board2base`` is given)
+        as world zones on the camera's nominal TCP."""
         c = self.controller
-        return {
+        out = {
             "robot": self.robot,
             "controller": {"protocol": self.link_protocol, "pc_address": c.pc_address, "controller_address": c.controller_address,
                            "port": c.port, "serial_channel": c.serial_channel, "ack_timeout_s": c.ack_timeout_s,
                            "idle_timeout_s": c.idle_timeout_s, "write_key": c.write_key},
-            "motion": {"speed_tcp_mm_s": self.motion.speed_tcp_mm_s, "speed_ori_deg_s": self.motion.speed_ori_deg_s},
+            "motion": {"speed_tcp_mm_s": self.motion.speed_tcp_mm_s, "speed_ori_deg_s": self.motion.speed_ori_deg_s,
+                       "speed_override_pct": self.motion.speed_override_pct},
             "tool": {"name": self.tool.name, "mass_kg": self.tool.mass_kg, "cog_mm": list(self.tool.cog_mm)},
             "postures": [[round(float(v), 4) for v in row] for row in np.asarray(postures, float)],
         }
+        if self.cell.world_zones:
+            volumes = self.cell.model().world_zone_volumes(board2base, self.target)
+            position, quaternion = self.camera.nominal_mount
+            out["world_zones"] = {"tcp": {"position_mm": list(position), "quaternion_wxyz": list(quaternion)},
+                                  "zones": [_plain(v.world_zone()) for v in volumes]}
+        return out
 
     def to_dict(self) -> dict:
         """A YAML-ready mapping of the whole configuration (for the session record); secrets are
         ``"<set>"`` or None, never their value."""
         out = {"robot": self.robot, "output": self.output, "quality": dict(self.quality),
                "target": {"corners": list(self.target.corners), "square_mm": self.target.square_mm}}
-        for name in ("controller", "camera", "plan", "motion", "tool", "capture", "mock"):
+        for name in ("controller", "camera", "plan", "motion", "tool", "capture", "guided", "mock"):
             settings = getattr(self, name)
             section = {f.name: getattr(settings, f.name) for f in fields(settings)}
             for secret in secret_fields(type(settings)):
                 section[secret] = None if section[secret] is None else "<set>"  # never the secret
             out[name] = _plain(section)
         out["camera"]["nominal_mount"] = pose_from_transform(self.camera.nominal_mount_transform())
+        out["cell"] = _plain(self.cell.to_dict())
         return out
 
 
@@ -394,6 +410,7 @@ def config_from_dict(data: dict, source: str = "configuration") -> StationConfig
     config = replace(StationConfig(source=source), **changes)
     _check_quality(config.quality)
     _check_hardware_named(data, config)
+    _check_cell(config)
     return config
 
 
@@ -423,6 +440,23 @@ def _check_hardware_named(data: dict, config: StationConfig) -> None:
         raise ConfigError(f"camera.backend is {MOCK} but controller.protocol is {config.controller.protocol}: the mock camera "
                           f"only sees the mock robot: set both to {MOCK} (the embedded mock station), or rehearse against "
                           "`handeye mock controller --camera-port PORT` with camera.mock_arm: HOST:PORT")
+
+
+def _check_cell(config: StationConfig) -> None:
+    """The cell's keys that depend on each other: the path step within the margin, and the carried
+    geometry where the camera is mounted."""
+    cell = config.cell
+    if cell.path_step_mm > cell.margin_mm:
+        raise ConfigError(f"cell.path_step_mm ({cell.path_step_mm:g}) must not exceed cell.margin_mm ({cell.margin_mm:g}): "
+                          "between two samples of a move the clearance may drop by half the step")
+    if not cell.carried:
+        return
+    camera = np.asarray(config.camera.nominal_mount[0], float)
+    gaps = [float(body.signed_distance(camera)) if hasattr(body, "signed_distance")
+            else float(np.linalg.norm(camera - np.asarray(body.centre_mm)) - body.radius_mm) for body in cell.carried]
+    if min(gaps) > cell.margin_mm:
+        raise ConfigError(f"camera.nominal_mount puts the camera {min(gaps):.0f} mm from every body of cell.carried: "
+                          "describe the camera and its bracket in tool0 where they are mounted")
 
 
 def _check_quality(quality: dict) -> None:

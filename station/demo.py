@@ -105,13 +105,13 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
 
 
 def _assess(session_dir: Path, config: StationConfig, compare: bool, progress) -> Assessment:
-    """Calibrate the captured session (robust default) and assess it against the config's thresholds,
+    """Calibrate the captured session (the default estimator) and assess it against the config's thresholds,
     with the method comparison when the report is wanted."""
     from ..rapid.literals import tooldata_literal
 
     outcome = calibrate_session_folder(session_dir)
     result = outcome.result
-    progress(f"calibrated {outcome.problem.n} postures in {result.runtime_s * 1000:.0f} ms (robust default), "
+    progress(f"calibrated {outcome.problem.n} postures in {result.runtime_s * 1000:.0f} ms (the default estimator), "
              f"outliers: {result.outliers or 'none'}")
     assessment = assess(outcome, config_thresholds(config), methods=COMPARISON_METHODS if compare else (),
                         tooldata_literal=tooldata_literal(result.x, config.tool.mass_kg, config.tool.cog_mm))

@@ -12,6 +12,7 @@ from ..calibration.diagnostics import diagnose
 from ..calibration.errors import SessionError
 from ..calibration.session import Session, create_session, write_posture
 from .importers import read_any
+from .importers.inference import format_table
 
 __all__ = ["ImportOptions", "ImportOutcome", "import_to_session", "import_summary"]
 
@@ -26,6 +27,8 @@ class ImportOptions:
     setup: str | None = None
     units: str | None = None
     quaternion_order: str | None = None
+    robot_pose: str | None = None
+    camera_pose: str | None = None
     board: tuple | None = None
     square_mm: float | None = None
     skip_invalid: bool = False
@@ -45,6 +48,15 @@ class ImportOutcome:
     @property
     def record(self) -> dict:
         return self.session.extra.get("import", {})
+
+    @property
+    def warnings(self) -> list:
+        """Every warning line: the flags the data contradict, then the checks' findings."""
+        return list(self.record.get("warnings") or []) + [f.message for f in self.findings]
+
+
+#: Findings that restate what the import's reading already warns about (a flag the data contradict).
+_RESTATED = ("setup", "rotation_convention", "model_mismatch")
 
 
 def _board(options: ImportOptions) -> BoardGeometry | None:
@@ -75,10 +87,13 @@ def import_to_session(options: ImportOptions, progress=lambda message: None) -> 
     extra = {k: v for k, v in options.format_options.items() if v is not None}
     session = read_any(sources if len(sources) > 1 else sources[0], options.format, setup=options.setup,
                        units=options.units, quaternion_order=options.quaternion_order, board=_board(options),
-                       skip_invalid=options.skip_invalid or None, **extra)
+                       skip_invalid=options.skip_invalid or None, robot_pose=options.robot_pose,
+                       camera_pose=options.camera_pose, **extra)
     tool0 = [p.tool0_in_base for p in session.postures]
     target = [p.target_in_camera for p in session.postures]
     findings = diagnose(np.array(tool0), np.array(target), session.setup, [p.index for p in session.postures])
+    if session.extra["import"].get("warnings"):  # the import already said what the data say about the flags
+        findings = [f for f in findings if f.kind not in _RESTATED]
     removed = []
     if options.overwrite and (out / "truth.yaml").exists():
         (out / "truth.yaml").unlink()  # belonged to the replaced (synthetic) session
@@ -99,13 +114,19 @@ def import_summary(outcome: ImportOutcome) -> list:
     units = r.get("units", {})
     unit_text = (f"{units.get('robot')} for robot and camera" if units.get("robot") == units.get("camera")
                  else f"robot {units.get('robot')}, camera {units.get('camera')}")
+    conventions = r.get("conventions") or {}
     lines = [
         f"read {source_text}",
         f"  format:   {r.get('format')}, {r.get('format_how', 'given')}",
         f"  setup:    {session.setup}, {r.get('setup_how')}",
         f"  units:    {unit_text}, {units.get('how')}; written in mm",
-        f"  postures: {len(session.postures)} from {r.get('entries_read')} entries",
     ]
+    for part in ("robot", "camera"):
+        if conventions.get(part):
+            lines.append(f"  {part + ':':9s} {conventions[part]}")
+    if conventions.get("decided_by"):
+        lines.append(f"  decided:  by {', then '.join(conventions['decided_by'])}")
+    lines.append(f"  postures: {len(session.postures)} from {r.get('entries_read')} entries")
     if session.target is not None:
         square = f", {session.target.square_mm:g} mm squares" if session.target.square_mm else ""
         lines.append(f"  target:   {session.target.corners[0]}x{session.target.corners[1]} inner corners{square}")
@@ -119,6 +140,10 @@ def import_summary(outcome: ImportOutcome) -> list:
         lines.append(f"  note:     {note}")
     for name in outcome.removed:
         lines.append(f"  removed:  {name} of the replaced session")
+    table = format_table(r.get("inference") or {})
+    if table:
+        lines.append("  readings of the poses (X-free invariants of AX = XB; misfits near 0 fit):")
+        lines += [f"    {line}" for line in table]
     lines.append(f"  checks:   {len(outcome.findings)} finding(s)" + (" (see warnings)" if outcome.findings else ": nothing odd"))
     lines.append(f"session written to {outcome.path}; next: handeye calibrate {outcome.path}")
     return lines

@@ -9,7 +9,13 @@ From a start posture where the camera sees the board, the planner knows roughly 
    limits with a margin from which every camera of the head sees the whole board;
 2. orders them for short motions: nearest neighbour by synchronised motion time (the slowest axis,
    from the axis speeds), then 2-opt;
-3. scores the plan with the verdict's own quality words (``calibration.quality_words``): the
+3. with a cell (``station.cell_plan``): refuses a start posture inside (or within the margin of) a
+   keep-out volume, vetoes postures closer than the margin to the cell while drawing them, and
+   repairs the order so every move, sampled along the joint-interpolated path ``MoveAbsJ`` runs,
+   keeps the margin: blocked moves are avoided by the order, postures at blocked moves replaced by new
+   draws, or dropped; fewer postures than asked are accepted down to the verdict's
+   ``min_inlier_postures``, below that the plan is refused with the reasons;
+4. scores the plan with the verdict's own quality words (``calibration.quality_words``): the
    rotation-axis spread and the relative rotation angles between postures, so the plan shows the
    numbers the verdict will judge; and the accuracy to expect, by solving a few simulated sessions
    of this very plan with the configured noise.
@@ -17,7 +23,7 @@ From a start posture where the camera sees the board, the planner knows roughly 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -29,6 +35,7 @@ from ..calibration.solve import calibrate, problem_from_session
 from ..calibration.synthetic import NoiseConfig, Scene, SceneConfig, sample_session
 from ..calibration.transforms import invert_transforms
 from ..calibration.views import NOMINAL_XB3, ViewSampling, sample_eye_in_hand_postures
+from .cell_plan import CellCheck, PostureVeto, Rejections, clear_route, start_problem
 from .quality import QualityThresholds
 
 __all__ = [
@@ -61,9 +68,14 @@ class PlanScore:
     min_pair_angle_deg, median_pair_angle_deg : float
         Relative rotation angles between postures (every pair).
     predicted_sigma_mm, predicted_sigma_deg : float
-        RMS error of the camera pose over simulated sessions of this plan (robust default).
+        RMS error of the camera pose over simulated sessions of this plan (the default estimator).
     motion_time_s : float
         Sum of the synchronised move times along the order.
+    rejected_postures, rejected_moves : int
+        Postures the cell check refused while drawing them, and moves between postures it found
+        blocked (each cost a posture, replaced or dropped).
+    rejections : tuple of str
+        Why, most frequent first (``3 postures: camera too close to 'fixture'``).
     """
 
     rotation_axis_spread_deg: float
@@ -72,6 +84,15 @@ class PlanScore:
     predicted_sigma_mm: float
     predicted_sigma_deg: float
     motion_time_s: float
+    rejected_postures: int = 0
+    rejected_moves: int = 0
+    rejections: tuple = ()
+
+    def to_dict(self) -> dict:
+        """YAML-ready: the figures as floats and counts, the reasons as a list."""
+        out = {k: float(v) for k, v in asdict(self).items() if k not in ("rejected_postures", "rejected_moves", "rejections")}
+        return {**out, "rejected_postures": int(self.rejected_postures), "rejected_moves": int(self.rejected_moves),
+                "rejections": list(self.rejections)}
 
     def verdict(self, thresholds: QualityThresholds | None = None) -> list[str]:
         """Warnings an operator should read before moving (empty when the plan looks good): the
@@ -104,6 +125,8 @@ class PosturePlan:
     board : BoardGeometry
     notes : list of str
         Warnings for the operator.
+    cell : CellCheck or None
+        The cell the plan was checked against.
     """
 
     joints_deg: np.ndarray
@@ -113,6 +136,7 @@ class PosturePlan:
     start_joints_deg: np.ndarray
     board: BoardGeometry
     notes: list = field(default_factory=list)
+    cell: CellCheck | None = None
 
 
 def motion_time_s(robot: RobotModel, a, b) -> np.ndarray:
@@ -121,11 +145,17 @@ def motion_time_s(robot: RobotModel, a, b) -> np.ndarray:
     return np.max(delta / robot.max_speed_deg_s, axis=-1)
 
 
-def order_for_short_motions(robot: RobotModel, joints: np.ndarray, start) -> np.ndarray:
-    """Visiting order (indices) starting next to ``start``: nearest neighbour, then 2-opt."""
+def order_for_short_motions(robot: RobotModel, joints: np.ndarray, start, blocked=None) -> np.ndarray:
+    """Visiting order (indices) starting next to ``start``: nearest neighbour, then 2-opt.
+
+    ``blocked`` (``(n + 1, n + 1)`` bool over ``[start, *joints]``, optional): moves that cost
+    infinitely much (not clear of the cell); the order avoids them when it can.
+    """
     n = len(joints)
     nodes = np.vstack([np.asarray(start, float)[None], joints])
     cost = motion_time_s(robot, nodes[:, None, :], nodes[None, :, :])
+    if blocked is not None:
+        cost = np.where(blocked, np.inf, cost)
     route = [0]
     left = set(range(1, n + 1))
     while left:
@@ -184,6 +214,7 @@ def plan_postures(
     noise: NoiseConfig = NoiseConfig(0.005, 0.3, "gaussian"),
     max_attempts: int | None = None,
     thresholds: QualityThresholds | None = None,
+    cell: CellCheck | None = None,
 ) -> PosturePlan:
     """Plan ``count`` postures around the board seen from the start posture.
 
@@ -209,10 +240,13 @@ def plan_postures(
         View points to try before giving up (default ``200 * count``).
     thresholds : QualityThresholds, optional
         The verdict's thresholds the plan is warned against (the defaults when omitted).
+    cell : CellCheck, optional
+        The cell every posture and move must keep clear of (its board stand from the board estimate).
 
     Raises
     ------
     PlanningError
+        No plan (with the reasons), or a start posture inside or within the margin of the cell.
     """
     start = np.asarray(start_joints_deg, float)
     if robot.limit_violations(start):
@@ -225,16 +259,68 @@ def plan_postures(
         sampling = ViewSampling(side=tuple(side))
     corners = board_corners(board.corners, board.square_mm)
     rng = np.random.default_rng(seed)
+    thresholds = thresholds or QualityThresholds()
+    if cell is None:
+        joints = _draw(robot, cam2tool0_nominal, board2base, corners, count, rng, sampling, views, start, max_attempts)
+        joints = joints[order_for_short_motions(robot, joints, start)]
+        rejections = Rejections()
+    else:
+        joints, rejections = _draw_clear_of_cell(robot, cam2tool0_nominal, board2base, board, corners, count, rng,
+                                                 sampling, views, start, max_attempts, cell, thresholds)
+    score = score_plan(robot, joints, board2base, cam2tool0_nominal, board, start, noise)
+    score = replace(score, rejected_postures=sum(rejections.postures.values()),
+                    rejected_moves=sum(rejections.moves.values()), rejections=tuple(rejections.lines()))
+    notes = score.verdict(thresholds)
+    if len(joints) < count:
+        notes.append(f"only {len(joints)} of {count} postures keep clear of the cell: {rejections.summary()}")
+    return PosturePlan(joints, board2base, np.asarray(cam2tool0_nominal, float), score, start, board, notes, cell)
+
+
+def _draw(robot, cam2tool0, board2base, corners, count, rng, sampling, views, start, max_attempts, veto=None,
+          min_count=None) -> np.ndarray:
+    """``sample_eye_in_hand_postures``, its RuntimeError a PlanningError saying what to do."""
     try:
-        joints = sample_eye_in_hand_postures(robot, cam2tool0_nominal, board2base, corners, count, rng, sampling, views,
-                                             seed_joints=start, max_attempts=max_attempts)
+        return sample_eye_in_hand_postures(robot, cam2tool0, board2base, corners, count, rng, sampling, views,
+                                           seed_joints=start, max_attempts=max_attempts, veto=veto, min_count=min_count)
     except RuntimeError as exc:
         raise PlanningError(f"{exc}; move the start posture so the board is centred at about 0.9 m") from None
-    order = order_for_short_motions(robot, joints, start)
-    joints = joints[order]
-    score = score_plan(robot, joints, board2base, cam2tool0_nominal, board, start, noise)
-    return PosturePlan(joints, board2base, np.asarray(cam2tool0_nominal, float), score, start, board,
-                       score.verdict(thresholds))
+
+
+def _draw_clear_of_cell(robot, cam2tool0, board2base, board, corners, count, rng, sampling, views, start, max_attempts,
+                        cell: CellCheck, thresholds: QualityThresholds) -> tuple[np.ndarray, Rejections]:
+    """Postures and their order clear of the cell (``station.cell_plan``), at least the verdict's
+    ``min_inlier_postures`` of them, and why the others were rejected."""
+    guard = cell.guard(robot, board2base, board)
+    problem = start_problem(guard, start)
+    if problem is not None:
+        raise PlanningError(problem)
+    rejections = Rejections()
+    veto = PostureVeto(guard, rejections)
+    fewest = min(count, thresholds.min_inlier_postures)
+    try:
+        joints = sample_eye_in_hand_postures(robot, cam2tool0, board2base, corners, count, rng, sampling, views,
+                                             seed_joints=start, max_attempts=max_attempts, veto=veto, min_count=fewest,
+                                             pose_veto=veto.pose)
+    except RuntimeError as exc:
+        found = int(str(exc).split()[1])  # "only N of M postures found; ..."
+        raise PlanningError(_too_few(f"only {found} of {count} postures keep clear of the cell", fewest, rejections)) \
+            from None
+
+    def redraw(m: int) -> np.ndarray:
+        return sample_eye_in_hand_postures(robot, cam2tool0, board2base, corners, m, rng, sampling, views,
+                                           seed_joints=start, max_attempts=200 * m, veto=veto, min_count=0,
+                                           pose_veto=veto.pose)
+
+    joints = clear_route(robot, guard, start, joints, redraw, rejections, order_for_short_motions)
+    if len(joints) < fewest:
+        raise PlanningError(_too_few(f"only {len(joints)} of {count} postures keep clear of the cell with clear moves "
+                                     "between them", fewest, rejections))
+    return joints, rejections
+
+
+def _too_few(found: str, fewest: int, rejections: Rejections) -> str:
+    return (f"{found}, fewer than the {fewest} the verdict needs (min_inlier_postures): {rejections.summary()}; "
+            "move the board or the keep-out volumes, or widen plan.distance_mm / plan.cone_deg")
 
 
 def board_distance_and_tilt(plan: PosturePlan, robot: RobotModel) -> np.ndarray:

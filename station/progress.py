@@ -21,3 +21,29 @@ def progress_bar(title: str):
             progress.update(task, completed=done, total=total, description=label)
 
         yield update
+
+
+@contextmanager
+def delayed_progress(title: str, delay_s: float = 1.0):
+    """Yield ``update(done, total, label)`` that shows a progress bar only once ``delay_s`` has passed.
+
+    A calibration that takes less than a second prints nothing; a longer one (hundreds of postures)
+    shows its stages. Quiet when the output is not a terminal.
+    """
+    import time
+
+    started = time.monotonic()
+    state: dict = {}
+    try:
+        def update(done, total, label=""):
+            if "bar" not in state:
+                if time.monotonic() - started < delay_s or not sys.stderr.isatty():
+                    return
+                state["context"] = progress_bar(title)
+                state["bar"] = state["context"].__enter__()
+            state["bar"](done, total, label)
+
+        yield update
+    finally:
+        if "context" in state:
+            state["context"].__exit__(None, None, None)

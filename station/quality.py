@@ -14,7 +14,7 @@ there shows in four kinds of figures, each checked against a threshold of :class
   compared. Over all postures, outliers included, the same figure is called ``d_org incl. outliers``.
 - **Where the camera is**: eye-in-hand, the camera's optical centre cannot sit inside the flange
   (a session written in metres solves to a frame a fraction of a millimetre from it) nor metres away.
-- **Precision of X**: the one-sigma uncertainty of the robust default method (translation per axis in
+- **Precision of X**: the one-sigma uncertainty of the default method (translation per axis in
   mm, rotation about each axis of the camera frame in degrees).
 - **Motion that determines X**: enough consistent postures, few outliers, relative flange rotations
   that are sizeable (median relative rotation angle) and turn about every direction (rotation-axis
@@ -421,7 +421,7 @@ def _precision_checks(result, t: QualityThresholds, n_in: int) -> list:
     """``max_sigma_translation_mm`` and ``max_sigma_rotation_deg``: the one-sigma uncertainty of X."""
     u = result.uncertainty
     if u is None:
-        no_sigma = (f"method {result.method} gives no uncertainty; run without --method (the robust default) "
+        no_sigma = (f"method {result.method} gives no uncertainty; run without --method (the default) "
                     f"to judge the precision")
         return [_check("max_sigma_translation_mm", None, t.max_sigma_translation_mm, no_sigma),
                 _check("max_sigma_rotation_deg", None, t.max_sigma_rotation_deg, no_sigma)]

@@ -8,7 +8,8 @@ Contents: a banner when the data come from the embedded mock station or a simula
 PASS; greyed out, struck through and not selectable under "FAIL - do not write this into the robot"
 on a FAIL), its uncertainty and the outliers; the quality checks with advice; five figures and
 tables (per-posture residuals, rotation-axis coverage, method comparison, repeatability of the board
-corners in the fixed frame, quality metrics and truth errors); the data checks made before solving.
+corners in the fixed frame, quality metrics and truth errors); the data checks made before solving;
+the capture plan's preview of the cell when the session holds one (``SESSION/preview.png``).
 d_org is everywhere the one of ``calibration.quality_words.result_d_org``, and the header says which
 postures and points it is computed over.
 
@@ -432,12 +433,20 @@ def _pose_facts(result) -> list:
         ("Euler ZYX", f"z {euler[0]:.4f} &nbsp; y {euler[1]:.4f} &nbsp; x {euler[2]:.4f} deg"),
     ]
     u = result.uncertainty
-    if u is None:
-        return pose + [("uncertainty", f"not estimated by method {_e(result.method)} (the robust default does)")]
-    return pose + [("uncertainty, position", "&plusmn; " + " / ".join(f"{v:.3f}" for v in u["translation_mm"])
-                    + " mm (x / y / z, one sigma)"),
-                   ("uncertainty, rotation", "&plusmn; " + " / ".join(f"{v:.4f}" for v in u["rotation_deg"])
-                    + " deg (about x / y / z, one sigma)")]
+    if u is not None:
+        pose += [("uncertainty, position", "&plusmn; " + " / ".join(f"{v:.3f}" for v in u["translation_mm"])
+                  + " mm (x / y / z, one sigma)"),
+                 ("uncertainty, rotation", "&plusmn; " + " / ".join(f"{v:.4f}" for v in u["rotation_deg"])
+                  + " deg (about x / y / z, one sigma)")]
+    else:
+        pose.append(("uncertainty", f"not estimated by method {_e(result.method)} (the default does)"))
+    cv = result.cross_validation
+    if cv:  # the default estimator's held-out accuracy (calibration/crossval.py)
+        pose.append(("cross-validated accuracy", f"{cv['rms_mm']:.3f} mm RMS of held-out board points ({cv['folds']}-fold)"
+                     + (f"; the noise model predicts {cv['predicted_rms_mm']:.3f} mm" if "predicted_rms_mm" in cv else "")))
+        if cv.get("systematic"):
+            pose.append(("systematic error", _e(cv.get("advice", ""))))
+    return pose
 
 
 def _session_facts(a: Assessment) -> list:
@@ -627,6 +636,13 @@ def _repeatability_section(a: Assessment, fixed_frame: str) -> str:
           f"(point {int(np.argmax(rms))}).</p></section>")
 
 
+def _preview_section(png: bytes) -> str:
+    return ("<h2>Capture plan: the cell</h2><section>"
+            '<p class="how">The preview written before the robot moved: the keep-out volumes and the board\'s stand, the '
+            "board, the path the flange ran and the numbered postures, from above and from the side (base frame, "
+            "mm).</p>" + _img(png, "capture plan preview: the cell from above and from the side") + "</section>")
+
+
 def _findings_section(findings) -> str:
     items = "".join(f"<li>{_e(f)}</li>" for f in findings)
     body = f"<ul>{items}</ul>" if findings else '<p class="note">Nothing odd found in the poses.</p>'
@@ -635,8 +651,9 @@ def _findings_section(findings) -> str:
 
 _FOOTER = (
     "<footer>Units: mm and degrees; quaternions q1..q4 = (w, x, y, z), scalar first. The camera frame is the left "
-    "camera of the stereo head (x right, y down, z forward). Uncertainties are one sigma from the robust "
-    "refinement's covariance; with few postures they tend to be pessimistic. Report written by handeye.</footer>")
+    "camera of the stereo head (x right, y down, z forward). Uncertainties are one sigma from the "
+    "estimator's covariance (random errors); the cross-validated accuracy also shows systematic ones. Report "
+    "written by handeye.</footer>")
 
 
 def write_report(path_html, assessment: Assessment, title: str = "Hand-eye calibration report") -> Path:
@@ -677,6 +694,8 @@ def write_report(path_html, assessment: Assessment, title: str = "Hand-eye calib
                  "<h2>5. Quality metrics</h2><section>" + _metrics_table(a) + "</section>"]
     if a.findings is not None:
         sections.append(_findings_section(a.findings))
+    if a.plan_preview is not None:
+        sections.append(_preview_section(a.plan_preview))
     sections.append(_FOOTER)
     document = ("<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
                 f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"><title>{_e(title)}</title>"

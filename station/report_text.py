@@ -62,6 +62,7 @@ def _closing_lines(r) -> list[str]:
         lines += ["", "Uncertainty (one sigma):",
                   "  position  x {:.3f}  y {:.3f}  z {:.3f} mm".format(*u["translation_mm"]),
                   "  rotation  about x {:.4f}  y {:.4f}  z {:.4f} deg".format(*u["rotation_deg"])]
+    lines += _cross_validation_lines(r)
     if r.truth_errors is not None:
         lines += ["", "Against the synthetic truth:",
                   f"  rotation error {r.truth_errors['rotation_error_deg']:.4f} deg, "
@@ -107,3 +108,27 @@ def calibration_summary(assessment: Assessment) -> str:
         "Quality (lower is better):",
     ]
     return "\n".join(lines + _quality_lines(assessment) + _closing_lines(r))
+
+
+def _cross_validation_lines(r) -> list[str]:
+    """The default estimator's held-out accuracy, systematic-error verdict and estimated noise."""
+    cv = r.cross_validation
+    if not cv:
+        return []
+    lines = ["", f"Cross-validated accuracy ({cv['folds']}-fold, held-out postures):",
+             f"  board points land {cv['rms_mm']:.3f} mm RMS from where the other postures put them"
+             + (f" (the noise model predicts {cv['predicted_rms_mm']:.3f} mm)" if "predicted_rms_mm" in cv else "")]
+    if cv.get("systematic"):
+        lines.append(f"  SYSTEMATIC: {cv.get('advice', '')}")
+    noise = r.details.get("noise", {})
+    camera, robot = noise.get("camera", {}), noise.get("robot", {})
+    parts = []
+    if "corner_rms_mm" in camera:
+        parts.append(f"camera corners {camera['corner_rms_mm']:.3f} mm RMS (stereo {camera.get('stereo_pixel_px', 0):.3f} px)")
+    if "joint_deg" in robot:
+        parts.append(f"robot joints {robot['joint_deg']:.4f} deg")
+    if "flange_position_rms_mm" in robot:
+        parts.append(f"flange {robot['flange_position_rms_mm']:.3f} mm RMS")
+    if parts:
+        lines.append("  estimated noise: " + ", ".join(parts))
+    return lines

@@ -79,9 +79,11 @@ def mock_spec(config: StationConfig):
     from ..mocks.station import MockStationSpec
 
     m = config.mock
+    zone_tcp = tuple(config.camera.nominal_mount[0]) if config.cell.world_zones else None
     return MockStationSpec(protocol=m.protocol, board=config.target, kinematic_error_mm=m.kinematic_error_mm,
                            kinematic_error_deg=m.kinematic_error_deg, time_scale=m.time_scale, seed=m.seed,
-                           idle_timeout_s=config.controller.idle_timeout_s, write_key=config.controller.write_key)
+                           idle_timeout_s=config.controller.idle_timeout_s, write_key=config.controller.write_key,
+                           cell=config.cell.model(), zone_tcp_mm=zone_tcp)
 
 
 #: What every output says when the embedded mock station is in use.

@@ -13,6 +13,7 @@ import handeye.calibration.solve as solve
 import handeye.station.assessment as assessment_module
 import handeye.station.quality as quality
 from handeye.calibration.session import create_session, write_posture, write_truth
+from handeye.calibration.solve import DEFAULT_METHOD
 from handeye.calibration.synthetic import NoiseConfig, sample_session, truth_dict
 from handeye.station.assessment import COMPARISON_METHODS, assess
 from handeye.station.calibrate import calibrate_session_folder
@@ -49,7 +50,9 @@ def _forbid(monkeypatch, *targets):
 
 def test_presenters_only_format_the_assessment(session_path, tmp_path, monkeypatch):
     assessed = assess(calibrate_session_folder(session_path), methods=COMPARISON_METHODS)
-    assert assessed.verdict.passed and [r["method"] for r in assessed.comparison] == list(COMPARISON_METHODS)
+    # the comparison holds the listed methods and the result's own (the default, solved once, not again)
+    methods = [r["method"] for r in assessed.comparison]
+    assert assessed.verdict.passed and sorted(methods) == sorted({*COMPARISON_METHODS, assessed.result.method})
     _forbid(monkeypatch, (solve, "calibrate"), (solve, "_calibrate"), (quality, "verdict"), (quality, "quality_figures"),
             (quality_words, "result_d_org"), (quality_words, "rotation_axis_coverage"),
             (quality_words, "hand_axis_coverage"), (metrics, "fixed_points"), (metrics, "d_org"),
@@ -82,7 +85,8 @@ def test_calibrate_with_report_and_json_assesses_once_and_solves_each_method_onc
         _count(monkeypatch, module, name, calls)
     out = tmp_path / "r.json"
     assert main(["calibrate", str(session_path), "--report", str(tmp_path / "r.html"), "--json", str(out)]) == 0
-    assert calls == {"_calibrate": len(COMPARISON_METHODS), "assess": 1, "quality_figures": 1}
+    # each comparison method solved once, and the default once (it is not one of the comparison's)
+    assert calls == {"_calibrate": len({*COMPARISON_METHODS, DEFAULT_METHOD}), "assess": 1, "quality_figures": 1}
     printed = capsys.readouterr().out
     data = json.loads(out.read_text())
     assert data["verdict"]["passed"] and "verdict: PASS (10 of 10 checks)" in printed

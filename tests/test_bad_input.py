@@ -343,7 +343,9 @@ def test_solver_failures_inside_numpy_become_one_line(session, capsys):
     with pytest.raises(CalibrationError, match=r"^the tsai solver failed on these data \(.*\); check the session's values"):
         calibrate(problem, "tsai")
     with pytest.raises(CalibrationError, match=r"^the robust solver failed on these data"):
-        calibrate(problem)
+        calibrate(problem, "robust")
+    with pytest.raises(CalibrationError, match=r"^the ml solver failed on these data"):
+        calibrate(problem)  # the default
 
 
 def test_a_solver_returning_nan_is_not_a_result(session, monkeypatch):
@@ -404,11 +406,19 @@ def test_calibrate_json_permission_denied_leaves_nothing(session, tmp_path, caps
 ])
 def test_output_folders_below_a_file(argv, a_file, tmp_path, capsys):
     source = tmp_path / "poses.json"  # import reads (and checks) everything before it writes
-    rotations = Rotation.from_rotvec(np.random.default_rng(1).normal(scale=0.5, size=(6, 3))).as_quat(scalar_first=True)
-    source.write_text(json.dumps({"units": "mm", "postures": [
-        {"tool0_in_base": {"position": [800.0, 20.0 * k, 900.0], "quaternion": list(q)},
-         "target_in_camera": {"position": [10.0, 5.0 * k, 950.0], "quaternion": [1, 0, 0, 0]}}
-        for k, q in enumerate(rotations)]}))
+    rotations = Rotation.from_rotvec(np.random.default_rng(1).normal(scale=0.5, size=(6, 3)))
+    mount = np.eye(4)
+    mount[:3, 3] = [60.0, -40.0, 90.0]  # a consistent scene: the board fixed in the base, the camera on the flange
+    board = np.eye(4)
+    board[:3, 3] = [1500.0, 0.0, 300.0]
+    postures = []
+    for k, rotation in enumerate(rotations):
+        flange = np.eye(4)
+        flange[:3, :3], flange[:3, 3] = rotation.as_matrix(), [800.0, 20.0 * k, 900.0]
+        target = np.linalg.inv(flange @ mount) @ board
+        postures.append({"tool0_in_base": {"position": flange[:3, 3].tolist(), "quaternion": list(rotation.as_quat(scalar_first=True))},
+                         "target_in_camera": {"matrix": target.tolist()}})
+    source.write_text(json.dumps({"units": "mm", "setup": "eye_in_hand", "postures": postures}))
     argv = [a.format(below=a_file, source=source) for a in argv]
     line = one_line_error(capsys, argv, r"cannot (create folder|write) .*: .*plain_file is a file, not a folder; "
                                         r"choose a writable folder$")

@@ -32,6 +32,7 @@ from handeye.station.config import EXAMPLE_FILE, load_config
 from handeye.station.importers import (
     read_any,
     read_easy_handeye,
+    read_log,
     read_moveit,
     read_opencv,
     read_plain,
@@ -51,8 +52,9 @@ EASY_HANDEYE_CASES = 700
 VISP_CASES = 500
 OPENCV_CASES = 500
 DETECT_CASES = 800
+LOG_CASES = 700
 TOTAL_CASES = (SESSION_CASES + CONFIG_CASES + THRESHOLD_CASES + MOVEIT_CASES + PLAIN_CSV_CASES + PLAIN_JSON_CASES
-               + STREAM_CASES + EASY_HANDEYE_CASES + VISP_CASES + OPENCV_CASES + DETECT_CASES)
+               + STREAM_CASES + EASY_HANDEYE_CASES + VISP_CASES + OPENCV_CASES + DETECT_CASES + LOG_CASES)
 
 
 def fuzz_settings(cases: int):
@@ -548,10 +550,76 @@ def test_read_opencv_raises_only_handeye_errors():
     _importer_test(read_opencv, OPENCV_CASES, opencv_storage(), ".yml", options)
 
 
+def _pose_row(k: int, width: int) -> list:
+    """A plausible pose row of ``width`` numbers (flange ~1 m out, a unit quaternion, angles in degrees)."""
+    base = [800.0 + 10 * k, 20.0 * k, 900.0]
+    if width == 7:
+        return base + [0.0, 0.7071068, 0.7071068, 0.0]
+    if width == 16:
+        return sum(_matrix(0.8 + 0.01 * k, 0.02 * k, 0.9), [])
+    return base + [10.0 * k, -20.0, 170.0]
+
+
+@st.composite
+def log_text(draw):
+    """Text tables as the log reader meets them: widths of one or two poses, index columns, headers,
+    separators, blocks, odd values and matrix rows."""
+    width = draw(st.sampled_from([4, 6, 7, 12, 13, 14, 16, 19, 23, 32, 3, 5, 40]))
+    lines = []
+    if draw(st.booleans()):
+        lines.append(draw(st.sampled_from(["x y z a b c cam_x cam_y cam_z qx qy qz qw", "# robot poses", "index,x,y,z",
+                                           "t qw qx qy qz", "camera:"])))
+    separator = draw(st.sampled_from([",", " ", "\t", ";", "  "]))
+    for k in range(draw(st.integers(0, 8))):
+        row = (_pose_row(k, 7) + _pose_row(k, 6) + _pose_row(k, 16) + [1.0] * 40)[:width]
+        cells = [repr(v) for v in row]
+        if draw(st.integers(0, 4)) == 0 and cells:
+            cells[draw(st.integers(0, len(cells) - 1))] = draw(CSV_FIELDS)
+        lines.append(separator.join(cells))
+        if draw(st.integers(0, 6)) == 0:
+            lines.append(draw(st.sampled_from(["", "# camera", "posture 3:", "0 0 0 1"])))
+    return "\n".join(lines) + "\n"
+
+
+LOG_JSON = {"robot_poses": [_pose_row(k, 6) for k in range(4)],
+            "samples": [{"tool": {"position": [0.8, 0.1 * k, 0.9], "orientation": {"x": 0, "y": 0, "z": 0, "w": 1}},
+                         "marker": {"rvec": [0.1, 0.2, 3.0], "tvec": [0.0, 0.05 * k, 0.8]}} for k in range(3)],
+            "T_cam_target_0": {"rows": 4, "cols": 4, "data": sum(_matrix(), [])}}
+
+
+def test_read_log_raises_only_handeye_errors():
+    documents = st.one_of(log_text(), mutated(LOG_JSON, steps=4).map(json_text), mutated(LOG_JSON, steps=4).map(yaml_text),
+                          VALUES.map(json_text), st.text(max_size=200))
+    suffixes = st.sampled_from([".csv", ".txt", ".json", ".yaml", ""])
+    options = COMMON_OPTIONS.flatmap(lambda o: st.fixed_dictionaries({}, optional={
+        "euler": st.sampled_from(["kuka", "ZYX:deg", "robot:xyz", "camera=rotvec", "bogus", "robot:fanuc,camera:ros", ""]),
+        "quaternion_order": st.sampled_from(["wxyz", "xyzw", "zyxw"]),
+        "robot_pose": st.sampled_from(["flange_in_base", "base_in_flange", "bad"]),
+        "camera_pose": st.sampled_from(["target_in_camera", "camera_in_target", "bad"]),
+    }).map(lambda q: {**o, **q}))
+
+    def check(ran):
+        @fuzz_settings(LOG_CASES)
+        @given(KINDS, file_bodies(documents), suffixes, options, st.booleans(), file_bodies(log_text()))
+        def case(kind, body, suffix, kwargs, two_files, second):
+            ran.append(1)
+            with Scratch() as root:
+                put(root / f"input{suffix}", kind, body)
+                paths = root / f"input{suffix}"
+                if two_files:
+                    (root / "camera.csv").write_bytes(second)
+                    paths = [root / f"input{suffix}", root / "camera.csv"]
+                expect_only_handeye_errors(read_log, paths, **kwargs)
+
+        case()
+
+    run_counted(check, LOG_CASES)
+
+
 def test_read_any_detects_or_raises_only_handeye_errors():
     documents = st.one_of(mutated(MOVEIT).map(json_text), plain_csv(), mutated(PLAIN_JSON).map(json_text),
                           stream_csv(), mutated(EASY_HANDEYE).map(yaml_text), opencv_storage(),
-                          VALUES.map(yaml_text), st.text(max_size=200))
+                          VALUES.map(yaml_text), st.text(max_size=200), log_text())
     suffixes = st.sampled_from([".json", ".csv", ".yaml", ".yml", ".samples", ".txt", ""])
 
     def check(ran):
@@ -569,7 +637,7 @@ def test_read_any_detects_or_raises_only_handeye_errors():
 
 
 @pytest.mark.parametrize("reader", [read_session, load_config, load_thresholds, read_moveit, read_plain,
-                                    read_easy_handeye, read_opencv, read_any])
+                                    read_easy_handeye, read_opencv, read_any, read_log])
 def test_named_pipe_inputs_are_refused_without_hanging(tmp_path, reader):
     """The fuzzers draw named pipes among other inputs; this pins it for each reader on its own."""
     pipe = tmp_path / ("session" if reader is read_session else "input.yaml")

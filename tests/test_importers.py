@@ -389,7 +389,7 @@ def test_stream_tolerance_drops_far_pairs(tmp_path, eih):
 def test_units_option_overrides_detection(tmp_path, eih):
     path = write_plain_csv(tmp_path / "poses.csv", eih.tool0, eih.target)
     session = read_plain(path, units="m")  # wrong on purpose: values of hundreds declared metres
-    assert any("looks like mm" in n for n in session.extra["import"]["notes"])
+    assert any("looks like mm" in n for n in session.extra["import"]["warnings"])
     a = [p.tool0_in_base for p in session.postures]
     b = [p.target_in_camera for p in session.postures]
     findings = diagnostics.diagnose(a, b, session.setup)
@@ -680,7 +680,8 @@ def test_cli_import_and_refuse_overwrite(tmp_path, capsys, eth):
     assert code == 0
     assert "setup:    eye_in_hand, given" in stdout
     assert "removed:  truth.yaml of the replaced session" in stdout and not (out / "truth.yaml").exists()
-    assert stderr.startswith("handeye import: warning: the data fit eye_to_hand much better")
+    assert stderr.startswith("handeye import: warning: --setup eye_in_hand: the poses do not fit it (angle gap")
+    assert "while eye_to_hand, robot flange in base" in stderr and "read as given" in stderr
     assert read_session(out).setup == "eye_in_hand"
 
 

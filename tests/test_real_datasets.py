@@ -41,19 +41,54 @@ def _best_opencv(problem):
     return min(scores)
 
 
+# The robust pipeline (the default until the maximum-likelihood estimator) minimises the point
+# consistency these tests score; its assertions stay, under its name. The ML default weighs the
+# rotations as their noise says and is checked below for what it does: d_org within 1 % of the best
+# OpenCV method, the AX = XB rotation residual within 1.2 x the best classic, and the best or
+# within 1 % of the best held-out (5-fold) prediction (benchmarks/real_data/README.md).
+
+
 @pytest.mark.parametrize("name", ["moveit-calibration", "visp-eye-in-hand"])
-def test_default_at_least_as_consistent_as_opencv(name):
+def test_robust_at_least_as_consistent_as_opencv(name):
+    problem = _problem(name)
+    result = calibrate(problem, "robust")
+    assert _score(problem, result.x) <= _best_opencv(problem)
+
+
+def _rotation_residual_deg(problem, x):
+    from handeye.calibration.transforms import invert_transforms
+
+    i, j = np.triu_indices(problem.n, 1)
+    a = invert_transforms(problem.hand[i]) @ problem.hand[j]
+    b = problem.target2cam[i] @ invert_transforms(problem.target2cam[j])
+    m = np.swapaxes(a[:, :3, :3] @ x[:3, :3], 1, 2) @ (x[:3, :3] @ b[:, :3, :3])
+    return float(np.sqrt(np.mean(np.degrees(np.arccos(np.clip((np.trace(m, axis1=1, axis2=2) - 1) / 2, -1, 1))) ** 2)))
+
+
+@pytest.mark.parametrize("name", ["moveit-calibration", "visp-eye-in-hand"])
+def test_default_balances_point_consistency_and_the_rotation_residual(name):
+    from handeye.calibration.classic import CLASSIC_METHODS
+    from handeye.calibration.crossval import cross_validate
+
     problem = _problem(name)
     result = calibrate(problem)
-    assert _score(problem, result.x) <= _best_opencv(problem)
+    assert result.method == "ml"
+    assert _score(problem, result.x) <= 1.01 * _best_opencv(problem)
+    classic = {m: calibrate(problem, m).x for m in CLASSIC_METHODS if m != "andreff"}
+    assert _rotation_residual_deg(problem, result.x) <= 1.2 * min(_rotation_residual_deg(problem, x) for x in classic.values())
+    if name == "moveit-calibration":  # 50 postures: a held-out figure worth comparing (8 postures is noise)
+        ml = cross_validate(problem, lambda p: calibrate(p).x).mean_mm
+        others = [cross_validate(problem, lambda p, m=m: calibrate(p, m).x).mean_mm for m in ("robust", "mcb", "park", "daniilidis", "lu")]
+        assert ml <= 1.01 * min(others)
 
 
 def test_camodocal_outliers_found_and_default_beats_opencv():
     problem = _problem("camodocal-ar-tag")
-    result = calibrate(problem)
-    assert {21, 36} <= set(result.outliers)
-    assert len(result.outliers) <= 4
-    assert _score(problem, result.x) <= 0.8 * _best_opencv(problem)
+    for method in ("robust", None):
+        result = calibrate(problem, method)
+        assert {21, 36} <= set(result.outliers)
+        assert len(result.outliers) <= 4
+        assert _score(problem, result.x) <= 0.8 * _best_opencv(problem)
 
 
 def test_visp_reference_is_close():

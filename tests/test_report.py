@@ -104,7 +104,7 @@ def test_cli_report_is_self_contained_with_pose_verdict_and_every_plot(good_sess
     assert rotation_error_deg(reported, truth) < 0.05
 
     # every compared method is in the table; truth errors shown for a synthetic session
-    for method in ("robust (chosen)", "mcb", "mc", "park", "tsai", "daniilidis"):
+    for method in ("ml (chosen)", "robust", "mcb", "mc", "park", "tsai", "daniilidis"):
         assert f">{method}<" in page
     assert "truth error (mm)" in page
 
@@ -209,7 +209,7 @@ def test_verdict_follows_the_thresholds(good_session, tmp_path, capsys):
     assert {c.name for c in strict.failed} == {"min_inlier_postures", "max_sigma_translation_mm"}
     no_sigma = verdict(calibrate(problem, "mcb"), problem)
     sigma = next(c for c in no_sigma.checks if c.name == "max_sigma_translation_mm")
-    assert sigma.value is None and not sigma.passed and "robust" in sigma.advice
+    assert sigma.value is None and not sigma.passed and "without --method" in sigma.advice
 
     # a station config's quality section is read, the rest ignored
     config = tmp_path / "station.yaml"

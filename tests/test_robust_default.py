@@ -1,16 +1,20 @@
 import numpy as np
 
 from handeye.calibration.refine import angle_gaps_deg, refine_point_consistency, robust_outliers
-from handeye.calibration.solve import DEFAULT_METHOD, calibrate
+from handeye.calibration.solve import ROBUST_METHOD, calibrate
 from handeye.calibration.triplets import relative_motions
 
 from helpers import problem
 
 
-def test_default_is_the_robust_pipeline():
+# The robust pipeline was the default until the maximum-likelihood estimator (tests/test_ml_default.py);
+# these tests pin its behaviour under its name.
+
+
+def test_robust_is_the_robust_pipeline():
     prob, truth, _ = problem(12, sigma_cam=2.0, seed=1)
-    r = calibrate(prob, None, truth)
-    assert r.method == DEFAULT_METHOD == "robust"
+    r = calibrate(prob, "robust", truth)
+    assert r.method == ROBUST_METHOD == "robust"
     assert r.uncertainty is not None
     assert all(np.isfinite(r.uncertainty["translation_mm"])) and all(np.isfinite(r.uncertainty["rotation_deg"]))
     assert set(map(int, r.residuals_mm)) == set(map(int, prob.posture_ids))
@@ -46,7 +50,7 @@ def test_gross_outliers_are_found_and_excluded():
     prob, truth, _ = problem(20, sigma_cam=2.0, seed=3)
     bad = _corrupt(prob, [4, 13])
     plain = calibrate(bad, "mc", truth)
-    robust = calibrate(bad, None, truth)
+    robust = calibrate(bad, "robust", truth)
     assert robust.outliers == [4, 13]
     assert robust.residuals_mm[4] > 5 * np.median(list(robust.residuals_mm.values()))
     # excluding them restores an accurate answer; the all-postures solution is pulled away
@@ -56,7 +60,7 @@ def test_gross_outliers_are_found_and_excluded():
 
 def test_no_outliers_in_clean_data():
     prob, _, _ = problem(20, sigma_cam=3.0, seed=5)
-    assert calibrate(prob).outliers == []
+    assert calibrate(prob, "robust").outliers == []
 
 
 def test_at_least_as_accurate_as_mcb_on_camera_noise():
@@ -64,7 +68,7 @@ def test_at_least_as_accurate_as_mcb_on_camera_noise():
     for seed in range(4):
         prob, truth, _ = problem(20, sigma_cam=5.0, seed=40 + seed)
         a = calibrate(prob, "mcb", truth).truth_errors
-        b = calibrate(prob, None, truth).truth_errors
+        b = calibrate(prob, "robust", truth).truth_errors
         errs.append([a["rotation_error_deg"], a["translation_error_mm"], b["rotation_error_deg"], b["translation_error_mm"]])
     errs = np.median(np.array(errs), axis=0)
     assert errs[2] <= errs[0] * 1.05 and errs[3] <= errs[1] * 1.05
@@ -88,7 +92,7 @@ def test_angle_gap_invariant_flags_a_flipped_board():
                              pts, prob.posture_ids)
     gaps = angle_gaps_deg(relative_motions(flipped))
     assert np.argmax(gaps) == 6 and robust_outliers(gaps)[6]
-    assert calibrate(flipped).outliers == [6]
+    assert calibrate(flipped, "robust").outliers == [6]
 
 
 def test_uncertainty_is_calibrated_on_synthetic_data():
@@ -98,7 +102,7 @@ def test_uncertainty_is_calibrated_on_synthetic_data():
     z = []
     for seed in range(12):
         prob, truth, _ = problem(20, sigma_cam=5.0, seed=300 + seed)
-        r = calibrate(prob, None, truth)
+        r = calibrate(prob, "robust", truth)
         et = r.x[:3, 3] - truth["x"][:3, 3]
         er = np.degrees(Rotation.from_matrix(r.x[:3, :3] @ truth["x"][:3, :3].T).as_rotvec())
         z.append(np.concatenate([et / r.uncertainty["translation_mm"], er / r.uncertainty["rotation_deg"]]))

@@ -5,8 +5,11 @@ Run from the repository root:
     python benchmarks/real_data/bench_real.py
 
 For each set: d_org (eq. 22) of the same three target-frame points over ALL postures (the measure
-of issue 3), d_org over the postures the robust default keeps, the distance to the set's published
-reference where there is one (another tool's estimate, not truth), and the solve time.
+of issue 3), the AX = XB rotation residual in degrees (RMS over all posture pairs of the angle
+between R_A R_X and R_X R_B, eq. 16), the 5-fold posture cross-validation (calibration/crossval.py:
+held-out board points against the training postures' mean points; the same definition for every
+method), d_org over the postures the default keeps, the distance to the set's published reference
+where there is one (another tool's estimate, not truth), and the solve time.
 """
 
 from __future__ import annotations
@@ -17,11 +20,14 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from handeye.calibration.classic import CLASSIC_METHODS
+from handeye.calibration.crossval import cross_validate
 from handeye.calibration.errors import CalibrationError
 from handeye.calibration.metrics import d_org, fixed_points
-from handeye.calibration.solve import ALL_METHODS, calibrate, problem_from_session
-from handeye.station.opencv_reference import OPENCV_METHODS, opencv_available, solve_opencv
+from handeye.calibration.solve import ALL_METHODS, DEFAULT_METHOD, calibrate, problem_from_session
+from handeye.calibration.transforms import invert_transforms
 from handeye.station.importers import read_any
+from handeye.station.opencv_reference import OPENCV_METHODS, opencv_available, solve_opencv
 
 DATASETS = Path(__file__).resolve().parents[2].parent / "shared" / "datasets"
 SETS = {
@@ -44,6 +50,16 @@ def opencv_methods():
     return {f"opencv_{n}": (lambda problem, n=n: solve_opencv(problem.hand, problem.target2cam, n)) for n in OPENCV_METHODS}
 
 
+def rotation_residual_deg(problem, x) -> float:
+    """RMS over all posture pairs of the angle between ``R_A R_X`` and ``R_X R_B`` (eq. 16), degrees."""
+    i, j = np.triu_indices(problem.n, 1)
+    a = invert_transforms(problem.hand[i]) @ problem.hand[j]
+    b = problem.target2cam[i] @ invert_transforms(problem.target2cam[j])
+    m = np.swapaxes(a[:, :3, :3] @ x[:3, :3], 1, 2) @ (x[:3, :3] @ b[:, :3, :3])
+    angle = np.degrees(np.arccos(np.clip((np.trace(m, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)))
+    return float(np.sqrt(np.mean(angle**2)))
+
+
 def main():
     if not DATASETS.is_dir():
         sys.exit(f"no data sets at {DATASETS}")
@@ -51,43 +67,53 @@ def main():
     for name, (file, options) in SETS.items():
         session = read_any(DATASETS / name / file if file else DATASETS / name, **options)
         problem = problem_from_session(session)
-        robust = calibrate(problem)
-        keep = ~np.isin(problem.posture_ids, robust.outliers)
+        default = calibrate(problem)
+        keep = ~np.isin(problem.posture_ids, default.outliers)
         rows = []
         for method in list(ALL_METHODS) + list(ocv):
             if method == "mcy":
                 continue
+            if method in ocv:
+                solver, runtime = ocv[method], float("nan")
+            else:
+                solver = lambda p, m=method: calibrate(p, m).x  # noqa: E731
             try:
                 if method in ocv:
-                    x, runtime = ocv[method](problem), float("nan")
+                    x = solver(problem)
                 else:
                     r = calibrate(problem, method)
                     x, runtime = r.x, r.runtime_s
             except CalibrationError as exc:
-                rows.append((method, None, None, None, str(exc)))
+                rows.append((method, None, None, None, None, None, str(exc)))
                 continue
             if not np.all(np.isfinite(x)):
-                rows.append((method, None, None, None, "not finite"))
+                rows.append((method, None, None, None, None, None, "not finite"))
                 continue
             score_all = d_org(fixed_points(problem.hand, x, problem.compact.points))
             score_in = d_org(fixed_points(problem.hand[keep], x, problem.compact.points[keep]))
+            cv = cross_validate(problem, solver).mean_mm
             ref = ""
             if name in REFERENCES:
                 t, rot = REFERENCES[name]
                 angle = np.degrees((Rotation.from_matrix(x[:3, :3]) * rot.inv()).magnitude())
                 ref = f"{np.linalg.norm(x[:3, 3] - t):.2f} mm, {angle:.3f} deg"
-            rows.append((method, score_all, score_in, runtime, ref))
-        best_ocv = min((r[1] for r in rows if r[0].startswith("opencv") and r[1] is not None), default=np.nan)
-        print(f"\n### {name}: {problem.n} postures, {problem.setup}; robust outliers: {robust.outliers or 'none'}\n")
-        print("| method | d_org all postures (mm) | vs best OpenCV | d_org robust inliers (mm) | to published reference | solve (ms) |")
-        print("|---|---|---|---|---|---|")
-        for method, s_all, s_in, runtime, ref in rows:
+            rows.append((method, score_all, rotation_residual_deg(problem, x), cv, score_in, runtime, ref))
+        valid = [r for r in rows if r[1] is not None]
+        best_ocv = min((r[1] for r in valid if r[0].startswith("opencv")), default=np.nan)
+        best_classic = min((r[2] for r in valid if r[0] in CLASSIC_METHODS), default=np.nan)
+        best_cv = {m: min((r[3] for r in valid if r[0] != m), default=np.nan) for m in (r[0] for r in valid)}
+        print(f"\n### {name}: {problem.n} postures, {problem.setup}; {DEFAULT_METHOD} outliers: {default.outliers or 'none'}\n")
+        print("| method | d_org all postures (mm) | vs best OpenCV | AX=XB rotation residual (deg) | vs best classic "
+              "| 5-fold CV (mm) | vs best other | d_org default's inliers (mm) | to published reference | solve (ms) |")
+        print("|---|---|---|---|---|---|---|---|---|---|")
+        for method, s_all, rot_res, cv, s_in, runtime, ref in rows:
             if s_all is None:
-                print(f"| {method} | - | - | - | {ref} | - |")
+                print(f"| {method} | - | - | - | - | - | - | - | {ref} | - |")
                 continue
             ms = "-" if np.isnan(runtime) else f"{1000 * runtime:.1f}"
-            bold = "**" if method == "robust" else ""
-            print(f"| {bold}{method}{bold} | {s_all:.3f} | {s_all / best_ocv:.2f} | {s_in:.3f} | {ref} | {ms} |")
+            bold = "**" if method == DEFAULT_METHOD else ""
+            print(f"| {bold}{method}{bold} | {s_all:.3f} | {s_all / best_ocv:.3f} | {rot_res:.4f} | {rot_res / best_classic:.2f} "
+                  f"| {cv:.3f} | {cv / best_cv[method]:.3f} | {s_in:.3f} | {ref} | {ms} |")
 
 
 if __name__ == "__main__":

@@ -14,6 +14,7 @@ import numpy as np
 
 from ...calibration.transforms import transform_from_pose
 from ...rapid.interpreter import MotionBinding, RapidFatalError
+from ..robot import ZoneViolation
 
 __all__ = ["ArmBinding", "zone_violation", "PATH_SAMPLES"]
 
@@ -95,7 +96,9 @@ class ArmBinding(MotionBinding):
         self._check_zones(target, tool)
         try:
             self.robot.start_move(target, posture=self._posture(target))
-        except ValueError as exc:
+        except (ValueError, ZoneViolation) as exc:
+            # outside the joint limits, or the path would enter a volume of the simulated cell: the
+            # controller's motion supervision stops the program (with the reason) before the arm moves
             raise RapidFatalError(f"MoveAbsJ: {exc}") from None
         while self.robot.is_moving:
             task.idle(max(min(self.robot.time_to_arrival(), 0.05), 0.0005))

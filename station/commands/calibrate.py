@@ -8,8 +8,13 @@ HELP = "solve a session for the camera pose (cam2tool0, or cam2base eye-to-hand)
 
 EPILOG = """\
 Methods (--method); without it the recommended default runs:
-  robust  (default) mcb, then outlier postures detected and excluded, a robust refinement of the
-          point consistency over the inliers, and a one-sigma uncertainty of the pose
+  ml      (default) maximum likelihood with errors in variables: camera corners weighted by their
+          stereo covariance, robot poses corrected with a prior from the joint noise (and the arm's
+          kinematic deviations when a likelihood-ratio test finds them), noise levels estimated from
+          the data, outlier postures excluded, a one-sigma uncertainty and a 5-fold cross-validation
+          of the held-out board points (calibration/eiv.py)
+  robust  mcb, then outlier postures detected and excluded, a robust refinement of the point
+          consistency over the inliers, and a one-sigma uncertainty (the default before ml)
 The paper's variants (Deniz & Cakir):
   mc    all postures at once (Horn least squares over every pair; no selection)
   mcb   best triplet by back-projection d_back, eq. 23 (mean distance between the same board point
@@ -34,8 +39,8 @@ sessions are flagged in the text and the HTML report: they are not a calibration
 
 --report [FILE] also writes the calibration report: one self-contained HTML file (plots embedded,
 no network needed) with a PASS/FAIL verdict against the quality thresholds, the tframe literal,
-uncertainty, outliers, per-posture residuals, rotation-axis coverage, a comparison with the methods
-robust, mcb, mc, park, tsai and daniilidis, and the repeatability of the board corners in base.
+uncertainty and cross-validated accuracy, outliers, per-posture residuals, rotation-axis coverage, a
+comparison with other methods, and the repeatability of the board corners in base.
 Without FILE it is SESSION/report.html (then put --report after SESSION). The verdict uses the
 default thresholds, or those of --thresholds FILE.yaml (lines 'key: number', or a station config's
 'quality:' section; a commented example with the defaults: station/quality_thresholds.yaml); keys:
@@ -93,7 +98,10 @@ def run(args) -> int:
         from ...calibration.errors import HandEyeError
 
         raise HandEyeError(f"cannot write the report {report_path}: folder {report_path.parent} does not exist")
-    outcome = calibrate_session_folder(args.session, args.method, args.units)
+    from ..progress import delayed_progress
+
+    with delayed_progress("calibrate") as update:  # shown only when solving takes over a second
+        outcome = calibrate_session_folder(args.session, args.method, args.units, progress=update)
     assessment = assess(outcome, thresholds, judge=wants_report or bool(args.thresholds),
                         methods=COMPARISON_METHODS if wants_report else ())
     written = None

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-HELP = "visit the planned postures, measure the board at each, and write the session (resumes)"
+HELP = "visit the planned postures (or the operator's, --guided), measure the board at each, write the session (resumes)"
 
 EPILOG = """\
 A new session: the robot must stand where the camera sees the whole board (about 0.9 m away; the
@@ -14,6 +14,24 @@ all directions, ordered for short moves), scored, and the RAPID program is writt
 Then, posture by posture: move (MoveAbsJ fine), read joints and flange pose (checked against the
 kinematics), grab, triangulate, judge quality (retry or skip with the reason), write the posture
 file atomically, acknowledge.
+
+The plan keeps clear of the cell (the config's cell section: keep-out volumes, the floor, what the
+flange carries, the board's stand): every posture and every move between two postures, sampled
+along the joint-interpolated path MoveAbsJ runs, keeps links 4-6 and the carried bodies
+cell.margin_mm away; postures or moves that do not are replaced or reordered, and the plan line says
+how many were rejected and why. A start posture inside (or within the margin of) a volume is
+refused. SESSION/preview.png shows the cell from above and from the side with the flange path and
+the numbered postures; --plan-only writes the plan, the preview and the RAPID program and stops.
+At a real station the first move waits for your yes (or --yes, for scripts); the mock says it moves
+without asking.
+
+--guided: for cells that cannot run the automatic program. Jog the robot with the pendant; each time
+it rests (guided.still_s) somewhere new with the board in view, the posture is captured, and the
+command says what is still missing (postures, rotation-axis spread and which way to turn next,
+relative rotation angles, distance spread, where in the image the board has not been) and when the
+set is good enough for the verdict's thresholds. Stop with Ctrl-C; the same command resumes. The
+controller only answers joint and pose reads (its link module must run while you jog: on a real
+IRC5 that needs the link in a background task, see the README's known limits).
 
 Interrupted (Ctrl-C, kill, lost link)? Run the same command again: it resumes, and every posture
 ends up on disk exactly once.
@@ -30,7 +48,9 @@ records that it came from a mock station.
 
 Examples:
   handeye capture --mock --session cal_2026_11_21
-  handeye capture --config station.yaml --session cal_2026_11_21
+  handeye capture --config station.yaml --session cal_2026_11_21 --plan-only   # look at preview.png
+  handeye capture --config station.yaml --session cal_2026_11_21               # asks, then moves
+  handeye capture --config station.yaml --session cal_2026_11_22 --guided      # you jog, it captures
   handeye calibrate cal_2026_11_21 --report
 """
 
@@ -42,7 +62,26 @@ def add_parser(sub):
     p.add_argument("--mock", action="store_true", help="use the embedded mock robot and camera")
     p.add_argument("--session", required=True, metavar="DIR", help="session folder (created, or resumed)")
     p.add_argument("--postures", type=int, help="number of postures to plan (default: the config's, 30)")
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument("--plan-only", action="store_true", help="plan, write the preview and the RAPID program; move nothing")
+    mode.add_argument("--guided", action="store_true", help="the operator jogs; capture whenever the arm rests somewhere new")
+    p.add_argument("--yes", action="store_true", help="move without asking (scripts; a real station asks otherwise)")
     return p
+
+
+def _ask(question: str) -> bool:
+    """The operator's yes at the terminal."""
+    answer = input(f"{question} [y/N] ")
+    return answer.strip().lower() in ("y", "yes")
+
+
+def _confirmation(args):
+    """How the first move is confirmed: --yes, a prompt at a terminal, or nothing (the capture refuses)."""
+    import sys
+
+    if args.yes:
+        return lambda question: True
+    return _ask if sys.stdin is not None and sys.stdin.isatty() else None
 
 
 def run(args) -> int:
@@ -69,12 +108,18 @@ def run(args) -> int:
         print(MOCK_BANNER, flush=True)
     elif config.is_rehearsal:
         print(rehearsal_banner(config), flush=True)
+    if args.guided:
+        return _run_guided(config, args, say)
     with open_station(config) as link, progress_bar("capture") as update:
         def on_posture(report):
             say(("  ok    " if report.ok else "  SKIP  ") + report.message + f"  ({report.elapsed_s:.1f} s)")
             update(report.k, report.total, f"posture {report.k}/{report.total}")
 
-        summary = capture(config, args.session, link, progress=say, on_posture=on_posture)
+        summary = capture(config, args.session, link, progress=say, on_posture=on_posture, plan_only=args.plan_only,
+                          confirm=_confirmation(args))
+    if args.plan_only:
+        say(f"next: look at {summary.session}/preview.png, then the same command without --plan-only")
+        return 0
     have = len(summary.captured) + len(summary.already)
     say(f"{have} of {summary.planned} postures in {summary.session} ({len(summary.captured)} this run, "
         f"{summary.duration_s:.0f} s)")
@@ -82,3 +127,20 @@ def run(args) -> int:
         say(f"skipped: {', '.join(map(str, summary.skipped))}: run capture again to retry them")
     say(f"next: handeye calibrate {summary.session} --report")
     return 0 if summary.complete or have >= 3 else 1
+
+
+def _run_guided(config, args, say) -> int:
+    from ..guided import guided_capture
+    from ..runtime import open_station
+
+    with open_station(config) as link:
+        try:
+            summary = guided_capture(config, args.session, link, progress=say,
+                                     on_posture=lambda report: say("  ok    " + report.message))
+        except KeyboardInterrupt:
+            say(f"stopped; the postures on disk stay in {args.session}: run the same command to add more")
+            return 0
+    say(f"{len(summary.captured)} postures captured this run ({summary.already} before); "
+        + ("good enough" if summary.good_enough else "still missing: " + "; ".join(m.line() for m in summary.missing)))
+    say(f"next: handeye calibrate {summary.session} --report")
+    return 0

@@ -13,7 +13,7 @@ What happens (about half a minute):
   2. the board is measured from the start posture, 30 postures are planned and scored, and the
      RAPID program is generated and loaded;
   3. each posture is visited, grabbed, triangulated and written to the session;
-  4. the session is calibrated (robust default), judged against the quality thresholds, and the
+  4. the session is calibrated (the default estimator), judged against the quality thresholds, and the
      HTML report is written;
   5. the camera frame is written into the robot's PERS tooldata, read back and compared;
   6. the recovered camera pose is compared with the hidden truth.
@@ -84,7 +84,7 @@ def _summary(r: dict) -> str:
         f"  error: {e['translation_error_mm']:.3f} mm, {e['rotation_error_deg']:.4f} deg   (target <= 0.5 mm, <= 0.05 deg)",
     ]
     if u:
-        lines.append("  one-sigma uncertainty (random errors): position " + ", ".join(f"{v:.3f}" for v in u["translation_mm"])
+        lines.append("  one-sigma uncertainty: position " + ", ".join(f"{v:.3f}" for v in u["translation_mm"])
                      + " mm; rotation " + ", ".join(f"{v:.4f}" for v in u["rotation_deg"]) + " deg")
     lines += [
         f"postures captured: {r['postures_captured']}; outliers: {r['outliers'] or 'none'}; verdict: "

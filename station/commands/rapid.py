@@ -16,6 +16,9 @@ Writes three modules to load together into the robot task:
   HeSerial.mod   the same protocol on a serial channel                              (protocol serial)
   HeIo.mod       I/O handshake for a Modbus TCP gateway (SetGO/SetDO/WaitDI)       (protocol modbus)
   HeTool.mod     PERS tooldata of the camera (identity frame until calibrated)
+  HeCell.mod     only with motion.speed_override_pct < 100 or cell.world_zones: true: VelSet, and
+                 the cell's keep-out volumes as world zones (World Zones option 608-1) on the
+                 camera's nominal TCP; main calls HeCellSetup first
   HeKey.sys      only with controller.write_key in --config: a system module holding the write
                  key (a secret) that tool writes need. Load it ONCE on the controller (system
                  modules stay loaded when the program modules are replaced); never copy it into
@@ -29,7 +32,8 @@ shape the RAPID program; all are optional, missing ones come from the built-in s
   controller: {protocol: socket, pc_address: 192.168.125.10, controller_address: auto,
                port: 1025, serial_channel: "sio1:", ack_timeout_s: 30, idle_timeout_s: 5,
                write_key: YOUR-SECRET-KEY}
-  motion: {speed_tcp_mm_s: 200, speed_ori_deg_s: 100}
+  motion: {speed_tcp_mm_s: 200, speed_ori_deg_s: 100, speed_override_pct: 100}
+  cell: {keep_out: [...], world_zones: false}      # see station/example_station.yaml
   tool: {name: tHeCamera, mass_kg: 1.0, cog_mm: [0, 0, 60]}
   postures: [[a1, a2, a3, a4, a5, a6], ...]        # controller axis angles, degrees (one per robot axis)
 controller_address auto binds to GetSysInfo(\\LanIp); a virtual controller needs 127.0.0.1.

@@ -3,19 +3,26 @@
 One module per format, each with ``read_<format>(path(s), **options) -> Session``; this package
 holds the registry and the format detection used by ``handeye import``.
 
-==============  =======================================================  ==============  ======
-format          files                                                     default setup   units
-==============  =======================================================  ==============  ======
-moveit          MoveIt Calibration ``pose_samples.json``                  eye_to_hand     m
-visp            folder of ViSP ``pose_fPe_<i>.yaml`` + ``pose_cPo_<i>``   eye_in_hand     m
-opencv          OpenCV FileStorage ``T1_<i>``/``T2_<i>`` (camodocal)       eye_to_hand     m
-stream          two time-stamped CSV streams (ETH layout)                 eye_in_hand     m
-plain           CSV / JSON of flange pose + board pose (documented here)  eye_in_hand     m|mm
-easy_handeye    easy_handeye2 ``.samples`` (YAML)                         from the file   m
-==============  =======================================================  ==============  ======
+==============  =======================================================  ==================  ======
+format          files                                                     what the file says  units
+==============  =======================================================  ==================  ======
+moveit          MoveIt Calibration ``pose_samples.json``                  T_base_eef,         m
+                                                                          T_cam_target
+visp            folder of ViSP ``pose_fPe_<i>.yaml`` + ``pose_cPo_<i>``   fPe/rPe, cPo        m
+opencv          OpenCV FileStorage ``T1_<i>``/``T2_<i>`` (camodocal)       T_base_ee,          m
+                                                                          T_cam_marker
+stream          two time-stamped CSV streams (ETH layout)                 hand in base,       m
+                                                                          camera in target
+plain           CSV / JSON of flange pose + board pose (documented here)  tool0 in base,      m|mm
+                                                                          target in camera;
+                                                                          eye_in_hand default
+easy_handeye    easy_handeye2 ``.samples`` (YAML)                         calibration_type    m
+log             any table, JSON or YAML of pose numbers                   (names, if any)     m|mm
+==============  =======================================================  ==================  ======
 
-"Default set-up" applies when neither ``setup=`` nor the file decides and the data do not decide
-clearly either (see ``common.build_session``); units are detected from the values unless given.
+Every reader hands the poses as the file holds them, with what the format says they are, to
+``common.build_session``, where ``inference.infer`` decides the reading (rotation convention,
+directions, set-up, units) from the data; what the file says breaks the ties the data leave.
 Every reader records how it decided in ``session.extra["import"]``.
 """
 
@@ -29,6 +36,7 @@ from ...calibration.errors import SessionError
 from ...calibration.files import read_file_bytes
 from ...calibration.session import Session
 from .easy_handeye import looks_like_easy_handeye, read_easy_handeye
+from .log import looks_like_log, read_log
 from .moveit import looks_like_moveit, read_moveit
 from .opencv_storage import looks_like_opencv, read_opencv
 from .plain import looks_like_plain_csv, looks_like_plain_json, read_plain
@@ -47,6 +55,7 @@ __all__ = [
     "read_stream",
     "read_plain",
     "read_easy_handeye",
+    "read_log",
 ]
 
 
@@ -63,22 +72,24 @@ class Importer:
 
 
 #: Options every reader takes.
-COMMON_OPTIONS = ("setup", "units", "board", "skip_invalid")
+COMMON_OPTIONS = ("setup", "units", "board", "skip_invalid", "robot_pose", "camera_pose")
 
 IMPORTERS = {
     "moveit": Importer("moveit", read_moveit, "MoveIt Calibration pose_samples.json ([T_base_eef, T_cam_target] pairs)",
-                       "eye_to_hand"),
+                       None),
     "visp": Importer("visp", read_visp, "ViSP pose vectors: folder of pose_fPe_<i>.yaml (or *_pose_rPe_<i>.yaml) + pose_cPo_<i>.yaml",
-                     "eye_in_hand", several_paths=True),
+                     None, ("tag_mm",), several_paths=True),
     "opencv": Importer("opencv", read_opencv, "OpenCV FileStorage pose pairs T1_<i> (robot) / T2_<i> (camera), camodocal layout",
-                       "eye_to_hand", ("robot_prefix", "camera_prefix")),
+                       None, ("robot_prefix", "camera_prefix")),
     "stream": Importer("stream", read_stream, "two time-stamped CSV pose streams (t,x,y,z,qx,qy,qz,qw), robot then camera",
-                       "eye_in_hand", ("quaternion_order", "camera_pose", "tolerance_s", "max_postures", "rest_mm_s",
+                       None, ("quaternion_order", "tolerance_s", "max_postures", "rest_mm_s",
                                        "rest_deg_s"), several_paths=True),
     "plain": Importer("plain", read_plain, "plain CSV/JSON, one posture per row: tool0 in base + target in camera",
                       "eye_in_hand", ("quaternion_order",)),
     "easy_handeye": Importer("easy_handeye", read_easy_handeye, "easy_handeye2 .samples (YAML robot/tracking transforms)",
                              None),
+    "log": Importer("log", read_log, "any log of pose numbers (CSV/TSV/text table, JSON, YAML; one or two files): "
+                    "conventions inferred from the data", None, ("euler", "quaternion_order"), several_paths=True),
 }
 FORMAT_NAMES = tuple(IMPORTERS)
 
@@ -115,7 +126,10 @@ def detect_format(paths) -> str:
     if len(paths) > 1:
         if all(p.is_file() and looks_like_visp(p) for p in paths):
             return "visp"
-        raise SessionError(f"several inputs are read only as two CSV streams or ViSP pose files; {_formats_hint()}")
+        if len(paths) == 2 and all(p.is_file() and looks_like_log(p, _head(p)) for p in paths):
+            return "log"
+        raise SessionError(f"several inputs are read as two CSV streams, two log files (robot, camera) or ViSP pose "
+                           f"files; {_formats_hint()}")
     path = paths[0]
     if path.is_dir():
         if looks_like_visp(path):
@@ -123,7 +137,11 @@ def detect_format(paths) -> str:
         csvs = [p for p in path.iterdir() if p.suffix.lower() == ".csv"]
         if len(csvs) == 2 and all(looks_like_stream(_head(p)) for p in csvs):
             return "stream"
-        raise SessionError(f"{path}: a folder without ViSP pose files or two CSV streams; {_formats_hint()}")
+        files = [p for p in path.iterdir() if p.is_file() and not p.name.startswith(".")]
+        if len(files) in (1, 2) and all(looks_like_log(p, _head(p)) for p in files):
+            return "log"
+        raise SessionError(f"{path}: a folder without ViSP pose files, two CSV streams or one or two logs; "
+                           f"{_formats_hint()}")
     head = _head(path)
     suffix = path.suffix.lower()
     if looks_like_visp(path):
@@ -143,6 +161,8 @@ def detect_format(paths) -> str:
     if looks_like_stream(head):
         raise SessionError(f"{path} looks like a time-stamped pose stream: give the robot stream and the camera stream "
                            f"(two files, or their folder)")
+    if looks_like_log(path, head):
+        return "log"
     raise SessionError(f"{path}: cannot tell the format from its content; {_formats_hint()}")
 
 
@@ -185,7 +205,7 @@ def read_any(paths, format: str | None = None, **options) -> Session:
         if len(paths) != 1:
             raise SessionError(f"{format} reads one file; got {len(paths)}")
         paths = paths[0]
-    if isinstance(paths, (list, tuple)) and len(paths) == 1 and format == "visp":
+    if isinstance(paths, (list, tuple)) and len(paths) == 1 and format in ("visp", "log"):
         paths = paths[0]
     session = importer.reader(paths, **given)
     session.extra["import"]["format_how"] = how

@@ -1,9 +1,12 @@
-"""What every importer shares: pose checks, unit and set-up resolution, building the session.
+"""What every importer shares: pose checks, building the session from the reading the data support.
 
-An importer reads its file(s) into two stacks of 4x4 poses in the file's own length unit (robot:
-``tool0_in_base``, camera: ``target_in_camera``), one label per pair naming where it came from
-(``entry 12``, ``pose_fPe_3.yaml``, ``line 40``), and hands them to :func:`build_session`, which
-converts to millimetres, chooses the set-up and records how everything was decided in
+An importer reads its file(s) into two stacks of 4x4 poses in the file's own length unit and
+direction (with what the format says they are: the flange in the base or the base in the flange,
+the board in the camera or the camera in the board), or, for a log whose convention is not known,
+every possible reading of each side (``inference.Side``); one label per pair names where it came
+from (``entry 12``, ``pose_fPe_3.yaml``, ``line 40``). :func:`build_session` lets
+``inference.infer`` choose the reading (units, directions, set-up, rotation convention), converts
+to millimetres, flange in base and board in camera, and records how everything was decided in
 ``session.extra["import"]`` (written to ``session.yaml``, so a session says where it came from).
 """
 
@@ -17,11 +20,11 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ...calibration.compact_points import BoardGeometry
-from ...calibration.diagnostics import DiagnosticLimits, hand_eye_fit, setup_rotation_residuals
 from ...calibration.errors import SessionError, brief
 from ...calibration.files import read_text_file
 from ...calibration.problem import SETUPS
 from ...calibration.session import MAX_LENGTH_MM, MAX_LENGTH_WORDS, Posture, Session
+from .inference import METRES_BELOW, Constraints, Side, SideReading, infer
 
 __all__ = [
     "UNITS",
@@ -37,6 +40,7 @@ __all__ = [
     "check_units",
     "check_quaternion_order",
     "build_session",
+    "quaternion_side",
     "read_text",
     "parse_json",
     "EntryErrors",
@@ -44,10 +48,6 @@ __all__ = [
 
 UNITS = ("m", "mm")
 QUATERNION_ORDERS = ("wxyz", "xyzw")
-#: A median translation length below this (in the file's numbers) is read as metres, above as mm:
-#: a flange 20 m from the base or a board 20 m from the camera is as implausible as one 20 mm away.
-METRES_BELOW = 20.0
-_SCALE = {"m": 1000.0, "mm": 1.0}
 #: Largest accepted deviation of a rotation matrix from orthonormal, and of a quaternion's norm from 1.
 ROTATION_TOLERANCE = 1e-3
 
@@ -203,58 +203,95 @@ def detect_unit(poses) -> tuple[str, float]:
     return ("m" if median < METRES_BELOW else "mm"), median
 
 
-def _resolve_units(robot, camera, units, documented: str | None, notes: list) -> dict:
-    out = {}
-    medians = {}
-    for part, poses in (("robot", robot), ("camera", camera)):
-        guess, median = detect_unit(poses)
-        medians[part] = median
-        if units is not None:
-            out[part] = units
-            if guess != units:
-                notes.append(f"{part} translations have a median length of {median:.4g}, which looks like {guess}, "
-                             f"but {units} was given: read as {units}")
-        else:
-            out[part] = guess
-            if documented is not None and guess != documented:
-                notes.append(f"{part} translations have a median length of {median:.4g}: read as {guess} although "
-                             f"this format is documented in {documented} (pass --units to force)")
+def _side(name: str, poses, words: str | None, declared_direction: str | None, declared_unit: str | None) -> Side:
+    """A side with one reading: the poses as a format documents them (or a :class:`Side` as it is)."""
+    if isinstance(poses, Side):
+        return poses
+    words = words or "4x4 matrix"
+    reading = SideReading("as written", words, words, np.asarray(poses, dtype=float).reshape(-1, 4, 4), declared=True)
+    return Side(name, [reading], declared_direction, declared_unit)
+
+
+def quaternion_side(name: str, positions, quaternions, declared_order: str | None, given_order: str | None,
+                    declared_direction: str | None, named: bool = False) -> Side:
+    """A side of position + quaternion rows, read in both component orders unless the names fix it.
+
+    Parameters
+    ----------
+    name : str
+        ``robot`` or ``camera``.
+    positions, quaternions : array-like, shape (n, 3) and (n, 4)
+        As the file holds them (unit norm already checked).
+    declared_order : str or None
+        The order the format documents (``wxyz`` or ``xyzw``).
+    given_order : str or None
+        ``--quaternion-order``: the only order allowed.
+    declared_direction : str or None
+    named : bool
+        The columns are named by component (``qw``, ``qx``, ...): ``declared_order`` is certain.
+    """
+    p = np.asarray(positions, dtype=float).reshape(-1, 3)
+    q = np.asarray(quaternions, dtype=float).reshape(-1, 4)
+    orders = [declared_order] if named else list(QUATERNION_ORDERS)
+    readings = []
+    for order in orders:
+        poses = np.tile(np.eye(4), (len(p), 1, 1))
+        if len(p):
+            poses[:, :3, :3] = Rotation.from_quat(q / np.linalg.norm(q, axis=1, keepdims=True),
+                                                  scalar_first=(order == "wxyz")).as_matrix()
+        poses[:, :3, 3] = p
+        words = f"quaternion ({', '.join(order)})" + (", by the column names" if named else "")
+        readings.append(SideReading(f"quaternion:{order}", words, f"quaternion {order}", poses,
+                                    declared=(order == declared_order), allowed=(named or given_order in (None, order))))
+    return Side(name, readings, declared_direction)
+
+
+def _units_record(inference, robot: Side, camera: Side, units, documented: str | None, notes: list) -> dict:
+    chosen = inference.chosen
+    medians = {"robot": float(np.median(np.linalg.norm(robot.readings[chosen.robot].poses[:, :3, 3], axis=1))),
+               "camera": float(np.median(np.linalg.norm(camera.readings[chosen.camera].poses[:, :3, 3], axis=1)))}
     lengths = f"median lengths: robot {medians['robot']:.4g}, camera {medians['camera']:.4g}"
-    out["how"] = f"given ({lengths})" if units is not None else f"detected from the values ({lengths})"
-    if units is None and out["robot"] != out["camera"]:
-        notes.append(f"robot poses read as {out['robot']} and board poses as {out['camera']} (each detected from its "
-                     f"values); pass --units to force one unit for both")
+    out = {"robot": chosen.units[0], "camera": chosen.units[1],
+           "how": f"given ({lengths})" if units is not None else f"detected from the values ({lengths})"}
+    if units is None:
+        for part, side in (("robot", robot), ("camera", camera)):
+            documented_here = side.declared_unit or documented
+            if documented_here is not None and out[part] != documented_here:
+                notes.append(f"{part} translations have a median length of {medians[part]:.4g}: read as {out[part]} "
+                             f"although this format is documented in {documented_here} (pass --units to force)")
+        if out["robot"] != out["camera"]:
+            notes.append(f"robot poses read as {out['robot']} and board poses as {out['camera']} (each detected from its "
+                         f"values); pass --units to force one unit for both")
     return out
 
 
-def _resolve_setup(robot_mm, camera_mm, setup, declared, default: str, notes: list) -> tuple[str, str]:
-    """Set-up from: the option, else the file's declaration, else the data when decisive, else the default.
-
-    Decisive: the rotation axes fit one set-up 3x better than the other, and the translations fit it
-    too (otherwise the rotations are probably read in a wrong convention and the checks say so).
-    """
+def _setup_how(inference, setup, declared, default: str | None) -> str:
+    """How the set-up was decided, in words (``given``, ``declared in the file``, ``detected from the data ...``)."""
     if setup is not None:
-        return setup, "given"
-    if declared is not None:
-        return declared, "declared in the file"
-    limits = DiagnosticLimits()
-    if len(robot_mm) >= 3:
-        residuals = setup_rotation_residuals(robot_mm, camera_mm, limits)
-        fits = {k: v for k, v in residuals.items() if np.isfinite(v)}
-        if len(fits) == 2:
-            best = min(fits, key=fits.get)
-            other = next(k for k in fits if k != best)
-            fit = hand_eye_fit(robot_mm, camera_mm, best, limits)
-            translations_fit = fit["motion_mm"] > 0 and fit["translation_mm"] <= limits.translation_ratio * fit["motion_mm"]
-            if (fits[other] > limits.setup_ratio * max(fits[best], 0.05) and fits[other] > limits.gap_floor_deg
-                    and translations_fit):
-                how = (f"detected from the data: median rotation residual {fits[best]:.2f} deg as {best}, "
-                       f"{fits[other]:.2f} deg as {other}")
-                if best != default:
-                    notes.append(f"set-up {best} detected from the data although this format's default is {default}; "
-                                 f"pass --setup to force")
-                return best, how
-    return default, "the format's default; the data do not decide"
+        return "given"
+    if declared is not None and inference.setup == declared:
+        return "declared in the file"
+    scores = inference.record["scores"]
+    axis, translation = scores.get("axis_misfit_deg"), scores.get("translation_misfit")
+    figures = ("rotation-axis misfit " + ("-" if axis is None else f"{axis:.2f} deg") + ", translation misfit "
+               + ("-" if translation is None else f"{100 * translation:.1f} % of the motion"))
+    if any("declares" in d for d in inference.record.get("decided_by", [])):
+        what = "the file's pose directions" + (f" and the format's default set-up {default}" if default else "")
+        return f"as {what} declare; the data fit it ({figures}) and another reading as well (see the notes)"
+    how = f"detected from the data ({figures})"
+    if default is not None and inference.setup != default:
+        how += f"; this format's default is {default}"
+    return how
+
+
+def _check_lengths(where, labels, robot_mm, camera_mm) -> None:
+    """Refuse translations beyond the session format's limit (10 km), naming the entry."""
+    for part, poses in (("robot", robot_mm), ("camera", camera_mm)):
+        farthest = np.max(np.abs(poses[:, :3, 3]), axis=1)
+        k = int(np.argmax(farthest))
+        if not farthest[k] <= MAX_LENGTH_MM:
+            raise SessionError(f"{where}: {labels[k]}: the {part} translation reaches {farthest[k]:g} mm, beyond "
+                               f"{MAX_LENGTH_WORDS}: is the unit right? (--units)")
 
 
 def build_session(
@@ -266,7 +303,7 @@ def build_session(
     *,
     setup=None,
     declared_setup=None,
-    default_setup: str,
+    default_setup: str | None,
     units=None,
     documented_units: str | None = "m",
     board: BoardGeometry | None = None,
@@ -274,73 +311,89 @@ def build_session(
     entries_read: int | None = None,
     notes: list | None = None,
     details: dict | None = None,
+    robot_pose: str | None = None,
+    camera_pose: str | None = None,
+    robot_declared: str | None = "flange_in_base",
+    camera_declared: str | None = "target_in_camera",
+    robot_words: str | None = None,
+    camera_words: str | None = None,
+    conventions_given: str | None = None,
 ) -> Session:
-    """Convert pose pairs in file units to a session in mm with its import record.
+    """Choose the reading of pose pairs (``inference.infer``) and build a session in mm with its record.
 
     Parameters
     ----------
     format_name : str
     source : path or list of paths
-    robot, camera : array-like, shape (n, 4, 4)
-        ``tool0_in_base`` and ``target_in_camera`` in the file's length unit.
+    robot, camera : array-like, shape (n, 4, 4), or Side
+        The robot and camera poses as the file holds them (file length unit, file direction), or
+        every reading of them (:class:`~.inference.Side`, for logs whose convention is not known).
     labels : sequence of str, length n
         Where each pair came from (kept in each posture file as ``source``).
-    setup : str, optional
-        The user's choice (wins over everything).
+    setup, units, robot_pose, camera_pose : str, optional
+        The user's flags (win over everything; a contradiction with the data is a warning).
     declared_setup : str, optional
         What the file itself says.
-    default_setup : str
-        The format's documented default, used when the data do not decide.
-    units : str, optional
-        The user's choice (``m`` or ``mm``); else each side is detected from its values.
+    default_setup : str or None
+        The format's documented default (a declaration of the weakest kind).
     documented_units : str, optional
         The unit the format is documented in (a note is added when the values disagree).
+    robot_declared, camera_declared : str or None
+        What the format says the poses are (``flange_in_base`` / ``base_in_flange``,
+        ``target_in_camera`` / ``camera_in_target``); ``None``: not said.
+    robot_words, camera_words : str, optional
+        The rotation convention of poses given as arrays, in words.
+    conventions_given : str, optional
+        The rotation-convention flags as the user gave them (``--euler robot:kuka``), for warnings.
 
     Raises
     ------
     SessionError
-        When no pair is left.
+        When no pair is left, or the data cannot decide the reading (naming the flag that decides).
     """
     check_setup(setup)
     check_units(units)
     notes = list(notes or [])
     dropped = dropped or Dropped()
-    robot = np.asarray(robot, dtype=float).reshape(-1, 4, 4)
-    camera = np.asarray(camera, dtype=float).reshape(-1, 4, 4)
     where = source if isinstance(source, (str, Path)) else (source[0] if source else "input")
-    if len(robot) == 0:
+    robot_side = _side("robot", robot, robot_words, robot_declared, None)
+    camera_side = _side("camera", camera, camera_words, camera_declared, None)
+    n = len(robot_side.readings[0].poses)
+    if n == 0:
         why = "; ".join(f"{d['count']} {d['reason']}" for d in dropped.as_list())
         raise SessionError(f"{where}: no usable pose pair" + (f" ({why})" if why else ""))
-    unit_info = _resolve_units(robot, camera, units, documented_units, notes)
-    robot_mm = robot.copy()
-    camera_mm = camera.copy()
-    robot_mm[:, :3, 3] *= _SCALE[unit_info["robot"]]
-    camera_mm[:, :3, 3] *= _SCALE[unit_info["camera"]]
-    for part, poses in (("robot", robot_mm), ("camera", camera_mm)):
-        farthest = np.max(np.abs(poses[:, :3, 3]), axis=1)
-        k = int(np.argmax(farthest))
-        if not farthest[k] <= MAX_LENGTH_MM:
-            raise SessionError(f"{where}: {labels[k]}: the {part} translation reaches {farthest[k]:g} mm, beyond "
-                               f"{MAX_LENGTH_WORDS}: is the unit right? (--units)")
-    chosen, setup_how = _resolve_setup(robot_mm, camera_mm, setup, declared_setup, default_setup, notes)
+    constraints = Constraints(setup=setup, robot_pose=robot_pose, camera_pose=camera_pose, units=units,
+                              declared_setup=declared_setup, default_setup=default_setup,
+                              conventions_given=conventions_given)
+    try:
+        inference = infer(robot_side, camera_side, constraints)
+    except SessionError as exc:
+        raise SessionError(f"{where}: {exc}") from None
+    robot_mm, camera_mm = inference.robot_mm, inference.camera_mm
+    _check_lengths(where, labels, robot_mm, camera_mm)
+    unit_info = _units_record(inference, robot_side, camera_side, units, documented_units, notes)
+    notes += inference.notes
     postures = [
         Posture(index=k, tool0_in_base=robot_mm[k], target_in_camera=camera_mm[k], extra={"source": str(labels[k])})
-        for k in range(len(robot_mm))
+        for k in range(n)
     ]
     sources = [str(source)] if isinstance(source, (str, Path)) else [str(s) for s in source]
     record = {
         "format": format_name,
         "source": sources[0] if len(sources) == 1 else sources,
-        "units": {"robot": unit_info["robot"], "camera": unit_info["camera"], "how": unit_info["how"]},
-        "setup_how": setup_how,
-        "entries_read": int(entries_read if entries_read is not None else len(robot) + dropped.total),
+        "units": unit_info,
+        "setup_how": _setup_how(inference, setup, declared_setup, default_setup),
+        "conventions": {k: inference.record[k] for k in ("robot", "camera", "setup", "decided_by")},
+        "inference": {k: inference.record[k] for k in ("scores", "candidates")},
+        "entries_read": int(entries_read if entries_read is not None else n + dropped.total),
         "postures": len(postures),
         "dropped": dropped.as_list(),
         "notes": notes,
+        "warnings": list(inference.warnings),
     }
     if details:
         record.update(details)
-    return Session(setup=chosen, robot=None, target=board, postures=postures, extra={"import": record})
+    return Session(setup=inference.setup, robot=None, target=board, postures=postures, extra={"import": record})
 
 
 def read_text(path) -> str:

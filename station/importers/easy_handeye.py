@@ -14,9 +14,9 @@
 
 ``tracking`` is the marker (board) in the tracking/camera frame: ``target_in_camera``. ``robot``
 is a tf lookup: for ``eye_in_hand`` the effector in the robot base (``tool0_in_base``); for
-``eye_on_base`` easy_handeye2 looks it up the other way round (the base in the effector), so it is
-inverted here. When ``calibration_type`` is empty the robot sample is read as the effector in the
-base and the set-up comes from the data (else eye-in-hand).
+``eye_on_base`` easy_handeye2 looks it up the other way round (the base in the effector). That is
+what the file declares; the data decide when they can (``inference``). When ``calibration_type``
+is empty nothing is declared but the effector in the base, and the set-up comes from the data.
 """
 
 from __future__ import annotations
@@ -25,13 +25,14 @@ import numpy as np
 
 from ...calibration.errors import SessionError, brief
 from ...calibration.session import Session, parse_yaml
-from ...calibration.transforms import invert_transforms
 from .common import Dropped, EntryErrors, build_session, read_text, transform_from_quaternion
 
 __all__ = ["FORMAT", "DEFAULT_SETUP", "read_easy_handeye", "looks_like_easy_handeye"]
 
 FORMAT = "easy_handeye"
-DEFAULT_SETUP = "eye_in_hand"
+#: No default set-up: the files this tool writes declare what their poses are, and with the data
+#: that decides the set-up (``inference``); the set-up of the source's own example data is only a hint.
+DEFAULT_SETUP = None
 _TYPES = {"eye_in_hand": "eye_in_hand", "eye_on_hand": "eye_in_hand", "eye_on_base": "eye_to_hand",
           "eye_to_hand": "eye_to_hand"}
 
@@ -54,7 +55,8 @@ def _transform(value) -> np.ndarray:
     return transform_from_quaternion(position, quaternion, "xyzw")
 
 
-def read_easy_handeye(path, *, setup=None, units=None, board=None, skip_invalid: bool = False) -> Session:
+def read_easy_handeye(path, *, setup=None, units=None, board=None, skip_invalid: bool = False,
+                      robot_pose=None, camera_pose=None) -> Session:
     """Read an easy_handeye2 ``.samples`` file into a session (mm).
 
     Raises
@@ -89,15 +91,15 @@ def read_easy_handeye(path, *, setup=None, units=None, board=None, skip_invalid:
         except ValueError as exc:
             errors.bad(label, f"tracking {exc}")
             continue
-        robot.append(invert_transforms(a) if declared == "eye_to_hand" else a)
+        robot.append(a)
         camera.append(b)
         labels.append(label)
     notes = []
-    if declared == "eye_to_hand":
-        notes.append("eye_on_base samples hold the base in the effector frame: inverted to tool0_in_base")
     if setup is not None and declared is not None and setup != declared:
         notes.append(f"--setup {setup} overrides the file's calibration_type {kind}")
     return build_session(FORMAT, path, np.array(robot).reshape(-1, 4, 4), np.array(camera).reshape(-1, 4, 4), labels,
                          setup=setup, declared_setup=declared, default_setup=DEFAULT_SETUP, units=units,
                          documented_units="m", board=board, dropped=dropped, entries_read=len(data["samples"]),
-                         notes=notes)
+                         notes=notes, robot_pose=robot_pose, camera_pose=camera_pose,
+                         robot_declared="base_in_flange" if declared == "eye_to_hand" else "flange_in_base",
+                         robot_words="quaternion (x, y, z, w)", camera_words="quaternion (x, y, z, w)")

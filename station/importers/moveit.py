@@ -21,7 +21,9 @@ from .common import Dropped, EntryErrors, build_session, parse_json, read_text, 
 __all__ = ["FORMAT", "DEFAULT_SETUP", "read_moveit", "looks_like_moveit"]
 
 FORMAT = "moveit"
-DEFAULT_SETUP = "eye_to_hand"
+#: No default set-up: the files this tool writes declare what their poses are, and with the data
+#: that decides the set-up (``inference``); the set-up of the source's own example data is only a hint.
+DEFAULT_SETUP = None
 
 
 def looks_like_moveit(path, head: str) -> bool:
@@ -29,7 +31,8 @@ def looks_like_moveit(path, head: str) -> bool:
     return head.lstrip().replace(" ", "").replace("\n", "").replace("\r", "").replace("\t", "").startswith("[[[[")
 
 
-def read_moveit(path, *, setup=None, units=None, board=None, skip_invalid: bool = False) -> Session:
+def read_moveit(path, *, setup=None, units=None, board=None, skip_invalid: bool = False,
+                robot_pose=None, camera_pose=None) -> Session:
     """Read a MoveIt Calibration ``pose_samples.json`` into a session (mm).
 
     Parameters
@@ -76,4 +79,5 @@ def read_moveit(path, *, setup=None, units=None, board=None, skip_invalid: bool 
         labels.append(label)
     return build_session(FORMAT, path, np.array(robot).reshape(-1, 4, 4), np.array(camera).reshape(-1, 4, 4), labels,
                          setup=setup, default_setup=DEFAULT_SETUP, units=units, documented_units="m", board=board,
-                         dropped=dropped, entries_read=len(data))
+                         dropped=dropped, entries_read=len(data), robot_pose=robot_pose,
+                         camera_pose=camera_pose, robot_words="4x4 matrix (T_base_eef)", camera_words="4x4 matrix (T_cam_target)")

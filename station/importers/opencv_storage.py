@@ -32,7 +32,9 @@ from .common import Dropped, EntryErrors, build_session, read_text, rigid_transf
 __all__ = ["FORMAT", "DEFAULT_SETUP", "read_opencv", "looks_like_opencv"]
 
 FORMAT = "opencv"
-DEFAULT_SETUP = "eye_to_hand"
+#: No default set-up: the files this tool writes declare what their poses are, and with the data
+#: that decides the set-up (``inference``); the set-up of the source's own example data is only a hint.
+DEFAULT_SETUP = None
 _KEY = re.compile(r"^([A-Za-z][A-Za-z0-9]*)_(\d+)$")
 
 
@@ -56,7 +58,7 @@ def _cv_message(exc: BaseException) -> str:
 
 
 def read_opencv(path, *, setup=None, units=None, board=None, skip_invalid: bool = False,
-                robot_prefix: str = "T1", camera_prefix: str = "T2") -> Session:
+                robot_prefix: str = "T1", camera_prefix: str = "T2", robot_pose=None, camera_pose=None) -> Session:
     """Read OpenCV FileStorage pose pairs into a session (mm).
 
     Parameters
@@ -94,7 +96,8 @@ def read_opencv(path, *, setup=None, units=None, board=None, skip_invalid: bool 
         if not storage.isOpened():
             raise SessionError(f"{path}: not a readable OpenCV FileStorage file")
         try:
-            return _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, camera_prefix)
+            return _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, camera_prefix,
+                                  robot_pose, camera_pose)
         except (cv2.error, SystemError) as exc:
             raise SessionError(f"{path}: not a readable OpenCV FileStorage file ({_cv_message(exc)})") from None
         finally:
@@ -118,7 +121,8 @@ def _read_matrix(storage, name: str):
     return rigid_transform(matrix)
 
 
-def _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, camera_prefix) -> Session:
+def _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, camera_prefix, robot_pose=None,
+                camera_pose=None) -> Session:
     import cv2
 
     indices = set()
@@ -164,4 +168,6 @@ def _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, 
         notes.append(f"frameCount says {declared} but the file holds {len(indices)} numbered pairs")
     return build_session(FORMAT, path, np.array(robot).reshape(-1, 4, 4), np.array(camera).reshape(-1, 4, 4), labels,
                          setup=setup, default_setup=DEFAULT_SETUP, units=units, documented_units="m", board=board,
-                         dropped=dropped, entries_read=len(indices), notes=notes)
+                         dropped=dropped, entries_read=len(indices), notes=notes,
+                         robot_pose=robot_pose, camera_pose=camera_pose, robot_words=f"4x4 matrix ({robot_prefix}_<i>)",
+                         camera_words=f"4x4 matrix ({camera_prefix}_<i>)")

@@ -39,6 +39,7 @@ from ...calibration.problem import SETUPS
 from ...calibration.session import MAX_CORNERS, MAX_LENGTH_MM, Session
 from .common import (
     QUATERNION_ORDERS,
+    quaternion_side,
     UNITS,
     Dropped,
     EntryErrors,
@@ -74,15 +75,32 @@ def _quaternion_columns(names: set, part: str, order: str):
     named = [f"{part}_q{c}" for c in "wxyz"]
     numbered = [f"{part}_q{k}" for k in "1234"]
     if all(n in names for n in named):
-        return named, "wxyz"
+        return named, "wxyz", True
     if all(n in names for n in numbered):
-        return numbered, order
+        return numbered, order, False
     missing = [n for n in named if n not in names]
     raise SessionError(f"header lacks {', '.join(missing)} (or {part}_q1..{part}_q4)")
 
 
+def _csv_columns(names: list, quaternion_order: str | None, where: str) -> dict:
+    """``{part: (position columns, quaternion columns, order, named)}`` of a header, or a one-line error."""
+    name_set = set(names)
+    try:
+        columns = {}
+        for part in PARTS:
+            position = [f"{part}_{c}" for c in "xyz"]
+            missing = [n for n in position if n not in name_set]
+            if missing:
+                raise SessionError(f"header lacks {', '.join(missing)}")
+            quaternion, order, named = _quaternion_columns(name_set, part, quaternion_order or "wxyz")
+            columns[part] = ([names.index(n) for n in position], [names.index(n) for n in quaternion], order, named)
+    except SessionError as exc:
+        raise SessionError(f"{where}: {exc} (columns: {','.join(CSV_COLUMNS)})") from None
+    return columns
+
+
 def read_plain_csv(path, *, setup=None, units=None, board=None, skip_invalid: bool = False,
-                   quaternion_order: str = "wxyz") -> Session:
+                   quaternion_order: str | None = None, robot_pose=None, camera_pose=None) -> Session:
     """Read the plain CSV layout (module docstring) into a session (mm).
 
     Raises
@@ -90,7 +108,8 @@ def read_plain_csv(path, *, setup=None, units=None, board=None, skip_invalid: bo
     SessionError
         Naming the file and line at fault.
     """
-    check_quaternion_order(quaternion_order)
+    if quaternion_order is not None:
+        check_quaternion_order(quaternion_order)
     text = read_text(path)
     lines = [(k, ln) for k, ln in enumerate(text.splitlines(), start=1) if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
@@ -108,23 +127,14 @@ def read_plain_csv(path, *, setup=None, units=None, board=None, skip_invalid: bo
     if duplicates:
         raise SessionError(f"{path}: line {header_line}: column {duplicates[0]!r} appears twice")
     name_set = set(names)
-    try:
-        columns = {}
-        for part in PARTS:
-            position = [f"{part}_{c}" for c in "xyz"]
-            missing = [n for n in position if n not in name_set]
-            if missing:
-                raise SessionError(f"header lacks {', '.join(missing)}")
-            quaternion, order = _quaternion_columns(name_set, part, quaternion_order)
-            columns[part] = ([names.index(n) for n in position], [names.index(n) for n in quaternion], order)
-    except SessionError as exc:
-        raise SessionError(f"{path}: line {header_line}: {exc} (columns: {','.join(CSV_COLUMNS)})") from None
+    columns = _csv_columns(names, quaternion_order, f"{path}: line {header_line}")
     used = {i for part in columns.values() for group in part[:2] for i in group}
+    raw = {part: ([], []) for part in PARTS}
     index_col = names.index("index") if "index" in name_set else None
     ignored = [n for i, n in enumerate(names) if i not in used and i != index_col]
     dropped = Dropped()
     errors = EntryErrors(path, skip_invalid, dropped)
-    robot, camera, labels = [], [], []
+    labels = []
     rows = 0
     for number, line in lines[1:]:
         rows += 1
@@ -140,21 +150,28 @@ def read_plain_csv(path, *, setup=None, units=None, board=None, skip_invalid: bo
             continue
         poses = []
         for part in PARTS:
-            pos_cols, quat_cols, order = columns[part]
+            pos_cols, quat_cols, order, _ = columns[part]
             try:
-                poses.append(transform_from_quaternion([values[i] for i in pos_cols], [values[i] for i in quat_cols], order))
+                transform_from_quaternion([values[i] for i in pos_cols], [values[i] for i in quat_cols], order)
             except ValueError as exc:
                 errors.bad(label, f"{part} pose: {exc}")
                 break
+            poses.append(([values[i] for i in pos_cols], [values[i] for i in quat_cols]))
         if len(poses) != 2:
             continue
-        robot.append(poses[0])
-        camera.append(poses[1])
+        for part, (position, quaternion) in zip(PARTS, poses):
+            raw[part][0].append(position)
+            raw[part][1].append(quaternion)
         labels.append(label + (f" (index {fields[index_col].strip()})" if index_col is not None else ""))
     notes = [f"columns ignored: {', '.join(ignored)}"] if ignored else []
-    return build_session(FORMAT, path, np.array(robot).reshape(-1, 4, 4), np.array(camera).reshape(-1, 4, 4), labels,
+    sides = [quaternion_side(name, raw[part][0], raw[part][1], "wxyz" if not columns[part][3] else columns[part][2],
+                             quaternion_order, direction, named=columns[part][3])
+             for name, part, direction in (("robot", "tool0", "flange_in_base"), ("camera", "target", "target_in_camera"))]
+    return build_session(FORMAT, path, sides[0], sides[1], labels,
                          setup=setup, default_setup=DEFAULT_SETUP, units=units, documented_units=None, board=board,
-                         dropped=dropped, entries_read=rows, notes=notes)
+                         dropped=dropped, entries_read=rows, notes=notes, robot_pose=robot_pose,
+                         camera_pose=camera_pose,
+                         conventions_given=f"--quaternion-order {quaternion_order}" if quaternion_order else None)
 
 
 def _number(text: str):
@@ -195,7 +212,7 @@ def _json_board(value, path) -> BoardGeometry | None:
 
 
 def read_plain_json(path, *, setup=None, units=None, board=None, skip_invalid: bool = False,
-                    quaternion_order: str | None = None) -> Session:
+                    quaternion_order: str | None = None, robot_pose=None, camera_pose=None) -> Session:
     """Read the plain JSON layout (module docstring) into a session (mm).
 
     Options given here win over the file's own ``setup``, ``units`` and ``quaternion_order``.
@@ -247,7 +264,9 @@ def read_plain_json(path, *, setup=None, units=None, board=None, skip_invalid: b
     return build_session(FORMAT, path, np.array(robot).reshape(-1, 4, 4), np.array(camera).reshape(-1, 4, 4), labels,
                          setup=setup, declared_setup=declared_setup, default_setup=DEFAULT_SETUP,
                          units=units or file_units, documented_units=None, board=board, dropped=dropped,
-                         entries_read=len(data["postures"]))
+                         entries_read=len(data["postures"]), robot_pose=robot_pose, camera_pose=camera_pose,
+                         robot_words=f"position + quaternion ({', '.join(order)}) or 4x4 matrix",
+                         camera_words=f"position + quaternion ({', '.join(order)}) or 4x4 matrix")
 
 
 def read_plain(path, **options) -> Session:

@@ -6,9 +6,9 @@ Two files, one pose per line, no header (a first line that is not numbers is ski
 
 - the robot stream: the hand (flange) in the robot base, ``tool0_in_base`` (``*_base_link_*.csv``,
   ~50 Hz in the ETH set);
-- the camera stream: by default the CAMERA IN THE TARGET frame, as the ETH set stores it
-  (``*_target_*.csv``, ~30 Hz); ``target_in_camera`` is its inverse. ``camera_pose=
-  "target_in_camera"`` reads files that already hold the board in the camera frame.
+- the camera stream: the CAMERA IN THE TARGET frame, as the ETH set stores it (``*_target_*.csv``,
+  ~30 Hz); ``target_in_camera`` is its inverse. That is what the format declares; the data decide
+  when they can (``inference``), and ``camera_pose="target_in_camera"`` forces the other reading.
 
 Pairing: every camera sample takes the robot sample with the nearest stamp; pairs farther apart
 than ``tolerance_s`` (default 30 ms) are dropped. Optionally only pairs where the hand is at rest
@@ -27,7 +27,6 @@ from scipy.spatial.transform import Rotation
 
 from ...calibration.errors import SessionError
 from ...calibration.session import Session
-from ...calibration.transforms import invert_transforms
 from .common import (
     Dropped,
     EntryErrors,
@@ -43,7 +42,9 @@ __all__ = ["FORMAT", "DEFAULT_SETUP", "CAMERA_POSES", "read_stream", "read_pose_
            "looks_like_stream", "split_stream_files"]
 
 FORMAT = "stream"
-DEFAULT_SETUP = "eye_in_hand"
+#: No default set-up: the files this tool writes declare what their poses are, and with the data
+#: that decides the set-up (``inference``); the set-up of the source's own example data is only a hint.
+DEFAULT_SETUP = None
 CAMERA_POSES = ("camera_in_target", "target_in_camera")
 
 
@@ -214,7 +215,7 @@ def _slowest_per_window(candidates, camera_t, v, w, max_postures: int, dropped: 
 
 
 def read_stream(paths, *, setup=None, units=None, board=None, skip_invalid: bool = False,
-                quaternion_order: str = "xyzw", camera_pose: str = "camera_in_target",
+                quaternion_order: str = "xyzw", camera_pose: str | None = None, robot_pose: str | None = None,
                 tolerance_s: float = 0.03, max_postures: int = 40,
                 rest_mm_s: float | None = None, rest_deg_s: float | None = None) -> Session:
     """Pair two time-stamped pose streams into a session (mm).
@@ -232,8 +233,9 @@ def read_stream(paths, *, setup=None, units=None, board=None, skip_invalid: bool
         Drop malformed lines (reported) instead of stopping at the first.
     quaternion_order : str
         ``xyzw`` (scalar last, default, the ETH layout) or ``wxyz``.
-    camera_pose : str
-        ``camera_in_target`` (default, ETH) or ``target_in_camera``.
+    camera_pose, robot_pose : str, optional
+        Force what the streams hold (``camera_in_target`` / ``target_in_camera``, ``flange_in_base``
+        / ``base_in_flange``); default: decided from the data, else the ETH layout.
     tolerance_s : float
         Largest stamp difference of a pair.
     max_postures : int
@@ -247,7 +249,7 @@ def read_stream(paths, *, setup=None, units=None, board=None, skip_invalid: bool
     """
     check_units(units)
     check_quaternion_order(quaternion_order)
-    if camera_pose not in CAMERA_POSES:
+    if camera_pose is not None and camera_pose not in CAMERA_POSES:
         raise SessionError(f"camera pose must be one of {', '.join(CAMERA_POSES)}; got {camera_pose!r}")
     if not (tolerance_s > 0):
         raise SessionError(f"the pairing tolerance must be positive; got {tolerance_s}")
@@ -265,8 +267,6 @@ def read_stream(paths, *, setup=None, units=None, board=None, skip_invalid: bool
     robot_t, robot_poses = robot_t[order], robot_poses[order]
     order = np.argsort(camera_t, kind="stable")
     camera_t, camera_poses = camera_t[order], camera_poses[order]
-    if camera_pose == "camera_in_target":
-        camera_poses = invert_transforms(camera_poses)
     nearest, offset = pair_by_stamp(robot_t, camera_t, tolerance_s)
     keep = offset <= tolerance_s
     for k in np.flatnonzero(~keep):
@@ -279,9 +279,11 @@ def read_stream(paths, *, setup=None, units=None, board=None, skip_invalid: bool
     labels = [f"t={camera_t[k]:.4f} (robot t={robot_t[nearest[k]]:.4f}, {offset[k] * 1000:.1f} ms apart)"
               for k in candidates]
     details = {"pairing": {"tolerance_ms": tolerance_s * 1000.0, "robot_samples": int(len(robot_t)),
-                           "camera_samples": int(len(camera_t)), "camera_pose_in_file": camera_pose,
+                           "camera_samples": int(len(camera_t)),
                            "max_postures": int(max_postures)}}
     return build_session(FORMAT, [robot_path, camera_path], robot_poses[nearest[candidates]],
                          camera_poses[candidates], labels, setup=setup, default_setup=DEFAULT_SETUP, units=units,
                          documented_units="m", board=board, dropped=dropped, entries_read=len(camera_t),
-                         notes=notes, details=details)
+                         notes=notes, details=details, robot_pose=robot_pose, camera_pose=camera_pose,
+                         camera_declared="camera_in_target", robot_words=f"quaternion ({', '.join(quaternion_order)})",
+                         camera_words=f"quaternion ({', '.join(quaternion_order)})")

@@ -36,12 +36,15 @@ import numpy as np
 from ...calibration.errors import SessionError
 from ...calibration.session import Session, parse_yaml
 from .common import Dropped, EntryErrors, build_session, flat_numbers, read_text, transform_from_rotvec
-from .visp_images import find_images, measure_board_pose, read_chessboard_data, read_visp_camera
+from .visp_images import find_images, measure_board_pose, measure_tag_pose, read_chessboard_data, read_visp_camera
 
 __all__ = ["FORMAT", "DEFAULT_SETUP", "read_visp", "read_pose_vector", "looks_like_visp", "ROBOT_PATTERN", "CAMERA_PATTERN"]
 
 FORMAT = "visp"
-DEFAULT_SETUP = "eye_in_hand"
+THETA_U = "ViSP pose vector: rotation vector theta-u (axis x angle, radians)"
+#: No default set-up: the files this tool writes declare what their poses are, and with the data
+#: that decides the set-up (``inference``); the set-up of the source's own example data is only a hint.
+DEFAULT_SETUP = None
 #: ``pose_fPe_3.yaml``, ``franka_pose_rPe_3.yaml``, ``pose_w_P_ee-3.yaml`` (newer ViSP): end effector
 #: in the robot base.
 ROBOT_PATTERN = re.compile(r"(?:^|_)(?:pose_(?:fPe|rPe)_|(?:pose_)?w_P_ee-)(\d+)\.ya?ml$")
@@ -96,7 +99,8 @@ def _collect(paths) -> tuple[dict, dict, list]:
     return robot, camera, other
 
 
-def read_visp(path, *, setup=None, units=None, board=None, skip_invalid: bool = False) -> Session:
+def read_visp(path, *, setup=None, units=None, board=None, skip_invalid: bool = False, robot_pose=None,
+              camera_pose=None, tag_mm: float | None = None) -> Session:
     """Read ViSP pose files into a session (mm).
 
     Parameters
@@ -110,6 +114,11 @@ def read_visp(path, *, setup=None, units=None, board=None, skip_invalid: bool = 
     board : BoardGeometry, optional
     skip_invalid : bool
         Drop unreadable pose files (reported) instead of stopping at the first.
+    robot_pose, camera_pose : str, optional
+        Force what the pose files hold (default: decided from the data, else ViSP's ``rPe`` / ``cPo``).
+    tag_mm : float, optional
+        App folders with images: measure an AprilTag 36h11 of this size (the black square's side,
+        mm) instead of a chessboard.
 
     Raises
     ------
@@ -131,10 +140,13 @@ def read_visp(path, *, setup=None, units=None, board=None, skip_invalid: bool = 
     where = source if isinstance(source, Path) else (Path(files[0]).parent if files else "input")
     if not robot_files:
         raise SessionError(f"{where}: no robot pose files (pose_fPe_<i>.yaml or <robot>_pose_rPe_<i>.yaml)")
+    if tag_mm is not None and not (np.isfinite(tag_mm) and 0 < tag_mm <= 10000):
+        raise SessionError(f"--tag-mm must be the tag's side in mm (0 .. 10000); got {tag_mm}")
     if not camera_files:
         images = find_images(files)
         if images:
-            return _read_with_images(where, source, files, robot_files, images, setup, units, board, skip_invalid)
+            return _read_with_images(where, source, files, robot_files, images, setup, units, board, skip_invalid,
+                                    robot_pose, camera_pose, tag_mm)
         raise SessionError(
             f"{where}: robot poses ({len(robot_files)} files) but no board poses (pose_cPo_<i>.yaml) and no "
             f"images (<robot>_image-<i>.png) to measure them from")
@@ -164,22 +176,26 @@ def read_visp(path, *, setup=None, units=None, board=None, skip_invalid: bool = 
         labels.append(f"{robot_files[number].name} + {camera_files[number].name}")
     return build_session(FORMAT, source, np.array(robot).reshape(-1, 4, 4), np.array(camera).reshape(-1, 4, 4), labels,
                          setup=setup, default_setup=DEFAULT_SETUP, units=units, documented_units="m", board=board,
-                         dropped=dropped, entries_read=len(set(robot_files) | set(camera_files)))
+                         dropped=dropped, entries_read=len(set(robot_files) | set(camera_files)),
+                         robot_pose=robot_pose, camera_pose=camera_pose, robot_words=THETA_U, camera_words=THETA_U)
 
 
-def _read_with_images(where, source, files, robot_files, images, setup, units, board, skip_invalid) -> Session:
-    """Robot pose files + images: measure the board poses, then build the session."""
+def _read_with_images(where, source, files, robot_files, images, setup, units, board, skip_invalid, robot_pose=None,
+                      camera_pose=None, tag_mm=None) -> Session:
+    """Robot pose files + images: measure the board (chessboard or AprilTag) poses, then build the session."""
     xml = [p for p in files if p.suffix.lower() == ".xml"]
     if len(xml) != 1:
         raise SessionError(f"{where}: board poses must be measured from the images, which needs exactly one ViSP "
                            f"camera file (*.xml with px, py, u0, v0); found {len(xml)}")
     camera = read_visp_camera(xml[0])
-    if board is None or board.square_mm is None:
+    if tag_mm is None and (board is None or board.square_mm is None):
         data = [p for p in files if p.name == "chessboard-data.txt"]
         if not data:
-            raise SessionError(f"{where}: the board size is needed to measure its poses: pass --board NXxNY "
-                               f"--square-mm MM (or add ViSP's chessboard-data.txt)")
+            raise SessionError(f"{where}: the target's size is needed to measure its poses from the images: pass "
+                               f"--tag-mm MM (an AprilTag 36h11) or --board NXxNY --square-mm MM (a chessboard; or add "
+                               f"ViSP's chessboard-data.txt)")
         board = read_chessboard_data(data[0])
+    target = f"AprilTag 36h11 of {tag_mm:g} mm" if tag_mm is not None else "board"
     dropped = Dropped()
     errors = EntryErrors(where, skip_invalid, dropped)
     robot, measured, labels, rms = [], [], [], []
@@ -198,25 +214,32 @@ def _read_with_images(where, source, files, robot_files, images, setup, units, b
             errors.bad(robot_files[number].name, str(exc).split(": ", 1)[-1])
             continue
         try:
-            result = measure_board_pose(images[number], board, camera)
+            if tag_mm is not None:
+                result = measure_tag_pose(images[number], tag_mm, camera)
+            else:
+                result = measure_board_pose(images[number], board, camera)
         except ValueError as exc:
-            dropped.add(f"board not measured ({exc})", images[number].name)
+            dropped.add(f"{target.split(' of ')[0]} not measured ({exc})", images[number].name)
             continue
-        target = result["pose"].copy()
-        target[:3, 3] /= 1000.0  # metres, like ViSP's pose_cPo files
+        target_pose = result["pose"].copy()
+        target_pose[:3, 3] /= 1000.0  # metres, like ViSP's pose_cPo files
         robot.append(pose)
-        measured.append(target)
+        measured.append(target_pose)
         rms.append(result["rms_px"])
-        turned += result["turned"]
-        labels.append(f"{robot_files[number].name} + {images[number].name} (board measured, {result['rms_px']:.3f} px rms)")
-    notes = [f"board poses measured from {len(measured)} images with OpenCV (chessboard {board.corners[0]}x"
-             f"{board.corners[1]}, {board.square_mm:g} mm squares, intrinsics from {xml[0].name})"]
+        turned += result.get("turned", False)
+        labels.append(f"{robot_files[number].name} + {images[number].name} (measured, {result['rms_px']:.3f} px rms)")
+    what = (f"AprilTag 36h11, {tag_mm:g} mm" if tag_mm is not None
+            else f"chessboard {board.corners[0]}x{board.corners[1]}, {board.square_mm:g} mm squares")
+    notes = [f"{'tag' if tag_mm is not None else 'board'} poses measured from {len(measured)} images with OpenCV "
+             f"({what}, intrinsics from {xml[0].name})"]
     if turned:
         notes.append(f"{turned} detection(s) turned 180 deg to the conventions' board orientation")
     details = {"board_measurement": {"camera_file": str(xml[0]), "px": camera.px, "py": camera.py, "u0": camera.u0,
-                                     "v0": camera.v0, "kud": camera.kud,
+                                     "v0": camera.v0, "kud": camera.kud, "target": what,
                                      "max_rms_px": float(max(rms)) if rms else None}}
     return build_session(FORMAT, source, np.array(robot).reshape(-1, 4, 4), np.array(measured).reshape(-1, 4, 4),
                          labels, setup=setup, default_setup=DEFAULT_SETUP, units=units, documented_units="m",
-                         board=board, dropped=dropped, entries_read=len(set(robot_files) | set(images)),
-                         notes=notes, details=details)
+                         board=board if tag_mm is None else None, dropped=dropped,
+                         entries_read=len(set(robot_files) | set(images)), notes=notes, details=details,
+                         robot_pose=robot_pose, camera_pose=camera_pose, robot_words=THETA_U,
+                         camera_words=f"measured from the images ({what})")

@@ -27,7 +27,7 @@ from ...calibration.files import check_regular_file, read_file_bytes, read_text_
 from ...calibration.session import MAX_CORNERS, MAX_LENGTH_MM
 
 __all__ = ["IMAGE_PATTERN", "CameraIntrinsics", "read_visp_camera", "read_chessboard_data", "find_images",
-           "canonical_corner_order", "measure_board_pose"]
+           "canonical_corner_order", "measure_board_pose", "measure_tag_pose", "tag_corners"]
 
 #: ``franka_image-3.png``: the image of posture 3.
 IMAGE_PATTERN = re.compile(r"image-(\d+)\.(?:png|jpe?g|bmp|pgm|ppm|tiff?)$", re.IGNORECASE)
@@ -191,3 +191,59 @@ def measure_board_pose(image_path, board: BoardGeometry, camera: CameraIntrinsic
     pose[:3, :3] = cv2.Rodrigues(rvec)[0]
     pose[:3, 3] = tvec.ravel()
     return {"pose": pose, "rms_px": rms, "turned": bool(turned)}
+
+
+def tag_corners(size_mm: float) -> np.ndarray:
+    """The four outer corners of a square tag in its frame, in the order OpenCV's ArUco detector
+    returns them (clockwise from the top-left corner as printed).
+
+    The tag frame follows the conventions' target: origin at the tag centre, x to the right and y
+    down as printed, z = x x y into the tag (away from a camera that sees it).
+    """
+    h = size_mm / 2.0
+    return np.array([[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]])
+
+
+def measure_tag_pose(image_path, size_mm: float, camera: CameraIntrinsics, tag_id: int | None = None) -> dict:
+    """Pose of one AprilTag 36h11 (``target_in_camera``, mm) in an image, as ViSP's
+    ``visp-compute-apriltag-poses`` measures it (one tag per image; ``size_mm`` is the black square's side).
+
+    Returns
+    -------
+    dict
+        ``pose`` (4x4, mm), ``rms_px`` (reprojection RMS of the four corners), ``id`` (tag number).
+
+    Raises
+    ------
+    ValueError
+        Unreadable image, no tag, or several tags (and ``tag_id`` does not pick one).
+    """
+    import cv2
+
+    check_regular_file(image_path, "image", ValueError, max_bytes=None)
+    image = cv2.imread(str(image_path), cv2.IMREAD_GRAYSCALE)
+    if image is None:
+        raise ValueError("cannot read the image")
+    dictionary = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_APRILTAG_36h11)
+    parameters = cv2.aruco.DetectorParameters()
+    parameters.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_APRILTAG
+    corners, ids, _ = cv2.aruco.ArucoDetector(dictionary, parameters).detectMarkers(image)
+    if ids is None or len(ids) == 0:
+        raise ValueError("no AprilTag 36h11 found")
+    found = [(int(i), c.reshape(4, 2)) for i, c in zip(ids.ravel(), corners)]
+    if tag_id is not None:
+        found = [f for f in found if f[0] == tag_id]
+    if len(found) != 1:
+        raise ValueError(f"{len(found)} AprilTags found (ids {', '.join(str(f[0]) for f in found)}); one is needed")
+    number, points = found[0]
+    objects = tag_corners(size_mm)
+    ok, rvec, tvec = cv2.solvePnP(objects, points.astype(np.float64), camera.matrix(), camera.distortion(),
+                                  flags=cv2.SOLVEPNP_IPPE)
+    if not ok:
+        raise ValueError("solvePnP failed")
+    projected, _ = cv2.projectPoints(objects, rvec, tvec, camera.matrix(), camera.distortion())
+    rms = float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - points) ** 2, axis=1))))
+    pose = np.eye(4)
+    pose[:3, :3] = cv2.Rodrigues(rvec)[0]
+    pose[:3, 3] = tvec.ravel()
+    return {"pose": pose, "rms_px": rms, "id": number}

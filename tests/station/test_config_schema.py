@@ -90,7 +90,7 @@ def five_axis_robot(tmp_path):
     """A robot YAML with five axes (the IRB 1400 without its last wrist axis)."""
     robot = yaml.safe_load((EXAMPLE_FILE.parents[1] / "calibration" / "robots" / "irb1400.yaml").read_text())
     robot.update(name="FiveAxis", aliases=[], dh=robot["dh"][:5], joint_limits_deg=robot["joint_limits_deg"][:5],
-                 max_speed_deg_s=robot["max_speed_deg_s"][:5])
+                 max_speed_deg_s=robot["max_speed_deg_s"][:5], bodies=robot["bodies"][:2])  # no flange: no link 6
     robot.pop("home_tool0_in_base", None)
     path = tmp_path / "five_axis.yaml"
     path.write_text(yaml.safe_dump(robot))

@@ -89,7 +89,7 @@ def test_capture_calibrate_writeback_against_the_standalone_mock(tmp_path, capsy
     try:
         config = _config(tmp_path, protocol, link, mock_arm, 10)
         session = tmp_path / "s"
-        assert main(["capture", "--config", str(config), "--session", str(session)]) == 0
+        assert main(["capture", "--config", str(config), "--session", str(session), "--yes"]) == 0
         out = capsys.readouterr().out
         lines = [line for line in out.splitlines() if line.strip()]
         assert lines[0].startswith("MOCK: rehearsal") and mock_arm in lines[0]
