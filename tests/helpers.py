@@ -5,6 +5,7 @@ from __future__ import annotations
 from functools import lru_cache
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from handeye.calibration.solve import problem_from_session
@@ -54,6 +55,24 @@ class LinePeer:
     def close(self) -> None:
         self.file.close()
         self.sock.close()
+
+
+def flipped_board(prob, k: int):
+    """``prob`` with posture ``k``'s board points turned 180 deg about the board's normal (in place):
+    the points still fit a board, but the X-free angle invariant of AX = XB breaks at ``k``."""
+    from scipy.spatial.transform import Rotation
+
+    from handeye.calibration.compact_points import CompactPoints
+    from handeye.calibration.problem import HandEyeProblem
+
+    pts = prob.compact.points.copy()
+    centre = pts[k].mean(axis=0)
+    normal = np.cross(pts[k][1] - pts[k][0], pts[k][2] - pts[k][0])
+    flip = Rotation.from_rotvec(np.pi * normal / np.linalg.norm(normal)).as_matrix()
+    pts[k] = (pts[k] - centre) @ flip.T + centre
+    c = prob.compact
+    return HandEyeProblem(prob.setup, prob.hand, CompactPoints(pts, c.target_points, c.target2cam, c.plane_rms_mm),
+                          pts, prob.posture_ids)
 
 
 def assessed(problem, result, session_path="s", origin=None, **options):

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration.compact_points import CompactPoints, board_corners
+from handeye.calibration.compact_points import board_corners
 from handeye.calibration.crossval import SYSTEMATIC_RATIO, CrossValidation, cross_validate
 from handeye.calibration.eiv import angle_gaps_deg, observations, solve_eiv, varied_rotation_subset
 from handeye.calibration.kinematics import load_robot
@@ -27,14 +27,13 @@ from handeye.calibration.noise import (
     stereo_point_shape,
     twist_between,
 )
-from handeye.calibration.problem import HandEyeProblem
 from handeye.calibration.session import Posture, Session
 from handeye.calibration.solve import DEFAULT_METHOD, ML_METHOD, calibrate, problem_from_session
 from handeye.calibration.synthetic_poses import opencv_test_problem
 from handeye.calibration.transforms import invert_transforms
 from handeye.mocks.station import perturbed_robot
 
-from helpers import problem, scene
+from helpers import flipped_board, problem, scene
 from test_robust_default import _corrupt
 
 
@@ -109,14 +108,7 @@ def test_no_outliers_in_clean_data():
 
 def test_a_flipped_board_is_an_outlier():
     prob, _, _ = problem(12, sigma_cam=1.0, seed=2)
-    pts = prob.compact.points.copy()
-    centre = pts[6].mean(axis=0)
-    normal = np.cross(pts[6][1] - pts[6][0], pts[6][2] - pts[6][0])
-    flip = Rotation.from_rotvec(np.pi * normal / np.linalg.norm(normal)).as_matrix()
-    pts[6] = (pts[6] - centre) @ flip.T + centre
-    c = prob.compact
-    flipped = HandEyeProblem(prob.setup, prob.hand, CompactPoints(pts, c.target_points, c.target2cam, c.plane_rms_mm),
-                             pts, prob.posture_ids)
+    flipped = flipped_board(prob, 6)
     assert angle_gaps_deg(observations(flipped).hand, observations(flipped).board).argmax() == 6
     assert calibrate(flipped).outliers == [6]
 

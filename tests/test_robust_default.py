@@ -4,7 +4,7 @@ from handeye.calibration.refine import angle_gaps_deg, refine_point_consistency,
 from handeye.calibration.solve import ROBUST_METHOD, calibrate
 from handeye.calibration.triplets import relative_motions
 
-from helpers import problem
+from helpers import flipped_board, problem
 
 
 # The robust pipeline was the default until the maximum-likelihood estimator (tests/test_ml_default.py);
@@ -75,21 +75,9 @@ def test_at_least_as_accurate_as_mcb_on_camera_noise():
 
 
 def test_angle_gap_invariant_flags_a_flipped_board():
-    prob, _, _ = problem(12, sigma_cam=1.0, seed=2)
-    from scipy.spatial.transform import Rotation
-
     # flip posture 6's board by 180 deg about its normal: the X-free angle invariant breaks
-    pts = prob.compact.points.copy()
-    centre = pts[6].mean(axis=0)
-    normal = np.cross(pts[6][1] - pts[6][0], pts[6][2] - pts[6][0])
-    flip = Rotation.from_rotvec(np.pi * normal / np.linalg.norm(normal)).as_matrix()
-    pts[6] = (pts[6] - centre) @ flip.T + centre
-    from handeye.calibration.compact_points import CompactPoints
-    from handeye.calibration.problem import HandEyeProblem
-
-    c = prob.compact
-    flipped = HandEyeProblem(prob.setup, prob.hand, CompactPoints(pts, c.target_points, c.target2cam, c.plane_rms_mm),
-                             pts, prob.posture_ids)
+    prob, _, _ = problem(12, sigma_cam=1.0, seed=2)
+    flipped = flipped_board(prob, 6)
     gaps = angle_gaps_deg(relative_motions(flipped))
     assert np.argmax(gaps) == 6 and robust_outliers(gaps)[6]
     assert calibrate(flipped, "robust").outliers == [6]
