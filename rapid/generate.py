@@ -7,7 +7,8 @@ loaded together into the robot task:
   there, with ``MoveAbsJ ... fine`` at the configured speed), the program state;
 - a link module, by protocol: ``HeSocket`` (TCP server accepting only the PC's address),
   ``HeSerial`` (same line protocol on a serial channel) or ``HeIo`` (I/O handshake for a Modbus
-  gateway: ``SetGO``/``SetDO``/``WaitDI \\MaxTime``);
+  gateway: ``SetGO``/``SetDO``/``WaitDI \\MaxTime``) or ``HeRws`` (PERS data the PC reads and writes
+  through Robot Web Services);
 - ``HeTool`` : ``PERS tooldata`` of the camera (identity frame until calibrated).
 
 A station with a write key (``controller.write_key``) also gets ``HeKey.sys`` (:func:`render_key`):
@@ -68,6 +69,8 @@ IO_SIGNALS = (
 )
 #: Publishing period of HeIo's timer interrupt (joints, pose, heartbeat), seconds.
 IO_PUBLISH_S = 0.1
+#: PollRate of HeRws' WaitUntil (s): how soon the program sees a PERS value the PC wrote over RWS.
+RWS_POLL_S = 0.02  # RAPID accepts 0.01; the interpreter compares float32(0.01) < 0.01 and refuses it
 #: Routines of the HeKey system module the link modules call (declared outside the program).
 KEY_ROUTINES = ("HeKeyMatches", "HeCodeMatches")
 #: Wrong keys a session (line) or the program (I/O) may send before tool writes are refused
@@ -133,6 +136,11 @@ def render_link(station: RapidStation, protocol: str | None = None) -> RapidModu
         gate = _template("key_io.tmpl" if keyed else "key_io_none.tmpl").template.rstrip("\n")
         text = _template("HeIo.mod.tmpl").substitute(common, publish_period=format_num(IO_PUBLISH_S, 3),
                                                      tool_key_check=gate)
+        return RapidModule(LINK_MODULES[protocol], text)
+    if protocol == "rws":
+        # Robot Web Services: the PC writes the tool data by symbol (authorised by the controller's
+        # own users and mastership), so HeRws has no tool path and needs no key.
+        text = _template("HeRws.mod.tmpl").substitute(common, poll=format_num(RWS_POLL_S, 3))
         return RapidModule(LINK_MODULES[protocol], text)
     session = _template("session_data.tmpl").substitute(common).rstrip("\n")
     key_check = _template("key_check.tmpl" if keyed else "key_check_none.tmpl").template.rstrip("\n")
