@@ -240,15 +240,23 @@ class RwsController(Controller):
         return self._http
 
     def _open(self, deadline: Deadline) -> None:
+        try:
+            self._identify(deadline)
+        except LinkDown:
+            raise  # the session (its cookies: mastership) is kept for the retry
+        except BaseException:
+            self._connected = False
+            if self._http is not None:  # refused, garbage, timeout: close the sockets now
+                _close_session(self._http)
+                self._http = None
+            raise
+
+    def _identify(self, deadline: Deadline) -> None:
         self._session()
         if self.generation is None:
             self.generation = self._detect(deadline)
         self._connected = True
-        try:
-            state = self._symbol_value(self.link_module, "heRwsLink", deadline)
-        except BaseException:
-            self._connected = False
-            raise
+        state = self._symbol_value(self.link_module, "heRwsLink", deadline)
         version, count = int(state[4]), int(state[3])
         if version != PROTOCOL_VERSION:
             self._connected = False
@@ -266,6 +274,9 @@ class RwsController(Controller):
         probe, failure = self._send("GET", self._url("/rw/system"), timeout=self._timeout(deadline),
                                     headers={"Accept": f"{HAL_JSON}, application/json"})
         if failure is not None:
+            if failure[0] == "link" and not self.https and "refused" not in failure[1].lower():
+                failure = ("link", failure[1] + "; a RobotWare 7 controller answers HTTPS only: give its "
+                                                 "certificate's fingerprint (controller.tls_fingerprint)")
             self._fail("connect", failure, deadline)
         challenge = probe.headers.get("WWW-Authenticate", "").split(" ", 1)[0].lower()
         found = {"digest": 1, "basic": 2}.get(challenge)

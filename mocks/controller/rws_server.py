@@ -512,13 +512,19 @@ class RwsControllerServer(RapidControllerServer):
         return state
 
     def _rmmp_state(self, path: str) -> dict:
-        granted = any(s["rmmp"] == "modify" for s in self.sessions.values())
+        rights = {s["rmmp"] for s in self.sessions.values()}
+        if "modify" in rights:
+            status = "GRANTED"
+        elif "denied" in rights:
+            status = "DENIED"
+        elif self.rmmp_policy == "ignore" and any(s.get("rmmp_asked") for s in self.sessions.values()):
+            status = "PENDING"  # nobody pressed Allow or Deny on the FlexPendant
+        else:
+            status = "NONE"
         if path.endswith("poll"):
-            pending = self.rmmp_policy == "ignore"
-            status = "PENDING" if pending else ("GRANTED" if granted else "DENIED")
             return {"_type": "user-rmmp-poll", "_title": "poll", "status": status}
-        return {"_type": "user-rmmp", "_title": "rmmp", "privilege": "modify" if granted else "none",
-                "status": "GRANTED" if granted else ("PENDING" if self.rmmp_policy == "ignore" else "NONE")}
+        return {"_type": "user-rmmp", "_title": "rmmp", "privilege": "modify" if status == "GRANTED" else "none",
+                "status": status}
 
     # ------------------------------------------------------------------ symbols
     def _symbol_of(self, path: str):
@@ -633,6 +639,7 @@ class RwsControllerServer(RapidControllerServer):
     def _request_rmmp(self, form, session):
         if form.get("privilege") != "modify":
             raise HttpError(400, "RMMP privilege must be modify")
+        self.sessions[session]["rmmp_asked"] = True
         if self.rmmp_policy == "allow":
             self.sessions[session]["rmmp"] = "modify"
         elif self.rmmp_policy == "deny":
