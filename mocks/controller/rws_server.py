@@ -42,6 +42,8 @@ import time
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from urllib.parse import parse_qs, unquote, urlsplit
 
+import numpy as np
+
 from ...drivers.controller.rws_client import parse_rapid_value
 from ...rapid.errors import RapidError
 from ...rapid.interpreter import Bindings, ModuleSource, parse_module
@@ -107,12 +109,16 @@ class HttpError(Exception):
 
 
 def _rws_text(value) -> str:
-    """A RAPID value as RWS prints it (nums with 9 significant digits: a float32 round-trips)."""
+    """A RAPID value as RWS prints it (a num as the shortest text that gives back the same float32)."""
     if isinstance(value, bool):
         return "TRUE" if value else "FALSE"
     if isinstance(value, (int, float)):
-        v = float(value)
-        return str(int(v)) if v == int(v) and abs(v) < 1e9 else f"{v:.9g}".replace("e+", "E+").replace("e-", "E-")
+        v = np.float32(value)
+        if v == int(v) and abs(v) < 1e9:
+            return str(int(v))
+        if 1e-4 <= abs(v) < 1e9:
+            return np.format_float_positional(v, unique=True, trim="-")
+        return np.format_float_scientific(v, unique=True, trim="-").upper().replace("E+", "E+")
     if isinstance(value, str):
         return '"' + value.replace('"', '""') + '"'
     if isinstance(value, Record):
@@ -494,7 +500,7 @@ class RwsControllerServer(RapidControllerServer):
         symbol = self._symbol_of(path)
         if symbol is not None:
             value = self._symbol(symbol).box[0]
-            return [{"_type": "rap-data", "_title": "/".join(symbol), "value": _rws_text(value)}]
+            return [{"_type": "rap-data", "_title": "/".join(s for s in symbol if s), "value": _rws_text(value)}]
         raise HttpError(404, f"no resource {path}", -1073442812)
 
     def _robtarget(self, query) -> dict:

@@ -73,6 +73,7 @@ def test_mastership_held_elsewhere_is_refused_naming_it_and_nothing_is_written(r
         assert c.set_tool(TOOL).close_to(TOOL)
 
 
+@pytest.mark.filterwarnings("ignore::urllib3.exceptions.InsecureRequestWarning")  # verify=False: a bare client
 def test_rws2_refuses_a_write_without_mastership_rws1_takes_it_implicitly(rws):
     import requests
 
@@ -167,6 +168,7 @@ def test_the_program_is_uploaded_loaded_and_started_and_pers_survive_a_restart(r
             c.goto_posture(1)
 
 
+@pytest.mark.filterwarnings("ignore::urllib3.exceptions.InsecureRequestWarning")
 def test_xhtml_answers_without_json(rws):
     import requests
 
