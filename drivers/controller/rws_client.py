@@ -41,7 +41,7 @@ import time
 
 import numpy as np
 
-from .errors import InvalidRequest
+from .errors import ControllerRefused, InvalidRequest
 from .interface import Controller, Deadline, LinkDown
 from .protocol import E_BUSY, E_STATE, ERROR_CODES, PROTOCOL_VERSION
 from .types import ACKED, AT, ERROR, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_posture_index, check_timeout
@@ -480,11 +480,15 @@ class RwsController(Controller):
         self._request("POST", path, deadline, data={}, what=f"mastership {action}")
 
     def _as_master(self, what: str, write, deadline: Deadline):
-        """``write(deadline)`` inside a mastership request/release (RMMP first in manual mode)."""
-        mode = self._get("/rw/panel/opmode", deadline, "read the operating mode").get("opmode", "")
-        if str(mode).upper().startswith("MAN"):
+        """``write(deadline)`` inside a mastership request/release; in manual mode, where the controller
+        refuses mastership without RMMP, the grant is asked for (the operator presses Allow) first."""
+        try:
+            self._mastership("request", deadline)
+        except ControllerRefused as exc:
+            if exc.code != 403 or RMMP_HINT not in str(exc):
+                raise
             self._grant_rmmp(deadline)
-        self._mastership("request", deadline)
+            self._mastership("request", deadline)
         try:
             return write(deadline)
         finally:
@@ -650,9 +654,10 @@ class RwsController(Controller):
             raise self.refused_error(f"cannot acknowledge posture {k}: robot is {raw['state']} at posture "
                                      f"{raw['posture']}", E_STATE)
         if raw["state"] in (AT, LATE):
+            # HeRws clears heRwsPc itself once it has seen the acknowledgement: READY follows
             self._write_pc(f"acknowledge posture {k}", k, 1, deadline)
-            self._wait_for("wait for ACKED", lambda r: r["state"] in (ACKED, READY), deadline)
-        if raw["state"] != READY:
+            self._wait_for("wait for READY", lambda r: r["state"] == READY, deadline)
+        elif raw["state"] == ACKED:
             self._clear_request(deadline)
         self._requested = 0
         return self.status(timeout=max(deadline.remaining(), 1e-3))

@@ -631,7 +631,8 @@ class RwsControllerServer(RapidControllerServer):
         with self._lock:
             if verb == "request":
                 if self.opmode.startswith("MAN") and self.sessions.get(session, {}).get("rmmp") != "modify":
-                    raise HttpError(403, "mastership: manual mode needs RMMP first (press Allow on the FlexPendant)", E_RMMP)
+                    raise HttpError(403, "mastership: the controller is in manual mode and this client has no RMMP "
+                                         "(request it and press Allow on the FlexPendant)", E_RMMP)
                 if self.faults.mastership_held or self.master not in (None, session):
                     raise HttpError(403, "mastership is held by another client (FlexPendant)", E_MASTERSHIP)
                 self.master = session
