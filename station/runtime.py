@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from contextlib import contextmanager
+from pathlib import Path
 from dataclasses import dataclass
 
 import numpy as np
@@ -177,7 +178,30 @@ def open_station(config: StationConfig, mock: bool = False):
             yield StationLink(controller, camera, model, lambda _postures, rapid_dir: camera.load_program(rapid_dir),
                               rehearsal=config.camera.mock_arm)
             return
-        yield StationLink(controller, camera, model)
+        yield StationLink(controller, camera, model, _program_loader(controller))
+
+
+def _program_loader(controller):
+    """``load_program(postures, rapid_dir)`` for a controller the PC can load itself (Robot Web
+    Services: upload, load into the task, reset the program pointer, start), else None (the
+    operator loads the modules). HeTool is loaded only when the task has no camera tool data yet, so
+    a calibrated tframe on the controller is never replaced by the session's placeholder."""
+    load = getattr(controller, "load_program", None)
+    if load is None:
+        return None
+
+    def put(_postures, rapid_dir) -> None:
+        from ..drivers.errors import StationError
+
+        try:
+            controller.read_tool()
+            has_tool = True
+        except StationError:
+            has_tool = False
+        files = sorted(p for p in Path(rapid_dir).iterdir() if p.suffix.lower() in (".mod", ".modx") and p.is_file())
+        load([(p.name, p.read_text(encoding="latin-1")) for p in files if not (has_tool and p.stem.lower() == "hetool")])
+
+    return put
 
 
 @contextmanager

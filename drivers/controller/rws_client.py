@@ -256,7 +256,14 @@ class RwsController(Controller):
         if self.generation is None:
             self.generation = self._detect(deadline)
         self._connected = True
-        state = self._symbol_value(self.link_module, "heRwsLink", deadline)
+        try:
+            state = self._symbol_value(self.link_module, "heRwsLink", deadline)
+        except ControllerRefused as exc:
+            if exc.code != 404:
+                raise
+            # No handeye program in the task yet: reading works, and load_program can install it.
+            self._info = ControllerInfo(PROTOCOL_VERSION, f"none ({self.link_module} not loaded)", 0)
+            return
         version, count = int(state[4]), int(state[3])
         if version != PROTOCOL_VERSION:
             self._connected = False
@@ -576,6 +583,13 @@ class RwsController(Controller):
         return ControllerStatus(raw["state"], raw["posture"])
 
     # ------------------------------------------------------------------ motion
+    def check_posture(self, k, expected_joints=None) -> int:
+        if self._info is not None and self._info.postures == 0:
+            raise self.refused_error(f"no handeye program runs in {self.task} at {self.address} ({self._info.program}): "
+                                     "handeye capture loads it over RWS, or load HeMain, HeRws and HeTool and start "
+                                     "it", E_STATE)
+        return super().check_posture(k, expected_joints)
+
     def _write_pc(self, what: str, request: int, grabbed: int, deadline: Deadline) -> None:
         self._call(what, lambda d: self._as_master(
             what, lambda d2: self._set_symbol(self.link_module, "heRwsPc", [request, grabbed], d2), d), deadline=deadline)

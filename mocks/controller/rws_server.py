@@ -660,7 +660,10 @@ class RwsControllerServer(RapidControllerServer):
                 if not self.motors_on:
                     raise HttpError(409, "cannot start: the motors are off", E_STATE)
                 if not self.running:
-                    self._run(self.source)
+                    try:
+                        self._run(self.source)
+                    except RapidError as exc:  # link errors of the loaded modules, as the pendant shows them
+                        raise HttpError(409, f"cannot start the program: {exc}", E_STATE) from None
             elif verb == "stop":
                 if self.runner is not None:
                     self.runner.stop()

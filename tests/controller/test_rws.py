@@ -190,3 +190,31 @@ def test_rapid_values_round_trip():
     for bad in ("[1,2", "1,2]", "[x]", ""):
         with pytest.raises(ValueError):
             parse_rapid_value(bad)
+
+
+def test_an_empty_task_is_reported_and_the_station_installs_the_program_over_rws(tmp_path):
+    from handeye.rapid.generate import write_modules
+    from handeye.station.runtime import _program_loader
+
+    idle = tmp_path / "idle"
+    idle.mkdir()
+    (idle / "HeMain.mod").write_text("MODULE HeMain\n  PROC main()\n    WHILE TRUE DO\n      WaitTime 0.05;\n"
+                                   "    ENDWHILE\n  ENDPROC\nENDMODULE\n")
+    with start_mock_controller("rws", generation=2, time_scale=0.002, program=idle) as server:
+        with _open(server) as c:
+            assert c.info().postures == 0
+            assert np.allclose(c.read_joints(), 0.0)  # reading needs no program
+            with pytest.raises(ControllerRefused, match="no handeye program runs in T_ROB1"):
+                c.goto_posture(1)
+            postures = server.robot.postures[:4] if len(server.robot.postures) else default_station().postures[:4]
+            station = default_station().with_(protocol="rws", postures=tuple(tuple(r) for r in postures))
+            rapid_dir = tmp_path / "rapid"
+            write_modules(render_program(station, protocol="rws"), rapid_dir)
+            _program_loader(c)(postures, rapid_dir)
+            assert c.info().postures == 4
+            assert c.goto_posture(4).state == AT
+            assert np.allclose(server.robot.current_joints, postures[3])
+            c.acknowledge(4)
+            c.set_tool(TOOL)
+            _program_loader(c)(postures, rapid_dir)  # a resumed capture: HeTool is not loaded again
+            assert c.read_tool().close_to(TOOL)
