@@ -274,7 +274,6 @@ class RwsController(Controller):
 
     def _detect(self, deadline: Deadline) -> int:
         """RWS 1 or 2 from the authentication challenge, confirmed by the RobotWare version."""
-        import requests
 
         self.limiter.wait()
         self.requests += 1
@@ -349,7 +348,6 @@ class RwsController(Controller):
 
     def _request(self, method: str, path: str, deadline: Deadline, data=None, what: str = ""):
         """One request (503 retried with back-off within the budget); the response when 2xx."""
-        import requests
 
         if not self._connected and self._http is None:
             raise LinkDown("not connected")

@@ -135,6 +135,7 @@ def _aggregate(value):
 class _Handler(BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
     server_version = "handeye-mock-RWS"
+    disable_nagle_algorithm = True  # headers and body are two writes: no 40 ms Nagle/delayed-ACK stall
 
     def log_message(self, fmt, *args):  # quiet: the test output is ours
         log.debug("mock RWS: " + fmt, *args)
