@@ -83,7 +83,7 @@ def _stop(proc) -> None:
         proc.communicate()
 
 
-@pytest.mark.parametrize("protocol", ["socket", "modbus"])
+@pytest.mark.parametrize("protocol", ["socket", "modbus", "rws"])
 def test_capture_calibrate_writeback_against_the_standalone_mock(tmp_path, capsys, protocol):
     proc, link, mock_arm = _start_mock(protocol)
     try:

@@ -36,7 +36,7 @@ def test_dry_run_prints_the_rapid_literal(tmp_path, capsys):
     assert not list(path.glob("tooldata_backup_*"))  # nothing touched
 
 
-@pytest.mark.parametrize("protocol", ["socket", "serial", "modbus"])
+@pytest.mark.parametrize("protocol", ["socket", "serial", "modbus", "rws"])
 def test_writes_reads_back_and_keeps_a_backup(tmp_path, no_leaked_threads, protocol):
     from handeye.calibration.solve import calibrate
     from handeye.mocks.station import MockStationSpec
