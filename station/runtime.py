@@ -39,6 +39,9 @@ class StationLink:
         The embedded station, with its hidden truth.
     rehearsal : str or None
         A rehearsal station: the ``HOST:PORT`` of the mock controller's camera (its truth stays there).
+    stop_program : callable or None
+        ``stop_program()`` stops RAPID execution at the end of a capture, where the PC started it
+        (Robot Web Services); None: the program is left to the operator.
     """
 
     controller: object
@@ -47,6 +50,7 @@ class StationLink:
     load_program: Callable | None = None
     mock: object = None
     rehearsal: str | None = None
+    stop_program: Callable | None = None
 
     @property
     def is_mock(self) -> bool:
@@ -174,11 +178,14 @@ def open_station(config: StationConfig, mock: bool = False):
     model = load_stereo_model(config.camera.stereo_model) if config.camera.stereo_model else nominal_xb3_model()
     with open_controller(config.controller.protocol, **_controller_options(config)) as controller, \
             open_camera(config.camera.backend, **_camera_options(config)) as camera:
-        if config.is_rehearsal:  # the mock plays the operator who loads SESSION/rapid into the task
-            yield StationLink(controller, camera, model, lambda _postures, rapid_dir: camera.load_program(rapid_dir),
-                              rehearsal=config.camera.mock_arm)
+        loader = _program_loader(controller)  # over RWS the PC loads the program itself, rehearsal or not
+        stop = getattr(controller, "stop_program", None) if loader is not None else None
+        if config.is_rehearsal:  # else the mock plays the operator who loads SESSION/rapid into the task
+            yield StationLink(controller, camera, model,
+                              loader or (lambda _postures, rapid_dir: camera.load_program(rapid_dir)),
+                              rehearsal=config.camera.mock_arm, stop_program=stop)
             return
-        yield StationLink(controller, camera, model, _program_loader(controller))
+        yield StationLink(controller, camera, model, loader, stop_program=stop)
 
 
 def _program_loader(controller):
