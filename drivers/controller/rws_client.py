@@ -717,10 +717,20 @@ class RwsController(Controller):
                 self._request("POST", path, d, data={"modulepath": f"{folder}/{name}", "replace": "true"},
                               what=f"load {name}")
             self._execution("resetpp", d, {})
+            if any(name.lower().startswith(self.link_module.lower() + ".") for name, _ in files):
+                # a PERS keeps the last run's value until HeLinkOpen runs: clear it, so that a stale READY
+                # is not taken for the new program's
+                self._set_symbol(self.link_module, "heRwsLink", [0, 0, 0, 0, 0], d)
             self._execution("start", d, {"regain": "continue", "execmode": "continue", "cycle": "forever",
                                          "condition": "none", "stopatbp": "disabled", "alltaskbytsp": "false"})
 
         self._call("load the program", lambda d: self._as_master("load the program", load, d), deadline=deadline)
+        while self._call("wait for the program", lambda d: self._symbol_value(self.link_module, "heRwsLink", d),
+                         deadline=deadline)[4] != PROTOCOL_VERSION:
+            if deadline.remaining() <= self.poll_s:
+                raise self.timeout_error(f"the program loaded at {self.address} did not start within "
+                                         f"{deadline.seconds:g} s (heRwsLink stays cleared): check the FlexPendant")
+            time.sleep(self.poll_s)
         self._info = None
         self._connected = False  # read the program's identity again
         self.connect(max(deadline.remaining(), self.timeout))

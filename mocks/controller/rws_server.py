@@ -317,7 +317,9 @@ class RwsControllerServer(RapidControllerServer):
             (self._connections.add if opened else self._connections.discard)(conn)
 
     # ------------------------------------------------------------------ program, with PERS kept
-    def _run(self, program) -> None:
+    def _load(self, program) -> None:
+        """Link ``program`` into the task (stopped), its PERS data keeping their values unless their
+        module was just loaded from a file, as a controller keeps them."""
         old = self.runner.program
         if old is not None:
             self._pers.update(self._pers_values(old))
@@ -327,6 +329,11 @@ class RwsControllerServer(RapidControllerServer):
             if symbol.storage == "PERS" and key in self._pers and symbol.module.lower() not in self._fresh_modules:
                 symbol.box[0] = self._pers[key]
         self._fresh_modules.clear()
+        self._loaded = program
+
+    def _run(self, program) -> None:
+        if getattr(self, "_loaded", None) is not program:
+            self._load(program)
         self.runner.start()
 
     @staticmethod
@@ -337,7 +344,8 @@ class RwsControllerServer(RapidControllerServer):
         """A warm start of the controller: the program restarts from main, PERS values kept."""
         if self.runner is not None:
             self.runner.stop()
-            self._run(self.source)
+            self._load(self.source)
+            self.runner.start()
 
     def set_motors(self, on: bool) -> None:
         """Motors on or off (off: the RAPID program stops, as a controller's does)."""
@@ -689,9 +697,17 @@ class RwsControllerServer(RapidControllerServer):
                 raise HttpError(400, f"load module {name}: {exc}", -1073442811) from None
             kept = [m for m in self.source.modules if parse_module(m.text, m.source).name.lower() != module.lower()]
             if len(kept) == len(self.source.modules) or form.get("replace", "false").lower() == "true":
-                self.source = ControllerProgram(tuple(kept) + (ModuleSource(text, name),), self.source.origin,
-                                                self.source.link, self.source.tool_name)
+                program = ControllerProgram(tuple(kept) + (ModuleSource(text, name),), self.source.origin,
+                                            self.source.link, self.source.tool_name)
                 self._fresh_modules.add(module.lower())
+                self.source = program
+                try:
+                    self._load(program)  # linked now: its symbols are there before the start
+                except RapidError as exc:
+                    # a controller loads a module whose references are not there yet (the next module
+                    # brings them); the link errors stop the start, as on the FlexPendant
+                    log.info("mock RWS: %s loaded, not linked yet: %s", name, exc)
+                    self._loaded = None
             else:
                 raise HttpError(409, f"load module: {module} is loaded already (replace=true replaces it)", E_STATE)
         return 204, None
