@@ -265,6 +265,9 @@ class RwsController(Controller):
             self._info = ControllerInfo(PROTOCOL_VERSION, f"none ({self.link_module} not loaded)", 0)
             return
         version, count = int(state[4]), int(state[3])
+        if version == 0:  # loaded, HeLinkOpen has not run (stopped, or its start failed): reading still works
+            self._info = ControllerInfo(PROTOCOL_VERSION, f"none ({self.link_module} loaded, not started)", 0)
+            return
         if version != PROTOCOL_VERSION:
             self._connected = False
             raise self.protocol_error(

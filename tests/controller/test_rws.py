@@ -218,3 +218,22 @@ def test_an_empty_task_is_reported_and_the_station_installs_the_program_over_rws
             c.set_tool(TOOL)
             _program_loader(c)(postures, rapid_dir)  # a resumed capture: HeTool is not loaded again
             assert c.read_tool().close_to(TOOL)
+
+
+def test_a_program_that_cannot_start_is_reported_and_nothing_moves(rws):
+    station = default_station().with_(protocol="rws")
+    modules = [(m.filename, m.text) for m in render_program(station, protocol="rws") if m.name != "HeTool"]
+    with _open(rws) as c:
+        rws.set_motors(False)
+        with pytest.raises(ControllerRefused, match="motors are off"):
+            c.load_program(modules)
+        c.close()
+        c.connect()
+        assert c.info().postures == 0 and "not started" in c.info().program
+        assert np.allclose(c.read_joints(), rws.robot.current_joints, atol=1e-4)
+        with pytest.raises(ControllerRefused, match="no handeye program runs"):
+            c.goto_posture(1)
+        rws.set_motors(True)
+        c.load_program(modules)
+        assert c.info().postures == 12 and c.goto_posture(2).at_posture(2)
+    assert rws.robot.moves == 1
