@@ -237,3 +237,27 @@ def test_a_program_that_cannot_start_is_reported_and_nothing_moves(rws):
         c.load_program(modules)
         assert c.info().postures == 12 and c.goto_posture(2).at_posture(2)
     assert rws.robot.moves == 1
+
+
+def test_the_rate_limiter_keeps_the_average_below_the_ceiling(monkeypatch):
+    from handeye.drivers.controller import rws_client
+
+    clock = {"now": 100.0, "slept": 0.0}
+
+    def sleep(seconds):
+        clock["now"] += seconds
+        clock["slept"] += seconds
+
+    monkeypatch.setattr(rws_client.time, "monotonic", lambda: clock["now"])
+    monkeypatch.setattr(rws_client.time, "sleep", sleep)
+    limiter = rws_client.RateLimiter(20.0, burst=10)
+    for _ in range(10):
+        limiter.wait()
+    assert clock["slept"] == 0.0  # a burst passes at once
+    for _ in range(40):
+        limiter.wait()
+    assert clock["slept"] == pytest.approx(40 / 20.0)  # then 20 per second
+    clock["now"] += 10.0  # a quiet spell refills the burst, no more
+    for _ in range(10):
+        limiter.wait()
+    assert clock["slept"] == pytest.approx(2.0)
