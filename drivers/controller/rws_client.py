@@ -33,7 +33,6 @@ write key, which never travels over RWS (see the README's threat model).
 
 from __future__ import annotations
 
-import hashlib
 import logging
 import re
 import threading
@@ -102,7 +101,7 @@ def parse_rapid_value(text: str):
     ValueError
         Not a RAPID literal of numbers, bools and strings.
     """
-    pos, stack, root = 0, [[]], None
+    pos, stack = 0, [[]]
     text = str(text).strip()
     while pos < len(text):
         m = _TOKEN.match(text, pos)
@@ -126,8 +125,7 @@ def parse_rapid_value(text: str):
             stack[-1].append(float(tok))
     if len(stack) != 1 or len(stack[0]) != 1:
         raise ValueError("not one RAPID value")
-    root = stack[0][0]
-    return root
+    return stack[0][0]
 
 
 def tooldata_value(tool: ToolData, robhold: bool = True) -> list:
@@ -787,7 +785,3 @@ def _pinned_adapter(fingerprint: str):
 
     return PinnedAdapter()
 
-
-def certificate_fingerprint(der: bytes) -> str:
-    """The SHA-256 fingerprint (hex) of a DER certificate, as ``controller.tls_fingerprint`` takes it."""
-    return hashlib.sha256(der).hexdigest()

@@ -118,7 +118,7 @@ def _rws_text(value) -> str:
             return str(int(v))
         if 1e-4 <= abs(v) < 1e9:
             return np.format_float_positional(v, unique=True, trim="-")
-        return np.format_float_scientific(v, unique=True, trim="-").upper().replace("E+", "E+")
+        return np.format_float_scientific(v, unique=True, trim="-").upper()
     if isinstance(value, str):
         return '"' + value.replace('"', '""') + '"'
     if isinstance(value, Record):
