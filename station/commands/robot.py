@@ -91,9 +91,15 @@ def run(args) -> int:
             info, status = controller.info(), controller.status()
             data = {"state": status.state, "posture": status.posture, "postures": info.postures,
                     "program": info.program, "protocol_version": info.protocol_version}
+            if hasattr(controller, "controller_state"):  # RWS: the controller's own state too
+                data["controller"] = controller.controller_state()
             if args.json:
                 print(json.dumps(data))
             else:
                 print(f"{info.program} (protocol {info.protocol_version}, {info.postures} approved postures): "
                       f"{status.state} at posture {status.posture}")
+                if "controller" in data:
+                    c = data["controller"]
+                    print(f"controller: {c['ctrlstate']}, mode {c['opmode']}, RAPID {c['execution']}, "
+                          f"RobotWare {c['robotware']}")
     return 0

@@ -44,7 +44,10 @@ def test_robot_joints_json(server, capsys):
 
 def test_robot_status_text(server, capsys):
     assert main(["robot", "status", *_link_args(server)]) == 0
-    assert "12 approved postures" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "12 approved postures" in out
+    if server.protocol == "rws":
+        assert f"controller: motoron, mode AUTO, RAPID running, RobotWare {server.robotware}" in out
 
 
 @pytest.mark.parametrize("link", ["socket", "modbus", "rws"])
