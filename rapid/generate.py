@@ -261,10 +261,11 @@ def _write_secret(path: Path, text: str) -> Path:
 def generate_station_modules(output, config=None, protocol: str | None = None) -> list[Path]:
     """Render the station's program (``config``: a station YAML path; None: the built-in station) into ``output``.
 
-    With a write key in the station, ``HeKey.sys`` is written beside the program modules.
+    With a write key in the station, ``HeKey.sys`` is written beside the program modules (not for
+    ``rws``: Robot Web Services authorises tool writes by the controller's users, HeRws has no key check).
     """
     station = load_station(config) if config is not None else default_station()
     modules = render_program(station, protocol=protocol)
-    if station.write_key is not None:
+    if station.write_key is not None and (protocol or station.protocol) != "rws":
         modules.append(render_key(station))
     return write_modules(modules, output)
