@@ -10,7 +10,7 @@ from __future__ import annotations
 from ..drivers.camera.backends import CAMERAS, CameraBackend
 from ..drivers.controller.backends import CONTROLLERS, MockServer
 
-__all__ = ["MOCK_SERVERS", "MOCK_CAMERA", "mock_protocols", "mock_server"]
+__all__ = ["MOCK_SERVERS", "MOCK_CAMERA", "MockVariant", "mock_protocols", "mock_server", "mock_variants"]
 
 _HERE = __package__  # handeye.mocks
 
@@ -22,6 +22,10 @@ MOCK_SERVERS = {
                          help="HeSerial executed on a line behind pyserial's socket://HOST:PORT URL"),
     "modbus": MockServer(f"{_HERE}.controller.modbus_server:ModbusControllerServer", 5020, ("register_map",),
                          help="HeIo executed behind a Modbus TCP gateway (drivers/controller/modbus_map.yaml)"),
+    "rws": MockServer(f"{_HERE}.controller.rws_server:RwsControllerServer", 8080, ("generation",),
+                      help="HeRws executed behind Robot Web Services (--rws-generation 1: RobotWare 6 HTTP/Digest; "
+                           "2: RobotWare 7 HTTPS/Basic)",
+                      variants=(("rws1", {"generation": 1}), ("rws2", {"generation": 2}))),
 }
 
 
@@ -60,3 +64,27 @@ def mock_server(protocol: str) -> MockServer:
     if str(protocol).lower() not in names:
         raise ValueError(f"unknown mock protocol {protocol!r}; choose one of {', '.join(names)}")
     return CONTROLLERS[protocol].mock
+
+
+class MockVariant(str):
+    """A mock protocol name carrying server settings: equal to the protocol's name (``"rws"``), so it
+    opens the same client back end, with ``label`` (``rws2``) and ``options`` (``{"generation": 2}``)
+    that :func:`~handeye.mocks.controller.start_mock_controller` passes to the server."""
+
+    def __new__(cls, protocol: str, label: str, options: dict):
+        obj = super().__new__(cls, protocol)
+        obj.label, obj.options = label, dict(options)
+        return obj
+
+    def __repr__(self) -> str:
+        return self.label
+
+
+def mock_variants() -> tuple:
+    """Every mock protocol, and each variant of a mock that has them (RWS 1.0 and 2.0): what the
+    contract tests run on. Plain names for mocks without variants, :class:`MockVariant` otherwise."""
+    out = []
+    for name in mock_protocols():
+        variants = CONTROLLERS[name].mock.variants
+        out += [MockVariant(name, label, options) for label, options in variants] if variants else [name]
+    return tuple(out)

@@ -7,7 +7,8 @@ loaded together into the robot task:
   there, with ``MoveAbsJ ... fine`` at the configured speed), the program state;
 - a link module, by protocol: ``HeSocket`` (TCP server accepting only the PC's address),
   ``HeSerial`` (same line protocol on a serial channel) or ``HeIo`` (I/O handshake for a Modbus
-  gateway: ``SetGO``/``SetDO``/``WaitDI \\MaxTime``);
+  gateway: ``SetGO``/``SetDO``/``WaitDI \\MaxTime``) or ``HeRws`` (PERS data the PC reads and writes
+  through Robot Web Services);
 - ``HeTool`` : ``PERS tooldata`` of the camera (identity frame until calibrated);
 - ``HeCell`` (only when the station sets a speed override or world zones, :mod:`handeye.rapid.cell`):
   ``VelSet`` and the keep-out world zones, set up by ``HeCellSetup``, which ``main`` then calls first;
@@ -73,6 +74,8 @@ IO_SIGNALS = (
 )
 #: Publishing period of HeIo's timer interrupt (joints, pose, heartbeat), seconds.
 IO_PUBLISH_S = 0.1
+#: PollRate of HeRws' WaitUntil (s): how soon the program sees a PERS value the PC wrote over RWS.
+RWS_POLL_S = 0.02  # RAPID accepts 0.01; the interpreter compares float32(0.01) < 0.01 and refuses it
 #: Routines of the HeKey system module the link modules call (declared outside the program).
 KEY_ROUTINES = ("HeKeyMatches", "HeCodeMatches")
 #: Wrong keys a session (line) or the program (I/O) may send before tool writes are refused
@@ -161,6 +164,11 @@ def render_link(station: RapidStation, protocol: str | None = None) -> RapidModu
         gate = _template("key_io.tmpl" if keyed else "key_io_none.tmpl").template.rstrip("\n")
         text = _template("HeIo.mod.tmpl").substitute(common, publish_period=format_num(IO_PUBLISH_S, 3),
                                                      tool_key_check=gate)
+        return RapidModule(LINK_MODULES[protocol], text)
+    if protocol == "rws":
+        # Robot Web Services: the PC writes the tool data by symbol (authorised by the controller's
+        # own users and mastership), so HeRws has no tool path and needs no key.
+        text = _template("HeRws.mod.tmpl").substitute(common, poll=format_num(RWS_POLL_S, 3))
         return RapidModule(LINK_MODULES[protocol], text)
     session = _template("session_data.tmpl").substitute(common).rstrip("\n")
     key_check = _template("key_check.tmpl" if keyed else "key_check_none.tmpl").template.rstrip("\n")
@@ -285,10 +293,11 @@ def _write_secret(path: Path, text: str) -> Path:
 def generate_station_modules(output, config=None, protocol: str | None = None) -> list[Path]:
     """Render the station's program (``config``: a station YAML path; None: the built-in station) into ``output``.
 
-    With a write key in the station, ``HeKey.sys`` is written beside the program modules.
+    With a write key in the station, ``HeKey.sys`` is written beside the program modules (not for
+    ``rws``: Robot Web Services authorises tool writes by the controller's users, HeRws has no key check).
     """
     station = load_station(config) if config is not None else default_station()
     modules = render_program(station, protocol=protocol)
-    if station.write_key is not None:
+    if station.write_key is not None and (protocol or station.protocol) != "rws":
         modules.append(render_key(station))
     return write_modules(modules, output)

@@ -9,6 +9,6 @@ from __future__ import annotations
 __all__ = ["LINK_MODULES", "PROTOCOLS"]
 
 #: Controller protocol -> the RAPID module that speaks it on the controller.
-LINK_MODULES = {"socket": "HeSocket", "serial": "HeSerial", "modbus": "HeIo"}
+LINK_MODULES = {"socket": "HeSocket", "serial": "HeSerial", "modbus": "HeIo", "rws": "HeRws"}
 #: The protocols a RAPID program can be generated for.
 PROTOCOLS = tuple(LINK_MODULES)

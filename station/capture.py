@@ -446,6 +446,9 @@ def capture(
     already = sorted(k + 1 for k in run.done)
     release_waiting_posture(link.controller, run.done, progress)
     captured, skipped = visit_postures(config, session_dir, run, link, on_posture, stop_after)
+    if link.stop_program is not None and stop_after is None:
+        link.stop_program()  # the PC started it (RWS); a resumed capture loads and starts it again
+        progress("RAPID program stopped: the capture went through the plan")
     return CaptureSummary(session_dir, len(run.plan_joints), captured, already, skipped, time.monotonic() - started,
                           run.plan_score)
 

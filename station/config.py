@@ -100,6 +100,15 @@ def _write_key(value, key: str, context) -> str | None:
     return value
 
 
+def _fingerprint(value, key: str, context) -> str:
+    """A SHA-256 certificate fingerprint: 64 hex digits, colons allowed (as browsers and openssl print it)."""
+    text = str(value).replace(":", "").strip().lower()
+    if not re.fullmatch(r"[0-9a-f]{64}", text):
+        raise ConfigError(f"{key} must be the SHA-256 of the controller's certificate: 64 hex digits (colons "
+                          f"allowed); got {len(text)} characters")
+    return text
+
+
 def _mount(value, key: str, context) -> tuple:
     if not isinstance(value, dict) or "position_mm" not in value or "quaternion_wxyz" not in value:
         raise ConfigError(f"{key} needs position_mm and quaternion_wxyz")
@@ -201,6 +210,11 @@ class ControllerSettings:
     idle_timeout_s: float = setting(5.0, Number(0.1, 10), "RAPID and PC: a link silent this long is dropped", "s")
     write_key: str | None = setting(None, Custom(_write_key), "the secret tool-data writes need (8-32 letters, "
                                     "digits, _ or -; HeKey.sys)", secret=True)
+    username: str = setting("Default User", Text(), "rws: the controller user (give the station its own)")
+    password: str | None = setting(None, Optional(Text()), "rws: that user's password (null: RobotWare's default "
+                                   "account's)", secret=True)
+    tls_fingerprint: str | None = setting(None, Optional(Custom(_fingerprint)), "rws, RobotWare 7: SHA-256 of the "
+                                          "controller's certificate (HTTPS, pinned); null: RobotWare 6 over HTTP")
 
 
 @dataclass(frozen=True)

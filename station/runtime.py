@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from contextlib import contextmanager
+from pathlib import Path
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,6 +39,9 @@ class StationLink:
         The embedded station, with its hidden truth.
     rehearsal : str or None
         A rehearsal station: the ``HOST:PORT`` of the mock controller's camera (its truth stays there).
+    stop_program : callable or None
+        ``stop_program()`` stops RAPID execution at the end of a capture, where the PC started it
+        (Robot Web Services); None: the program is left to the operator.
     """
 
     controller: object
@@ -46,6 +50,7 @@ class StationLink:
     load_program: Callable | None = None
     mock: object = None
     rehearsal: str | None = None
+    stop_program: Callable | None = None
 
     @property
     def is_mock(self) -> bool:
@@ -175,11 +180,37 @@ def open_station(config: StationConfig, mock: bool = False):
     model = load_stereo_model(config.camera.stereo_model) if config.camera.stereo_model else nominal_xb3_model()
     with open_controller(config.controller.protocol, **_controller_options(config)) as controller, \
             open_camera(config.camera.backend, **_camera_options(config)) as camera:
-        if config.is_rehearsal:  # the mock plays the operator who loads SESSION/rapid into the task
-            yield StationLink(controller, camera, model, lambda _postures, rapid_dir: camera.load_program(rapid_dir),
-                              rehearsal=config.camera.mock_arm)
+        loader = _program_loader(controller)  # over RWS the PC loads the program itself, rehearsal or not
+        stop = getattr(controller, "stop_program", None) if loader is not None else None
+        if config.is_rehearsal:  # else the mock plays the operator who loads SESSION/rapid into the task
+            yield StationLink(controller, camera, model,
+                              loader or (lambda _postures, rapid_dir: camera.load_program(rapid_dir)),
+                              rehearsal=config.camera.mock_arm, stop_program=stop)
             return
-        yield StationLink(controller, camera, model)
+        yield StationLink(controller, camera, model, loader, stop_program=stop)
+
+
+def _program_loader(controller):
+    """``load_program(postures, rapid_dir)`` for a controller the PC can load itself (Robot Web
+    Services: upload, load into the task, reset the program pointer, start), else None (the
+    operator loads the modules). HeTool is loaded only when the task has no camera tool data yet, so
+    a calibrated tframe on the controller is never replaced by the session's placeholder."""
+    load = getattr(controller, "load_program", None)
+    if load is None:
+        return None
+
+    def put(_postures, rapid_dir) -> None:
+        from ..drivers.errors import StationError
+
+        try:
+            controller.read_tool()
+            has_tool = True
+        except StationError:
+            has_tool = False
+        files = sorted(p for p in Path(rapid_dir).iterdir() if p.suffix.lower() in (".mod", ".modx") and p.is_file())
+        load([(p.name, p.read_text(encoding="latin-1")) for p in files if not (has_tool and p.stem.lower() == "hetool")])
+
+    return put
 
 
 @contextmanager

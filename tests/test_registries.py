@@ -22,7 +22,7 @@ from handeye.station.config import ConfigError, config_from_dict
 from handeye.station.runtime import _controller_options, open_station
 
 PLUGIN = Path(__file__).with_name("plugin")
-BUILT_IN_CONTROLLERS = ("socket", "serial", "modbus")
+BUILT_IN_CONTROLLERS = ("socket", "serial", "modbus", "rws")
 
 
 @pytest.fixture
@@ -51,9 +51,9 @@ def _choices(argv_prefix, option="--protocol"):
 # ------------------------------------------------------------------------------------ the package alone
 def test_the_package_registers_its_back_ends_and_the_mocks_theirs():
     assert CONTROLLERS.names() == BUILT_IN_CONTROLLERS
-    assert [CONTROLLERS[n].default_port for n in BUILT_IN_CONTROLLERS] == [1025, None, 502]
+    assert [CONTROLLERS[n].default_port for n in BUILT_IN_CONTROLLERS] == [1025, None, 502, 80]
     assert mock_protocols() == BUILT_IN_CONTROLLERS
-    assert [CONTROLLERS[n].mock.default_port for n in BUILT_IN_CONTROLLERS] == [1025, 1026, 5020]
+    assert [CONTROLLERS[n].mock.default_port for n in BUILT_IN_CONTROLLERS] == [1025, 1026, 5020, 8080]
     assert CAMERAS.names() == ("xb3", "mock") and CAMERAS["mock"].simulated and not CAMERAS["xb3"].simulated
     assert "loopback" not in CONTROLLERS and "blank" not in CAMERAS
 
@@ -69,13 +69,13 @@ def test_every_list_of_back_ends_is_the_registry():
     assert _choices(["mock", "controller"]) == mock_protocols()
     assert _choices(["demo"]) == mock_protocols()
     assert _choices(["rapid", "generate"]) == tuple(LINK_MODULES)
-    with pytest.raises(ConfigError, match="controller.protocol must be one of socket, serial, modbus, mock; got 'x'"):
+    with pytest.raises(ConfigError, match="controller.protocol must be one of socket, serial, modbus, rws, mock; got 'x'"):
         config_from_dict({"controller": {"protocol": "x"}, "camera": {"backend": "xb3"}})
     with pytest.raises(ConfigError, match="camera.backend must be one of xb3, mock; got 'x'"):
         config_from_dict({"controller": {"protocol": "socket"}, "camera": {"backend": "x"}})
-    with pytest.raises(ConfigError, match="mock.protocol must be one of socket, serial, modbus; got 'x'"):
+    with pytest.raises(ConfigError, match="mock.protocol must be one of socket, serial, modbus, rws; got 'x'"):
         config_from_dict({"controller": {"protocol": "mock"}, "camera": {"backend": "mock"}, "mock": {"protocol": "x"}})
-    with pytest.raises(InvalidRequest, match="unknown controller protocol 'profinet'; choose one of socket, serial, modbus$"):
+    with pytest.raises(InvalidRequest, match="unknown controller protocol 'profinet'; choose one of socket, serial, modbus, rws$"):
         open_controller("profinet")
 
 
@@ -129,7 +129,7 @@ def test_entry_points_add_a_controller_and_a_camera(plugin):
 def test_the_plugin_back_ends_pass_the_station_config(plugin):
     config = config_from_dict({"controller": {"protocol": "loopback"}, "camera": {"backend": "blank"}})
     assert (config.controller.protocol, config.camera.backend) == ("loopback", "blank") and not config.is_mock
-    with pytest.raises(ConfigError, match="controller.protocol must be one of socket, serial, modbus, loopback, mock"):
+    with pytest.raises(ConfigError, match="controller.protocol must be one of socket, serial, modbus, rws, loopback, mock"):
         config_from_dict({"controller": {"protocol": "x"}, "camera": {"backend": "blank"}})
 
 
@@ -157,7 +157,7 @@ def test_without_the_plugin_its_names_are_refused(capsys):
     with pytest.raises(SystemExit) as info:
         main(["robot", "joints", "--protocol", "loopback"])
     assert info.value.code == 2 and "invalid choice: 'loopback'" in capsys.readouterr().err
-    with pytest.raises(ConfigError, match="controller.protocol must be one of socket, serial, modbus, mock; got 'loopback'"):
+    with pytest.raises(ConfigError, match="controller.protocol must be one of socket, serial, modbus, rws, mock; got 'loopback'"):
         config_from_dict({"controller": {"protocol": "loopback"}, "camera": {"backend": "xb3"}})
 
 

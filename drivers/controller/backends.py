@@ -36,6 +36,10 @@ class ControllerLink:
         Register map YAML (None: the built-in one).
     baudrate : int or None
         Serial baud rate (None: the back end's default).
+    username, password : str or None
+        Robot Web Services: the controller user (None: RobotWare's default account).
+    tls_fingerprint : str or None
+        Robot Web Services 2.0: SHA-256 of the controller's certificate (HTTPS, pinned).
     """
 
     host: str = "127.0.0.1"
@@ -43,6 +47,9 @@ class ControllerLink:
     serial_url: str | None = None
     modbus_map: str | None = None
     baudrate: int | None = None
+    username: str | None = None
+    password: str | None = None
+    tls_fingerprint: str | None = None
 
     @classmethod
     def of(cls, section) -> "ControllerLink":
@@ -66,12 +73,16 @@ class MockServer:
         The extra keyword options the server takes (``allowed_client``, ``register_map`` ...).
     help : str
         One line for ``handeye mock controller --help``: what it serves.
+    variants : tuple of (str, dict)
+        Named settings of the server the contract tests run each (``("rws2", {"generation": 2})``);
+        empty: the server as it is.
     """
 
     target: object
     default_port: int
     options: tuple = ()
     help: str = ""
+    variants: tuple = ()
 
     def load(self) -> type:
         return load_target(self.target)
@@ -117,7 +128,17 @@ def _modbus_options(link: ControllerLink, backend: ControllerBackend) -> dict:
     return {**tcp_options(link, backend), **({"register_map": link.modbus_map} if link.modbus_map else {})}
 
 
-#: Every controller back end by name: the package's (socket, serial, modbus), then plug-ins.
+def _rws_options(link: ControllerLink, backend: ControllerBackend) -> dict:
+    options = {"host": link.host}
+    if link.port is not None:
+        options["port"] = link.port  # None: 80 (RWS 1.0, HTTP) or 443 (with a fingerprint: RWS 2.0, HTTPS)
+    for name in ("username", "password", "tls_fingerprint"):
+        if getattr(link, name) is not None:
+            options[name] = getattr(link, name)
+    return options
+
+
+#: Every controller back end by name: the package's (socket, serial, modbus, rws), then plug-ins.
 CONTROLLERS: Registry[ControllerBackend] = Registry("controller protocol", "handeye.controllers", ControllerBackend)
 
 _HERE = __package__
@@ -130,6 +151,10 @@ CONTROLLERS.register(ControllerBackend(
 CONTROLLERS.register(ControllerBackend(
     "modbus", f"{_HERE}.modbus_client:ModbusController", default_port=502, options=_modbus_options,
     help="Modbus TCP gateway (HeIo module):   --host H --port P (default 502) [--register-map MAP]"))
+CONTROLLERS.register(ControllerBackend(
+    "rws", f"{_HERE}.rws_client:RwsController", default_port=80, options=_rws_options,
+    help="Robot Web Services (RobotWare 6/7, HeRws module): --host H [--port P] [--user U --password W] "
+         "[--tls-fingerprint SHA256 for RobotWare 7]"))
 
 
 def register_backend(backend: ControllerBackend) -> ControllerBackend:

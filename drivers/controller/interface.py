@@ -101,6 +101,9 @@ class Controller(ABC):
 
     #: Back-end name; set by subclasses (the name it is registered under).
     protocol = "abstract"
+    #: Whether tool writes need the station's write key (False where the link authorises writes by
+    #: itself: Robot Web Services checks the controller's own users and mastership).
+    writes_need_key = True
 
     # The shared error kinds (drivers/errors.py), named after this back end.
     def connection_error(self, message: str) -> ControllerConnectionError:
@@ -335,7 +338,7 @@ class Controller(ABC):
             When the value read back differs from the one written.
         """
         tool = check_tooldata(tool, self.max_tool_mass_kg)
-        if self._write_key is None:
+        if self._write_key is None and self.writes_need_key:
             raise InvalidRequest(f"cannot write tool data to {self.address} without the station's write key: set "
                                  "controller.write_key in the station config and load HeKey.sys on the controller "
                                  "(handeye rapid generate --config STATION.yaml -o DIR writes it); nothing was sent")

@@ -26,6 +26,7 @@ from ..robot import SimulatedRobot
 from .faults import Faults
 from .line_server import SerialControllerServer, SocketControllerServer
 from .modbus_server import ModbusControllerServer
+from .rws_server import RwsControllerServer
 from .runner import RapidRunner
 from .server import DEFAULT_IDLE_TIMEOUT_S, RapidControllerServer
 from .sources import ControllerProgram, generated_program, program_from_folder
@@ -44,6 +45,7 @@ __all__ = [
     "SocketControllerServer",
     "SerialControllerServer",
     "ModbusControllerServer",
+    "RwsControllerServer",
 ]
 
 
@@ -61,7 +63,7 @@ def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", 
                           ack_timeout_s: float | None = 30.0, allowed_client: str | None = None,
                           register_map=None, faults: Faults | None = None,
                           idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None,
-                          program=None, station=None, start: bool = True):
+                          program=None, station=None, start: bool = True, generation: int | None = None):
     """A started mock controller of ``protocol`` running its RAPID program.
 
     Parameters
@@ -94,15 +96,21 @@ def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", 
         The station the modules are generated for (default: the built-in one).
     start : bool
         Start the server (default); else call ``server.start()`` or use ``with``.
+    generation : int, optional
+        RWS only: 1 (RobotWare 6, HTTP) or 2 (RobotWare 7, HTTPS). A :class:`MockVariant` protocol
+        brings its own (``mock_variants()``); default 1.
     """
     mock = mock_server(protocol)
+    variant, protocol = getattr(protocol, "options", {}), str(protocol)
     source = _program(protocol, program, station, postures, ack_timeout_s, idle_timeout_s, write_key,
                       allowed_client)
     if robot is None:
         robot = SimulatedRobot(postures if postures is not None else (station or default_station()).postures,
                                time_scale=time_scale, speed_fraction=speed_fraction)
-    offered = {"register_map": register_map}
+    offered = {"register_map": register_map, **variant}
+    if generation is not None:
+        offered["generation"] = generation
     server = mock.load()(source, robot, host, port, faults=faults, idle_timeout_s=idle_timeout_s, write_key=write_key,
-                         **{name: offered[name] for name in mock.options})
+                         **{name: offered[name] for name in mock.options if name in offered})
     server.protocol = str(protocol).lower()
     return server.start() if start else server

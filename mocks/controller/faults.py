@@ -10,6 +10,9 @@ Set attributes from a test (or the station's demo) and the next requests feel th
     server.faults.robot_stalled = True # the RAPID program is held (the Modbus gateway still answers)
     server.faults.modbus_exception = 4 # Modbus: answer every request with exception code 4
     server.faults.modbus_exception_next = 1   # ... only the next request (code modbus_exception or 4)
+    server.faults.busy_next = 2        # RWS: answer the next 2 requests with 503 (busy)
+    server.faults.busy = True          # RWS: answer every request with 503
+    server.faults.mastership_held = True   # RWS: another client (a FlexPendant) holds mastership
     server.faults.reset()
 """
 
@@ -58,8 +61,11 @@ class Faults:
         self.robot_stalled = False
         self.modbus_exception = 0
         self.modbus_exception_next = 0
+        self.busy = False
+        self.busy_next = 0
+        self.mastership_held = False
         #: How many times each fault fired (for tests).
-        self.fired = {"drop": 0, "garbage": 0, "silent": 0, "modbus_exception": 0}
+        self.fired = {"drop": 0, "garbage": 0, "silent": 0, "modbus_exception": 0, "busy": 0}
 
     def take(self, name: str) -> bool:
         """Consume one unit of the counter ``name`` (e.g. ``drop_next``); True if one was left."""

@@ -71,6 +71,7 @@ class MockControllerOptions:
     station: RapidStation | None = None
     program: str | None = None
     camera_port: int | None = None
+    rws_generation: int = 1
 
 
 def is_loopback(host: str) -> bool:
@@ -92,6 +93,14 @@ def _banner(server, options: MockControllerOptions, postures: int, idle_timeout_
     else:
         writes = "tool writes refused: no write key (start it with --write-key KEY or --config STATION.yaml)"
     link = f"  idle timeout {idle_timeout_s:g} s; {writes}"
+    if options.protocol == "rws":
+        gen = server.generation
+        auth = f"--user '{server.username}' --password {server.password}"
+        pin = f" --tls-fingerprint {server.tls_fingerprint}" if gen == 2 else ""
+        writes = "tool writes by symbol, authorised by the RWS user and mastership"
+        return (f"{head}: Robot Web Services {gen}.0 (RobotWare {server.robotware}, "
+                f"{'HTTPS, Basic' if gen == 2 else 'HTTP, Digest'}) listening on {where}; stop with Ctrl-C\n  {writes}\n"
+                f"  try: handeye robot joints --protocol rws --host {server.host} --port {server.port} {auth}{pin} --json")
     if options.protocol == "serial":
         return (f"{head}: serial line on pyserial URL {server.url}; stop with Ctrl-C\n{link}\n"
                 f"  try: handeye robot joints --protocol serial --url {server.url} --json")
@@ -131,7 +140,8 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
                                        robot=robot,
                                        time_scale=options.time_scale, ack_timeout_s=station.ack_timeout_s,
                                        allowed_client=options.allowed_client, register_map=options.register_map,
-                                       idle_timeout_s=idle, write_key=key, station=station, program=options.program)
+                                       idle_timeout_s=idle, write_key=key, station=station, program=options.program,
+                                       **({"generation": options.rws_generation} if options.protocol == "rws" else {}))
     except OSError as exc:
         raise InvalidRequest(f"cannot listen on {options.host}:{port} ({exc}); pick another --port "
                              "(0 = any free port)") from None

@@ -70,6 +70,9 @@ def add_parser(sub):
                    help="socket: the PC address rendered into the generated program (HE_PC_ADDRESS; default: the "
                         "config's controller.pc_address, 127.0.0.1); --program modules carry their own")
     c.add_argument("--register-map", metavar="MAP.yaml", help="modbus: register map (default: the built-in one)")
+    c.add_argument("--rws-generation", type=int, choices=(1, 2), default=1,
+                   help="rws: 1 = RobotWare 6 (HTTP, Digest; default), 2 = RobotWare 7 (HTTPS with a self-signed "
+                        "certificate, Basic; the banner prints its fingerprint)")
     c.add_argument("--duration", type=argtypes.positive, metavar="S", help="stop after S seconds (default: run until Ctrl-C)")
     c.add_argument("--idle-timeout", type=argtypes.positive, metavar="S",
                    help="drop a silent PC (socket) / forget its session (serial) after S seconds, 0.1..10 "
@@ -105,6 +108,7 @@ def run(args) -> int:
                                     time_scale=args.time_scale, allowed_client=args.allow_client,
                                     register_map=args.register_map, duration_s=args.duration,
                                     idle_timeout_s=args.idle_timeout, write_key=args.write_key,
-                                    program=args.program, camera_port=args.camera_port)
+                                    program=args.program, camera_port=args.camera_port,
+                                    rws_generation=args.rws_generation)
     return run_mock_controller(options, announce=lambda text: print(text, flush=True),
                                warn=lambda text: print(text, file=sys.stderr, flush=True))

@@ -15,6 +15,8 @@ Writes three modules to load together into the robot task:
   HeSocket.mod   line-protocol server over TCP, accepting only the PC's address  (protocol socket)
   HeSerial.mod   the same protocol on a serial channel                              (protocol serial)
   HeIo.mod       I/O handshake for a Modbus TCP gateway (SetGO/SetDO/WaitDI)       (protocol modbus)
+  HeRws.mod      posture handshake in PERS data the PC reads and writes over Robot
+                 Web Services (RobotWare 6/7)                                       (protocol rws)
   HeTool.mod     PERS tooldata of the camera (identity frame until calibrated)
   HeCell.mod     only with motion.speed_override_pct < 100 or cell.world_zones: true: VelSet, and
                  the cell's keep-out volumes as world zones (World Zones option 608-1) on the
@@ -77,7 +79,10 @@ def run(args) -> int:
     for path in paths:
         print(path)
     names = ", ".join(p.name for p in paths)
-    if station.write_key is not None:
+    if (args.protocol or station.protocol) == "rws":
+        print("rws: tool writes are authorised by the controller's users and mastership (no write key, no "
+              "HeKey.sys); handeye capture uploads, loads and starts these modules itself")
+    elif station.write_key is not None:
         (key_path,) = write_modules([render_key(station)], args.output)
         print(key_path)
         print(f"{key_path.name} holds the station's write key (a secret, readable by you only): load it ONCE into the "

@@ -29,6 +29,10 @@ def _link_options(p, backends) -> None:
     p.add_argument("--url", help="serial: device (/dev/ttyUSB0, COM3) or pyserial URL (socket://127.0.0.1:1026)")
     p.add_argument("--baudrate", type=int, default=9600, help="serial: baud rate (default 9600)")
     p.add_argument("--register-map", metavar="MAP.yaml", help="modbus: register map (default: the built-in one)")
+    p.add_argument("--user", default=None, help="rws: controller user (default: RobotWare's 'Default User')")
+    p.add_argument("--password", default=None, help="rws: that user's password (default: RobotWare's default)")
+    p.add_argument("--tls-fingerprint", metavar="SHA256", default=None,
+                   help="rws, RobotWare 7: SHA-256 of the controller's certificate (HTTPS, pinned; default port 443)")
     p.add_argument("--timeout", type=argtypes.positive, default=2.0, metavar="S", help="seconds per call (default 2)")
     p.add_argument("--idle-timeout", type=argtypes.positive, default=5.0, metavar="S",
                    help="the controller's idle timeout (controller.idle_timeout_s, default 5): connecting may wait "
@@ -59,7 +63,8 @@ def _options(args) -> dict:
     from ...drivers.controller.backends import CONTROLLERS, ControllerLink
 
     link = ControllerLink(host=args.host, port=args.port, serial_url=args.url, modbus_map=args.register_map,
-                          baudrate=args.baudrate)
+                          baudrate=args.baudrate, username=args.user, password=args.password,
+                          tls_fingerprint=args.tls_fingerprint)
     options = {"timeout": args.timeout, "retries": 1, "idle_timeout": args.idle_timeout}
     return {**CONTROLLERS[args.protocol].link_options(link), **options}
 
@@ -86,9 +91,15 @@ def run(args) -> int:
             info, status = controller.info(), controller.status()
             data = {"state": status.state, "posture": status.posture, "postures": info.postures,
                     "program": info.program, "protocol_version": info.protocol_version}
+            if hasattr(controller, "controller_state"):  # RWS: the controller's own state too
+                data["controller"] = controller.controller_state()
             if args.json:
                 print(json.dumps(data))
             else:
                 print(f"{info.program} (protocol {info.protocol_version}, {info.postures} approved postures): "
                       f"{status.state} at posture {status.posture}")
+                if "controller" in data:
+                    c = data["controller"]
+                    print(f"controller: {c['ctrlstate']}, mode {c['opmode']}, RAPID {c['execution']}, "
+                          f"RobotWare {c['robotware']}")
     return 0

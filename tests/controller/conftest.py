@@ -8,10 +8,12 @@ import time
 import pytest
 
 from handeye.drivers.controller import open_controller
-from handeye.mocks.controller import mock_protocols, start_mock_controller
+from handeye.mocks.backends import mock_variants
+from handeye.mocks.controller import start_mock_controller
 
-#: Every controller back end a mock serves (the registry's, so a new back end is tested here at once).
-PROTOCOLS = mock_protocols()
+#: Every controller back end a mock serves (the registry's, so a new back end is tested here at once),
+#: each variant of its mock included (RWS 1.0 and RWS 2.0 are both ``rws``).
+PROTOCOLS = mock_variants()
 #: Wall-clock seconds per simulated second of motion in tests (moves take a few ms).
 TIME_SCALE = 0.002
 #: The write key of the test servers (their client_options() carry it to the clients).
@@ -54,7 +56,7 @@ def _no_leaks(no_leaked_threads, no_leaked_sockets):
     yield
 
 
-@pytest.fixture(params=PROTOCOLS)
+@pytest.fixture(params=PROTOCOLS, ids=[getattr(p, "label", p) for p in PROTOCOLS])
 def protocol(request):
     return request.param
 

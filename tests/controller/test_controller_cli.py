@@ -18,6 +18,11 @@ from handeye.station.cli import main
 def _link_args(server):
     if server.protocol == "serial":
         return ["--protocol", "serial", "--url", server.url]
+    if server.protocol == "rws":
+        options = server.client_options()
+        pin = ["--tls-fingerprint", options["tls_fingerprint"]] if "tls_fingerprint" in options else []
+        return ["--protocol", "rws", "--host", server.host, "--port", str(server.port), "--user", options["username"],
+                "--password", options["password"], *pin]
     return ["--protocol", server.protocol, "--host", server.host, "--port", str(server.port)]
 
 
@@ -39,10 +44,13 @@ def test_robot_joints_json(server, capsys):
 
 def test_robot_status_text(server, capsys):
     assert main(["robot", "status", *_link_args(server)]) == 0
-    assert "12 approved postures" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "12 approved postures" in out
+    if server.protocol == "rws":
+        assert f"controller: motoron, mode AUTO, RAPID running, RobotWare {server.robotware}" in out
 
 
-@pytest.mark.parametrize("link", ["socket", "modbus"])
+@pytest.mark.parametrize("link", ["socket", "modbus", "rws"])
 def test_robot_unreachable_is_one_line_without_traceback(capsys, link):
     import socket
 
@@ -59,7 +67,7 @@ def test_robot_serial_needs_a_url(capsys):
     assert "--url" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("protocol", ["socket", "serial", "modbus"])
+@pytest.mark.parametrize("protocol", ["socket", "serial", "modbus", "rws"])
 def test_mock_controller_in_process(protocol, capsys):
     assert main(["mock", "controller", "--protocol", protocol, "--port", "0", "--duration", "0.2"]) == 0
     out = capsys.readouterr().out

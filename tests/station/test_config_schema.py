@@ -80,7 +80,7 @@ def test_the_defaults_are_the_built_in_station():
 
 
 def test_secrets_are_masked_from_their_declaration():
-    assert [f.name for f in fields(station_config.ControllerSettings) if f.metadata["secret"]] == ["write_key"]
+    assert [f.name for f in fields(station_config.ControllerSettings) if f.metadata["secret"]] == ["write_key", "password"]
     keyed = config_from_dict({**REAL, "controller": {"protocol": "socket", "write_key": "a-secret-key"}})
     assert keyed.to_dict()["controller"]["write_key"] == "<set>" and "a-secret-key" not in repr(keyed)
 

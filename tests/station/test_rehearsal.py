@@ -83,7 +83,7 @@ def _stop(proc) -> None:
         proc.communicate()
 
 
-@pytest.mark.parametrize("protocol", ["socket", "modbus"])
+@pytest.mark.parametrize("protocol", ["socket", "modbus", "rws"])
 def test_capture_calibrate_writeback_against_the_standalone_mock(tmp_path, capsys, protocol):
     proc, link, mock_arm = _start_mock(protocol)
     try:
@@ -98,6 +98,8 @@ def test_capture_calibrate_writeback_against_the_standalone_mock(tmp_path, capsy
         # loaded into the mock controller and executed
         assert "10 of 10 postures" in out and (session / "rapid" / "HeMain.mod").is_file()
         assert session_origin(read_session(session)) == "mock"
+        if protocol == "rws":  # the PC itself uploaded, loaded and started the program over RWS, and stopped it
+            assert "RAPID program stopped" in out
 
         assert main(["calibrate", str(session)]) == 0
         assert "MOCK SESSION" in capsys.readouterr().out

@@ -36,7 +36,7 @@ def test_dry_run_prints_the_rapid_literal(tmp_path, capsys):
     assert not list(path.glob("tooldata_backup_*"))  # nothing touched
 
 
-@pytest.mark.parametrize("protocol", ["socket", "serial", "modbus"])
+@pytest.mark.parametrize("protocol", ["socket", "serial", "modbus", "rws"])
 def test_writes_reads_back_and_keeps_a_backup(tmp_path, no_leaked_threads, protocol):
     from handeye.calibration.solve import calibrate
     from handeye.mocks.station import MockStationSpec
@@ -88,7 +88,7 @@ def test_bad_tool_values_are_refused_before_sending(tmp_path):
         writeback(tmp_path, replace(config, tool=replace(config.tool, mass_kg=0.0)), calibrate(prob), None, dry_run=True)
 
 
-@pytest.mark.parametrize("protocol, postures", [("socket", 30), ("serial", 12), ("modbus", 12)])
+@pytest.mark.parametrize("protocol, postures", [("socket", 30), ("serial", 12), ("modbus", 12), ("rws", 12)])
 def test_demo_recovers_the_hidden_mount(tmp_path, protocol, postures, capsys, no_leaked_threads):
     """The demo on every link: the capture's own RAPID modules are loaded into the mock and executed."""
     out = tmp_path / "demo.json"
