@@ -25,7 +25,12 @@ weighted by its stereo covariance (``noise.py``: far noisier in depth than sidew
 corner-noise variance components estimated from the fit residuals. Sessions of board poses only
 get ``C_B,i`` from components in the board frame: tilt (rotation about the board's in-plane axes,
 poorly seen by one camera), spin (about its normal), depth (along the camera's optical axis) and an
-isotropic position noise (which an isotropic flange position noise could not be told from).
+isotropic position noise (which an isotropic flange position noise could not be told from). A
+board pose measured by one camera is best determined at the middle of what the camera sees, so its
+tilt turns the board about that point and moves a corner origin with it (``ρ = ρ_c + c x φ``): the
+point ``c`` (board frame, unknown in a session of poses) is found by restricted maximum likelihood
+and kept when the likelihood ratio exceeds :data:`CENTRE_LR` (chi-square, 3 degrees of freedom,
+p = 0.001), so poses whose rotation and position errors are independent keep the origin model.
 ``C_A,i = σ_q² J_i J_i^T + σ_p² I_pos`` with the flange Jacobian ``J_i`` of the robot model when the
 session holds joint angles (joint noise, and position noise for what joints cannot shape); else
 flange rotation and translation noise in the flange frame.
@@ -98,6 +103,9 @@ __all__ = [
     "angle_gaps_deg",
     "varied_rotation_subset",
     "initial_board_pose",
+    "CENTRE_LR",
+    "centred",
+    "board_centre",
 ]
 
 #: Above this many (invariant-consistent) postures, mcb starts from a subset of this size.
@@ -312,6 +320,116 @@ def _pose_components(hand_comps: tuple, target2cam: np.ndarray, model: np.ndarra
     hand_comps = tuple(c for c in hand_comps if c.name != "flange_translation")
     return hand_comps + (Component("camera_tilt", "board", tilt), Component("camera_spin", "board", spin),
                          Component("position", "board", pos), Component("camera_depth", "board", depth))
+
+
+#: Board-frame rotation components of sessions of board poses, per unit variance about the board origin.
+_ROTATION_BASES = {"camera_tilt": np.diag([0.0, 0.0, 0.0, 1.0, 1.0, 0.0]), "camera_spin": np.diag([0.0, 0.0, 0.0, 0.0, 0.0, 1.0])}
+#: Likelihood ratio above which the board's rotation noise is modelled about a fitted centre (chi-square,
+#: 3 degrees of freedom, p = 0.001).
+CENTRE_LR = 16.27
+#: Lower bound of the variances while the centre is searched (mm², rad²): keeps every ``S_i`` invertible.
+CENTRE_THETA_FLOOR = 1e-12
+
+
+def _lever(centre) -> np.ndarray:
+    """``[[I, [c]x], [0, I]]``: a twist about the board point ``c`` as a twist about the board origin."""
+    out = np.eye(6)
+    out[:3, 3:] = skew(np.asarray(centre, float))
+    return out
+
+
+def centred(obs: "Observations", centre) -> "Observations":
+    """Observations whose board rotation noise (tilt, spin) turns the board about the board point ``centre``.
+
+    A board pose measured by one camera is best determined at the middle of what the camera sees:
+    its tilt error turns the board about that point, so the board origin (a corner) moves with the
+    tilt, ``ρ = ρ_c + c x φ``. ``centre`` is that point in the board frame (mm).
+    """
+    lever = _lever(centre)
+    comps = tuple(replace(c, structure=np.broadcast_to(lever @ _ROTATION_BASES[c.name] @ lever.T, (obs.n, 6, 6)).copy())
+                  if c.side == "board" and c.name in _ROTATION_BASES else c for c in obs.components)
+    return replace(obs, components=comps, notes={**obs.notes, "camera_centre_mm": np.asarray(centre, float)})
+
+
+def _centre_nll(params, r, jac, g, rotation) -> tuple[float, np.ndarray]:
+    """Minus the restricted log-likelihood at fixed ``X, T`` (constants dropped) of the variance
+    components ``θ = CENTRE_THETA_FLOOR + exp(params[3:])`` (never below the floor, so every ``S_i``
+    stays invertible), the board rotation components about the centre ``params[:3]``, and its
+    gradient: ``½ (tr(W D) - tr(M C^T W D W C) - r^T W D W r)`` for ``D = dS/dp``."""
+    lever = _lever(params[:3])
+    scale = np.exp(params[3:])
+    theta = CENTRE_THETA_FLOOR + scale
+    moved = np.array([lever @ gk @ lever.T if about else gk for gk, about in zip(g, rotation)])
+    s = np.tensordot(theta, moved, axes=1)
+    sign, logdet = np.linalg.slogdet(s)
+    if np.any(sign <= 0):
+        return float("inf"), np.zeros(len(params))
+    w = np.linalg.inv(s)
+    wj = w @ jac
+    normal = _sum_t(jac, wj)
+    sign_m, logdet_m = np.linalg.slogdet(normal)
+    if sign_m <= 0:
+        return float("inf"), np.zeros(len(params))
+    wr = (w @ r[..., None])[..., 0]
+    # every derivative D of S enters as sum_i <P_i, D_i>, P_i = W_i - (W C M C^T W)_i - W_i r_i r_i^T W_i
+    p = w - wj @ np.linalg.inv(normal) @ np.swapaxes(wj, 1, 2) - wr[:, :, None] * wr[:, None, :]
+    grad = np.empty(len(params))
+    grad[3:] = (moved.reshape(len(moved), -1) @ p.reshape(-1)) * scale  # d / d params[3 + k]
+    # d / dc_a: dS = sum_k θ_k (E_a G_k L^T + L G_k E_a^T), E_a = dL/dc_a, so <P, dS> = 2 <E_a, sum θ_k P L G_k>
+    plg = np.sum(p @ lever @ np.tensordot(theta[rotation], g[rotation], axes=1), axis=0)
+    grad[:3] = 2.0 * np.array([np.sum(skew(np.eye(3)[a]) * plg[:3, 3:]) for a in range(3)])
+    value = 0.5 * float(np.sum(logdet) + logdet_m + np.einsum("ni,ni->", r, wr))
+    return value, 0.5 * grad
+
+
+def board_centre(obs: "Observations", fit: "MLFit", keep, start) -> tuple[np.ndarray, np.ndarray] | None:
+    """The board point about which the board's rotation noise acts, by restricted maximum likelihood.
+
+    ``obs`` holds the rotation components about the board origin; the residuals of ``fit`` (its
+    ``X, T``) are held, the centre and the variance components (bounded below by
+    :data:`CENTRE_THETA_FLOOR`) searched together (BFGS). Returns the centre (mm) and the
+    variance components, ``None`` when the search fails.
+    """
+    from scipy.optimize import minimize  # noqa: PLC0415
+
+    keep = np.asarray(keep, bool)
+    sub = obs.subset(keep)
+    rotation = np.array([c.side == "board" and c.name in _ROTATION_BASES for c in sub.components])
+    start_theta = np.log(np.maximum(fit.theta - CENTRE_THETA_FLOOR, CENTRE_THETA_FLOOR))
+    try:
+        found = minimize(_centre_nll, np.concatenate([start, start_theta]), method="BFGS", jac=True,
+                         args=(fit.residuals[keep], _jacobians(sub), _structures(sub, fit.x), rotation))
+    except (np.linalg.LinAlgError, ValueError):
+        return None
+    if not (np.all(np.isfinite(found.x)) and np.isfinite(found.fun)):
+        return None
+    return found.x[:3], CENTRE_THETA_FLOOR + np.exp(found.x[3:])
+
+
+def _centre_test(obs: "Observations", fit: "MLFit", keep, kinematic: bool):
+    """Board rotation noise about a fitted centre (sessions of board poses), kept when the likelihood
+    ratio of the restricted likelihoods exceeds :data:`CENTRE_LR`; the centre and the fit are found
+    alternately (twice). Returns the observations and the fit to go on with, and the report."""
+    rotation = [c.name for c in obs.components if c.side == "board" and c.name in _ROTATION_BASES]
+    if obs.mode != "poses" or not rotation or 6 * int(np.sum(keep)) - 12 <= len(obs.components) + 3:
+        return obs, fit, {"modelled": False, "reason": "board poses fitted to corners, or too few postures"}
+    centre, current = np.zeros(3), fit
+    for _ in range(2):
+        found = board_centre(obs, current, keep, centre)
+        if found is None:
+            break
+        centre = found[0]
+        # the restricted likelihood can have more than one maximum (a component pinned at its floor):
+        # from the search's components and from the usual start of every fit, the higher one
+        fits = [fit_ml(centred(obs, centre), current.x, current.target, theta0, keep=keep, kinematic=kinematic,
+                       kinematic0=fit.kinematic, kinematic_var0=fit.kinematic_var) for theta0 in (found[1], None)]
+        current = max(fits, key=lambda f: f.loglik)
+    lr = 2.0 * (current.loglik - fit.loglik)
+    report = {"modelled": bool(lr > CENTRE_LR), "likelihood_ratio": float(lr), "threshold": CENTRE_LR}
+    if not report["modelled"]:
+        return obs, fit, report
+    report["centre_mm"] = [float(v) for v in centre]
+    return centred(obs, centre), current, report
 
 
 # --------------------------------------------------------------------------------------- the fit
@@ -826,6 +944,8 @@ def _noise_report(obs: Observations, fit: MLFit) -> dict:
         out["camera"]["corner_rms_mm"] = float(np.sqrt(np.mean(np.trace(obs.point_cov, axis1=-2, axis2=-1))))
         out["camera"]["degrees_of_freedom"] = int(obs.corner.dof)
     board_cov = obs.board_cov.copy()
+    if "camera_centre_mm" in obs.notes:  # tilt and spin turn the board about this board point
+        out["camera"]["rotation_centre_mm"] = [float(v) for v in obs.notes["camera_centre_mm"]]
     for comp, theta in zip(obs.components, fit.theta):
         if comp.name == "joint":
             out["robot"]["joint_deg"] = float(np.sqrt(theta))
@@ -971,7 +1091,7 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
     rounds = 0
     kinematic = False  # posture-independent robot errors until the test below says otherwise
     tested = obs.kinematic is None
-    lr = None
+    lr = centre = None
     for rounds in range(1, MAX_ROUNDS + 2):
         keep = ~flags
         warm = {} if fit is None else {"t0": fit.target, "theta0": fit.theta, "kinematic0": fit.kinematic,
@@ -985,6 +1105,8 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
             lr = 2.0 * (kin_fit.loglik - fit.loglik)
             if lr > KINEMATIC_LR:
                 fit, kinematic = kin_fit, True
+        if centre is None:  # board poses only: the board's rotation noise about a fitted centre (CENTRE_LR)
+            obs, fit, centre = _centre_test(obs, fit, keep, kinematic)
         x = fit.x
         new_flags = _outlier_flags(problem, fit, gaps, gap_flags)
         report(1 + rounds, total + rounds, f"ML fit, round {rounds}: {int(new_flags.sum())} outlier postures")
@@ -1002,20 +1124,27 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
             cv_dict["systematic"] = True
             cv_dict["advice"] = KINEMATIC_ADVICE + ("; " + cv_dict["advice"] if "advice" in cv_dict else "")
         report(total + rounds, total + rounds, "cross-validation done")
-    details = {
+    details = _details(problem, obs, fit, start, rounds, _kinematic_report(obs, fit, kinematic, lr), centre, gaps)
+    return EivSolution(fit.x, flags, residual_mm, fit, obs, uncertainty, details, cv_dict, cv)
+
+
+def _details(problem: HandEyeProblem, obs: Observations, fit: MLFit, start: dict, rounds: int, kinematics: dict,
+             centre: dict, gaps: np.ndarray) -> dict:
+    """The result's ``details`` entry of the default estimator."""
+    return {
         "estimator": "maximum likelihood, errors in variables (calibration/eiv.py)",
         "start": start,
         "outlier_rounds": rounds,
         "fit": {"iterations": int(fit.iterations), "converged": bool(fit.converged), "mode": obs.mode,
                 "components": {c.name: float(t) for c, t in zip(obs.components, fit.theta)}},
-        "kinematics": _kinematic_report(obs, fit, kinematic, lr),
+        "kinematics": kinematics,
+        "camera_centre": centre,
         "noise": _noise_report(obs, fit),
         "mahalanobis": {str(int(i)): float(d) for i, d in zip(problem.posture_ids, fit.mahalanobis)},
         "angle_gap_deg": {str(int(i)): float(g) for i, g in zip(problem.posture_ids, gaps)},
         "target_pose": {"position_mm": [float(v) for v in fit.target[:3, 3]],
                         "rotation_matrix": [[float(v) for v in row] for row in fit.target[:3, :3]]},
     }
-    return EivSolution(fit.x, flags, residual_mm, fit, obs, uncertainty, details, cv_dict, cv)
 
 
 MAX_ROUNDS = 5
