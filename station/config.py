@@ -197,7 +197,9 @@ class ControllerSettings:
     protocol: str = setting(MOCK, Text(lambda: controller_protocols() + (MOCK,)),
                             "link protocol: a registered back end (socket, serial, modbus), or mock", required=True)
     host: str = setting("127.0.0.1", Text(), "controller (socket) or gateway (modbus) address")
-    port: int = setting(1025, Number(1, 65535, integer=True), "RAPID socket server port (modbus: the gateway's port)")
+    port: int | None = setting(None, Optional(Number(1, 65535, integer=True)),
+                               "TCP port (null: the link's own: socket 1025, modbus 502, rws 80, or 443 with "
+                               "tls_fingerprint)")
     serial_url: str = setting("socket://127.0.0.1:1026", Text(), "serial: device or pyserial URL")
     modbus_map: str | None = setting(None, Optional(Text()), "modbus: register map YAML (null: the built-in one)")
     timeout_s: float = setting(2.0, Number(0.001, 3600), "budget of one request", "s")
@@ -361,7 +363,7 @@ class StationConfig:
         out = {
             "robot": self.robot,
             "controller": {"protocol": self.link_protocol, "pc_address": c.pc_address, "controller_address": c.controller_address,
-                           "port": c.port, "serial_channel": c.serial_channel, "ack_timeout_s": c.ack_timeout_s,
+                           **({"port": c.port} if c.port is not None else {}), "serial_channel": c.serial_channel, "ack_timeout_s": c.ack_timeout_s,
                            "idle_timeout_s": c.idle_timeout_s, "write_key": c.write_key},
             "motion": {"speed_tcp_mm_s": self.motion.speed_tcp_mm_s, "speed_ori_deg_s": self.motion.speed_ori_deg_s,
                        "speed_override_pct": self.motion.speed_override_pct},

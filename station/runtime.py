@@ -133,8 +133,11 @@ def check_rehearsal(config: StationConfig) -> dict:
         same = served["protocol"] == "serial" and served.get("url") == c.serial_url
         named = c.serial_url
     else:
-        same = served["protocol"] == c.protocol and served["port"] == c.port and _same_host(served["host"], c.host)
-        named = f"{c.protocol} {c.host}:{c.port}"
+        from ..drivers.controller.backends import CONTROLLERS
+
+        port = CONTROLLERS[c.protocol].link_options(c).get("port")
+        same = served["protocol"] == c.protocol and served["port"] == port and _same_host(served["host"], c.host)
+        named = f"{c.protocol} {c.host}:{port}"
     if not same:
         where = served.get("url") or f"{served['host']}:{served['port']}"
         raise ConfigError(f"camera.mock_arm {config.camera.mock_arm} is the camera of the mock {served['protocol']} "

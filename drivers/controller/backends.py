@@ -129,9 +129,9 @@ def _modbus_options(link: ControllerLink, backend: ControllerBackend) -> dict:
 
 
 def _rws_options(link: ControllerLink, backend: ControllerBackend) -> dict:
-    options = {"host": link.host}
-    if link.port is not None:
-        options["port"] = link.port  # None: 80 (RWS 1.0, HTTP) or 443 (with a fingerprint: RWS 2.0, HTTPS)
+    # no port named: 443 with a certificate fingerprint (RWS 2.0, HTTPS), else 80 (RWS 1.0, HTTP)
+    default = backend.default_port if link.tls_fingerprint is None else 443
+    options = {"host": link.host, "port": link.port if link.port is not None else default}
     for name in ("username", "password", "tls_fingerprint"):
         if getattr(link, name) is not None:
             options[name] = getattr(link, name)

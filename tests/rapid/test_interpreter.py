@@ -203,6 +203,14 @@ def test_waituntil_polls_and_times_out_with_a_flag():
     assert value(task, "late") is True and time.monotonic() - start >= 0.25
 
 
+
+def test_waituntil_accepts_the_manuals_lowest_poll_rate_and_refuses_less():
+    """0.01 s is the manual's lowest \\PollRate; a num holds it as float32 (a hair below 0.01), still allowed."""
+    task = run("    WaitUntil TRUE \\PollRate:=0.01;\n    x := 1;", "  VAR num x;")
+    assert value(task, "x") == 1
+    assert "PollRate must be >= 0.01 s" in failing("    WaitUntil TRUE \\PollRate:=0.005;").error
+
+
 # ---------------------------------------------------------------------------------------- load-time checks
 @pytest.mark.parametrize("body, data, message", [
     ("    MoveL p, v100, fine, tool0;", "", "T.mod:5: unknown instruction MoveL"),

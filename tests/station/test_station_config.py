@@ -52,3 +52,18 @@ def test_rapid_generate_reads_the_station_config(tmp_path):
     config.write_text(EXAMPLE_FILE.read_text())
     assert main(["rapid", "generate", "--config", str(config), "-o", str(tmp_path / "out")]) == 0
     assert (tmp_path / "out" / "HeMain.mod").exists()
+
+
+@pytest.mark.parametrize("protocol, extra, port", [
+    ("socket", {}, 1025), ("modbus", {}, 502), ("rws", {}, 80),
+    ("rws", {"tls_fingerprint": "ab" * 32}, 443), ("modbus", {"port": 5020}, 5020), ("rws", {"port": 8080}, 8080)])
+def test_a_config_without_a_port_connects_to_the_links_own(protocol, extra, port):
+    """controller.port left out means the link's own port (a Modbus gateway is not on the RAPID server's
+    1025, an RWS controller is on 80 or 443); a named port wins."""
+    from handeye.drivers.controller.backends import CONTROLLERS
+
+    config = config_from_dict({"controller": {"protocol": protocol, "host": "10.0.0.2", **extra},
+                               "camera": {"backend": "xb3"}})
+    assert CONTROLLERS[protocol].link_options(config.controller)["port"] == port
+    rapid = config.rapid_dict([[0.0] * 6])["controller"]
+    assert rapid.get("port", 1025) == (extra.get("port", 1025))  # the RAPID socket server's own default

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
 from ..errors import RapidFatalError, RapidRuntimeError
 from ..frames import StopSignal
 from ..values import format_value, to_num
@@ -70,7 +72,7 @@ def _waittime(task, a):
 def _waituntil(task, a):
     _, condition, max_time, flag, poll = a
     poll = 0.1 if poll is None else poll  # the manual's default polling rate
-    if poll < 0.01:
+    if poll < float(np.float32(0.01)):  # a num holds 0.01 as its float32 value, a hair below 0.01
         raise RapidFatalError(f"WaitUntil \\PollRate must be >= 0.01 s; got {poll:g}")
     wait_for(task, condition, max_time, flag, poll, "WaitUntil")
 
