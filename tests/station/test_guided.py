@@ -169,3 +169,24 @@ def test_the_arm_counts_as_still_once_per_rest():
     assert not watch.update(joints + 1.0, 5.1)  # moved
     assert not watch.update(joints + 1.0, 5.5)
     assert watch.update(joints + 1.0, 6.2)
+
+
+def test_guided_over_rws_reads_the_joints_with_no_program_running(tmp_path):
+    """On a controller with Robot Web Services the PC reads the joints from the controller itself: guided
+    capture needs no RAPID program (no Multitasking option for jogging while it runs)."""
+    config = _config()
+    config = replace(config, mock=replace(config.mock, protocol="rws"))
+    poses = _operator_poses(config)[:4]
+    captured = []
+    with open_station(config, mock=True) as link:
+        link.controller.stop_program()
+        assert link.controller.controller_state()["execution"] == "stopped"
+        stop = threading.Event()
+        operator = _jog_through(link, poses, captured, stop)
+        summary = guided_capture(config, tmp_path / "g", link, on_posture=captured.append, stop=stop)
+        operator.join()
+        assert link.controller.controller_state()["execution"] == "stopped"
+    assert summary.captured == [0, 1, 2, 3]
+    session = read_session(tmp_path / "g")
+    assert [p.index for p in session.postures] == [0, 1, 2, 3]
+    assert all(np.allclose(p.joints_deg, q, atol=1e-3) for p, q in zip(session.postures, poses))
