@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from .errors import brief
 from .problem import EYE_IN_HAND, EYE_TO_HAND, SETUPS, hand_poses
 from .transforms import invert_transforms, rotation_error_deg
 
@@ -441,7 +442,7 @@ def find_setup_mismatch(tool0_in_base, target_in_camera, setup: str,
     like the other set-up to the rotations) and the finding is ``rotation_convention``.
     """
     if setup not in SETUPS:
-        raise ValueError(f"setup must be one of {', '.join(SETUPS)}; got {setup!r}")
+        raise ValueError(f"setup must be one of {', '.join(SETUPS)}; got {brief(setup)}")
     residuals = setup_rotation_residuals(tool0_in_base, target_in_camera, limits)
     other = EYE_TO_HAND if setup == EYE_IN_HAND else EYE_IN_HAND
     mine, theirs = residuals[setup], residuals[other]

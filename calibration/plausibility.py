@@ -24,7 +24,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .errors import CalibrationError
+from .errors import CalibrationError, brief
 
 __all__ = [
     "MIN_DISTANCE_MM",
@@ -203,7 +203,7 @@ def session_in_mm(session, units: str = "mm"):
     converted corners, so a square size in the wrong unit is still refused).
     """
     if units not in UNITS:
-        raise UnitsError(f"units must be one of {', '.join(UNITS)}; got {units!r}")
+        raise UnitsError(f"units must be one of {', '.join(UNITS)}; got {brief(units)}")
     factor = UNITS[units]
     if factor == 1.0:
         return session

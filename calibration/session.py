@@ -150,7 +150,7 @@ def create_session(path, session: Session, overwrite: bool = False) -> Path:
     if (path / "session.yaml").exists() and not overwrite:
         raise SessionError(f"{path} already holds a session; choose another folder or pass --overwrite")
     if session.setup not in SETUPS:
-        raise SessionError(f"setup must be one of {', '.join(SETUPS)}; got {session.setup!r}")
+        raise SessionError(f"setup must be one of {', '.join(SETUPS)}; got {brief(session.setup)}")
     if overwrite and (path / "postures").is_dir():
         for old in (path / "postures").glob("*.yaml"):
             try:

@@ -142,7 +142,7 @@ def _mock_arm(value, key: str, context) -> str:
 def _rapid_name(value, key: str, context) -> str:
     name = text(value, key)
     if not (name[0].isalpha() and name.replace("_", "a").isalnum() and len(name) <= 32):
-        raise ConfigError(f"{key} must be a RAPID identifier (letter first, letters/digits/_, <= 32); got {name!r}")
+        raise ConfigError(f"{key} must be a RAPID identifier (letter first, letters/digits/_, <= 32); got {brief(name)}")
     return name
 
 

@@ -508,3 +508,20 @@ def test_broken_pipe_is_still_quiet(monkeypatch, capsys):
     assert main(["simulate", "-o", "x"]) == 0
     assert capsys.readouterr().err == ""
 
+
+
+@pytest.mark.parametrize("key", ["setup", "units", "quaternion_order"])
+def test_a_huge_value_is_quoted_briefly_in_the_one_line_error(tmp_path, key):
+    """Found by the fuzz test: a list of 600-digit numbers where a word belongs was echoed whole (12,000
+    characters); the message quotes it briefly."""
+    from handeye.calibration.errors import HandEyeError
+    from handeye.station.importers.plain import read_plain
+
+    data = {"setup": "eye_in_hand", "units": "mm", "quaternion_order": "wxyz", "postures": []}
+    data[key] = [10**600] * 3
+    path = tmp_path / "in.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(HandEyeError) as error:
+        read_plain(path)
+    message = str(error.value)
+    assert key in message and "\n" not in message and len(message) < 300 + len(str(path))

@@ -13,6 +13,7 @@ import struct
 from dataclasses import dataclass
 from pathlib import Path
 
+from ...calibration.errors import brief
 from ...calibration.files import parse_yaml, read_text_file
 from .errors import ConfigError
 
@@ -163,10 +164,10 @@ def load_register_map(path=None) -> RegisterMap:
         raise _bad(source, "expected 'format: handeye-modbus-map/1'")
     word_order = data.get("word_order")
     if word_order not in ("big", "little"):
-        raise _bad(source, f"word_order must be 'big' or 'little'; got {word_order!r}")
+        raise _bad(source, f"word_order must be 'big' or 'little'; got {brief(word_order)}")
     device_id = data.get("device_id", 1)
     if isinstance(device_id, bool) or not isinstance(device_id, int) or not 0 <= device_id <= 247:
-        raise _bad(source, f"device_id must be 0..247; got {device_id!r}")
+        raise _bad(source, f"device_id must be 0..247; got {brief(device_id)}")
     entries = data.get("registers")
     if not isinstance(entries, dict):
         raise _bad(source, "missing 'registers'")
@@ -179,9 +180,9 @@ def load_register_map(path=None) -> RegisterMap:
             raise _bad(source, f"register {name}: unknown keys {sorted(unknown)}")
         address, kind, count = spec.get("address"), spec.get("type"), spec.get("count", 1)
         if isinstance(address, bool) or not isinstance(address, int) or not 0 <= address <= 65535:
-            raise _bad(source, f"register {name}: address must be 0..65535; got {address!r}")
+            raise _bad(source, f"register {name}: address must be 0..65535; got {brief(address)}")
         if kind not in _WIDTH:
-            raise _bad(source, f"register {name}: type must be uint16, uint32 or float32; got {kind!r}")
+            raise _bad(source, f"register {name}: type must be uint16, uint32 or float32; got {brief(kind)}")
         if isinstance(count, bool) or not isinstance(count, int) or count < 1:
             raise _bad(source, f"register {name}: count must be >= 1; got {count!r}")
         access = spec.get("access")

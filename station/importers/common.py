@@ -74,19 +74,19 @@ class Dropped:
 
 def check_setup(setup):
     if setup is not None and setup not in SETUPS:
-        raise SessionError(f"setup must be one of {', '.join(SETUPS)}; got {setup!r}")
+        raise SessionError(f"setup must be one of {', '.join(SETUPS)}; got {brief(setup)}")
     return setup
 
 
 def check_units(units):
     if units is not None and units not in UNITS:
-        raise SessionError(f"units must be 'm' or 'mm'; got {units!r}")
+        raise SessionError(f"units must be 'm' or 'mm'; got {brief(units)}")
     return units
 
 
 def check_quaternion_order(order):
     if order not in QUATERNION_ORDERS:
-        raise SessionError(f"quaternion order must be 'wxyz' (scalar first) or 'xyzw' (scalar last); got {order!r}")
+        raise SessionError(f"quaternion order must be 'wxyz' (scalar first) or 'xyzw' (scalar last); got {brief(order)}")
     return order
 
 

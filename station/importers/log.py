@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...calibration.errors import SessionError
+from ...calibration.errors import SessionError, brief
 from ...calibration.session import Session, parse_yaml
 from .common import QUATERNION_ORDERS, Dropped, build_session, parse_json, read_text
 from .conventions import POSE_WIDTHS, PoseConvention, conventions_for_width, parse_rotation_spec, vendor_units
@@ -495,7 +495,7 @@ def read_log(paths, *, setup=None, units=None, board=None, skip_invalid: bool = 
         (naming the flag that does).
     """
     if quaternion_order is not None and quaternion_order not in QUATERNION_ORDERS:
-        raise SessionError(f"quaternion order must be wxyz or xyzw; got {quaternion_order!r}")
+        raise SessionError(f"quaternion order must be wxyz or xyzw; got {brief(quaternion_order)}")
     files = _sources(paths)
     if len(files) == 1:
         alternatives = _file_alternatives(files[0])

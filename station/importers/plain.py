@@ -229,13 +229,13 @@ def read_plain_json(path, *, setup=None, units=None, board=None, skip_invalid: b
         raise SessionError(f"{path}: expected an object with a 'postures' list (or a list of postures)")
     declared_setup = data.get("setup")
     if declared_setup is not None and declared_setup not in SETUPS:
-        raise SessionError(f"{path}: setup must be one of {', '.join(SETUPS)}; got {declared_setup!r}")
+        raise SessionError(f"{path}: setup must be one of {', '.join(SETUPS)}; got {brief(declared_setup)}")
     file_units = data.get("units")
     if file_units is not None and file_units not in UNITS:
-        raise SessionError(f"{path}: units must be 'm' or 'mm'; got {file_units!r}")
+        raise SessionError(f"{path}: units must be 'm' or 'mm'; got {brief(file_units)}")
     order = quaternion_order or data.get("quaternion_order", "wxyz")
     if order not in QUATERNION_ORDERS:
-        raise SessionError(f"{path}: quaternion_order must be 'wxyz' or 'xyzw'; got {order!r}")
+        raise SessionError(f"{path}: quaternion_order must be 'wxyz' or 'xyzw'; got {brief(order)}")
     if board is None:
         board = _json_board(data.get("target"), path)
     dropped = Dropped()

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ...calibration.errors import SessionError
+from ...calibration.errors import SessionError, brief
 from ...calibration.session import Session
 from .common import (
     Dropped,
@@ -250,7 +250,7 @@ def read_stream(paths, *, setup=None, units=None, board=None, skip_invalid: bool
     check_units(units)
     check_quaternion_order(quaternion_order)
     if camera_pose is not None and camera_pose not in CAMERA_POSES:
-        raise SessionError(f"camera pose must be one of {', '.join(CAMERA_POSES)}; got {camera_pose!r}")
+        raise SessionError(f"camera pose must be one of {', '.join(CAMERA_POSES)}; got {brief(camera_pose)}")
     if not (tolerance_s > 0):
         raise SessionError(f"the pairing tolerance must be positive; got {tolerance_s}")
     if max_postures < 0 or (0 < max_postures < 3):
