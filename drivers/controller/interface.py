@@ -99,6 +99,9 @@ class Controller(ABC):
         controller). :meth:`set_tool` refuses to write without it. Never printed.
     """
 
+    #: What a connection failure tells the operator to check (a back end with no RAPID server overrides it).
+    unreachable_hint = "check that the RAPID program runs and the address/port"
+
     #: Back-end name; set by subclasses (the name it is registered under).
     protocol = "abstract"
     #: Whether tool writes need the station's write key (False where the link authorises writes by
@@ -224,7 +227,7 @@ class Controller(ABC):
                 if failures > self.retries or left <= delay:
                     raise self.connection_error(
                         f"{what}: no link to the controller at {self.address} ({exc}) after {failures} attempt(s) "
-                        f"in {time.monotonic() - deadline.start:.1f} s; check that the RAPID program runs and the address/port") from None
+                        f"in {time.monotonic() - deadline.start:.1f} s; {self.unreachable_hint}") from None
                 log.info("%s: link to %s down (%s); reconnecting in %.3f s", what, self.address, exc, delay)
                 time.sleep(delay)
                 delay = min(2 * delay, self.backoff_max_s)

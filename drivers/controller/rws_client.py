@@ -176,6 +176,10 @@ class RwsController(Controller):
         not used: RWS authorises writes by its users).
     """
 
+    #: No RAPID program serves RWS: the controller's web server does.
+    unreachable_hint = ("check the address/port (RobotWare 6: HTTP, port 80; RobotWare 7: HTTPS, port 443 with "
+                        "controller.tls_fingerprint) and that this PC reaches the controller's Robot Web Services")
+
     protocol = "rws"
     writes_need_key = False
 
@@ -555,7 +559,8 @@ class RwsController(Controller):
         if abs(norm - 1.0) > 1e-4:
             raise self.protocol_error(f"flange quaternion from {self.address} is not unit (norm {norm:.6g})")
         q = np.round(q / norm, 6)
-        return FlangePose(p, -q if q[0] < 0 else q)
+        q = (-q if q[0] < 0 else q) + 0.0  # + 0.0: no -0.0 in what is printed
+        return FlangePose(p + 0.0, q)
 
     def controller_state(self, timeout=None) -> dict:
         """``{"ctrlstate": "motoron", "opmode": "AUTO", "execution": "running", "robotware": "6.08"}``."""
