@@ -22,6 +22,7 @@ import numpy as np
 from .errors import InvalidRequest, ProtocolError, StationError
 from .interface import Controller, Deadline, LinkDown
 from .modbus_map import STATE_NAMES, load_register_map
+from .polled import PolledHandshake
 from .protocol import E_AUTH, E_BUSY, E_STATE, E_TOOL, ERROR_CODES, KEY_TRIES, PROTOCOL_VERSION, write_key_code
 from .types import ACKED, AT, ERROR, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_posture_index, check_timeout
 
@@ -57,7 +58,7 @@ class ModbusExceptionResponse(ProtocolError):
         self.exception_code = exception_code
 
 
-class ModbusController(Controller):
+class ModbusController(PolledHandshake, Controller):
     """The I/O-handshake RAPID program through a Modbus TCP gateway.
 
     Parameters
@@ -277,28 +278,6 @@ class ModbusController(Controller):
                                      f"acknowledge posture {raw['posture']} first", E_BUSY)
         self._call(f"request posture {k}", lambda d: self._write_named(d, {"request": k}), deadline=deadline)
         self._requested = k
-
-    def wait_at_rest(self, k=None, timeout=None, *, deadline=None) -> ControllerStatus:
-        deadline = deadline or Deadline(self.motion_timeout if timeout is None else check_timeout("timeout", timeout))
-        pending = self._requested if (k is None or k == self._requested) else 0
-
-        def done(raw):
-            if raw["state"] == ERROR:
-                return True
-            if raw["state"] == READY:
-                return not pending  # a request not yet picked up by the robot reads READY too
-            return raw["state"] != MOVING
-
-        raw = self._wait_for("wait for the robot" if k is None else f"wait for posture {k}", done, deadline)
-        if raw["state"] == ERROR:
-            code = raw["error"]
-            self._clear_request(deadline)
-            raise self.refused_error(f"robot at {self.address} refused posture {pending or k}: "
-                                     f"{ERROR_CODES.get(code, 'error')} (error {code})", code)
-        status = ControllerStatus(raw["state"], raw["posture"])
-        if k is not None and not status.at_posture(k):
-            raise self.refused_error(f"robot is {status.state} at posture {status.posture}, not at posture {k}", E_STATE)
-        return status
 
     def acknowledge(self, k: int, timeout=None) -> ControllerStatus:
         k = check_posture_index(k)

@@ -42,7 +42,8 @@ import numpy as np
 
 from .errors import ControllerRefused, InvalidRequest
 from .interface import Controller, Deadline, LinkDown
-from .protocol import E_BUSY, E_STATE, ERROR_CODES, PROTOCOL_VERSION
+from .polled import PolledHandshake
+from .protocol import E_BUSY, E_STATE, PROTOCOL_VERSION
 from .types import ACKED, AT, ERROR, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_posture_index, check_timeout
 
 __all__ = ["RwsController", "RateLimiter", "STATE_NAMES", "rapid_literal", "parse_rapid_value", "tooldata_value"]
@@ -143,7 +144,7 @@ def _tool_of(value) -> ToolData:
         raise ValueError(f"not a tooldata value ({exc})") from None
 
 
-class RwsController(Controller):
+class RwsController(PolledHandshake, Controller):
     """An IRC5 (RobotWare 6) or OmniCore (RobotWare 7) controller through Robot Web Services.
 
     Parameters
@@ -641,28 +642,6 @@ class RwsController(Controller):
         self._check_running(deadline, f"request posture {k}")
         self._write_pc(f"request posture {k}", k, 0, deadline)
         self._requested = k
-
-    def wait_at_rest(self, k=None, timeout=None, *, deadline=None) -> ControllerStatus:
-        deadline = deadline or Deadline(self.motion_timeout if timeout is None else check_timeout("timeout", timeout))
-        pending = self._requested if (k is None or k == self._requested) else 0
-
-        def done(raw):
-            if raw["state"] == ERROR:
-                return True
-            if raw["state"] == READY:
-                return not pending
-            return raw["state"] != MOVING
-
-        raw = self._wait_for("wait for the robot" if k is None else f"wait for posture {k}", done, deadline)
-        if raw["state"] == ERROR:
-            code = raw["error"]
-            self._clear_request(deadline)
-            raise self.refused_error(f"robot at {self.address} refused posture {pending or k}: "
-                                     f"{ERROR_CODES.get(code, 'error')} (error {code})", code)
-        status = ControllerStatus(raw["state"], raw["posture"])
-        if k is not None and not status.at_posture(k):
-            raise self.refused_error(f"robot is {status.state} at posture {status.posture}, not at posture {k}", E_STATE)
-        return status
 
     def acknowledge(self, k: int, timeout=None) -> ControllerStatus:
         k = check_posture_index(k)
