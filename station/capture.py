@@ -19,9 +19,9 @@ its file was written, and goes on: every posture ends up on disk exactly once.
 - plan or resume (:func:`open_capture`): :func:`plan_session` measures the board at the start
   posture, plans and scores the postures and creates the session with its capture record
   (``capture.station: mock|real``); :func:`resume_session` reads that record back and refuses to
-  resume a session of the other station;
-  A new plan keeps clear of the cell (``cell`` of the station config, ``station.cell_plan``), and
-  its preview (``station.preview``) is written to ``SESSION/preview.png``;
+  resume a session of the other station. A new plan keeps clear of the cell (``cell`` of the
+  station config, ``station.cell_plan``), and its preview (``station.preview``) is written to
+  ``SESSION/preview.png``;
 - program (:func:`install_program`): the RAPID modules written once into ``SESSION/rapid``, loaded
   when the station can, and the wait until the controller runs them (``plan_only`` stops before:
   plan, preview and program on disk, nothing moved);
