@@ -23,8 +23,8 @@ from .errors import InvalidRequest, ProtocolError, StationError
 from .interface import Controller, Deadline, LinkDown
 from .modbus_map import STATE_NAMES, load_register_map
 from .polled import PolledHandshake
-from .protocol import E_AUTH, E_BUSY, E_STATE, E_TOOL, ERROR_CODES, KEY_TRIES, PROTOCOL_VERSION, write_key_code
-from .types import ACKED, AT, ERROR, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_posture_index, check_timeout
+from .protocol import E_AUTH, E_BUSY, E_TOOL, ERROR_CODES, KEY_TRIES, PROTOCOL_VERSION, write_key_code
+from .types import ACKED, AT, ERROR, LATE, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_timeout
 
 __all__ = [
     "ModbusController",
@@ -265,34 +265,15 @@ class ModbusController(PolledHandshake, Controller):
         self._wait_for("wait for READY", lambda r: r["state"] == READY, deadline)
 
     # ------------------------------------------------------------------ motion
-    def _request_posture(self, k: int, deadline: Deadline) -> None:
-        raw = self._call("read status", self._raw_status, deadline=deadline)
-        if raw["state"] in (ACKED, ERROR):
-            self._clear_request(deadline)
-            raw = self._call("read status", self._raw_status, deadline=deadline)
-        if raw["state"] in (AT, LATE, MOVING) and raw["posture"] == k:
-            self._requested = k  # already there or on the way (a repeated request)
-            return
-        if raw["state"] != READY:
-            raise self.refused_error(f"robot at {self.address} is busy ({raw['state']} at posture {raw['posture']}): "
-                                     f"acknowledge posture {raw['posture']} first", E_BUSY)
+    def _send_request(self, k: int, deadline: Deadline) -> None:
         self._call(f"request posture {k}", lambda d: self._write_named(d, {"request": k}), deadline=deadline)
-        self._requested = k
 
-    def acknowledge(self, k: int, timeout=None) -> ControllerStatus:
-        k = check_posture_index(k)
-        deadline = self._budget(timeout)
-        raw = self._call("read status", self._raw_status, deadline=deadline)
-        if raw["posture"] != k or raw["state"] not in (AT, LATE, ACKED, READY):
-            raise self.refused_error(f"cannot acknowledge posture {k}: robot is {raw['state']} at posture "
-                                     f"{raw['posture']}", E_STATE)
+    def _send_acknowledgement(self, k: int, raw: dict, deadline: Deadline) -> None:
         if raw["state"] in (AT, LATE):
             self._call(f"acknowledge posture {k}", lambda d: self._write_named(d, {"grabbed": 1}), deadline=deadline)
             self._wait_for("wait for ACKED", lambda r: r["state"] in (ACKED, READY), deadline)
         if raw["state"] != READY:
             self._clear_request(deadline)
-        self._requested = 0
-        return self.status(timeout=max(deadline.remaining(), 1e-3))
 
     # ------------------------------------------------------------------ tool data
     def _write_tool(self, tool: ToolData, deadline: Deadline) -> None:

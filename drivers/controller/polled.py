@@ -3,24 +3,51 @@ waiting until the robot stands still after a posture request.
 
 The program publishes its state (READY, MOVING, AT, LATE, ACKED, ERROR), the posture and an error
 code; the PC writes a request and polls. A back end mixes :class:`PolledHandshake` in before
-:class:`~handeye.drivers.controller.interface.Controller` and provides ``_wait_for(what, done,
-deadline) -> raw`` (poll ``{"state", "posture", "error"}`` until ``done(raw)``), ``_clear_request``
-and ``_requested`` (the posture asked for and not yet acknowledged, 0 for none).
+:class:`~handeye.drivers.controller.interface.Controller` and provides ``_raw_status(deadline) ->
+raw`` (``{"state", "posture", "error"}``), ``_wait_for(what, done, deadline) -> raw`` (poll until
+``done(raw)``), ``_clear_request``, and how it writes: ``_send_request(k, deadline)`` and
+``_send_acknowledgement(k, raw, deadline)``. ``_requested`` is the posture asked for and not yet
+acknowledged (0 for none).
 """
 
 from __future__ import annotations
 
 from .interface import Deadline
-from .protocol import E_STATE, ERROR_CODES
-from .types import ERROR, MOVING, READY, ControllerStatus, check_timeout
+from .protocol import E_BUSY, E_STATE, ERROR_CODES
+from .types import ACKED, AT, ERROR, LATE, MOVING, READY, ControllerStatus, check_posture_index, check_timeout
 
 __all__ = ["PolledHandshake"]
 
 
 class PolledHandshake:
-    """``wait_at_rest`` over a polled state (see the module docstring)."""
+    """Posture requests, waits and acknowledgements over a polled state (see the module docstring)."""
 
     _requested = 0
+
+    def _request_posture(self, k: int, deadline: Deadline) -> None:
+        raw = self._call("read status", self._raw_status, deadline=deadline)
+        if raw["state"] in (ACKED, ERROR):
+            self._clear_request(deadline)
+            raw = self._call("read status", self._raw_status, deadline=deadline)
+        if raw["state"] in (AT, LATE, MOVING) and raw["posture"] == k:
+            self._requested = k  # already there or on the way (a repeated request)
+            return
+        if raw["state"] != READY:
+            raise self.refused_error(f"robot at {self.address} is busy ({raw['state']} at posture {raw['posture']}): "
+                                     f"acknowledge posture {raw['posture']} first", E_BUSY)
+        self._send_request(k, deadline)
+        self._requested = k
+
+    def acknowledge(self, k: int, timeout=None) -> ControllerStatus:
+        k = check_posture_index(k)
+        deadline = self._budget(timeout)
+        raw = self._call("read status", self._raw_status, deadline=deadline)
+        if raw["posture"] != k or raw["state"] not in (AT, LATE, ACKED, READY):
+            raise self.refused_error(f"cannot acknowledge posture {k}: robot is {raw['state']} at posture "
+                                     f"{raw['posture']}", E_STATE)
+        self._send_acknowledgement(k, raw, deadline)
+        self._requested = 0
+        return self.status(timeout=max(deadline.remaining(), 1e-3))
 
     def wait_at_rest(self, k=None, timeout=None, *, deadline=None) -> ControllerStatus:
         deadline = deadline or Deadline(self.motion_timeout if timeout is None else check_timeout("timeout", timeout))

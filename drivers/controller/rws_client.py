@@ -43,8 +43,8 @@ import numpy as np
 from .errors import ControllerRefused, InvalidRequest
 from .interface import Controller, Deadline, LinkDown
 from .polled import PolledHandshake
-from .protocol import E_BUSY, E_STATE, PROTOCOL_VERSION
-from .types import ACKED, AT, ERROR, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_posture_index, check_timeout
+from .protocol import E_STATE, PROTOCOL_VERSION
+from .types import ACKED, AT, ERROR, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_timeout
 
 __all__ = ["RwsController", "RateLimiter", "STATE_NAMES", "rapid_literal", "parse_rapid_value", "tooldata_value"]
 
@@ -628,36 +628,17 @@ class RwsController(PolledHandshake, Controller):
         self._requested = 0
         self._wait_for("wait for READY", lambda r: r["state"] == READY, deadline)
 
-    def _request_posture(self, k: int, deadline: Deadline) -> None:
-        raw = self._call("read status", self._raw_status, deadline=deadline)
-        if raw["state"] in (ACKED, ERROR):
-            self._clear_request(deadline)
-            raw = self._call("read status", self._raw_status, deadline=deadline)
-        if raw["state"] in (AT, LATE, MOVING) and raw["posture"] == k:
-            self._requested = k
-            return
-        if raw["state"] != READY:
-            raise self.refused_error(f"robot at {self.address} is busy ({raw['state']} at posture {raw['posture']}): "
-                                     f"acknowledge posture {raw['posture']} first", E_BUSY)
+    def _send_request(self, k: int, deadline: Deadline) -> None:
         self._check_running(deadline, f"request posture {k}")
         self._write_pc(f"request posture {k}", k, 0, deadline)
-        self._requested = k
 
-    def acknowledge(self, k: int, timeout=None) -> ControllerStatus:
-        k = check_posture_index(k)
-        deadline = self._budget(timeout)
-        raw = self._call("read status", self._raw_status, deadline=deadline)
-        if raw["posture"] != k or raw["state"] not in (AT, LATE, ACKED, READY):
-            raise self.refused_error(f"cannot acknowledge posture {k}: robot is {raw['state']} at posture "
-                                     f"{raw['posture']}", E_STATE)
+    def _send_acknowledgement(self, k: int, raw: dict, deadline: Deadline) -> None:
         if raw["state"] in (AT, LATE):
             # HeRws clears heRwsPc itself once it has seen the acknowledgement: READY follows
             self._write_pc(f"acknowledge posture {k}", k, 1, deadline)
             self._wait_for("wait for READY", lambda r: r["state"] == READY, deadline)
         elif raw["state"] == ACKED:
             self._clear_request(deadline)
-        self._requested = 0
-        return self.status(timeout=max(deadline.remaining(), 1e-3))
 
     # ------------------------------------------------------------------ tool data
     def _write_tool(self, tool: ToolData, deadline: Deadline) -> None:
