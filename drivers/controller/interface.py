@@ -60,7 +60,7 @@ class Deadline:
         end = time.monotonic() + float(seconds)
         if end > self.end:
             self.end = end
-            self.seconds = end - self.start
+            self.seconds = round(end - self.start, 3)  # the budget messages quote: no 7.00001 s
 
     def remaining(self) -> float:
         return max(0.0, self.end - time.monotonic())
