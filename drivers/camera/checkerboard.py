@@ -51,6 +51,7 @@ import numpy as np
 
 from ...calibration.compact_points import BoardGeometry, board_corners
 from .errors import BoardNotFound, CameraError, FrameError, StereoMismatch
+from .pnp import pnp_pose
 from .stereo import StereoModel
 
 __all__ = [
@@ -622,20 +623,11 @@ def board_pose_from_corners(corners_px, board, camera_matrix, dist_coeffs=None) 
     board = as_board(board)
     if board.square_mm is None:
         raise CameraError("the square size is needed for a board pose")
-    obj = board_corners(board.corners, board.square_mm).astype(np.float64)
-    img = np.asarray(corners_px, dtype=np.float64).reshape(-1, 1, 2)
-    k = np.asarray(camera_matrix, dtype=np.float64)
-    d = np.zeros(5) if dist_coeffs is None else np.asarray(dist_coeffs, dtype=np.float64)
-    ok, rvec, tvec = cv2.solvePnP(obj, img, k, d, flags=cv2.SOLVEPNP_ITERATIVE)
-    if not ok:
+    solved = pnp_pose(board_corners(board.corners, board.square_mm), corners_px, camera_matrix,
+                      np.zeros(5) if dist_coeffs is None else dist_coeffs, refine=True)
+    if solved is None:
         raise BoardNotFound("solvePnP found no board pose for these corners")
-    rvec, tvec = cv2.solvePnPRefineLM(obj, img, k, d, rvec, tvec)
-    projected, _ = cv2.projectPoints(obj, rvec, tvec, k, d)
-    rms = float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - img.reshape(-1, 2)) ** 2, axis=1))))
-    pose = np.eye(4)
-    pose[:3, :3] = cv2.Rodrigues(rvec)[0]
-    pose[:3, 3] = tvec.ravel()
-    return pose, rms
+    return solved
 
 
 def plane_fit(points_mm: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -155,6 +155,27 @@ def canonical_corner_order(image, corners, pattern) -> tuple[np.ndarray, bool]:
     return grid[::-1, ::-1].reshape(-1, 2), True
 
 
+def _read_gray(image_path):
+    """The image as 8-bit grey (ValueError: not a regular file, or not an image OpenCV reads)."""
+    import cv2
+
+    check_regular_file(image_path, "image", ValueError, max_bytes=None)
+    image = cv2.imread(str(image_path), cv2.IMREAD_GRAYSCALE)
+    if image is None:
+        raise ValueError("cannot read the image")
+    return image
+
+
+def _pnp(objects, pixels, camera, flags) -> tuple[np.ndarray, float]:
+    """Pose (4x4, mm) and reprojection RMS (px) with the ViSP intrinsics (ValueError: PnP failed)."""
+    from ...drivers.camera.pnp import pnp_pose
+
+    solved = pnp_pose(objects, pixels, camera.matrix(), camera.distortion(), flags)
+    if solved is None:
+        raise ValueError("solvePnP failed")
+    return solved
+
+
 def measure_board_pose(image_path, board: BoardGeometry, camera: CameraIntrinsics) -> dict:
     """Board pose ``target_in_camera`` (mm) from one image.
 
@@ -170,10 +191,7 @@ def measure_board_pose(image_path, board: BoardGeometry, camera: CameraIntrinsic
     """
     import cv2
 
-    check_regular_file(image_path, "image", ValueError, max_bytes=None)
-    image = cv2.imread(str(image_path), cv2.IMREAD_GRAYSCALE)
-    if image is None:
-        raise ValueError("cannot read the image")
+    image = _read_gray(image_path)
     pattern = tuple(int(c) for c in board.corners)
     found, corners = cv2.findChessboardCorners(image, pattern, flags=cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE)
     if not found:
@@ -181,15 +199,7 @@ def measure_board_pose(image_path, board: BoardGeometry, camera: CameraIntrinsic
     corners = cv2.cornerSubPix(image, corners, (5, 5), (-1, -1),
                                (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-3)).reshape(-1, 2)
     corners, turned = canonical_corner_order(image, corners, pattern)
-    objects = board_corners(pattern, board.square_mm)
-    ok, rvec, tvec = cv2.solvePnP(objects, corners, camera.matrix(), camera.distortion(), flags=cv2.SOLVEPNP_ITERATIVE)
-    if not ok:
-        raise ValueError("solvePnP failed")
-    projected, _ = cv2.projectPoints(objects, rvec, tvec, camera.matrix(), camera.distortion())
-    rms = float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - corners) ** 2, axis=1))))
-    pose = np.eye(4)
-    pose[:3, :3] = cv2.Rodrigues(rvec)[0]
-    pose[:3, 3] = tvec.ravel()
+    pose, rms = _pnp(board_corners(pattern, board.square_mm), corners, camera, cv2.SOLVEPNP_ITERATIVE)
     return {"pose": pose, "rms_px": rms, "turned": bool(turned)}
 
 
@@ -220,10 +230,7 @@ def measure_tag_pose(image_path, size_mm: float, camera: CameraIntrinsics, tag_i
     """
     import cv2
 
-    check_regular_file(image_path, "image", ValueError, max_bytes=None)
-    image = cv2.imread(str(image_path), cv2.IMREAD_GRAYSCALE)
-    if image is None:
-        raise ValueError("cannot read the image")
+    image = _read_gray(image_path)
     dictionary = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_APRILTAG_36h11)
     parameters = cv2.aruco.DetectorParameters()
     parameters.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_APRILTAG
@@ -236,14 +243,5 @@ def measure_tag_pose(image_path, size_mm: float, camera: CameraIntrinsics, tag_i
     if len(found) != 1:
         raise ValueError(f"{len(found)} AprilTags found (ids {', '.join(str(f[0]) for f in found)}); one is needed")
     number, points = found[0]
-    objects = tag_corners(size_mm)
-    ok, rvec, tvec = cv2.solvePnP(objects, points.astype(np.float64), camera.matrix(), camera.distortion(),
-                                  flags=cv2.SOLVEPNP_IPPE)
-    if not ok:
-        raise ValueError("solvePnP failed")
-    projected, _ = cv2.projectPoints(objects, rvec, tvec, camera.matrix(), camera.distortion())
-    rms = float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - points) ** 2, axis=1))))
-    pose = np.eye(4)
-    pose[:3, :3] = cv2.Rodrigues(rvec)[0]
-    pose[:3, 3] = tvec.ravel()
+    pose, rms = _pnp(tag_corners(size_mm), points, camera, cv2.SOLVEPNP_IPPE)
     return {"pose": pose, "rms_px": rms, "id": number}
