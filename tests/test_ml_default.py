@@ -113,6 +113,64 @@ def test_a_flipped_board_is_an_outlier():
     assert calibrate(flipped).outliers == [6]
 
 
+# ------------------------------------------------------------------ small sets of board poses
+SMALL_SEEDS = range(3000, 3040)
+
+
+@pytest.fixture(scope="module")
+def small_clean_sets():
+    """ML fits of 40 clean six-pose sets of OpenCV's pose model (five noise components from 36 numbers),
+    with the deleted distance of posture 0 and its degrees of freedom."""
+    from handeye.calibration.eiv import deleted_mahalanobis
+
+    out = []
+    for seed in SMALL_SEEDS:
+        prob, truth = opencv_test_problem(np.random.default_rng(seed), 6)
+        sol = solve_eiv(prob, folds=0)
+        out.append((sol, *deleted_mahalanobis(sol.observations, sol.fit, np.ones(prob.n, bool), 0, False)))
+    return out
+
+
+def test_the_outlier_test_never_measures_against_a_zero_noise_level(small_clean_sets):
+    from handeye.calibration.eiv import BOUNDARY_PRIOR, fit_ml
+
+    # every component of OpenCV's model is positive, yet from five postures the plain restricted
+    # likelihood puts one at the variance floor in some sets; the deleted test's fits, with the
+    # boundary-avoiding prior, never do
+    others = np.arange(6) != 0
+    plain, with_prior = [], []
+    for sol, _, _ in small_clean_sets:
+        for weight, out in ((0.0, plain), (BOUNDARY_PRIOR, with_prior)):
+            fit = fit_ml(sol.observations, sol.fit.x, sol.fit.target, sol.fit.theta, keep=others, boundary_prior=weight)
+            out.append(np.min(fit.theta))
+    assert np.sum(np.array(plain) < 1e-12) >= 4
+    assert np.all(np.array(with_prior) > 1e-12)
+
+
+def test_the_deleted_distance_follows_its_f_distribution(small_clean_sets):
+    from scipy.stats import chi2, f
+
+    d2 = np.array([v for _, v, _ in small_clean_sets])
+    nu = small_clean_sets[0][2]
+    assert nu == 6 * 5 - 12 - len(small_clean_sets[0][0].fit.theta)
+    above_f = int(np.sum(d2 > 6 * f.ppf(0.9, 6, nu)))
+    assert 1 <= above_f <= 9  # 4 of 40 expected at the 10 % level
+    # the chi-square quantile, which ignores that the noise levels are estimated, is passed more often
+    assert np.sum(d2 > chi2.ppf(0.9, 6)) > above_f
+
+
+def test_small_clean_sets_keep_their_postures(small_clean_sets):
+    # a clean posture excluded from six costs a sixth of the data (with the chi-square test: 10 of 100)
+    assert sum(bool(sol.outliers.any()) for sol, _, _ in small_clean_sets) <= 2
+
+
+def test_a_gross_outlier_in_a_small_set_is_still_found():
+    for seed in range(2000, 2010):
+        prob, _ = opencv_test_problem(np.random.default_rng(seed), 8)
+        sol = solve_eiv(_corrupt(prob, [2], shift_mm=0.0, turn_deg=3.0), folds=0)
+        assert np.flatnonzero(sol.outliers).tolist() == [2]
+
+
 # ------------------------------------------------------------------------ accuracy by regime
 def _median_errors(methods, trials, postures=20, **noise):
     errors = {m: [] for m in methods}
