@@ -357,7 +357,10 @@ def _centre_nll(params, r, jac, g, rotation) -> tuple[float, np.ndarray]:
     stays invertible), the board rotation components about the centre ``params[:3]``, and its
     gradient: ``½ (tr(W D) - tr(M C^T W D W C) - r^T W D W r)`` for ``D = dS/dp``."""
     lever = _lever(params[:3])
-    scale = np.exp(params[3:])
+    with np.errstate(over="ignore"):  # a trial step of the optimiser far out: an infinite cost
+        scale = np.exp(params[3:])
+    if not np.all(np.isfinite(scale)):
+        return float("inf"), np.zeros(len(params))
     theta = CENTRE_THETA_FLOOR + scale
     moved = np.array([lever @ gk @ lever.T if about else gk for gk, about in zip(g, rotation)])
     s = np.tensordot(theta, moved, axes=1)
@@ -625,24 +628,23 @@ def _variance_step(g: np.ndarray, w: np.ndarray, theta: np.ndarray, rho: np.ndar
     quad = np.sum((g @ wr[None]) * wr[None], axis=(1, 2, 3))
     gwj = g @ wj[None]                                # G_k S^-1 C, (k, n, 6, p)
     a = _sum_t(wj[None], gwj)                         # C^T S^-1 G_k S^-1 C, (k, p, p)
-    tr_pg = np.trace(wg, axis1=2, axis2=3).sum(axis=1) - np.sum(m[None] * np.swapaxes(a, 1, 2), axis=(1, 2))
+    tr_wg = np.trace(wg, axis1=2, axis2=3).sum(axis=1)  # tr(S^-1 G_k)
+    tr_pg = tr_wg - np.sum(m[None] * np.swapaxes(a, 1, 2), axis=(1, 2))
+    # A component whose effect the fixed parameters absorb (tr(P G) ~ 0 against tr(S^-1 G)) gets no
+    # information from the restricted likelihood: it keeps its value, and the prior (improper,
+    # rate -> 0) is not applied to it, as it would push it up without bound.
+    informed = tr_pg > 1e-9 * tr_wg
+    weight = np.where(informed, boundary_prior, 0.0)
     if q:
         z = jac[:, :, 12:]
         pz = w @ z - wj @ (m @ _sum_t(jac, w @ z))   # P Z, per posture (n, 6, q)
         ztpz = _sum_t(z, pz)                          # Z^T P Z, (q, q)
     if not fisher_scoring:
-        # EM fixed point of the score ½ (quad - tr) + boundary_prior / (2 θ)
-        new_theta = np.maximum((theta * quad + boundary_prior) / np.maximum(tr_pg, 1e-300), VARIANCE_FLOOR)
-        new_lam = lam.copy()
-        for c in kinds_present:
-            sel = kinds == c
-            m_uu = m[12:, 12:][np.ix_(sel, sel)]
-            new_lam[c] = max((np.sum(u[sel] ** 2) + np.trace(m_uu)) / sel.sum(), VARIANCE_FLOOR)
-        return new_theta, new_lam, m
+        return (*_em_update(theta, quad, tr_pg, weight, informed, lam, u, m, kinds, kinds_present), m)
     size = k + len(kinds_present)
     score = np.empty(size)
     info = np.empty((size, size))
-    score[:k] = 0.5 * (quad - tr_pg) + 0.5 * boundary_prior / theta  # with the boundary-avoiding prior's score
+    score[:k] = 0.5 * (quad - tr_pg) + 0.5 * weight / theta  # with the boundary-avoiding prior's score
     for i in range(k):
         for j in range(i, k):
             term1 = np.sum(wg[i] * np.swapaxes(wg[j], 1, 2))
@@ -650,7 +652,7 @@ def _variance_step(g: np.ndarray, w: np.ndarray, theta: np.ndarray, rho: np.ndar
             term2 = np.trace(m @ b)
             term3 = np.trace(m @ a[i] @ m @ a[j])
             info[i, j] = info[j, i] = 0.5 * (term1 - 2.0 * term2 + term3)
-        info[i, i] += 0.5 * boundary_prior / theta[i] ** 2
+        info[i, i] += 0.5 * weight[i] / theta[i] ** 2
     for ci, c in enumerate(kinds_present):
         sel = kinds == c
         score[k + ci] = 0.5 * (np.sum(u[sel] ** 2) / lam[c] ** 2 - np.trace(ztpz[np.ix_(sel, sel)]))
@@ -686,6 +688,21 @@ def _variance_step(g: np.ndarray, w: np.ndarray, theta: np.ndarray, rho: np.ndar
 #: impossible. The estimate of ``X`` keeps the plain restricted likelihood: where a noise source is
 #: truly absent (a simulated robot without noise) the prior's pull off zero costs accuracy.
 BOUNDARY_PRIOR = 1.0
+def _em_update(theta, quad, tr_pg, weight, informed, lam, u, m, kinds, kinds_present) -> tuple[np.ndarray, np.ndarray]:
+    """The EM (positive fixed point) update of the block components and the DH-deviation variances.
+
+    Block components: the fixed point of the score ``½ (quad - tr(P G)) + weight / (2 θ)``; the
+    components the restricted likelihood does not inform keep their values.
+    """
+    new_theta = np.where(informed, (theta * quad + weight) / np.where(informed, tr_pg, 1.0), theta)
+    new_lam = lam.copy()
+    for c in kinds_present:
+        sel = kinds == c
+        m_uu = m[12:, 12:][np.ix_(sel, sel)]
+        new_lam[c] = max((np.sum(u[sel] ** 2) + np.trace(m_uu)) / sel.sum(), VARIANCE_FLOOR)
+    return np.maximum(new_theta, VARIANCE_FLOOR), new_lam
+
+
 #: Start of the DH-deviation variances (mm², deg²): a start for EM, which takes it from here.
 KINEMATIC_START = np.array([0.1**2, 0.01**2])
 

@@ -76,9 +76,13 @@ def test_mock_controller_in_process(protocol, capsys):
 
 
 def test_mock_controller_runs_until_ctrl_c():
+    # A shell starts background jobs with SIGINT ignored, and a child inherits that: Python then
+    # installs no KeyboardInterrupt handler and Ctrl-C never arrives. The child gets the default
+    # disposition back, so the test behaves the same whether the suite runs in front or behind.
     proc = subprocess.Popen([sys.executable, "-c", "from handeye.station.cli import main; raise SystemExit(main())",
                              "mock", "controller", "--protocol", "socket", "--port", "0"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         banner = proc.stdout.readline()
         assert "listening on 127.0.0.1:" in banner, banner + proc.stderr.read()
