@@ -54,11 +54,12 @@ Start and outliers. The paper's mcb (Algorithm 1, selection by d_back, eq. 23) o
 that keep the X-free angle invariant (eq. 30: ``S_A = S_B``); with many postures, on a subset of
 :data:`START_POSTURES` spread over the hand rotations, so the default never needs the exhaustive
 triplet search. Then alternately the ML fit over the inliers and outlier detection on the
-postures' Mahalanobis distances ``d_i = sqrt(r_i^T S_i^-1 r_i)`` (robust z-score, and a chi-square
-test with a Bonferroni bound, so clean sets keep every posture; a posture that breaks the angle
-invariant stays out when its ``d_i`` is also beyond the 5 % level shared among such postures and its
-angle gap three times what the fitted rotation noise explains) until the inlier set is stable,
-never dropping more than half. Finally a 5-fold posture cross-validation (``crossval.py``) with
+postures' Mahalanobis distances ``d_i = sqrt(r_i^T S_i^-1 r_i)``: a posture with a high robust
+z-score is tested by its deleted distance (:func:`deleted_mahalanobis`: the fit of the other
+postures predicts it; an F test with a Bonferroni bound, so clean sets, small ones too, keep every
+posture); a posture that breaks the angle invariant stays out when its deleted distance is also
+beyond the 5 % level shared among such postures and its angle gap three times what the fitted
+rotation noise explains. Until the inlier set is stable, never dropping more than half. Finally a 5-fold posture cross-validation (``crossval.py``) with
 the error the noise model predicts for it.
 """
 
@@ -688,6 +689,8 @@ def _variance_step(g: np.ndarray, w: np.ndarray, theta: np.ndarray, rho: np.ndar
 #: impossible. The estimate of ``X`` keeps the plain restricted likelihood: where a noise source is
 #: truly absent (a simulated robot without noise) the prior's pull off zero costs accuracy.
 BOUNDARY_PRIOR = 1.0
+
+
 def _em_update(theta, quad, tr_pg, weight, informed, lam, u, m, kinds, kinds_present) -> tuple[np.ndarray, np.ndarray]:
     """The EM (positive fixed point) update of the block components and the DH-deviation variances.
 
