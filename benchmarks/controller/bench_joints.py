@@ -14,14 +14,13 @@ from __future__ import annotations
 import argparse
 import json
 import platform
-import signal
 import statistics
-import subprocess
 import sys
 import time
 from contextlib import contextmanager
 
 from handeye.drivers.controller import open_controller
+from mock_process import mock_controller
 from handeye.mocks.backends import mock_protocols
 
 PROTOCOLS = tuple(p for p in mock_protocols() if p != "rws")  # rws: bench_rws.py (paced below its rate limit)
@@ -30,22 +29,9 @@ TARGET_MS = 5.0
 
 @contextmanager
 def mock_process(protocol: str):
-    cmd = [sys.executable, "-c", "from handeye.station.cli import main; raise SystemExit(main())",
-           "mock", "controller", "--protocol", protocol, "--port", "0"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        banner = proc.stdout.readline()
-        if "127.0.0.1:" not in banner:
-            raise RuntimeError(f"mock did not start: {banner}{proc.stderr.read()}")
-        port = int(banner.split("127.0.0.1:")[1].split(";")[0].split()[0])
+    """The mock controller of one back end in its own process; yields the client's options."""
+    with mock_controller("--protocol", protocol) as (port, _):
         yield ({"url": f"socket://127.0.0.1:{port}"} if protocol == "serial" else {"host": "127.0.0.1", "port": port})
-    finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.communicate(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.communicate()
 
 
 @contextmanager

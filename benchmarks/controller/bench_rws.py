@@ -18,16 +18,14 @@ from __future__ import annotations
 import argparse
 import json
 import platform
-import signal
 import statistics
-import subprocess
-import sys
 import time
 from contextlib import contextmanager
 
 import numpy as np
 
 from handeye.drivers.controller import ToolData, open_controller
+from mock_process import mock_controller
 
 JOINTS_TARGET_MS = 10.0
 WRITEBACK_TARGET_MS = 1000.0
@@ -35,25 +33,12 @@ WRITEBACK_TARGET_MS = 1000.0
 
 @contextmanager
 def mock_process(generation: int):
-    cmd = [sys.executable, "-c", "from handeye.station.cli import main; raise SystemExit(main())",
-           "mock", "controller", "--protocol", "rws", "--rws-generation", str(generation), "--port", "0"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        banner = [proc.stdout.readline() for _ in range(3)]
-        if "127.0.0.1:" not in banner[0]:
-            raise RuntimeError(f"mock did not start: {banner}{proc.stderr.read()}")
-        port = int(banner[0].split("127.0.0.1:")[1].split(";")[0])
+    """The mock RWS controller of one generation in its own process; yields the client's options."""
+    with mock_controller("--protocol", "rws", "--rws-generation", str(generation), banner_lines=3) as (port, banner):
         options = {"host": "127.0.0.1", "port": port}
         if generation == 2:
             options["tls_fingerprint"] = banner[2].split("--tls-fingerprint ")[1].split()[0]
         yield options
-    finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.communicate(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.communicate()
 
 
 def summary(times: list) -> dict:
