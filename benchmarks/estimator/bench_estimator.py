@@ -103,11 +103,12 @@ def small() -> None:
     from test_robust_default import _corrupt  # noqa: PLC0415 (the suite's gross-error helper)
 
     from handeye.calibration.eiv import solve_eiv  # noqa: PLC0415
+    from handeye.calibration.metrics import errors_against_truth  # noqa: PLC0415
     from handeye.calibration.synthetic_poses import opencv_test_problem  # noqa: PLC0415
 
     def solve(problem, truth):
         sol = solve_eiv(problem, folds=0)
-        return sol.outliers, float(np.linalg.norm(sol.x[:3, 3] - truth["x"][:3, 3]))
+        return sol.outliers, errors_against_truth(sol.x, truth["x"])["translation_error_mm"]
 
     print("| poses | clean sets losing a posture, of 100 | mean error (mm) |")
     print("|---|---|---|")

@@ -64,9 +64,17 @@ def rotation_residual_deg(problem, x) -> float:
     return float(np.sqrt(np.mean(angle**2)))
 
 
+def ours(method: str):
+    """``solve(problem) -> (X, runtime_s)`` of one of the package's methods."""
+    def solve(problem):
+        result = calibrate(problem, method)
+        return result.x, result.runtime_s
+    return solve
+
+
 def solvers(ocv) -> dict:
     """Every method to compare, ``name -> solve(problem) -> (X, runtime_s or nan)`` (ours, then OpenCV's)."""
-    out = {m: (lambda p, m=m: (lambda r: (r.x, r.runtime_s))(calibrate(p, m))) for m in ALL_METHODS if m != "mcy"}
+    out = {m: ours(m) for m in ALL_METHODS if m != "mcy"}
     out.update({m: (lambda p, f=f: (f(p), float("nan"))) for m, f in ocv.items()})
     return out
 
