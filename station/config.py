@@ -101,12 +101,14 @@ def _write_key(value, key: str, context) -> str | None:
 
 
 def _fingerprint(value, key: str, context) -> str:
-    """A SHA-256 certificate fingerprint: 64 hex digits, colons allowed (as browsers and openssl print it)."""
-    text = str(value).replace(":", "").strip().lower()
-    if not re.fullmatch(r"[0-9a-f]{64}", text):
-        raise ConfigError(f"{key} must be the SHA-256 of the controller's certificate: 64 hex digits (colons "
-                          f"allowed); got {len(text)} characters")
-    return text
+    """A SHA-256 certificate fingerprint (``check_fingerprint`` of the controller drivers)."""
+    from ..drivers.controller.errors import InvalidRequest  # noqa: PLC0415
+    from ..drivers.controller.types import check_fingerprint  # noqa: PLC0415
+
+    try:
+        return check_fingerprint(value, key)
+    except InvalidRequest as exc:
+        raise ConfigError(str(exc)) from None
 
 
 def _mount(value, key: str, context) -> tuple:

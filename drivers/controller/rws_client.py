@@ -44,7 +44,8 @@ from .errors import ControllerRefused, InvalidRequest
 from .interface import Controller, Deadline, LinkDown
 from .polled import PolledHandshake
 from .protocol import E_STATE, PROTOCOL_VERSION
-from .types import ACKED, AT, ERROR, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_timeout
+from .types import (ACKED, AT, ERROR, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData,
+                    check_fingerprint, check_timeout)
 
 __all__ = ["RwsController", "RateLimiter", "STATE_NAMES", "rapid_literal", "parse_rapid_value", "tooldata_value"]
 
@@ -57,7 +58,6 @@ HAL_JSON = "application/hal+json;v=2.0"
 FORM_V2 = "application/x-www-form-urlencoded;v=2.0"
 #: What the operator is told when the controller is in manual mode.
 RMMP_HINT = "press Allow on the FlexPendant to grant this PC write access in manual mode"
-_FINGERPRINT = re.compile(r"^[0-9a-fA-F]{64}$")
 
 
 class RateLimiter:
@@ -194,11 +194,7 @@ class RwsController(PolledHandshake, Controller):
         if str(generation).lower() not in ("auto", "1", "2"):
             raise InvalidRequest(f"RWS generation must be auto, 1 or 2; got {generation!r}")
         if tls_fingerprint is not None:
-            cleaned = str(tls_fingerprint).replace(":", "").strip()
-            if not _FINGERPRINT.match(cleaned):
-                raise InvalidRequest("controller.tls_fingerprint must be the SHA-256 of the controller's certificate: "
-                                     f"64 hex digits (colons allowed); got {len(cleaned)} characters")
-            tls_fingerprint = cleaned.lower()
+            tls_fingerprint = check_fingerprint(tls_fingerprint)
         self.host = str(host)
         self.https = tls_fingerprint is not None
         self.port = int(port) if port is not None else (443 if self.https else 80)

@@ -36,6 +36,7 @@ __all__ = [
     "check_tooldata",
     "check_timeout",
     "check_write_key",
+    "check_fingerprint",
     "write_key_code",
     "WRITE_KEY_PATTERN",
     "robot_model",
@@ -316,6 +317,22 @@ def check_write_key(value, name: str = "write_key") -> str | None:
         raise InvalidRequest(f"{name} must be 8 to 32 letters, digits, '_' or '-'; got another value of {len(value)} "
                              "characters (the key itself is never printed)")
     return value
+
+
+def check_fingerprint(value, name: str = "controller.tls_fingerprint") -> str:
+    """A SHA-256 certificate fingerprint as 64 lower-case hex digits (colons allowed in ``value``, as
+    browsers and openssl print it).
+
+    Raises
+    ------
+    InvalidRequest
+        Not 64 hex digits once the colons are removed.
+    """
+    text = str(value).replace(":", "").strip().lower()
+    if not re.fullmatch(r"[0-9a-f]{64}", text):
+        raise InvalidRequest(f"{name} must be the SHA-256 of the controller's certificate: 64 hex digits (colons "
+                             f"allowed); got {len(text)} characters")
+    return text
 
 
 def write_key_code(key: str) -> int:
