@@ -47,7 +47,7 @@ import numpy as np
 from ...drivers.controller.rws_client import parse_rapid_value
 from ...rapid.errors import RapidError
 from ...rapid.interpreter import Bindings, ModuleSource, parse_module
-from ...rapid.interpreter.values import Aggregate, Array, Record, coerce, coerce_array
+from ...rapid.interpreter.values import aggregate, coerce, coerce_array, format_value
 from .faults import Faults
 from .server import DEFAULT_IDLE_TIMEOUT_S, RapidControllerServer
 from .sources import ControllerProgram
@@ -108,28 +108,23 @@ class HttpError(Exception):
         self.status, self.message, self.code, self.headers = status, message, code, headers or {}
 
 
-def _rws_text(value) -> str:
-    """A RAPID value as RWS prints it (a num as the shortest text that gives back the same float32)."""
-    if isinstance(value, bool):
-        return "TRUE" if value else "FALSE"
-    if isinstance(value, (int, float)):
-        v = np.float32(value)
-        if v == int(v) and abs(v) < 1e9:
-            return str(int(v))
-        if 1e-4 <= abs(v) < 1e9:
-            return np.format_float_positional(v, unique=True, trim="-")
-        return np.format_float_scientific(v, unique=True, trim="-").upper()
-    if isinstance(value, str):
-        return '"' + value.replace('"', '""') + '"'
-    if isinstance(value, Record):
-        return "[" + ",".join(_rws_text(v) for v in value.fields.values()) + "]"
-    if isinstance(value, (Array, list, tuple)):
-        return "[" + ",".join(_rws_text(v) for v in value) + "]"
+def _rws_num(value: float) -> str:
+    """A num as RWS prints it: the shortest text that gives back the same float32."""
+    v = np.float32(value)
+    if v == int(v) and abs(v) < 1e9:
+        return str(int(v))
+    if 1e-4 <= abs(v) < 1e9:
+        return np.format_float_positional(v, unique=True, trim="-")
+    return np.format_float_scientific(v, unique=True, trim="-").upper()
+
+
+def _unreadable(value):
     raise HttpError(400, f"a {type(value).__name__} cannot be read over RWS")
 
 
-def _aggregate(value):
-    return Aggregate(_aggregate(v) for v in value) if isinstance(value, list) else value
+def _rws_text(value) -> str:
+    """A RAPID value as RWS prints it (``ValToStr``'s form with RWS's float32 numbers)."""
+    return format_value(value, _rws_num, _unreadable)
 
 
 class _Handler(BaseHTTPRequestHandler):
@@ -580,9 +575,9 @@ class RwsControllerServer(RapidControllerServer):
         try:
             value = parse_rapid_value(text)
             if datum.dims:
-                new = coerce_array(_aggregate(value), datum.type, datum.dims, self.runner.program.records, datum.name)
+                new = coerce_array(aggregate(value), datum.type, datum.dims, self.runner.program.records, datum.name)
             else:
-                new = coerce(_aggregate(value), datum.type, self.runner.program.records, datum.name)
+                new = coerce(aggregate(value), datum.type, self.runner.program.records, datum.name)
         except (ValueError, RapidError) as exc:
             raise HttpError(400, f"value {text[:60]!r} for {datum.name}: {exc}", -1073442811) from None
         datum.box[0] = new

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from .errors import RapidFatalError, RapidRuntimeError
 
 __all__ = ["TypeInfo", "Record", "Array", "Aggregate", "Handle", "TYPES", "type_info", "to_num", "default_value",
-           "coerce", "copy_value", "compatible", "format_value", "MAX_STRING", "NUM_TYPES", "SIGNAL_TYPES"]
+           "coerce", "copy_value", "compatible", "format_value", "aggregate", "MAX_STRING", "NUM_TYPES", "SIGNAL_TYPES"]
 
 MAX_STRING = 80
 _F32 = struct.Struct("f")
@@ -256,23 +256,28 @@ def format_num(value: float) -> str:
     return text.replace("e+", "E+").replace("e-", "E-")
 
 
-def format_value(value) -> str:
-    """``ValToStr`` of any value: ``[1,2,3]``, ``"text"``, ``TRUE``."""
+def format_value(value, number=None, other=repr) -> str:
+    """``ValToStr`` of any value: ``[1,2,3]``, ``"text"``, ``TRUE``.
+
+    ``number(float) -> str`` writes a num (default :func:`format_num`, ValToStr's 6 significant
+    digits); ``other(value) -> str`` is called for a value that is none of RAPID's data (it may raise).
+    """
     if isinstance(value, bool):
         return "TRUE" if value else "FALSE"
     if isinstance(value, (int, float)):
-        return format_num(float(value))
+        return (number or format_num)(float(value))
     if isinstance(value, str):
         return '"' + value.replace('"', '""') + '"'
     if isinstance(value, Record):
-        return "[" + ",".join(format_value(v) for v in value.fields.values()) + "]"
+        return "[" + ",".join(format_value(v, number, other) for v in value.fields.values()) + "]"
     if isinstance(value, (Array, Aggregate, list, tuple)):
-        return "[" + ",".join(format_value(v) for v in value) + "]"
-    return repr(value)
+        return "[" + ",".join(format_value(v, number, other) for v in value) + "]"
+    return other(value)
 
 
-def _agg(value):
-    return Aggregate(_agg(v) for v in value) if isinstance(value, list) else value
+def aggregate(value):
+    """Nested Python lists as nested :class:`Aggregate` literals (what a parsed ``[...]`` gives)."""
+    return Aggregate(aggregate(v) for v in value) if isinstance(value, list) else value
 
 
 class _Predefined:
@@ -283,7 +288,7 @@ class _Predefined:
 
     def add(self, name: str, type_name: str, value) -> None:
         t = TYPES[type_name]
-        self.table[name.lower()] = (t, coerce(_agg(value), t))
+        self.table[name.lower()] = (t, coerce(aggregate(value), t))
 
 
 def _predefined() -> dict:
