@@ -6,7 +6,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["pnp_pose"]
+__all__ = ["pnp_pose", "pose_from_rvec"]
 
 
 def pnp_pose(objects, pixels, camera_matrix, dist_coeffs, flags: int = cv2.SOLVEPNP_ITERATIVE,
@@ -43,7 +43,12 @@ def pnp_pose(objects, pixels, camera_matrix, dist_coeffs, flags: int = cv2.SOLVE
         rvec, tvec = cv2.solvePnPRefineLM(objects, pixels, k, d, rvec, tvec)
     projected, _ = cv2.projectPoints(objects, rvec, tvec, k, d)
     rms = float(np.sqrt(np.mean(np.sum((projected.reshape(-1, 2) - pixels) ** 2, axis=1))))
+    return pose_from_rvec(rvec, tvec), rms
+
+
+def pose_from_rvec(rvec, tvec) -> np.ndarray:
+    """The 4x4 pose of OpenCV's rotation vector and translation (``solvePnP``, ``calibrateCamera``)."""
     pose = np.eye(4)
-    pose[:3, :3] = cv2.Rodrigues(rvec)[0]
-    pose[:3, 3] = tvec.ravel()
-    return pose, rms
+    pose[:3, :3] = cv2.Rodrigues(np.asarray(rvec, float))[0]
+    pose[:3, 3] = np.asarray(tvec, float).ravel()
+    return pose

@@ -36,6 +36,7 @@ import numpy as np
 
 from ...calibration.compact_points import BoardGeometry, board_corners
 from .errors import CameraError, StereoModelError
+from .pnp import pose_from_rvec
 from .stereo import StereoModel
 
 __all__ = [
@@ -232,13 +233,6 @@ def _objects(board: BoardGeometry) -> np.ndarray:
     return board_corners(board.corners, board.square_mm).astype(np.float32)
 
 
-def _pose(rvec, tvec) -> np.ndarray:
-    out = np.eye(4)
-    out[:3, :3] = cv2.Rodrigues(np.asarray(rvec, float))[0]
-    out[:3, 3] = np.asarray(tvec, float).ravel()
-    return out
-
-
 def _outlier(errors: np.ndarray, n_dropped: int, n_total: int, min_keep: int) -> tuple[int, float] | None:
     """Index of the view to drop next (worst first) and the median, or ``None``."""
     errors = np.asarray(errors, float)
@@ -283,7 +277,7 @@ def _calibrate_camera(side: str, items: list, obj: np.ndarray, size, flags: int,
         raise StereoCalibrationError(f"the {side} camera's calibration diverged; capture more varied views")
     poses = {}
     for (name, _), rvec, tvec, err in zip(items, rvecs, tvecs, errors):
-        poses[name] = _pose(rvec, tvec)
+        poses[name] = pose_from_rvec(rvec, tvec)
         setattr(reports[name], f"used_{side}", True)
         setattr(reports[name], f"{side}_rms_px", float(err))
     return CameraIntrinsics(k, d.ravel(), float(rms), np.asarray(std_in).ravel()[:4], poses)
