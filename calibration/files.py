@@ -5,7 +5,8 @@ name a regular file (not a folder, a named pipe, a device or a socket), be reada
 than a limit (64 MB by default; no input of the package comes near it) and, for text, hold UTF-8.
 The path is checked with ``os.stat`` before it is opened, and opened with ``O_NONBLOCK`` and checked
 again on the open descriptor, so a named pipe can never hang a reader. :func:`parse_yaml` turns
-everything PyYAML can raise into the same kind of one-line error.
+everything PyYAML can raise into the same kind of one-line error (it lives in :mod:`.yaml_text`:
+duplicated keys are refused, ``1e30`` is a number).
 
 Writing (:func:`write_text_atomic`, :func:`make_folder`): a temporary file in the target's folder,
 flushed, renamed over the target. Any ``OSError`` (permission denied, a read-only file system, a file
@@ -24,9 +25,9 @@ import stat
 import tempfile
 from pathlib import Path
 
-import yaml
 
 from .errors import OutputError, SessionError
+from .yaml_text import parse_yaml
 
 __all__ = [
     "MAX_FILE_BYTES",
@@ -196,34 +197,6 @@ def read_text_file(path, what: str = "file", error=SessionError, *, missing: str
         else:
             message = f"is not UTF-8 text ({where}): save it as UTF-8"
         raise error(f"{_describe(what, path)} {message}") from None
-
-
-#: PyYAML's safe loader on libyaml when it is built in: many times faster, linear in the nesting depth
-#: and limited to 1000 levels (the pure-Python scanner is quadratic in the depth of ``[[[[...``).
-_SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-
-
-def parse_yaml(text: str, source, error=SessionError, hint: str = ""):
-    """``yaml.safe_load(text)``; text that cannot be loaded raises ``error`` naming ``source``.
-
-    Besides malformed YAML (named with its line) this covers what PyYAML's constructors raise as other
-    exceptions: impossible dates (``2020-13-45``), integers of more than 4300 digits, explicit tags
-    whose value has the wrong form (``!!float abc`` raises ValueError, ``!!timestamp x``
-    AttributeError), and nesting too deep for the parser.
-    """
-    try:
-        return yaml.load(text, Loader=_SAFE_LOADER)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" (line {mark.line + 1})" if mark is not None else ""
-        raise error(f"{source}: not valid YAML{where}{hint}") from None
-    except RecursionError:
-        raise error(f"{source}: nested too deeply to be read as YAML{hint}") from None
-    except (ValueError, OverflowError) as exc:
-        reason = str(exc).splitlines()[0][:120] if str(exc) else type(exc).__name__
-        raise error(f"{source}: not valid YAML: a value cannot be read ({reason}){hint}") from None
-    except Exception:  # noqa: BLE001 - PyYAML's safe constructors raise assorted types on tagged values
-        raise error(f"{source}: not valid YAML: a tagged value (such as !!timestamp) has the wrong form{hint}") from None
 
 
 # --------------------------------------------------------------------------- writing

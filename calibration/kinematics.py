@@ -19,7 +19,6 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-import yaml
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
@@ -279,7 +278,7 @@ def _normalise_name(name: str) -> str:
 def _robot_files() -> dict:
     table = {}
     for path in sorted(ROBOTS_DIR.glob("*.yaml")):
-        data = yaml.safe_load(path.read_text())
+        data = parse_yaml(read_text_file(path, "robot file", ValueError), path, ValueError)
         for name in [data["name"], *data.get("aliases", [])]:
             table[_normalise_name(name)] = path
     return table
@@ -287,7 +286,7 @@ def _robot_files() -> dict:
 
 def known_robots() -> list[str]:
     """Names of the robot models shipped with the package."""
-    return sorted({yaml.safe_load(p.read_text())["name"] for p in set(_robot_files().values())})
+    return sorted({_load_path(p).name for p in set(_robot_files().values())})
 
 
 @lru_cache(maxsize=None)

@@ -46,7 +46,6 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from ..calibration.files import parse_yaml, read_text_file
 from ..calibration.kinematics import load_robot
@@ -250,6 +249,6 @@ def default_station() -> RapidStation:
     """The built-in station: the mock controller on 127.0.0.1 with 12 approved postures."""
     global _DEFAULT
     if _DEFAULT is None:
-        data = yaml.safe_load(DEFAULT_STATION_FILE.read_text())
+        data = parse_yaml(read_text_file(DEFAULT_STATION_FILE, "built-in station", ConfigError), DEFAULT_STATION_FILE, ConfigError)
         _DEFAULT = station_from_dict(data, "built-in station", base=RapidStation())
     return _DEFAULT

@@ -27,7 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.errors import HandEyeError
+from ..calibration.errors import HandEyeError, OutputError
+from ..calibration.files import parse_yaml, read_text_file
 from ..calibration.problem import EYE_IN_HAND
 from ..calibration.session import write_yaml_atomic
 from ..calibration.solve import CalibrationResult
@@ -174,10 +175,8 @@ def _read_pending(session_dir: Path) -> dict | None:
     if not path.is_file():
         return None
     try:
-        import yaml
-
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except Exception:  # a damaged note says only that something was cut off
+        data = parse_yaml(read_text_file(path, "write-back note", OutputError), path, OutputError)
+    except OutputError:  # a damaged note says only that something was cut off
         return {}
     return data if isinstance(data, dict) else {}
 

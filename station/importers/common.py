@@ -21,7 +21,7 @@ from scipy.spatial.transform import Rotation
 
 from ...calibration.compact_points import BoardGeometry
 from ...calibration.errors import SessionError, brief
-from ...calibration.files import read_text_file
+from ...calibration.files import parse_yaml, read_text_file
 from ...calibration.problem import SETUPS
 from ...calibration.session import MAX_LENGTH_MM, MAX_LENGTH_WORDS, Posture, Session
 from .inference import METRES_BELOW, Constraints, Side, SideReading, infer
@@ -405,13 +405,31 @@ def read_text(path) -> str:
 def parse_json(text: str, path):
     """``json.loads(text)``, or a one-line :class:`SessionError` naming the file (and line)."""
     try:
-        return json.loads(text)
+        return json.loads(text, object_pairs_hook=_object_without_duplicates)
+    except _DuplicateJsonKey as exc:
+        parse_yaml(text, path)  # JSON is YAML: its reader names both lines of the duplicated key
+        raise SessionError(f"{path}: the key '{exc.args[0]}' is written twice in one object; JSON readers "
+                           "would silently keep only the last: merge them into one") from None
     except json.JSONDecodeError as exc:
         raise SessionError(f"{path}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
     except RecursionError:
         raise SessionError(f"{path}: nested too deeply to be read as JSON") from None
     except ValueError as exc:  # an integer of more than 4300 digits
         raise SessionError(f"{path}: not valid JSON: a value cannot be read ({str(exc)[:100]})") from None
+
+
+class _DuplicateJsonKey(ValueError):
+    """A JSON object holds a key twice (``args[0]``)."""
+
+
+def _object_without_duplicates(pairs: list) -> dict:
+    """``dict(pairs)`` for :func:`json.loads`, refusing a key written twice (JSON keeps the last)."""
+    result = {}
+    for key, value in pairs:
+        if key in result:
+            raise _DuplicateJsonKey(key)
+        result[key] = value
+    return result
 
 
 class EntryErrors:
