@@ -58,6 +58,7 @@ __all__ = ["EXAMPLE_FILE", "MOCK", "ConfigError", "StationConfig", "config_from_
            "describe_keys", "controller_protocols", "camera_backends", "mock_protocols"]
 
 EXAMPLE_FILE = Path(__file__).with_name("example_station.yaml")
+REHEARSAL_FILE = Path(__file__).with_name("rehearsal_station.yaml")
 
 #: The back-end name that selects the embedded mock station (controller and camera alike).
 MOCK = "mock"

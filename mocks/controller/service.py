@@ -98,6 +98,9 @@ def _banner(server, options: MockControllerOptions, postures: int, idle_timeout_
         auth = f"--user '{server.username}' --password {server.password}"
         pin = f" --tls-fingerprint {server.tls_fingerprint}" if gen == 2 else ""
         writes = "tool writes by symbol, authorised by the RWS user and mastership"
+        if gen == 2:
+            writes += ("\n  its self-signed certificate is made anew at every start: pin the fingerprint "
+                       "printed now, it changes the next time")
         return (f"{head}: Robot Web Services {gen}.0 (RobotWare {server.robotware}, "
                 f"{'HTTPS, Basic' if gen == 2 else 'HTTP, Digest'}) listening on {where}; stop with Ctrl-C\n  {writes}\n"
                 f"  try: handeye robot joints --protocol rws --host {server.host} --port {server.port} {auth}{pin} --json")

@@ -7,7 +7,7 @@ import argparse
 HELP = "run the whole station job on the embedded mock robot and camera, and check it against the truth"
 
 EPILOG = """\
-What happens (about half a minute):
+What happens (about 25 s on 2 cores):
   1. a simulated IRB 1400 (with small kinematic errors, like a real arm) starts behind a real
      controller server on 127.0.0.1, with a simulated Bumblebee XB3 on its flange at a hidden mount;
   2. the board is measured from the start posture, 30 postures are planned and scored, and the
@@ -48,7 +48,7 @@ def run(args) -> int:
 
     if not 3 <= args.postures <= 255:
         raise HandEyeError(f"--postures must be between 3 and 255; got {args.postures}")
-    if args.json:  # an unwritable --json fails before the half-minute run
+    if args.json:  # an unwritable --json fails before the run
         check_output_file(args.json)
     from ..runtime import MOCK_BANNER
 

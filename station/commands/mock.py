@@ -8,7 +8,7 @@ from . import argtypes
 
 HELP = "run a mock (simulated IRB 1400 controller on 127.0.0.1) until Ctrl-C"
 
-CONTROLLER_HELP = "run the mock robot controller (socket, serial or Modbus TCP) until Ctrl-C"
+CONTROLLER_HELP = "run the mock robot controller ({protocols}) until Ctrl-C"
 
 CONTROLLER_EPILOG = """\
 The mock EXECUTES the RAPID program: the modules `handeye rapid generate` writes for --protocol
@@ -56,7 +56,8 @@ def add_parser(sub):
     names, lines = _protocols()
     p = sub.add_parser("mock", help=HELP, description=HELP)
     targets = p.add_subparsers(dest="mock_target", metavar="TARGET")
-    c = targets.add_parser("controller", help=CONTROLLER_HELP, description=CONTROLLER_HELP,
+    controller_help = CONTROLLER_HELP.format(protocols=", ".join(names))
+    c = targets.add_parser("controller", help=controller_help, description=controller_help,
                            epilog=CONTROLLER_EPILOG.format(protocols=lines),
                            formatter_class=argparse.RawDescriptionHelpFormatter)
     c.add_argument("--protocol", choices=names, default="socket", help="default socket")
@@ -72,7 +73,8 @@ def add_parser(sub):
     c.add_argument("--register-map", metavar="MAP.yaml", help="modbus: register map (default: the built-in one)")
     c.add_argument("--rws-generation", type=int, choices=(1, 2), default=1,
                    help="rws: 1 = RobotWare 6 (HTTP, Digest; default), 2 = RobotWare 7 (HTTPS with a self-signed "
-                        "certificate, Basic; the banner prints its fingerprint)")
+                        "certificate, Basic; the banner prints its fingerprint, which is new at every start: "
+                        "a certificate is made for each run)")
     c.add_argument("--duration", type=argtypes.positive, metavar="S", help="stop after S seconds (default: run until Ctrl-C)")
     c.add_argument("--idle-timeout", type=argtypes.positive, metavar="S",
                    help="drop a silent PC (socket) / forget its session (serial) after S seconds, 0.1..10 "

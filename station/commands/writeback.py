@@ -10,7 +10,8 @@ EPILOG = """\
 The session is calibrated (recommended default, or --method) and judged against the quality
 thresholds; a failed verdict is refused unless --force. The tool data (frame from the calibration,
 mass and centre of gravity from the config's tool section) is validated: unit quaternion, frame
-within 1 m of the flange, mass > 0. --dry-run prints the RAPID literal and stops. Otherwise the
+20-500 mm from the flange (thresholds min_camera_offset_mm, max_camera_offset_mm), mass > 0.
+--dry-run prints the RAPID literal and stops. Otherwise the
 controller's current tool data is saved in the session (a new tooldata_backup_*.yaml each time,
 never overwritten), the new one is written, read back and compared to the last digit the
 controller keeps (0.001 mm, 1e-6).
