@@ -597,6 +597,41 @@ def _small(step) -> bool:
                 and np.all(np.abs(step[12:]) < STEP_TOL_MM))
 
 
+def _reml_score_information(g, wg, wj, a, m, quad, tr_pg, weight, theta, lam, u, kinds, kinds_present, pz, ztpz):
+    """Score and Fisher information of the restricted likelihood in ``(θ, λ[kinds_present])``.
+
+    The terms of :func:`_variance_step` (Henderson's form): ``½ (ρ^T S^-1 G_k S^-1 ρ - tr(P G_k))`` and
+    ``½ (û_c^T û_c / λ_c² - tr(Z_c^T P Z_c))`` for the scores, ``½ tr(P V_a P V_b)`` for the information,
+    with the boundary-avoiding prior's terms on the block components (``weight``).
+
+    Returns
+    -------
+    score : ndarray, shape (k + c,)
+    info : ndarray, shape (k + c, k + c)
+    """
+    k = len(theta)
+    size = k + len(kinds_present)
+    score = np.empty(size)
+    info = np.empty((size, size))
+    score[:k] = 0.5 * (quad - tr_pg) + 0.5 * weight / theta  # with the boundary-avoiding prior's score
+    for i in range(k):
+        for j in range(i, k):
+            term1 = np.sum(wg[i] * np.swapaxes(wg[j], 1, 2))
+            b = _sum_t(wj, g[i] @ (wg[j] @ wj))  # C^T S^-1 G_i S^-1 G_j S^-1 C
+            term2 = np.trace(m @ b)
+            term3 = np.trace(m @ a[i] @ m @ a[j])
+            info[i, j] = info[j, i] = 0.5 * (term1 - 2.0 * term2 + term3)
+        info[i, i] += 0.5 * weight[i] / theta[i] ** 2
+    for ci, c in enumerate(kinds_present):
+        sel = kinds == c
+        score[k + ci] = 0.5 * (np.sum(u[sel] ** 2) / lam[c] ** 2 - np.trace(ztpz[np.ix_(sel, sel)]))
+        for i in range(k):  # ½ tr(Z_c^T P G_i P Z_c)
+            info[i, k + ci] = info[k + ci, i] = 0.5 * np.sum(pz[:, :, sel] * (g[i] @ pz[:, :, sel]))
+        for di, d in enumerate(kinds_present):
+            info[k + ci, k + di] = 0.5 * np.sum(ztpz[np.ix_(sel, kinds == d)] ** 2)
+    return score, info
+
+
 def _variance_step(g: np.ndarray, w: np.ndarray, theta: np.ndarray, rho: np.ndarray, jac: np.ndarray,
                    prior: np.ndarray, u: np.ndarray, lam: np.ndarray, kinds, fisher_scoring: bool,
                    boundary_prior: float = 0.0):
@@ -642,25 +677,9 @@ def _variance_step(g: np.ndarray, w: np.ndarray, theta: np.ndarray, rho: np.ndar
         ztpz = _sum_t(z, pz)                          # Z^T P Z, (q, q)
     if not fisher_scoring:
         return (*_em_update(theta, quad, tr_pg, weight, informed, lam, u, m, kinds, kinds_present), m)
-    size = k + len(kinds_present)
-    score = np.empty(size)
-    info = np.empty((size, size))
-    score[:k] = 0.5 * (quad - tr_pg) + 0.5 * weight / theta  # with the boundary-avoiding prior's score
-    for i in range(k):
-        for j in range(i, k):
-            term1 = np.sum(wg[i] * np.swapaxes(wg[j], 1, 2))
-            b = _sum_t(wj, g[i] @ (wg[j] @ wj))  # C^T S^-1 G_i S^-1 G_j S^-1 C
-            term2 = np.trace(m @ b)
-            term3 = np.trace(m @ a[i] @ m @ a[j])
-            info[i, j] = info[j, i] = 0.5 * (term1 - 2.0 * term2 + term3)
-        info[i, i] += 0.5 * weight[i] / theta[i] ** 2
-    for ci, c in enumerate(kinds_present):
-        sel = kinds == c
-        score[k + ci] = 0.5 * (np.sum(u[sel] ** 2) / lam[c] ** 2 - np.trace(ztpz[np.ix_(sel, sel)]))
-        for i in range(k):  # ½ tr(Z_c^T P G_i P Z_c)
-            info[i, k + ci] = info[k + ci, i] = 0.5 * np.sum(pz[:, :, sel] * (g[i] @ pz[:, :, sel]))
-        for di, d in enumerate(kinds_present):
-            info[k + ci, k + di] = 0.5 * np.sum(ztpz[np.ix_(sel, kinds == d)] ** 2)
+    score, info = _reml_score_information(g, wg, wj, a, m, quad, tr_pg, weight, theta, lam, u, kinds, kinds_present,
+                                          pz if q else None, ztpz if q else None)
+    size = len(score)
     values = np.concatenate([theta, lam[kinds_present]])
     if not (np.all(np.isfinite(score)) and np.all(np.isfinite(info))):  # noise-free data: nothing to learn
         return theta, lam, m

@@ -173,6 +173,16 @@ def _posture_near(robot: RobotModel, tool02base, anchor, sampling: ViewSampling)
     return found
 
 
+def _board_view_frame(board: np.ndarray, corners: np.ndarray):
+    """``(centre, outward normal, e1, e2)`` of the board in base: a frame around the outward normal
+    (the printed face looks along -z of the target frame) in which a viewing direction is tilted."""
+    centre = board[:3, :3] @ corners.mean(axis=0) + board[:3, 3]
+    normal_out = -board[:3, 2]
+    e1 = np.cross([0.0, 1.0, 0.0] if abs(normal_out[1]) < 0.9 else [1.0, 0.0, 0.0], normal_out)
+    e1 /= np.linalg.norm(e1)
+    return centre, normal_out, e1, np.cross(normal_out, e1)
+
+
 def sample_eye_in_hand_postures(
     robot: RobotModel,
     cam2tool0,
@@ -226,13 +236,8 @@ def sample_eye_in_hand_postures(
     x = np.asarray(cam2tool0, float)
     board = np.asarray(target2base, float)
     corners = np.asarray(corners_target, float)
-    centre = board[:3, :3] @ corners.mean(axis=0) + board[:3, 3]
-    normal_out = -board[:3, 2]  # the printed face looks along -z of the target frame
+    centre, normal_out, e1, e2 = _board_view_frame(board, corners)
     side = np.asarray(sampling.side, float)
-    # A frame around the outward normal: the viewing direction is tilted within the cone.
-    e1 = np.cross([0.0, 1.0, 0.0] if abs(normal_out[1]) < 0.9 else [1.0, 0.0, 0.0], normal_out)
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(normal_out, e1)
     seed = None if seed_joints is None else np.asarray(seed_joints, float)
     anchor = seed
     joints = []

@@ -226,6 +226,42 @@ def check_program(modules, approved=None, robot: str = "IRB1400", external=(), m
     return findings
 
 
+def _module_attributes(module, tokens, i: int, out: list) -> int:
+    """Check the attributes ``(SYSMODULE, NOVIEW, ...)`` that may follow a module's name at ``tokens[i]``;
+    findings go to ``out``; returns the index after them."""
+    n = len(tokens)
+    if i < n and tokens[i].text == "(":
+        i += 1
+        while i < n and tokens[i].text != ")":
+            word = tokens[i]
+            if word.kind == "id" and word.text.upper() not in MODULE_ATTRIBUTES:
+                out.append(Finding(module, word.line, f"unknown module attribute {word.text!r} "
+                                                      f"(RAPID knows {', '.join(sorted(MODULE_ATTRIBUTES))})"))
+            elif word.kind != "id" and word.text != ",":
+                out.append(Finding(module, word.line, f"unexpected {word.text!r} in the module attributes"))
+            i += 1
+        i += 1
+    return i
+
+
+def _routine_parameters(module, tokens, i: int, local_scope: set, out: list) -> int:
+    """Check a routine's parameters ``([\\][INOUT|VAR|PERS] type name [{*}], ...)`` at ``tokens[i]``: their
+    types go to ``out`` when unknown, their names into ``local_scope``; returns the index after them."""
+    n = len(tokens)
+    if i < n and tokens[i].text == "(":
+        i += 1
+        while i < n and tokens[i].text != ")":
+            if tokens[i].kind == "id" and tokens[i].text.upper() not in ("INOUT", "VAR", "PERS"):
+                if tokens[i].text.lower() not in _DATA_TYPES:
+                    out.append(Finding(module, tokens[i].line, f"unknown data type {tokens[i].text!r}"))
+                if i + 1 < n and tokens[i + 1].kind == "id":
+                    local_scope.add(tokens[i + 1].text.lower())
+                    i += 1
+            i += 1
+        i += 1
+    return i
+
+
 def _check_module(module, tokens, global_data, routines, external, approved, model, move_tools=("tool0",)) -> list[Finding]:
     out: list[Finding] = []
     module_scope: set = set()
@@ -259,33 +295,13 @@ def _check_module(module, tokens, global_data, routines, external, approved, mod
         upper = t.text.upper()
         prev = tokens[i - 1].text if i > 0 else ""
         if upper == "MODULE":
-            i += 2
-            if i < n and tokens[i].text == "(":  # module attributes: (SYSMODULE, NOVIEW, ...)
-                i += 1
-                while i < n and tokens[i].text != ")":
-                    word = tokens[i]
-                    if word.kind == "id" and word.text.upper() not in MODULE_ATTRIBUTES:
-                        out.append(Finding(module, word.line, f"unknown module attribute {word.text!r} "
-                                                              f"(RAPID knows {', '.join(sorted(MODULE_ATTRIBUTES))})"))
-                    elif word.kind != "id" and word.text != ",":
-                        out.append(Finding(module, word.line, f"unexpected {word.text!r} in the module attributes"))
-                    i += 1
-                i += 1
+            i = _module_attributes(module, tokens, i + 2, out)
             continue
         if upper in ("PROC", "FUNC", "TRAP"):
             in_routine, local_scope = True, set()
             i += 3 if upper == "FUNC" else 2
-            if upper != "TRAP" and i < n and tokens[i].text == "(":  # parameters: [\][INOUT|VAR|PERS] type name [{*}]
-                i += 1
-                while i < n and tokens[i].text != ")":
-                    if tokens[i].kind == "id" and tokens[i].text.upper() not in ("INOUT", "VAR", "PERS"):
-                        if tokens[i].text.lower() not in _DATA_TYPES:
-                            out.append(Finding(module, tokens[i].line, f"unknown data type {tokens[i].text!r}"))
-                        if i + 1 < n and tokens[i + 1].kind == "id":
-                            local_scope.add(tokens[i + 1].text.lower())
-                            i += 1
-                    i += 1
-                i += 1
+            if upper != "TRAP":
+                i = _routine_parameters(module, tokens, i, local_scope, out)
             continue
         if upper in ("ENDPROC", "ENDFUNC", "ENDTRAP"):
             in_routine, local_scope = False, None

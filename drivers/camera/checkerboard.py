@@ -300,6 +300,32 @@ def _whole_board(corners: np.ndarray, pattern, gray: np.ndarray) -> bool:
                 and _outer_alternation(candidates[0], gray, contrast) <= MAX_OUTER_ALTERNATION)
 
 
+def _another_count(crop, region, pattern, gray, lap) -> dict | None:
+    """In a region OpenCV says holds a checkerboard: ``{"other": (a, b)}`` for a whole board one corner
+    off (or of another count OpenCV confirms), ``{"larger": (a, b)}`` for a grid larger than asked, else
+    ``None``; ``lap("count")`` times the stage."""
+    for other in _neighbour_patterns(pattern):
+        found = _opencv_grid(crop, other, ROI_FLAGS)
+        if found is not None and _whole_board(found + region[:2], other, gray):
+            lap("count")
+            return {"other": other}
+    # A grid larger than asked (findChessboardCornersSB may return more corners than its pattern):
+    # whatever OpenCV's exhaustive search could find would be part of that larger board.
+    ok, seen, meta = cv2.findChessboardCornersSBWithMeta(crop, (3, 3), flags=cv2.CALIB_CB_LARGER | SB_FLAGS)
+    lap("count")
+    if ok and meta is not None and seen is not None and len(seen) == meta.shape[0] * meta.shape[1]:
+        rows, cols = (int(v) for v in meta.shape[:2])
+        a, b = max(rows, cols), min(rows, cols)
+        if (a, b) != tuple(pattern) and a >= 3 and b >= 3:  # a whole board of another count? OpenCV confirms
+            found = _opencv_grid(crop, (a, b), ROI_FLAGS)
+            lap("count")
+            if found is not None and _whole_board(found + region[:2], (a, b), gray):
+                return {"other": (a, b)}
+        if a > pattern[0] or b > pattern[1]:
+            return {"larger": (a, b)}
+    return None
+
+
 def find_grid(gray: np.ndarray, pattern: tuple[int, int], search: str = "full") -> GridSearch:
     """Search the board with the stages of :data:`SEARCH_STAGES` in turn (see the module docstring).
 
@@ -350,25 +376,9 @@ def find_grid(gray: np.ndarray, pattern: tuple[int, int], search: str = "full") 
     if corners is not None:
         return GridSearch(corners * 2.0 + 0.5 if large else corners, "fast", seconds=seconds)
     if crop is not None and cv2.checkChessboard(crop, pattern):
-        for other in _neighbour_patterns(pattern):
-            found = _opencv_grid(crop, other, ROI_FLAGS)
-            if found is not None and _whole_board(found + region[:2], other, gray):
-                lap("count")
-                return GridSearch(None, other_pattern=other, seconds=seconds)
-        # A grid larger than asked (findChessboardCornersSB may return more corners than its pattern):
-        # whatever OpenCV's exhaustive search could find would be part of that larger board.
-        ok, seen, meta = cv2.findChessboardCornersSBWithMeta(crop, (3, 3), flags=cv2.CALIB_CB_LARGER | SB_FLAGS)
-        lap("count")
-        if ok and meta is not None and seen is not None and len(seen) == meta.shape[0] * meta.shape[1]:
-            rows, cols = (int(v) for v in meta.shape[:2])
-            a, b = max(rows, cols), min(rows, cols)
-            if (a, b) != tuple(pattern) and a >= 3 and b >= 3:  # a whole board of another count? OpenCV confirms
-                found = _opencv_grid(crop, (a, b), ROI_FLAGS)
-                lap("count")
-                if found is not None and _whole_board(found + region[:2], (a, b), gray):
-                    return GridSearch(None, other_pattern=(a, b), seconds=seconds)
-            if a > pattern[0] or b > pattern[1]:
-                return GridSearch(None, larger_seen=(a, b), seconds=seconds)
+        other = _another_count(crop, region, pattern, gray, lap)
+        if other is not None:
+            return GridSearch(None, other_pattern=other.get("other"), larger_seen=other.get("larger"), seconds=seconds)
     corners = _opencv_grid(gray, pattern, OPENCV_DEFAULT_FLAGS)
     lap("full")
     if corners is not None:
@@ -519,6 +529,28 @@ def _outer_alternation(grid: np.ndarray, image: np.ndarray, contrast: float) -> 
     return worst
 
 
+def _refuse_missing_grid(result: GridSearch, gray: np.ndarray, pattern: tuple, what: str) -> None:
+    """Raise :class:`BoardNotFound` saying why ``result`` holds no grid of ``pattern`` (another count,
+    a larger board, a board partly out of view, none at all); return when it holds one."""
+    nx, ny = pattern
+    if result.other_pattern is not None:
+        a, b = result.other_pattern
+        raise BoardNotFound(f"the board in the {what} has {a}x{b} inner corners, not {nx}x{ny}: give --board {a}x{b} "
+                            f"(inner corners, long side first)")
+    if result.larger_seen is not None:
+        a, b = result.larger_seen
+        raise BoardNotFound(f"the board in the {what} has more inner corners than {nx}x{ny} ({a}x{b} seen at least): "
+                            f"give its full inner-corner count (--board, long side first)")
+    if result.corners is None:
+        if cv2.checkChessboard(gray, (nx, ny)):
+            raise BoardNotFound(
+                f"a checkerboard is in the {what} but not all of its {nx}x{ny} inner corners were found: check that "
+                f"the whole board with its white margin is in view and that {nx}x{ny} is its inner-corner count "
+                f"(--board; e.g. 13x8 for 14x9 squares)"
+            )
+        raise BoardNotFound(f"no checkerboard in the {what}: check that the board is in view, lit evenly and in focus")
+
+
 def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside: bool = True,
                  search: str = "full", what: str = "image") -> Detection:
     """Find the board's inner corners in one image and put them in canonical order.
@@ -552,24 +584,9 @@ def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside
     gray = _gray_u8(image, what)
     nx, ny = board.corners
     result = find_grid(gray, (nx, ny), search)
-    if result.other_pattern is not None:
-        a, b = result.other_pattern
-        raise BoardNotFound(f"the board in the {what} has {a}x{b} inner corners, not {nx}x{ny}: give --board {a}x{b} "
-                            f"(inner corners, long side first)")
-    if result.larger_seen is not None:
-        a, b = result.larger_seen
-        raise BoardNotFound(f"the board in the {what} has more inner corners than {nx}x{ny} ({a}x{b} seen at least): "
-                            f"give its full inner-corner count (--board, long side first)")
-    found, stage = result.corners, result.stage
-    if found is None:
-        if cv2.checkChessboard(gray, (nx, ny)):
-            raise BoardNotFound(
-                f"a checkerboard is in the {what} but not all of its {nx}x{ny} inner corners were found: check that "
-                f"the whole board with its white margin is in view and that {nx}x{ny} is its inner-corner count "
-                f"(--board; e.g. 13x8 for 14x9 squares)"
-            )
-        raise BoardNotFound(f"no checkerboard in the {what}: check that the board is in view, lit evenly and in focus")
-    grid = found.reshape(ny, nx, 2)
+    _refuse_missing_grid(result, gray, (nx, ny), what)
+    stage = result.stage
+    grid = result.corners.reshape(ny, nx, 2)
     if refine:
         grid = _refine(gray, grid)
     candidates = canonical_orderings(grid)
