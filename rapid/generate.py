@@ -119,7 +119,9 @@ def render_main(station: RapidStation, postures=None) -> RapidModule:
     """``HeMain``: main routine, approved postures, speed. Refuses postures outside the joint limits."""
     arr = check_postures(station.postures if postures is None else postures, station.robot,
                          "postures to render")
-    consts = "\n".join(f"  CONST jointtarget jtHePost{k} := {jointtarget_literal(row)};" for k, row in enumerate(arr, 1))
+    # the PC asks for posture k (the link counts from 1); a capture writes it to the session's file k - 1
+    consts = "\n".join(f"  ! posture {k - 1} (postures/{k - 1:03d}.yaml)\n"
+                       f"  CONST jointtarget jtHePost{k} := {jointtarget_literal(row)};" for k, row in enumerate(arr, 1))
     tool = _move_tool(station)
     cases = "\n".join(f"    CASE {k}:\n      MoveAbsJ jtHePost{k}, vHeMove, fine, {tool};" for k in range(1, len(arr) + 1))
     cell_setup = ""

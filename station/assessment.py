@@ -69,6 +69,9 @@ class Assessment:
         The full RAPID tooldata literal, when the tool's load is known (station configuration).
     plan_preview : bytes or None
         The capture plan's preview (``SESSION/preview.png``, ``station.preview``), when the session has one.
+    plan_preview_missing : str or None
+        Why a planned capture's preview is not shown (its file is missing or unreadable), so the report
+        says so instead of dropping the section; None when shown or when the session had no plan.
     """
 
     session_path: Path | str
@@ -82,6 +85,7 @@ class Assessment:
     repeatability: dict
     tooldata_literal: str | None = None
     plan_preview: bytes | None = None
+    plan_preview_missing: str | None = None
 
     @property
     def d_org(self) -> DOrg:
@@ -140,20 +144,25 @@ def assess(outcome: CalibrationOutcome, thresholds: QualityThresholds | None = N
     origin = outcome.origin if outcome.origin is not None else session_origin(path=outcome.session_path)
     return Assessment(outcome.session_path, problem, result, origin, figures, judged, comparison,
                       _findings(problem), corner_repeatability(problem, result), tooldata_literal,
-                      _plan_preview(outcome.session_path))
+                      *_plan_preview(outcome.session_path, outcome.session))
 
 
-def _plan_preview(session_path) -> bytes | None:
-    """The capture plan's preview PNG of the session folder, when there is one."""
+def _plan_preview(session_path, session=None) -> tuple[bytes | None, str | None]:
+    """The capture plan's preview PNG of the session folder, when there is one; else, for a session
+    planned by capture (its record holds ``plan_joints_deg``), why it is not shown."""
     from ..calibration.files import read_file_bytes
 
     path = Path(session_path) / "preview.png" if session_path is not None else None
-    if path is None or not path.is_file():
-        return None
+    planned = session is not None and "plan_joints_deg" in session.extra.get("capture", {})
+    if path is None:
+        return None, None
+    if not path.is_file():
+        return None, (f"{path} is missing: run the capture command again with --plan-only to draw it"
+                      if planned else None)
     try:
-        return read_file_bytes(path, "plan preview", HandEyeError)
-    except HandEyeError:
-        return None
+        return read_file_bytes(path, "plan preview", HandEyeError), None
+    except HandEyeError as exc:
+        return None, (str(exc) if planned else None)
 
 
 def _findings(problem: HandEyeProblem) -> list | None:

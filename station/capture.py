@@ -1,6 +1,9 @@
 """Guided posture capture: plan, program the robot, visit every posture, measure, persist, resume.
 
-For each posture of the plan (1-based ``k`` on the controller, ``k - 1`` in the session):
+Each posture has one number, the number of its file (``postures/NNN.yaml`` -> NNN, from 0): every
+line the operator reads names it, as calibrate and the report do. Only the link to the controller
+counts from 1, as the RAPID program's ``jtHePost<k>`` do: posture ``index`` is the controller's
+``k = index + 1`` (the program's comments say so beside each jointtarget). For each posture of the plan:
 
 1. ask the RAPID program to move there (``MoveAbsJ ... fine``) and wait until the robot is at rest;
 2. read the joints and the flange pose, and cross-check the pose against our kinematics;
@@ -11,7 +14,10 @@ For each posture of the plan (1-based ``k`` on the controller, ``k - 1`` in the 
 
 Interrupted anywhere (Ctrl-C, a kill, a lost link), running the same command again reads the
 session, skips the postures already on disk, acknowledges a posture the robot is still waiting at if
-its file was written, and goes on: every posture ends up on disk exactly once.
+its file was written, and goes on: every posture ends up on disk exactly once. What a kill left half
+done before the first move is finished on the rerun: the preview drawn again from the plan recorded
+in ``session.yaml``, the RAPID modules not yet written written (:func:`repair_plan`); what cannot be
+rebuilt is named in one line.
 
 :func:`capture` runs four steps, each a function of its own, on the connected station
 (``station.runtime.StationLink``):
@@ -21,7 +27,8 @@ its file was written, and goes on: every posture ends up on disk exactly once.
   (``capture.station: mock|real``); :func:`resume_session` reads that record back and refuses to
   resume a session of the other station. A new plan keeps clear of the cell (``cell`` of the
   station config, ``station.cell_plan``), and its preview (``station.preview``) is written to
-  ``SESSION/preview.png``;
+  ``SESSION/preview.png`` (before ``session.yaml``; a resumed plan without it gets it drawn again,
+  :func:`repair_plan`);
 - program (:func:`install_program`): the RAPID modules written once into ``SESSION/rapid``, loaded
   when the station can, and the wait until the controller runs them (``plan_only`` stops before:
   plan, preview and program on disk, nothing moved);
@@ -80,7 +87,9 @@ __all__ = [
     "open_capture",
     "plan_line",
     "plan_session",
+    "recorded_plan",
     "release_waiting_posture",
+    "repair_plan",
     "resume_session",
     "stereo_views",
     "visit_postures",
@@ -97,15 +106,31 @@ class CaptureError(HandEyeError):
 
 @dataclass
 class PostureReport:
-    """What happened at one posture (for the progress display)."""
+    """What happened at one posture (for the progress display).
 
-    k: int
+    Attributes
+    ----------
+    index : int
+        The posture's number: its file's (``postures/NNN.yaml``), as calibrate and the report name it.
+    total : int
+        Postures planned (guided: captured so far).
+    ok : bool
+    message : str
+    quality : dict
+    attempts : int
+    elapsed_s : float
+    done : int
+        Postures visited so far, this one included (for a progress bar).
+    """
+
+    index: int
     total: int
     ok: bool
     message: str
     quality: dict = field(default_factory=dict)
     attempts: int = 1
     elapsed_s: float = 0.0
+    done: int = 0
 
 
 @dataclass
@@ -117,13 +142,15 @@ class CaptureSummary:
     session : Path
     planned : int
     captured : list of int
-        Plan indices (1-based) written in this run.
+        Posture numbers (the files' ``NNN``, from 0) written in this run.
     already : list of int
-        Plan indices found on disk when the run started (resume).
+        Posture numbers found on disk when the run started (resume).
     skipped : dict
-        Plan index -> reason, for postures that failed quality in this run.
+        Posture number -> reason, for postures that failed quality in this run.
     duration_s : float
     plan_score : dict
+    preview : Path or None
+        ``SESSION/preview.png`` when it is there (None: it could not be drawn, the output said why).
     """
 
     session: Path
@@ -133,6 +160,7 @@ class CaptureSummary:
     skipped: dict
     duration_s: float
     plan_score: dict
+    preview: Path | None = None
 
     @property
     def complete(self) -> bool:
@@ -228,8 +256,8 @@ class CaptureRun:
         As on disk when the run started; its capture record (``extra['capture']``) is updated and
         rewritten after each posture.
     plan_joints : ndarray, shape (n, dof)
-        Planned joint angles (deg), rounded as embedded in the RAPID program; posture ``k`` (1-based)
-        is row ``k - 1``.
+        Planned joint angles (deg), rounded as embedded in the RAPID program; row ``i`` is posture ``i``
+        (``postures/NNN.yaml``), the controller's posture ``i + 1``.
     plan_score : dict
         The plan's :class:`~handeye.station.planning.PlanScore` as recorded in the session.
     """
@@ -272,18 +300,66 @@ def plan_session(config: StationConfig, session_dir: Path, link: StationLink, pr
     session = Session(setup="eye_in_hand", robot=config.robot, target=config.target, extra={"capture": {
         "station": _station_kind(config),
         "plan_joints_deg": [[round(float(v), 4) for v in row] for row in plan.joints_deg],
+        "start_joints_deg": [round(float(v), 4) for v in plan.start_joints_deg],
         "plan_score": plan_score,
         "board_estimate": pose_from_transform(plan.board2base),
         "nominal_mount": pose_from_transform(plan.cam2tool0),
         "skipped": {},
         "config": config.to_dict(),
     }})
-    create_session(session_dir, session)
     from .preview import write_preview
 
+    preview = write_preview(session_dir / "preview.png", load_robot(config.robot), plan)  # before the plan: a kill
+    create_session(session_dir, session)  # between the two leaves no plan, and the rerun plans anew
     progress(f"plan preview (the cell from above and from the side, the flange path, the numbered postures): "
-             f"{write_preview(session_dir / 'preview.png', load_robot(config.robot), plan)}")
+             f"{preview}")
     return CaptureRun(session, np.round(plan.joints_deg, 4), plan_score)  # as embedded in the RAPID program
+
+
+#: What drawing a plan's preview again needs from the capture record in ``session.yaml``.
+_PREVIEW_KEYS = ("plan_joints_deg", "start_joints_deg", "board_estimate", "nominal_mount")
+
+
+def recorded_plan(session: Session, config: StationConfig) -> PosturePlan:
+    """The plan of a capture as its record in ``session.yaml`` holds it (to draw its preview again),
+    checked against the cell of ``config``.
+
+    Raises
+    ------
+    CaptureError
+        Naming what the record lacks (``start_joints_deg``: planned by an older handeye).
+    """
+    record = session.extra.get("capture", {})
+    lacking = [key for key in _PREVIEW_KEYS if key not in record] + (["target"] if session.target is None else [])
+    if lacking:
+        raise CaptureError(f"session.yaml records no {', '.join(lacking)}")
+    try:
+        joints = np.array(record["plan_joints_deg"], float)
+        start = np.array(record["start_joints_deg"], float)
+        board2base, cam2tool0 = (transform_from_pose(record[key]["position_mm"], record[key]["quaternion_wxyz"])
+                                 for key in ("board_estimate", "nominal_mount"))
+        score = PlanScore.from_dict(record.get("plan_score", {}))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise CaptureError(f"its capture record in session.yaml is unreadable ({exc})") from None
+    return PosturePlan(joints, board2base, cam2tool0, score, start, session.target, [], cell_check(config))
+
+
+def repair_plan(config: StationConfig, session_dir: Path, session: Session, progress) -> Path | None:
+    """Resume: draw ``SESSION/preview.png`` again when a kill left it out (from :func:`recorded_plan`), or
+    say in one line why it cannot be; returns the preview's path when it is there."""
+    from .preview import write_preview
+
+    path = session_dir / "preview.png"
+    if path.is_file():
+        return path
+    try:
+        plan = recorded_plan(session, config)
+        robot = load_robot(session.robot or config.robot)
+    except HandEyeError as exc:
+        progress(f"{path} is missing and cannot be drawn again: {exc}; the capture goes on without a preview")
+        return None
+    progress(f"plan preview drawn again (a run was interrupted before writing it): {write_preview(path, robot, plan)}")
+    return path
 
 
 def resume_session(config: StationConfig, session_dir: Path, session: Session, progress) -> CaptureRun:
@@ -313,24 +389,52 @@ def open_capture(config: StationConfig, session_dir: Path, link: StationLink, pr
     return resume_session(config, session_dir, session, progress)
 
 
-def write_program(config: StationConfig, session_dir: Path, plan_joints: np.ndarray, progress,
-                  board2base=None, link: StationLink | None = None) -> Path:
-    """Write the RAPID program into ``SESSION/rapid`` (once; with ``cell.world_zones`` the keep-out
-    volumes and the stand of the board at ``board2base`` as world zones); returns the folder. On the
-    embedded mock station (``link``) the program asks the mock's HeKey for the write key."""
-    from ..rapid.generate import render_program, write_modules
+def _session_program(config: StationConfig, plan_joints: np.ndarray, board2base, link: StationLink | None) -> list:
+    """The RAPID modules of the plan (``rapid.generate.RapidModule``), as :func:`write_program` writes them."""
+    from ..rapid.generate import render_program
     from ..rapid.station import station_from_dict
 
+    data = config.rapid_dict(plan_joints, board2base)
+    if link is not None and link.is_mock and data["controller"]["write_key"] is None:
+        # the embedded station's controller holds a key of its own (HeKey.sys, handed to the PC): its
+        # link module asks HeKey for it. The key itself never goes into the program modules.
+        data["controller"]["write_key"] = link.mock.write_key
+    return render_program(station_from_dict(data, config.source), plan_joints)
+
+
+def _same_text(path: Path, text: str) -> bool:
+    try:
+        return path.read_text(encoding="ascii", errors="replace") == text
+    except OSError:
+        return False
+
+
+def write_program(config: StationConfig, session_dir: Path, plan_joints: np.ndarray, progress,
+                  board2base=None, link: StationLink | None = None) -> Path:
+    """Write the RAPID program into ``SESSION/rapid`` (with ``cell.world_zones`` the keep-out volumes and
+    the stand of the board at ``board2base`` as world zones); returns the folder. On the embedded mock
+    station (``link``) the program asks the mock's HeKey for the write key.
+
+    Written once: modules on disk are never rewritten. A folder a kill left half written (some modules
+    missing, those present as this config generates them) is completed; one whose modules differ is
+    refused (CaptureError naming them)."""
+    from ..rapid.generate import write_modules
+
     rapid_dir = session_dir / "rapid"
-    if not rapid_dir.is_dir():
-        data = config.rapid_dict(plan_joints, board2base)
-        if link is not None and link.is_mock and data["controller"]["write_key"] is None:
-            # the embedded station's controller holds a key of its own (HeKey.sys, handed to the PC): its
-            # link module asks HeKey for it. The key itself never goes into the program modules.
-            data["controller"]["write_key"] = link.mock.write_key
-        station = station_from_dict(data, config.source)
-        write_modules(render_program(station, plan_joints), rapid_dir)
-        progress(f"RAPID program written to {rapid_dir}")
+    modules = _session_program(config, plan_joints, board2base, link)
+    missing = [m for m in modules if not (rapid_dir / m.filename).is_file()]
+    if not missing:
+        return rapid_dir
+    present = [m for m in modules if m not in missing]
+    differ = [m.filename for m in present if not _same_text(rapid_dir / m.filename, m.text)]
+    if differ:
+        raise CaptureError(f"{rapid_dir} lacks {', '.join(m.filename for m in missing)} and its {', '.join(differ)} "
+                           "differ from the program this config generates: delete that folder (nothing has moved "
+                           "with it) and run the same command again")
+    write_modules(missing, rapid_dir)
+    progress(f"RAPID program written to {rapid_dir}" if not present else
+             f"RAPID program in {rapid_dir} completed (a run was interrupted while writing it): "
+             f"{', '.join(m.filename for m in missing)} written")
     return rapid_dir
 
 
@@ -353,38 +457,40 @@ def release_waiting_posture(controller, done: set, progress) -> None:
     if status.moving:
         status = controller.wait_at_rest()
     if status.awaiting_ack and status.posture:
-        k = status.posture
+        k = status.posture  # the controller's number: posture k - 1 of the session
         if (k - 1) in done:
             controller.acknowledge(k)
-            progress(f"posture {k} was already on disk: acknowledged")
+            progress(f"posture {k - 1} was already on disk: acknowledged")
 
 
 def visit_postures(config: StationConfig, session_dir: Path, run: CaptureRun, link: StationLink, on_posture,
                    stop_after: int | None = None) -> tuple[list, dict]:
     """The posture loop: move, measure, write each posture not yet on disk, record skips, acknowledge.
 
-    Returns the plan indices (1-based) captured in this run and ``{plan index: reason}`` of those skipped.
+    Returns the posture numbers (the files' ``NNN``) captured in this run and ``{number: reason}`` of those
+    skipped. The controller is asked for posture ``index + 1`` (its program counts from 1).
     """
     controller, robot = link.controller, load_robot(config.robot)
     total, done = len(run.plan_joints), run.done
     record = run.session.extra["capture"]
     captured, skipped = [], {}
-    remaining = [k for k in range(1, total + 1) if (k - 1) not in done]
-    for n, k in enumerate(remaining):
+    remaining = [index for index in range(total) if index not in done]
+    for n, index in enumerate(remaining):
         if stop_after is not None and n >= stop_after:
             break
         t0 = time.monotonic()
+        k = index + 1  # the controller's number of the posture
         status = controller.status()
         if not (status.awaiting_ack and status.posture == k):
-            controller.goto_posture(k, expected_joints=run.plan_joints[k - 1])
-        report = _capture_posture(config, session_dir, link, robot, k, total, run.plan_joints[k - 1])
-        report.elapsed_s = time.monotonic() - t0
+            controller.goto_posture(k, expected_joints=run.plan_joints[index])
+        report = _capture_posture(config, session_dir, link, robot, index, total, run.plan_joints[index])
+        report.elapsed_s, report.done = time.monotonic() - t0, len(done) + n + 1
         if report.ok:
-            captured.append(k)
-            record["skipped"].pop(str(k), None)
+            captured.append(index)
+            record["skipped"].pop(str(index), None)
         else:
-            skipped[k] = report.message
-            record["skipped"][str(k)] = report.message
+            skipped[index] = report.message
+            record["skipped"][str(index)] = report.message
         run.session.extra["capture"] = record
         _write_header(session_dir, run.session)
         controller.acknowledge(k)
@@ -435,22 +541,23 @@ def capture(
     started = time.monotonic()
     session_dir = Path(session_dir)
     run = open_capture(config, session_dir, link, progress)
+    preview = repair_plan(config, session_dir, run.session, progress)
     if plan_only:
         write_program(config, session_dir, run.plan_joints, progress, run.board2base, link)
-        progress(f"plan only: nothing moved; look at {session_dir / 'preview.png'}, then run the same command "
-                 "without --plan-only to capture")
-        return CaptureSummary(session_dir, len(run.plan_joints), [], sorted(k + 1 for k in run.done), {},
-                              time.monotonic() - started, run.plan_score)
+        progress("plan only: nothing moved; " + (f"look at {preview}, then " if preview is not None else "")
+                 + "run the same command without --plan-only to capture")
+        return CaptureSummary(session_dir, len(run.plan_joints), [], sorted(run.done), {},
+                              time.monotonic() - started, run.plan_score, preview)
     install_program(config, session_dir, run.plan_joints, link, progress, run.board2base)
     confirm_motion(config, session_dir, run, link, confirm, progress)
-    already = sorted(k + 1 for k in run.done)
+    already = sorted(run.done)
     release_waiting_posture(link.controller, run.done, progress)
     captured, skipped = visit_postures(config, session_dir, run, link, on_posture, stop_after)
     if link.stop_program is not None and stop_after is None:
         link.stop_program()  # the PC started it (RWS); a resumed capture loads and starts it again
         progress("RAPID program stopped: the capture went through the plan")
     return CaptureSummary(session_dir, len(run.plan_joints), captured, already, skipped, time.monotonic() - started,
-                          run.plan_score)
+                          run.plan_score, preview)
 
 
 def confirm_motion(config: StationConfig, session_dir: Path, run: CaptureRun, link: StationLink,
@@ -465,8 +572,9 @@ def confirm_motion(config: StationConfig, session_dir: Path, run: CaptureRun, li
         progress(f"moving the mock robot through {left} postures at {speed} without asking (mock station; "
                  "a real station asks first)")
         return
-    question = (f"move the robot through {left} postures at {speed}, MoveAbsJ, checked against the cell "
-                f"(preview: {session_dir / 'preview.png'})?")
+    preview = session_dir / "preview.png"
+    question = (f"move the robot through {left} postures at {speed}, MoveAbsJ, checked against the cell"
+                + (f" (preview: {preview})?" if preview.is_file() else "?"))
     if confirm is None:
         raise CaptureError("motion needs the operator's confirmation: answer the prompt at a terminal, or give --yes "
                            "to move without asking (scripts)")
@@ -546,15 +654,16 @@ def measurement_line(quality: dict) -> str:
             f"{quality['row_disagreement_max_px']:.2f} px, plane {quality['plane_rms_mm']:.2f} mm")
 
 
-def _capture_posture(config, session_dir, link: StationLink, robot, k, total, planned) -> PostureReport:
-    """Steps 2-4 at posture ``k`` (the robot at rest there): check the pose, measure, write the posture file."""
-    joints, tool02base = read_flange(config, link, robot, f"posture {k}")
+def _capture_posture(config, session_dir, link: StationLink, robot, index, total, planned) -> PostureReport:
+    """Steps 2-4 at posture ``index`` (the robot at rest there): check the pose, measure, write the posture file."""
+    joints, tool02base = read_flange(config, link, robot, f"posture {index}")
     if np.max(np.abs(joints - planned)) > 0.05:
-        raise CaptureError(f"posture {k}: the robot stands at {np.round(joints, 3).tolist()}, not at the planned "
+        raise CaptureError(f"posture {index}: the robot stands at {np.round(joints, 3).tolist()}, not at the planned "
                            f"{np.round(planned, 3).tolist()}: is the right program loaded?")
     result, frame, problem, attempts = measure_with_retries(config, link)
     if problem is not None:
-        return PostureReport(k, total, False, f"posture {k} skipped after {attempts} attempt(s): {problem}",
+        return PostureReport(index, total, False, f"posture {index} skipped after {attempts} attempt(s): {problem}",
                              result.quality if result is not None else {}, attempts)
-    store_posture(config, session_dir, k - 1, joints, tool02base, result, frame, plan_index=k)
-    return PostureReport(k, total, True, f"posture {k}: {measurement_line(result.quality)}", result.quality, attempts)
+    store_posture(config, session_dir, index, joints, tool02base, result, frame, controller_posture=index + 1)
+    return PostureReport(index, total, True, f"posture {index}: {measurement_line(result.quality)}", result.quality,
+                         attempts)

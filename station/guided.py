@@ -303,8 +303,9 @@ class _GuidedRun:
         store_posture(self.config, self.session_dir, index, joints, tool02base, result, frame, guided=True)
         self.state.add(index, tool02base, result.points_mm, self.view)
         self.captured.append(index)
-        self.on_posture(PostureReport(index + 1, len(self.state.tool02base), True,
-                                      f"posture {index}: {measurement_line(result.quality)}", result.quality, attempts))
+        count = len(self.state.tool02base)
+        self.on_posture(PostureReport(index, count, True, f"posture {index}: {measurement_line(result.quality)}",
+                                      result.quality, attempts, done=count))
         self.say_missing()
 
 
@@ -331,7 +332,7 @@ def guided_capture(
     progress : callable
         One-line messages: what was captured, what is missing and what to do next, GOOD ENOUGH.
     on_posture : callable
-        A :class:`~handeye.station.capture.PostureReport` after each posture (``k``: 1-based count).
+        A :class:`~handeye.station.capture.PostureReport` after each posture (``index``: the posture's file number).
     stop : threading.Event, optional
         Set to end the run (a test's scripted operator; the command ends on Ctrl-C).
     clock : callable

@@ -94,6 +94,11 @@ class PlanScore:
         return {**out, "rejected_postures": int(self.rejected_postures), "rejected_moves": int(self.rejected_moves),
                 "rejections": list(self.rejections)}
 
+    @classmethod
+    def from_dict(cls, data: dict) -> "PlanScore":
+        """The score :meth:`to_dict` wrote (a plan read back from ``session.yaml``); TypeError when it is not one."""
+        return cls(**{**data, "rejections": tuple(data.get("rejections", ()))})
+
     def verdict(self, thresholds: QualityThresholds | None = None) -> list[str]:
         """Warnings an operator should read before moving (empty when the plan looks good): the
         plan's figures below the verdict's thresholds (defaults when omitted)."""

@@ -3,7 +3,8 @@
 One PNG (``SESSION/preview.png``, and in the report): the keep-out volumes (boxes, cylinders, the
 floor, the board's stand), the board, the path the flange will run (tool0's origin along the
 joint-interpolated moves, from the start posture through every posture in order) and the numbered
-postures (the flange there). Two views of the base frame: from above (x, y) and from the side
+postures (the flange there), each by its number: its file's, ``postures/NNN.yaml`` -> NNN
+(:func:`posture_labels`), as capture, calibrate and the report name it. Two views of the base frame: from above (x, y) and from the side
 (x, z; the robot's foot at the origin). mm.
 
 matplotlib's object API (``Figure`` + Agg canvas), no pyplot, as the report's figures; the posture
@@ -21,7 +22,7 @@ from ..calibration.cell import Box, Cylinder, Floor
 from ..calibration.kinematics import RobotModel
 from .planning import PosturePlan
 
-__all__ = ["plan_preview_figure", "plan_preview_png", "write_preview"]
+__all__ = ["plan_preview_figure", "plan_preview_png", "posture_labels", "write_preview"]
 
 _VOLUME, _STAND, _BOARD, _PATH, _CAMERA = "#c62828", "#ef8a17", "#1f5fa8", "#555555", "#1f5fa8"
 #: The two views: (title, index of the horizontal axis, of the vertical axis, their names).
@@ -103,6 +104,12 @@ def _place_labels(ax, points_2d, labels, renderer, taken: list) -> int:
     return missing
 
 
+def posture_labels(count: int) -> list[str]:
+    """The numbers written beside the ``count`` planned postures, in visiting order: the numbers of the
+    files they will be captured into (``postures/000.yaml`` -> ``0``)."""
+    return [str(index) for index in range(count)]
+
+
 def _extent(points: np.ndarray, volumes) -> np.ndarray:
     """``[xmin, xmax, ymin, ymax, zmin, zmax]`` covering the points and the finite volumes, with a border."""
     pts = [points]
@@ -169,20 +176,21 @@ def plan_preview_figure(robot: RobotModel, plan: PosturePlan):
     left_out = []
     for ax, (title, h, v, _) in zip(axes, _VIEWS):
         taken = [t.get_window_extent(renderer) for t in (ax.title, ax.xaxis.label, ax.yaxis.label)]
-        missing = _place_labels(ax, flanges[:, [h, v]], [str(k) for k in range(1, len(flanges) + 1)], renderer, taken)
+        missing = _place_labels(ax, flanges[:, [h, v]], posture_labels(len(flanges)), renderer, taken)
         if missing:
             left_out.append(f"{missing} number{'s' if missing != 1 else ''} left out {title.split(' (')[0]} (crowded)")
     handles = [Patch(facecolor=_VOLUME, alpha=0.3, edgecolor=_VOLUME, label="keep-out volume"),
                Patch(facecolor=_STAND, alpha=0.3, edgecolor=_STAND, label="board stand"),
                Patch(facecolor=_BOARD, alpha=0.35, label="board"),
                Line2D([], [], color=_PATH, label="flange path (tool0)"),
-               Line2D([], [], marker="o", linestyle="", color=_CAMERA, label="flange at posture k"),
+               Line2D([], [], marker="o", linestyle="", color=_CAMERA, label="flange at posture n"),
                Line2D([], [], marker="s", linestyle="", color="black", label="start (flange)"),
                Line2D([], [], marker="^", linestyle="", color="black", label="robot base")]
     fig.legend(handles=handles, loc="lower center", ncol=7, fontsize=8, frameon=False)
     margin = f"margin {plan.cell.margin_mm:g} mm" if plan.cell is not None else "no cell given"
     notes = "; ".join([margin] + left_out)
-    fig.suptitle(f"Plan preview: {len(plan.joints_deg)} postures in visiting order; {notes}", fontsize=11)
+    fig.suptitle(f"Plan preview: {len(plan.joints_deg)} postures in visiting order, numbered as their files "
+                 f"(postures/NNN.yaml); {notes}", fontsize=11)
     return fig
 
 

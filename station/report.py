@@ -636,11 +636,14 @@ def _repeatability_section(a: Assessment, fixed_frame: str) -> str:
           f"(point {int(np.argmax(rms))}).</p></section>")
 
 
-def _preview_section(png: bytes) -> str:
+def _preview_section(png: bytes | None, missing: str | None = None) -> str:
+    if png is None:
+        return f'<h2>Capture plan: the cell</h2><section><p class="note">Preview not shown: {_e(missing)}</p></section>'
     return ("<h2>Capture plan: the cell</h2><section>"
             '<p class="how">The preview written before the robot moved: the keep-out volumes and the board\'s stand, the '
-            "board, the path the flange ran and the numbered postures, from above and from the side (base frame, "
-            "mm).</p>" + _img(png, "capture plan preview: the cell from above and from the side") + "</section>")
+            "board, the path the flange ran and the postures, numbered as their files (postures/NNN.yaml) and as "
+            "this report names them, from above and from the side (base frame, mm).</p>"
+            + _img(png, "capture plan preview: the cell from above and from the side") + "</section>")
 
 
 def _findings_section(findings) -> str:
@@ -694,8 +697,8 @@ def write_report(path_html, assessment: Assessment, title: str = "Hand-eye calib
                  "<h2>5. Quality metrics</h2><section>" + _metrics_table(a) + "</section>"]
     if a.findings is not None:
         sections.append(_findings_section(a.findings))
-    if a.plan_preview is not None:
-        sections.append(_preview_section(a.plan_preview))
+    if a.plan_preview is not None or a.plan_preview_missing is not None:
+        sections.append(_preview_section(a.plan_preview, a.plan_preview_missing))
     sections.append(_FOOTER)
     document = ("<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
                 f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"><title>{_e(title)}</title>"

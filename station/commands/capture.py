@@ -33,8 +33,13 @@ set is good enough for the verdict's thresholds. Stop with Ctrl-C; the same comm
 controller only answers joint and pose reads (its link module must run while you jog: on a real
 IRC5 that needs the link in a background task, see the README's known limits).
 
+Each posture is named by the number of its file (postures/NNN.yaml -> NNN, from 0) in these lines,
+the preview, the RAPID program's comments (the controller's jtHePost<k> is posture k - 1) and by
+calibrate and its report.
+
 Interrupted (Ctrl-C, kill, lost link)? Run the same command again: it resumes, and every posture
-ends up on disk exactly once.
+ends up on disk exactly once; a preview or RAPID modules the interruption left unwritten are
+written then (what cannot be rebuilt is named in one line).
 
 --config runs the real station it names (controller.protocol and camera.backend are required);
 when the controller or the camera cannot be reached, capture stops with the reason: it never falls
@@ -113,12 +118,13 @@ def run(args) -> int:
     with open_station(config) as link, progress_bar("capture") as update:
         def on_posture(report):
             say(("  ok    " if report.ok else "  SKIP  ") + report.message + f"  ({report.elapsed_s:.1f} s)")
-            update(report.k, report.total, f"posture {report.k}/{report.total}")
+            update(report.done, report.total, f"posture {report.index}")
 
         summary = capture(config, args.session, link, progress=say, on_posture=on_posture, plan_only=args.plan_only,
                           confirm=_confirmation(args))
     if args.plan_only:
-        say(f"next: look at {summary.session}/preview.png, then the same command without --plan-only")
+        say((f"next: look at {summary.preview}, then " if summary.preview is not None else "next: ")
+            + "the same command without --plan-only")
         return 0
     have = len(summary.captured) + len(summary.already)
     say(f"{have} of {summary.planned} postures in {summary.session} ({len(summary.captured)} this run, "

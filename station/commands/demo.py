@@ -59,7 +59,7 @@ def run(args) -> int:
         def on_posture(report):
             if not quiet:
                 print(("  ok    " if report.ok else "  SKIP  ") + report.message, flush=True)
-            update(report.k, report.total, f"posture {report.k}/{report.total}")
+            update(report.done, report.total, f"posture {report.index}")
 
         result = run_demo(DemoOptions(args.session, args.postures, args.protocol, args.seed, not args.no_report),
                           progress=say, on_posture=on_posture)

@@ -33,7 +33,7 @@ def test_capture_plans_programs_and_measures(tmp_path, no_leaked_threads):
     with open_station(config, mock=True) as link:
         summary = capture(config, tmp_path / "s", link)
         truth = link.truth_cam2tool0
-    assert summary.complete and summary.captured == list(range(1, 9)) and not summary.skipped
+    assert summary.complete and summary.captured == list(range(8)) and not summary.skipped
     session = read_session(tmp_path / "s")
     assert [p.index for p in session.postures] == list(range(8))
     assert all(p.points_mm.shape == (104, 3) and p.extra["quality"]["corners"] == 104 for p in session.postures)
@@ -66,8 +66,10 @@ def test_resume_after_a_crash_between_grab_and_acknowledge(tmp_path, no_leaked_t
         status = link.controller.status()
         assert status.awaiting_ack and status.posture == 3  # the robot still waits at posture 3
         link.controller.acknowledge = real_ack
-        summary = capture(config, tmp_path / "s", link)
-    assert summary.already == [1, 2, 3] and summary.captured == [4, 5, 6]
+        messages = []
+        summary = capture(config, tmp_path / "s", link, progress=messages.append)
+    assert summary.already == [0, 1, 2] and summary.captured == [3, 4, 5]  # the postures' file numbers
+    assert "posture 2 was already on disk: acknowledged" in messages  # file 002, the controller's posture 3
     assert _indices(tmp_path / "s") == list(range(6))
 
 
@@ -75,15 +77,15 @@ def test_postures_that_fail_quality_are_skipped_with_the_reason(tmp_path, no_lea
     config = _config(5)
     with open_station(config, mock=True) as link:
         first = capture(config, tmp_path / "s", link, stop_after=2)
-        assert first.captured == [1, 2]
+        assert first.captured == [0, 1]
         board = link.mock.truth["board2base"].copy()
         board[:3, 3] += [0.0, 2000.0, 0.0]  # someone moved the board away
         link.camera.set_scene(target2base=board)
         second = capture(config, tmp_path / "s", link)
-    assert second.captured == [] and sorted(second.skipped) == [3, 4, 5]
+    assert second.captured == [] and sorted(second.skipped) == [2, 3, 4]
     assert all("skipped after 3 attempt(s)" in reason for reason in second.skipped.values())
     header = yaml.safe_load((tmp_path / "s" / "session.yaml").read_text())
-    assert sorted(header["capture"]["skipped"]) == ["3", "4", "5"]
+    assert sorted(header["capture"]["skipped"]) == ["2", "3", "4"]
     assert _indices(tmp_path / "s") == [0, 1]
 
 
@@ -111,5 +113,5 @@ def test_a_killed_capture_restarts_and_finishes_every_posture_once(tmp_path):
     assert "resuming" in again.stdout
     assert not list(session.rglob("*.tmp"))
     assert _indices(session) == list(range(10))
-    plan_index = [p.extra["plan_index"] for p in read_session(session).postures]
-    assert plan_index == list(range(1, 11))
+    controller_posture = [p.extra["controller_posture"] for p in read_session(session).postures]
+    assert controller_posture == list(range(1, 11))  # file NNN: the program's jtHePost<NNN + 1>

@@ -42,7 +42,7 @@ def test_a_half_open_connection_does_not_stop_the_capture_from_resuming(tmp_path
     with open_station(config, mock=True) as link:
         server = link.mock.server
         first = capture(config, tmp_path / "s", link, stop_after=2)
-        assert first.captured == [1, 2]
+        assert first.captured == [0, 1]
         moves = server.robot.moves
         ghost = _lose_power(link.controller)
         try:
@@ -52,7 +52,7 @@ def test_a_half_open_connection_does_not_stop_the_capture_from_resuming(tmp_path
             ghost.close()
         assert link.mock.server is server and server.running  # the same mock program, never restarted
         assert server.robot.moves > moves
-    assert second.already == [1, 2] and second.captured == [3, 4] and not second.skipped
+    assert second.already == [0, 1] and second.captured == [2, 3] and not second.skipped
     assert sorted(p.index for p in read_session(tmp_path / "s").postures) == [0, 1, 2, 3]
     if protocol == "socket":
         assert server.takeovers + server.idle_closes >= 1
