@@ -198,7 +198,8 @@ class ControllerSettings:
 
     protocol: str = setting(MOCK, Text(lambda: controller_protocols() + (MOCK,)),
                             "link protocol: a registered back end (socket, serial, modbus), or mock", required=True)
-    host: str = setting("127.0.0.1", Text(), "controller (socket) or gateway (modbus) address")
+    host: str = setting("127.0.0.1", Text(what="the controller's IP address or host name"),
+                        "controller (socket) or gateway (modbus) address")
     port: int | None = setting(None, Optional(Number(1, 65535, integer=True)),
                                "TCP port (null: the link's own: socket 1025, modbus 502, rws 80, or 443 with "
                                "tls_fingerprint)")
