@@ -23,10 +23,10 @@ import numpy as np
 
 from ..calibration.cell import CellModel
 from ..calibration.clearance import CellGuard
-from ..calibration.compact_points import BoardGeometry
+from ..calibration.compact_points import BoardGeometry, board_corners
 from ..calibration.kinematics import RobotModel
 
-__all__ = ["CellCheck", "PostureVeto", "Rejections", "cell_check", "clear_route", "start_problem"]
+__all__ = ["CellCheck", "PostureVeto", "Rejections", "board_problem", "cell_check", "clear_route", "start_problem"]
 
 #: Rounds of drawing replacements for postures at blocked moves.
 REPAIR_ROUNDS = 4
@@ -114,6 +114,28 @@ class PostureVeto:
 
     def __call__(self, joints) -> bool:
         return self._counted(self.guard.posture_violation(joints))
+
+
+def board_problem(model: CellModel, board2base, board: BoardGeometry) -> str | None:
+    """Why no view of the board can be planned because a configured keep-out volume holds part of the
+    board (its inner corners at ``board2base``), or None.
+
+    Parameters
+    ----------
+    model : CellModel
+        Its ``keep_out`` volumes (the board's own stand is derived from the board and is not one).
+    board2base : array-like, shape (4, 4)
+    board : BoardGeometry
+    """
+    frame = np.asarray(board2base, float)
+    corners = board_corners(board.corners, board.square_mm) @ frame[:3, :3].T + frame[:3, 3]
+    for volume in model.keep_out:
+        inside = int(np.count_nonzero(volume.signed_distance(corners) < 0))
+        if inside:
+            return (f"the keep-out volume {volume.name!r} ({volume.kind}, cell.keep_out) holds {inside} of the board's "
+                    f"{len(corners)} corners: every view of the board would enter it; make it leave the board out (the "
+                    "board's own stand is kept out already: cell.stand_margin_mm)")
+    return None
 
 
 def start_problem(guard: CellGuard, start) -> str | None:
