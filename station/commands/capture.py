@@ -33,6 +33,10 @@ set is good enough for the verdict's thresholds. Stop with Ctrl-C; the same comm
 controller only answers joint and pose reads (its link module must run while you jog: on a real
 IRC5 that needs the link in a background task, see the README's known limits).
 
+A config whose output names a folder (output: sessions) puts a relative --session DIR in it
+(sessions/DIR, under the folder the command runs in); an absolute DIR, or one already starting with
+that folder, is used as given.
+
 Interrupted (Ctrl-C, kill, lost link)? Run the same command again: it resumes, and every posture
 ends up on disk exactly once.
 
@@ -60,7 +64,8 @@ def add_parser(sub):
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--config", metavar="STATION.yaml", help="station configuration (see station/example_station.yaml)")
     p.add_argument("--mock", action="store_true", help="use the embedded mock robot and camera")
-    p.add_argument("--session", required=True, metavar="DIR", help="session folder (created, or resumed)")
+    p.add_argument("--session", required=True, metavar="DIR", help="session folder (created, or resumed); a relative "
+                   "one inside the config's output folder when it names one")
     p.add_argument("--postures", type=int, help="number of postures to plan (default: the config's, 30)")
     mode = p.add_mutually_exclusive_group()
     mode.add_argument("--plan-only", action="store_true", help="plan, write the preview and the RAPID program; move nothing")
@@ -102,6 +107,7 @@ def run(args) -> int:
         if not 3 <= args.postures <= 255:
             raise HandEyeError(f"--postures must be between 3 and 255; got {args.postures}")
         config = replace(config, plan=replace(config.plan, postures=args.postures))
+    args.session = str(config.session_folder(args.session))  # the config's output folder, when it names one
     tag = "MOCK " if config.is_mock or config.is_rehearsal else ""
     say = lambda message: print(tag + message, flush=True)  # noqa: E731
     if config.is_mock:
