@@ -29,7 +29,10 @@ without asking.
 it rests (guided.still_s) somewhere new with the board in view, the posture is captured, and the
 command says what is still missing (postures, rotation-axis spread and which way to turn next,
 relative rotation angles, distance spread, where in the image the board has not been) and when the
-set is good enough for the verdict's thresholds. Stop with Ctrl-C; the same command resumes. The
+set is good enough for the verdict's thresholds. Stop with Ctrl-C; the same command resumes. With
+--mock nobody holds a pendant: a simulated operator jogs the embedded arm through --postures N
+postures around the board (lines "MOCK operator (simulated): ..."), then ends the run, so the guided
+flow can be rehearsed end to end; a rehearsal config (camera.mock_arm) is refused with --guided. The
 controller only answers joint and pose reads (its link module must run while you jog: on a real
 IRC5 that needs the link in a background task, see the README's known limits).
 
@@ -90,6 +93,7 @@ def _confirmation(args):
 
 
 def run(args) -> int:
+    import threading
     from dataclasses import replace
 
     from ...calibration.errors import HandEyeError
@@ -109,7 +113,12 @@ def run(args) -> int:
         config = replace(config, plan=replace(config.plan, postures=args.postures))
     args.session = str(config.session_folder(args.session))  # the config's output folder, when it names one
     tag = "MOCK " if config.is_mock or config.is_rehearsal else ""
-    say = lambda message: print(tag + message, flush=True)  # noqa: E731
+    lock = threading.Lock()  # the mock's simulated operator says its steps from a thread of its own
+
+    def say(message: str) -> None:
+        with lock:
+            print(tag + message, flush=True)
+
     if config.is_mock:
         print(MOCK_BANNER, flush=True)
     elif config.is_rehearsal:
@@ -136,13 +145,24 @@ def run(args) -> int:
 
 
 def _run_guided(config, args, say) -> int:
+    import threading
+
+    from ...calibration.errors import HandEyeError
     from ..guided import guided_capture
+    from ..mock_operator import guided_refusal, mock_operator
     from ..runtime import open_station
 
-    with open_station(config) as link:
+    if guided_refusal(config):
+        raise HandEyeError(guided_refusal(config))
+    stop = threading.Event()  # the embedded mock's simulated operator sets it when done
+    with open_station(config) as link, mock_operator(config, link, stop, say) as operator:
+        def on_posture(report):
+            say("  ok    " + report.message)
+            if operator is not None:
+                operator.captured(report)
+
         try:
-            summary = guided_capture(config, args.session, link, progress=say,
-                                     on_posture=lambda report: say("  ok    " + report.message))
+            summary = guided_capture(config, args.session, link, progress=say, on_posture=on_posture, stop=stop)
         except KeyboardInterrupt:
             say(f"stopped; the postures on disk stay in {args.session}: run the same command to add more")
             return 0
