@@ -291,7 +291,8 @@ def _draw_clear_of_cell(robot, cam2tool0, board2base, board, corners, count, rng
     """Postures and their order clear of the cell (``station.cell_plan``), at least the verdict's
     ``min_inlier_postures`` of them, and why the others were rejected."""
     guard = cell.guard(robot, board2base, board)
-    problem = board_problem(cell.model, board2base, board) or start_problem(guard, start)
+    problem = (board_problem(cell.model, board2base, board, sampling.distance_mm, sampling.cone_deg)
+               or start_problem(guard, start))
     if problem is not None:
         raise PlanningError(problem)
     rejections = Rejections()
