@@ -23,10 +23,11 @@ import numpy as np
 
 from ..calibration.cell import CellModel
 from ..calibration.clearance import CellGuard
-from ..calibration.compact_points import BoardGeometry
+from ..calibration.compact_points import BoardGeometry, board_corners
 from ..calibration.kinematics import RobotModel
 
-__all__ = ["CellCheck", "PostureVeto", "Rejections", "cell_check", "clear_route", "start_problem"]
+__all__ = ["CellCheck", "PostureVeto", "Rejections", "board_problem", "cell_check", "clear_route", "start_problem",
+           "view_points"]
 
 #: Rounds of drawing replacements for postures at blocked moves.
 REPAIR_ROUNDS = 4
@@ -114,6 +115,57 @@ class PostureVeto:
 
     def __call__(self, joints) -> bool:
         return self._counted(self.guard.posture_violation(joints))
+
+
+def view_points(board2base, board: BoardGeometry, distance_mm, cone_deg: float) -> np.ndarray:
+    """Where a camera viewing the board stands at the least and the greatest distance, straight on and
+    at the cone's rim (8 directions): ``(18, 3)`` points in base (mm).
+
+    Parameters
+    ----------
+    board2base : array-like, shape (4, 4)
+        The board's target frame in base (its z points into the board, away from the camera).
+    board : BoardGeometry
+    distance_mm : tuple of float, shape (2,)
+        Camera-to-board-centre distance range (``plan.distance_mm``).
+    cone_deg : float
+        Largest angle of the viewing direction from the board normal (``plan.cone_deg``).
+    """
+    frame = np.asarray(board2base, float)
+    centre = frame[:3, :3] @ board_corners(board.corners, board.square_mm).mean(axis=0) + frame[:3, 3]
+    cone, turns = np.radians(cone_deg), np.radians(np.arange(0.0, 360.0, 45.0))
+    local = np.vstack([[0.0, 0.0, -1.0], np.stack([np.sin(cone) * np.cos(turns), np.sin(cone) * np.sin(turns),
+                                                   np.full(turns.shape, -np.cos(cone))], axis=1)])
+    directions = local @ frame[:3, :3].T
+    return np.concatenate([centre + d * directions for d in distance_mm])
+
+
+def board_problem(model: CellModel, board2base, board: BoardGeometry, distance_mm=(700.0, 1200.0),
+                  cone_deg: float = 35.0) -> str | None:
+    """Why no view of the board can be planned because one configured keep-out volume fills the space the
+    camera must stand in to see it (every point of :func:`view_points`), or None.
+
+    Parameters
+    ----------
+    model : CellModel
+        Its ``keep_out`` volumes (the board's own stand is derived from the board and is not one).
+    board2base : array-like, shape (4, 4)
+    board : BoardGeometry
+    distance_mm : tuple of float, shape (2,)
+    cone_deg : float
+    """
+    views = view_points(board2base, board, distance_mm, cone_deg)
+    frame = np.asarray(board2base, float)
+    corners = board_corners(board.corners, board.square_mm) @ frame[:3, :3].T + frame[:3, 3]
+    for volume in model.keep_out:
+        if np.all(volume.signed_distance(views) < 0):
+            holds = " holds the board and" if np.any(volume.signed_distance(corners) < 0) else ""
+            return (f"the keep-out volume {volume.name!r} ({volume.kind}, cell.keep_out){holds} fills the space the "
+                    f"camera must view the board from ({distance_mm[0]:g}-{distance_mm[1]:g} mm in front of it, within "
+                    f"{cone_deg:g} deg of its normal: plan.distance_mm, plan.cone_deg), so it would block every view; "
+                    "shrink it to what the arm must avoid (the board's own stand is kept out already: "
+                    "cell.stand_margin_mm)")
+    return None
 
 
 def start_problem(guard: CellGuard, start) -> str | None:

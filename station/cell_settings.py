@@ -23,6 +23,10 @@ __all__ = ["CellSettings", "GuidedSettings", "DEFAULT_CARRIED", "DEFAULT_KEEP_OU
 _CELL_REACH_MM = 10000.0
 #: Longest length of a carried body's coordinate in tool0, mm.
 _CARRIED_REACH_MM = 1000.0
+#: A keep-out volume whose every coordinate is within this (the robot reaches ~1400 mm) is in metres.
+_METRES_CELL = 5.0
+#: A carried body whose every coordinate is within this (a camera sits ~100 mm from the flange) is in metres.
+_METRES_CARRIED = 1.0
 
 _VOLUME_KEYS = {
     "box": {"type", "name", "min_mm", "max_mm"},
@@ -66,16 +70,37 @@ def _name(value: dict, key: str, default: str, taken: set) -> str:
     return name
 
 
+def _not_metres(key: str, name: str, values, largest_m: float) -> None:
+    """Refuse a volume whose every coordinate is within ``largest_m``: lengths in metres, not mm."""
+    if max(abs(float(v)) for v in values) < largest_m:
+        raise ConfigError(f"{key} ({name!r}): every coordinate is within +-{largest_m:g}, which looks like metres; "
+                          f"the cell is given in mm (e.g. 1.15 m -> 1150)")
+
+
+def _floor(entry: dict, key: str, name: str) -> Floor:
+    """A floor at or below the robot's foot (base z = 0): higher, the robot would stand inside it."""
+    z = number(entry["z_mm"], f"{key}.z_mm", -_CELL_REACH_MM, _CELL_REACH_MM)
+    if z > 0:
+        raise ConfigError(f"{key}.z_mm is {z:g}: a floor is everything below that height, so the robot's foot (base z 0) "
+                          f"would stand inside {name!r}; give 0 or below (a robot on a pedestal: minus its height), and a "
+                          "table beside the robot as a box")
+    return Floor(name, z)
+
+
 def _volume(value, key: str, taken: set):
     kind, entry = _entry(value, key, _VOLUME_KEYS)
     name = _name(entry, key, kind if kind == "floor" else f"{kind} {key.rsplit('[', 1)[-1].rstrip(']')}", taken)
     if kind == "box":
-        return Box(name, *_corners(entry, key, _CELL_REACH_MM))
+        low, high = _corners(entry, key, _CELL_REACH_MM)
+        _not_metres(key, name, low + high, _METRES_CELL)
+        return Box(name, low, high)
     if kind == "floor":
-        return Floor(name, number(entry["z_mm"], f"{key}.z_mm", -_CELL_REACH_MM, _CELL_REACH_MM))
+        return _floor(entry, key, name)
     centre = numbers(entry["centre_mm"], f"{key}.centre_mm", 2, -_CELL_REACH_MM, _CELL_REACH_MM)
-    radius = number(entry["radius_mm"], f"{key}.radius_mm", 1.0, _CELL_REACH_MM)
     z = numbers(entry["z_mm"], f"{key}.z_mm", 2, -_CELL_REACH_MM, _CELL_REACH_MM)
+    radius = number(entry["radius_mm"], f"{key}.radius_mm", -_CELL_REACH_MM, _CELL_REACH_MM)
+    _not_metres(key, name, centre + z + (radius,), _METRES_CELL)
+    radius = number(radius, f"{key}.radius_mm", 1.0, _CELL_REACH_MM)
     if not z[0] < z[1]:
         raise ConfigError(f"{key}.z_mm must be [bottom, top] with bottom < top; got {list(z)}")
     return Cylinder(name, centre, radius, z)
@@ -93,9 +118,13 @@ def _carried_body(value, key: str, taken: set):
     kind, entry = _entry(value, key, _CARRIED_KEYS)
     name = _name(entry, key, f"{kind} {key.rsplit('[', 1)[-1].rstrip(']')}", taken)
     if kind == "box":
-        return Box(name, *_corners(entry, key, _CARRIED_REACH_MM))
+        low, high = _corners(entry, key, _CARRIED_REACH_MM)
+        _not_metres(key, name, low + high, _METRES_CARRIED)
+        return Box(name, low, high)
     centre = numbers(entry["centre_mm"], f"{key}.centre_mm", 3, -_CARRIED_REACH_MM, _CARRIED_REACH_MM)
-    return Sphere(name, centre, number(entry["radius_mm"], f"{key}.radius_mm", 1.0, _CARRIED_REACH_MM))
+    radius = number(entry["radius_mm"], f"{key}.radius_mm", -_CARRIED_REACH_MM, _CARRIED_REACH_MM)
+    _not_metres(key, name, centre + (radius,), _METRES_CARRIED)
+    return Sphere(name, centre, number(radius, f"{key}.radius_mm", 1.0, _CARRIED_REACH_MM))
 
 
 def _carried(value, key: str, context) -> tuple:

@@ -199,7 +199,8 @@ class ControllerSettings:
 
     protocol: str = setting(MOCK, Text(lambda: controller_protocols() + (MOCK,)),
                             "link protocol: a registered back end (socket, serial, modbus), or mock", required=True)
-    host: str = setting("127.0.0.1", Text(), "controller (socket) or gateway (modbus) address")
+    host: str = setting("127.0.0.1", Text(what="the controller's IP address or host name"),
+                        "controller (socket) or gateway (modbus) address")
     port: int | None = setting(None, Optional(Number(1, 65535, integer=True)),
                                "TCP port (null: the link's own: socket 1025, modbus 502, rws 80, or 443 with "
                                "tls_fingerprint)")
@@ -331,7 +332,8 @@ class StationConfig:
     guided: GuidedSettings = section(GuidedSettings, "operator-guided capture")
     quality: dict = setting(None, Custom(_quality), "verdict thresholds (station/quality_thresholds.yaml)",
                             factory=dict)
-    output: str = setting("sessions", Text(), "folder of new sessions")
+    output: str | None = setting(None, Optional(Text()), "folder of new sessions: a relative capture --session goes "
+                                 "inside it (null: the current folder)")
     mock: MockSettings = section(MockSettings, "the embedded mock station")
     postures: tuple | None = setting(None, Optional(Custom(_postures)), "fixed approved postures for rapid generate "
                                      "(null: the built-in station's)", "deg")
@@ -352,6 +354,15 @@ class StationConfig:
         """The same settings on the embedded mock station (what ``--mock`` does to a config)."""
         return replace(self, controller=replace(self.controller, protocol=MOCK),
                        camera=replace(self.camera, backend=MOCK, mock_arm=None))
+
+    def session_folder(self, session) -> Path:
+        """Where ``handeye capture --session SESSION`` works: a relative ``SESSION`` inside ``output`` (unless it
+        already starts with that folder), an absolute one, or any with ``output`` null, as given."""
+        path = Path(session)
+        if self.output is None or path.is_absolute():
+            return path
+        output = Path(self.output)
+        return path if path.parts[:len(output.parts)] == output.parts else output / path
 
     @property
     def link_protocol(self) -> str:

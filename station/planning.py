@@ -35,7 +35,7 @@ from ..calibration.solve import calibrate, problem_from_session
 from ..calibration.synthetic import NoiseConfig, Scene, SceneConfig, sample_session
 from ..calibration.transforms import invert_transforms
 from ..calibration.views import NOMINAL_XB3, ViewSampling, sample_eye_in_hand_postures
-from .cell_plan import CellCheck, PostureVeto, Rejections, clear_route, start_problem
+from .cell_plan import CellCheck, PostureVeto, Rejections, board_problem, clear_route, start_problem
 from .quality import QualityThresholds
 
 __all__ = [
@@ -296,7 +296,8 @@ def _draw_clear_of_cell(robot, cam2tool0, board2base, board, corners, count, rng
     """Postures and their order clear of the cell (``station.cell_plan``), at least the verdict's
     ``min_inlier_postures`` of them, and why the others were rejected."""
     guard = cell.guard(robot, board2base, board)
-    problem = start_problem(guard, start)
+    problem = (board_problem(cell.model, board2base, board, sampling.distance_mm, sampling.cone_deg)
+               or start_problem(guard, start))
     if problem is not None:
         raise PlanningError(problem)
     rejections = Rejections()

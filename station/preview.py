@@ -110,19 +110,37 @@ def posture_labels(count: int) -> list[str]:
     return [str(index) for index in range(count)]
 
 
+#: How far beyond the robot, the board and the postures a volume still widens the view, mm.
+_VOLUME_REACH_MM = 300.0
+#: Border around everything shown, mm.
+_BORDER_MM = 150.0
+
+
+def _bounds(volume, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned bounds ``(low, high)``, each shape (3,), of a volume in base (a floor: its top, under
+    the middle of ``points``)."""
+    if isinstance(volume, Box):
+        corners = volume.corners()
+        return corners.min(axis=0), corners.max(axis=0)
+    if isinstance(volume, Cylinder):
+        c, r = volume.centre_mm, volume.radius_mm
+        return np.array([c[0] - r, c[1] - r, volume.z_mm[0]]), np.array([c[0] + r, c[1] + r, volume.z_mm[1]])
+    top = np.array([points[:, 0].mean(), points[:, 1].mean(), volume.z_mm])
+    return top, top
+
+
 def _extent(points: np.ndarray, volumes) -> np.ndarray:
-    """``[xmin, xmax, ymin, ymax, zmin, zmax]`` covering the points and the finite volumes, with a border."""
-    pts = [points]
+    """``[xmin, xmax, ymin, ymax, zmin, zmax]`` framing the points (the robot's base, the board, the flange
+    path and postures) and the parts of the volumes within :data:`_VOLUME_REACH_MM` of them, with a border:
+    a huge keep-out volume is clipped to the view instead of shrinking the postures to a dot cluster."""
+    low, high = points.min(axis=0), points.max(axis=0)
+    near_low, near_high = low - _VOLUME_REACH_MM, high + _VOLUME_REACH_MM
     for volume in volumes:
-        if isinstance(volume, Box):
-            pts.append(volume.corners())
-        elif isinstance(volume, Cylinder):
-            c, r = volume.centre_mm, volume.radius_mm
-            pts.append(np.array([[c[0] - r, c[1] - r, volume.z_mm[0]], [c[0] + r, c[1] + r, volume.z_mm[1]]]))
-        elif isinstance(volume, Floor):
-            pts.append(np.array([[points[:, 0].mean(), points[:, 1].mean(), volume.z_mm]]))
-    allp = np.concatenate(pts)
-    low, high = allp.min(axis=0) - 150, allp.max(axis=0) + 150
+        v_low, v_high = _bounds(volume, points)
+        part_low, part_high = np.maximum(v_low, near_low), np.minimum(v_high, near_high)
+        if np.all(part_low <= part_high):  # the volume reaches near the scene: frame that part of it
+            low, high = np.minimum(low, part_low), np.maximum(high, part_high)
+    low, high = low - _BORDER_MM, high + _BORDER_MM
     return np.array([low[0], high[0], low[1], high[1], low[2], high[2]])
 
 

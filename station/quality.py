@@ -52,6 +52,7 @@ __all__ = [
     "QualityThresholds",
     "ThresholdError",
     "Verdict",
+    "camera_too_near",
     "config_thresholds",
     "load_thresholds",
     "quality_figures",
@@ -476,15 +477,31 @@ def _motion_checks(result, problem: HandEyeProblem, t: QualityThresholds, figure
                f"by 20-45 deg between postures, keeping the board in view")]
 
 
+def camera_too_near(offset_mm: float, thresholds: QualityThresholds) -> str:
+    """Why an eye-in-hand camera frame sits nearer the flange than ``min_camera_offset_mm``, in words.
+
+    Metres only when the offset, read as metres, is a camera offset the thresholds admit in mm (at most
+    ``max_camera_offset_mm`` / 1000: 0.165 is a 165 mm mount in metres); a larger one (14 mm) cannot be
+    metres (14 m) and is a camera frame too near the flange: a wrong frame or set-up.
+    """
+    if offset_mm * 1000.0 <= thresholds.max_camera_offset_mm:
+        return (f"the camera frame is {offset_mm:.1f} mm from the flange, inside it (quality.min_camera_offset_mm "
+                f"{thresholds.min_camera_offset_mm:g}): the session's lengths look like metres; lengths must be in mm "
+                "(robot poses, board points and the stereo baseline)")
+    return (f"the camera frame is {offset_mm:.1f} mm from the flange, nearer than quality.min_camera_offset_mm "
+            f"({thresholds.min_camera_offset_mm:g}): too near for a camera on its bracket, and not metres (that would be "
+            f"{offset_mm:.0f} m); check the set-up: eye-in-hand with the camera on the flange, tool0 poses from CRobT "
+            "with tool0/wobj0 (not the camera's tool), board points in the camera frame; or lower "
+            "min_camera_offset_mm if the camera really sits that close")
+
+
 def _placement_checks(result, problem: HandEyeProblem, t: QualityThresholds) -> list:
     """Eye-in-hand: the camera frame's distance from the flange (not inside it, not far off)."""
     if problem.setup != EYE_IN_HAND:
         return []
     offset = float(np.linalg.norm(result.x[:3, 3]))
     return [
-        _check("min_camera_offset_mm", offset, t.min_camera_offset_mm,
-               f"the camera frame is {offset:.1f} mm from the flange, inside it: the session's lengths look like metres; "
-               f"lengths must be in mm (robot poses, board points and the stereo baseline)"),
+        _check("min_camera_offset_mm", offset, t.min_camera_offset_mm, camera_too_near(offset, t)),
         _check("max_camera_offset_mm", offset, t.max_camera_offset_mm,
                f"the camera frame is {offset:.0f} mm from the flange, more than {t.max_camera_offset_mm:g} mm: check the "
                f"session's units (mm on both sides) and set-up (eye-in-hand?), or raise max_camera_offset_mm if the "

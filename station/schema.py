@@ -55,10 +55,13 @@ def numbers(value, key: str, count: int, low=-math.inf, high=math.inf) -> tuple:
     return tuple(number(v, f"{key}[{i}]", low, high) for i, v in enumerate(value))
 
 
-def text(value, key: str, choices=()) -> str:
-    """A non-empty text, one of ``choices`` when given."""
-    if not isinstance(value, str) or not value:
-        raise ConfigError(f"{key} must be a text; got {brief(value)}")
+def text(value, key: str, choices=(), what: str = "") -> str:
+    """A non-empty text, one of ``choices`` when given; ``what`` (``the controller's IP address or host
+    name``) says what an empty one should have held."""
+    if isinstance(value, str) and not value.strip():
+        raise ConfigError(f"{key} must not be empty{': ' + what if what else ''}")
+    if not isinstance(value, str):
+        raise ConfigError(f"{key} must be a text{': ' + what if what else ''}; got {brief(value)}")
     if choices and value not in choices:
         raise ConfigError(f"{key} must be one of {', '.join(choices)}; got {brief(value)}")
     return value
@@ -104,12 +107,14 @@ class Range(Rule):
 
 @dataclass(frozen=True)
 class Text(Rule):
-    """A non-empty text; ``choices`` (a callable returning them: registries grow) limits it."""
+    """A non-empty text; ``choices`` (a callable returning them: registries grow) limits it; ``what``
+    says what it holds when it is left empty."""
 
     choices: Callable[[], tuple] | None = None
+    what: str = ""
 
     def __call__(self, value, key, context):
-        return text(value, key, self.choices() if self.choices else ())
+        return text(value, key, self.choices() if self.choices else (), self.what)
 
 
 @dataclass(frozen=True)

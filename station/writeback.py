@@ -29,6 +29,7 @@ import numpy as np
 
 from ..calibration.errors import HandEyeError, OutputError
 from ..calibration.files import parse_yaml, read_text_file
+from ..calibration.methods import DEFAULT_METHOD
 from ..calibration.problem import EYE_IN_HAND
 from ..calibration.session import write_yaml_atomic
 from ..calibration.solve import CalibrationResult
@@ -133,16 +134,26 @@ def check_session_origin(origin: str | None, mock_controller: bool) -> None:
 def check_camera_offset(cam2tool0, config: StationConfig) -> None:
     """Refuse a camera frame whose distance from the flange is outside the config's quality limits
     (``min_camera_offset_mm``, ``max_camera_offset_mm``): checked before every write, ``--force`` or not."""
-    from .quality import config_thresholds
+    from .quality import camera_too_near, config_thresholds
 
     limits = config_thresholds(config)
     offset = float(np.linalg.norm(np.asarray(cam2tool0, float)[:3, 3]))
     if offset < limits.min_camera_offset_mm:
-        raise WritebackError(f"the camera frame is {offset:.2f} mm from the flange, inside it (quality.min_camera_offset_mm "
-                             f"{limits.min_camera_offset_mm:g}): the session's lengths look like metres; nothing was written")
+        raise WritebackError(f"{camera_too_near(offset, limits)}; nothing was written")
     if offset > limits.max_camera_offset_mm:
         raise WritebackError(f"the camera frame is {offset:.0f} mm from the flange, beyond quality.max_camera_offset_mm "
                              f"({limits.max_camera_offset_mm:g}): check the session's units and set-up; nothing was written")
+
+
+def _verdict_refusal(result: CalibrationResult, verdict_reason: str) -> str:
+    """Why a failed verdict is not written, and what to do: a method without an uncertainty (the classics)
+    can never pass the precision checks, so the advice is the default method, not a better session."""
+    failed = f"the calibration failed its quality verdict ({verdict_reason})"
+    if result.uncertainty is None:
+        return (f"{failed}; the verdict needs the camera frame's uncertainty (max_sigma_translation_mm, "
+                f"max_sigma_rotation_deg), which method {result.method} does not give: write back with the default "
+                f"method (leave out --method, or --method {DEFAULT_METHOD}), or pass --force to write it anyway")
+    return f"{failed}; improve it (see the report) or pass --force to write it anyway"
 
 
 def _values(tool: ToolData) -> dict:
@@ -225,8 +236,7 @@ def writeback(session_dir, config: StationConfig, result: CalibrationResult, con
     session_dir = Path(session_dir)
     check_session_origin(origin, mock_controller)
     if not verdict_passed and not force:
-        raise WritebackError(f"the calibration failed its quality verdict ({verdict_reason}); improve it (see the report) "
-                             "or pass --force to write it anyway")
+        raise WritebackError(_verdict_refusal(result, verdict_reason))
     new = tooldata_from_result(result, config)
     check_camera_offset(result.x, config)
     literal = f"PERS tooldata {config.tool.name} := {tooldata_literal(result.x, new.mass_kg, new.cog_mm)};"

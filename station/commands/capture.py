@@ -29,13 +29,20 @@ without asking.
 it rests (guided.still_s) somewhere new with the board in view, the posture is captured, and the
 command says what is still missing (postures, rotation-axis spread and which way to turn next,
 relative rotation angles, distance spread, where in the image the board has not been) and when the
-set is good enough for the verdict's thresholds. Stop with Ctrl-C; the same command resumes. The
+set is good enough for the verdict's thresholds. Stop with Ctrl-C; the same command resumes. With
+--mock nobody holds a pendant: a simulated operator jogs the embedded arm through --postures N
+postures around the board (lines "MOCK operator (simulated): ..."), then ends the run, so the guided
+flow can be rehearsed end to end; a rehearsal config (camera.mock_arm) is refused with --guided. The
 controller only answers joint and pose reads (its link module must run while you jog: on a real
 IRC5 that needs the link in a background task, see the README's known limits).
 
 Each posture is named by the number of its file (postures/NNN.yaml -> NNN, from 0) in these lines,
 the preview, the RAPID program's comments (the controller's jtHePost<k> is posture k - 1) and by
 calibrate and its report.
+
+A config whose output names a folder (output: sessions) puts a relative --session DIR in it
+(sessions/DIR, under the folder the command runs in); an absolute DIR, or one already starting with
+that folder, is used as given.
 
 Interrupted (Ctrl-C, kill, lost link)? Run the same command again: it resumes, and every posture
 ends up on disk exactly once; a preview or RAPID modules the interruption left unwritten are
@@ -65,7 +72,8 @@ def add_parser(sub):
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--config", metavar="STATION.yaml", help="station configuration (see station/example_station.yaml)")
     p.add_argument("--mock", action="store_true", help="use the embedded mock robot and camera")
-    p.add_argument("--session", required=True, metavar="DIR", help="session folder (created, or resumed)")
+    p.add_argument("--session", required=True, metavar="DIR", help="session folder (created, or resumed); a relative "
+                   "one inside the config's output folder when it names one")
     p.add_argument("--postures", type=int, help="number of postures to plan (default: the config's, 30)")
     mode = p.add_mutually_exclusive_group()
     mode.add_argument("--plan-only", action="store_true", help="plan, write the preview and the RAPID program; move nothing")
@@ -90,6 +98,7 @@ def _confirmation(args):
 
 
 def run(args) -> int:
+    import threading
     from dataclasses import replace
 
     from ...calibration.errors import HandEyeError
@@ -107,8 +116,14 @@ def run(args) -> int:
         if not 3 <= args.postures <= 255:
             raise HandEyeError(f"--postures must be between 3 and 255; got {args.postures}")
         config = replace(config, plan=replace(config.plan, postures=args.postures))
+    args.session = str(config.session_folder(args.session))  # the config's output folder, when it names one
     tag = "MOCK " if config.is_mock or config.is_rehearsal else ""
-    say = lambda message: print(tag + message, flush=True)  # noqa: E731
+    lock = threading.Lock()  # the mock's simulated operator says its steps from a thread of its own
+
+    def say(message: str) -> None:
+        with lock:
+            print(tag + message, flush=True)
+
     if config.is_mock:
         print(MOCK_BANNER, flush=True)
     elif config.is_rehearsal:
@@ -136,13 +151,24 @@ def run(args) -> int:
 
 
 def _run_guided(config, args, say) -> int:
+    import threading
+
+    from ...calibration.errors import HandEyeError
     from ..guided import guided_capture
+    from ..mock_operator import guided_refusal, mock_operator
     from ..runtime import open_station
 
-    with open_station(config) as link:
+    if guided_refusal(config):
+        raise HandEyeError(guided_refusal(config))
+    stop = threading.Event()  # the embedded mock's simulated operator sets it when done
+    with open_station(config) as link, mock_operator(config, link, stop, say) as operator:
+        def on_posture(report):
+            say("  ok    " + report.message)
+            if operator is not None:
+                operator.captured(report)
+
         try:
-            summary = guided_capture(config, args.session, link, progress=say,
-                                     on_posture=lambda report: say("  ok    " + report.message))
+            summary = guided_capture(config, args.session, link, progress=say, on_posture=on_posture, stop=stop)
         except KeyboardInterrupt:
             say(f"stopped; the postures on disk stay in {args.session}: run the same command to add more")
             return 0

@@ -1,0 +1,82 @@
+"""Cell settings that cannot be meant are refused with one line that names the volume (issue 25, finding
+7c): a keep-out box around the board, a floor above the robot's foot, a cell written in metres."""
+
+import numpy as np
+import pytest
+
+from handeye.calibration.cell import Box, CellModel, Floor
+from handeye.calibration.compact_points import BoardGeometry, board_corners
+from handeye.calibration.kinematics import load_robot
+from handeye.calibration.transforms import invert_transforms
+from handeye.mocks.station import DEFAULT_BOARD, DEFAULT_MOUNT, DEFAULT_START
+from handeye.station.cell_plan import CellCheck
+from handeye.station.cell_settings import DEFAULT_CARRIED
+from handeye.station.config import ConfigError, config_from_dict
+from handeye.station.planning import PlanningError, plan_postures
+
+ROBOT = load_robot("IRB1400")
+BOARD = BoardGeometry((13, 8), 30.0)
+MOCK = {"controller": {"protocol": "mock"}, "camera": {"backend": "mock"}}
+
+
+def _board_box(grow_mm: float) -> Box:
+    """An axis-aligned box in base around the default board's corners, grown by ``grow_mm``."""
+    corners = board_corners(BOARD.corners, BOARD.square_mm) @ DEFAULT_BOARD[:3, :3].T + DEFAULT_BOARD[:3, 3]
+    return Box("inspection table guard", tuple(corners.min(axis=0) - grow_mm), tuple(corners.max(axis=0) + grow_mm))
+
+
+def test_a_keep_out_box_around_the_board_is_refused_naming_it():
+    """A box around the board and the space above it (a guard around the inspection table): every view
+    point is inside it. On main the plan failed on the start posture: 'jog the robot out of it'."""
+    cell = CellModel((Floor("floor", 0.0), _board_box(1300.0)), DEFAULT_CARRIED)
+    view = invert_transforms(ROBOT.forward_transform(DEFAULT_START) @ DEFAULT_MOUNT) @ DEFAULT_BOARD
+    with pytest.raises(PlanningError) as refused:
+        plan_postures(ROBOT, DEFAULT_START, view, DEFAULT_MOUNT, BOARD, count=12, seed=1, cell=CellCheck(cell))
+    message = str(refused.value)
+    assert message.startswith("the keep-out volume 'inspection table guard' (box, cell.keep_out) holds the board and "
+                              "fills the space the camera must view the board from (700-1200 mm in front of it")
+    assert "block every view" in message and "jog" not in message and "\n" not in message
+
+
+def test_volumes_that_leave_some_views_are_no_board_problem():
+    from handeye.station.cell_plan import board_problem, view_points
+
+    points = view_points(DEFAULT_BOARD, BOARD, (700.0, 1200.0), 35.0)
+    centre = DEFAULT_BOARD[:3, :3] @ board_corners(BOARD.corners, BOARD.square_mm).mean(axis=0) + DEFAULT_BOARD[:3, 3]
+    assert np.allclose(np.linalg.norm(points[:9] - centre, axis=1), 700.0)  # on the spheres about the board centre
+    assert np.allclose(np.linalg.norm(points[9:] - centre, axis=1), 1200.0)
+    tilt = np.degrees(np.arccos((points - centre) @ -DEFAULT_BOARD[:3, 2] / np.linalg.norm(points - centre, axis=1)))
+    assert np.allclose(np.sort(tilt)[[0, 1, 2, -1]], [0, 0, 35, 35], atol=1e-5)  # in front, up to the cone's rim
+    thin = _board_box(40.0)  # a box just around the board, like its stand: the views are outside it
+    wall = Box("left wall", (0, 200, 0), (2000, 1500, 2500))  # holds a few corners, leaves most views
+    assert board_problem(CellModel((Floor("floor", 0.0), thin, wall)), DEFAULT_BOARD, BOARD) is None
+    above = Box("hood", (0, -1500, 500), (2500, 1500, 3000))  # every view point, not the board
+    assert "'hood' (box, cell.keep_out) fills the space" in board_problem(CellModel((above,)), DEFAULT_BOARD, BOARD)
+
+
+@pytest.mark.parametrize("volume, words", [
+    ({"type": "floor", "name": "table", "z_mm": 300},
+     ["cell.keep_out[0].z_mm is 300", "robot's foot (base z 0) would stand inside 'table'", "0 or below"]),
+    ({"type": "box", "name": "fixture", "min_mm": [1.15, -0.6, 0], "max_mm": [1.6, -0.25, 0.7]},
+     ["cell.keep_out[0] ('fixture')", "looks like metres", "mm (e.g. 1.15 m -> 1150)"]),
+    ({"type": "cylinder", "name": "column", "centre_mm": [-0.4, 0.7], "radius_mm": 0.12, "z_mm": [0, 2.2]},
+     ["cell.keep_out[0] ('column')", "looks like metres"]),
+])
+def test_a_floor_above_the_foot_and_a_cell_in_metres_are_refused(volume, words):
+    with pytest.raises(ConfigError) as refused:
+        config_from_dict({**MOCK, "cell": {"keep_out": [volume]}})
+    assert all(w in str(refused.value) for w in words), str(refused.value)
+    assert "\n" not in str(refused.value)
+
+
+def test_a_carried_box_in_metres_is_refused():
+    with pytest.raises(ConfigError, match=r"cell.carried\[0\] \('camera'\).*looks like metres"):
+        config_from_dict({**MOCK, "cell": {"carried": [{"type": "box", "name": "camera", "min_mm": [-0.136, 0.011, 0.058],
+                                                        "max_mm": [-0.094, 0.288, 0.1]}]}})
+
+
+def test_plausible_cells_still_load():
+    config = config_from_dict({**MOCK, "cell": {"keep_out": [
+        {"type": "floor", "z_mm": -250}, {"type": "box", "name": "fixture", "min_mm": [1150, -600, 0], "max_mm": [1600, -250, 700]},
+        {"type": "cylinder", "name": "column", "centre_mm": [-400, 700], "radius_mm": 120, "z_mm": [0, 2200]}]}})
+    assert [v.name for v in config.cell.keep_out] == ["floor", "fixture", "column"]
