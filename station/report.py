@@ -464,6 +464,8 @@ def _session_facts(a: Assessment) -> list:
         ("d_org", f'<span class="num" data-d-org="header">{scatter.mm:.3f} mm</span><br>'
                   f'<span class="note">{_e(scatter.basis())} (eq. 22)</span>'),
     ]
+    if result.excluded:
+        facts.append(("left out before solving", _excluded_html(result.excluded)))
     if scatter.incl_outliers_mm is not None:
         facts.append((D_ORG_ALL_NAME, f"{scatter.incl_outliers_mm:.3f} mm (the same over all {n} postures)"))
     facts.append(("solve time", f"{1000 * result.runtime_s:.1f} ms"))
@@ -573,7 +575,15 @@ def _residuals_section(a: Assessment, fixed_frame: str) -> str:
         f"the others is a posture to check (board partly hidden or misdetected, robot not at rest)."
         + (f" Dashed line: the limit max_posture_residual_mm = {limit:g} mm." if limit is not None else "") + "</p>"
         + _img(plot_residuals(result, a.problem, limit), "per-posture residuals")
-        + f'<p class="note">{_e(residual_note)}</p></section>')
+        + f'<p class="note">{_e(residual_note)}</p>'
+        + (f'<p class="note">Outliers left out before solving (the robot and board poses of the session fit no '
+           f"rigid camera mount with them): {_excluded_html(result.excluded)}</p>" if result.excluded else "")
+        + "</section>")
+
+
+def _excluded_html(excluded: dict) -> str:
+    """Gross postures left out before solving, each with its reason (``CalibrationResult.excluded``)."""
+    return "<br>".join(f"posture {int(i)}: {_e(reason)}" for i, reason in excluded.items())
 
 
 def _coverage_section(a: Assessment) -> str:

@@ -70,6 +70,7 @@ def _closing_lines(r) -> list[str]:
     if r.outliers:
         lines += ["", f"Outlier postures (excluded from the solution): {', '.join(map(str, r.outliers))}",
                   "  check them: board partly hidden or misdetected, robot not at rest, wrong pose pairing"]
+        lines += [f"  posture {i}: left out before solving: {reason}" for i, reason in r.excluded.items()]
     lines += [""] + _residual_table(r.residuals_mm, r.outliers)
     d = r.details
     extra = ""
