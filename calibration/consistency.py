@@ -10,7 +10,12 @@ pose is confidently wrong. The X-free invariants of ``AX = XB`` (``invariants``)
 - one translation then fits (median translation misfit, as a fraction of the motions).
 
 Medians over all posture pairs: a few outlier postures (the robust solver removes them) leave them
-small; only a set that is inconsistent as a whole is refused. Real sets and noisy synthetic ones
+small; only a set that is inconsistent as a whole is refused. A few GROSS postures (robot and camera
+poses swapped, one posture's quaternions in another order, a posture of another station) can still
+throw the linear fit behind the medians; :func:`consistent_majority` then names them from two X-free
+per-posture figures (the median, over its pairs, of the rotation-angle gap and of the screw-pitch
+gap, ``invariants``) with the robust median/MAD rule of the outlier step, never more than a
+minority, and leaves them out when the rest passes. Otherwise the whole set's diagnosis stands. Real sets and noisy synthetic ones
 (up to 20 mm of camera noise, the paper's worst) stay far below the limits; a wrong direction or
 set-up gives axis misfits of 15-40 deg and translation misfits of 40-150 %.
 
@@ -32,10 +37,13 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from .errors import CalibrationError
-from .invariants import MIN_MOTION_DEG, fit_hand_eye, pair_indices
+from .invariants import (MIN_MOTION_DEG, fit_hand_eye, pair_indices, posture_medians, relative_motions,
+                         screw_pitches)
+from .refine import keep_majority, robust_outliers
 from .transforms import invert_transforms
 
-__all__ = ["ConsistencyLimits", "InconsistentPosesError", "consistency_figures", "check_consistent"]
+__all__ = ["ConsistencyLimits", "InconsistentPosesError", "consistency_figures", "check_consistent", "posture_gaps",
+           "consistent_majority"]
 
 
 @dataclass(frozen=True)
@@ -64,6 +72,10 @@ class ConsistencyLimits:
         The board's median direction in the camera frame farther than ``behind_deg`` from the
         optical axis +z, and not within ``x_forward_deg`` of +x (a ROS body frame's forward axis):
         the board is behind the camera.
+    gross_gap_deg, gross_pitch_mm : float
+        When the whole set fails, a posture whose median angle gap or screw-pitch gap to the others
+        stands out (robust z-score, ``refine.robust_outliers``) and exceeds this floor is a gross
+        posture (real sets and 20 mm of camera noise: under 1.5 deg and 13 mm).
     """
 
     max_gap_deg: float = 5.0
@@ -76,6 +88,8 @@ class ConsistencyLimits:
     mount_min_mm: float = 500.0
     behind_deg: float = 120.0
     x_forward_deg: float = 50.0
+    gross_gap_deg: float = 2.0
+    gross_pitch_mm: float = 10.0
 
 
 class InconsistentPosesError(CalibrationError):
@@ -177,3 +191,90 @@ def check_consistent(hand, target2cam, setup: str, limits: ConsistencyLimits = C
             f"the board is behind the camera (its median direction {f['board_from_z_deg']:.0f} deg from the optical axis "
             f"+z): the board poses look inverted (camera in target), which with the other set-up fits the data exactly as "
             f"well; {fix} (--camera-pose, --setup)")
+
+
+def posture_gaps(hand, target2cam, pairs=None) -> tuple[np.ndarray, np.ndarray]:
+    """Two X-free figures per posture: how far its relative motions to the others break ``AX = XB``.
+
+    Parameters
+    ----------
+    hand, target2cam : array-like, shape (n, 4, 4)
+        The frame-neutral hand poses and board poses, mm.
+    pairs : array-like of int, shape (m, 2), optional
+        Default: the pairs :func:`consistency_figures` uses.
+
+    Returns
+    -------
+    angle_gap_deg, pitch_gap_mm : ndarray, shape (n,)
+        Medians over the posture's pairs of ``|angle(A_ij) - angle(B_ij)|`` and of the screw-pitch
+        gap ``|d(A_ij) - d(B_ij)|`` (pairs turning by ``MIN_MOTION_DEG`` .. 180 - ``MIN_MOTION_DEG``
+        only; NaN for a posture without such a pair). Neither depends on ``X`` or on the set-up.
+    """
+    h, b = np.asarray(hand, float), np.asarray(target2cam, float)
+    pairs = pair_indices(len(h), _PAIRS) if pairs is None else np.asarray(pairs, int)
+    rel_a, rel_b = relative_motions(h, b, pairs)
+    angle_a, pitch_a = screw_pitches(rel_a)
+    angle_b, pitch_b = screw_pitches(rel_b)
+    usable = np.all([angle_a > MIN_MOTION_DEG, angle_a < 180.0 - MIN_MOTION_DEG,
+                     angle_b > MIN_MOTION_DEG, angle_b < 180.0 - MIN_MOTION_DEG], axis=0)
+    pitch_gap = np.where(usable, np.abs(pitch_a - pitch_b), np.nan)
+    return posture_medians(np.abs(angle_a - angle_b), pairs, len(h)), posture_medians(pitch_gap, pairs, len(h))
+
+
+def _gross_reason(gap: float, pitch: float, typical_gap: float, typical_pitch: float) -> str:
+    pitch_text = (f"; screw-pitch gap {pitch:.0f} mm, typically {typical_pitch:.1f}"
+                  if np.isfinite(pitch) and np.isfinite(typical_pitch) else "")
+    return (f"its robot and board motions disagree with the other postures' (median rotation-angle gap {gap:.1f} deg, "
+            f"typically {typical_gap:.2f}{pitch_text}): robot and camera poses swapped, another rotation convention "
+            f"or a posture of another session; check its file")
+
+
+def consistent_majority(hand, target2cam, setup: str, ids=None,
+                        limits: ConsistencyLimits = ConsistencyLimits()) -> dict:
+    """The gross postures to leave out so that the rest fits a rigid camera mount, with the reason.
+
+    The whole set is checked first (:func:`check_consistent`): when it passes, nothing is left out
+    (single outliers are the solver's outlier step's). When it fails, the postures whose
+    :func:`posture_gaps` stand out (``refine.robust_outliers`` above the floors of ``limits``; never
+    more than a minority, ``refine.keep_majority``) are left out if the rest then passes.
+
+    Parameters
+    ----------
+    hand, target2cam : array-like, shape (n, 4, 4)
+        The frame-neutral hand poses and board poses, mm.
+    setup : str
+    ids : sequence of int, optional
+        Posture indices as written in the session (default 0..n-1).
+
+    Returns
+    -------
+    dict
+        ``{posture index: reason}`` of the postures left out (empty when the whole set is consistent).
+
+    Raises
+    ------
+    InconsistentPosesError
+        With the whole set's diagnosis (:func:`check_consistent`) when no consistent majority exists.
+    """
+    try:
+        check_consistent(hand, target2cam, setup, limits)
+        return {}
+    except InconsistentPosesError as whole:
+        refusal = whole
+    h, b = np.asarray(hand, float), np.asarray(target2cam, float)
+    ids = list(range(len(h))) if ids is None else [int(i) for i in ids]
+    gap, pitch = posture_gaps(h, b)
+    pitch_known = np.isfinite(pitch)
+    gross = robust_outliers(gap, limits.gross_gap_deg)
+    if pitch_known.sum() >= 3:
+        gross[pitch_known] |= robust_outliers(pitch[pitch_known], limits.gross_pitch_mm)
+    gross = keep_majority(gross)
+    if not gross.any():
+        raise refusal
+    try:
+        check_consistent(h[~gross], b[~gross], setup, limits)
+    except InconsistentPosesError:
+        raise refusal from None
+    kept_pitch = pitch[~gross & pitch_known]
+    typical_gap, typical_pitch = float(np.median(gap[~gross])), float(np.median(kept_pitch)) if kept_pitch.size else np.nan
+    return {ids[k]: _gross_reason(gap[k], pitch[k], typical_gap, typical_pitch) for k in np.flatnonzero(gross)}

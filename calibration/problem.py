@@ -57,6 +57,10 @@ class HandEyeProblem:
         (the ML estimator propagates joint noise through the robot's flange Jacobian).
     robot : str or None
         The robot model of ``joints_deg``.
+    excluded : dict
+        ``{posture index: reason}`` of gross postures left out before solving
+        (``consistency.consistent_majority``); ``solve.calibrate`` solves without them and reports
+        them with the outliers.
     """
 
     setup: str
@@ -68,10 +72,16 @@ class HandEyeProblem:
     notes: dict = field(default_factory=dict)
     joints_deg: np.ndarray | None = None
     robot: str | None = None
+    excluded: dict = field(default_factory=dict)
 
     @property
     def n(self) -> int:
         return int(self.hand.shape[0])
+
+    @property
+    def excluded_mask(self) -> np.ndarray:
+        """Boolean mask ``(n,)`` of the postures in :attr:`excluded`."""
+        return np.array([int(i) in self.excluded for i in self.posture_ids], dtype=bool)
 
     @property
     def target2cam(self) -> np.ndarray:
@@ -83,5 +93,7 @@ class HandEyeProblem:
         c = self.compact
         compact = CompactPoints(c.points[keep], c.target_points, c.target2cam[keep], c.plane_rms_mm[keep], c.square_mm)
         joints = None if self.joints_deg is None else self.joints_deg[keep]
+        ids = self.posture_ids[keep]
+        excluded = {i: reason for i, reason in self.excluded.items() if i in {int(k) for k in ids}}
         return HandEyeProblem(self.setup, self.hand[keep], compact, self.points_cam[keep],
-                              self.posture_ids[keep], self.target_points, dict(self.notes), joints, self.robot)
+                              ids, self.target_points, dict(self.notes), joints, self.robot, excluded)

@@ -27,6 +27,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
+from .invariants import posture_medians
 from .triplets import RelativeMotions
 
 __all__ = [
@@ -35,6 +36,7 @@ __all__ = [
     "posture_residuals_to",
     "angle_gaps_deg",
     "robust_outliers",
+    "keep_majority",
 ]
 
 #: Robust z-score above which a posture is an outlier (z = (r - median) / (1.4826 MAD)).
@@ -167,12 +169,8 @@ def _uncertainty(fit, n: int, k: int) -> tuple[np.ndarray, np.ndarray]:
 
 def angle_gaps_deg(motions: RelativeMotions) -> np.ndarray:
     """Per posture: median over the others of ``|angle(A_ij) - angle(B_ij)|`` in degrees (X-free)."""
-    n = motions.rot_hand.shape[0]
     gap = np.abs(motions.angle_a_deg - motions.angle_b_deg)
-    table = np.full((n, n), np.nan)
-    table[motions.pairs[:, 0], motions.pairs[:, 1]] = gap
-    table[motions.pairs[:, 1], motions.pairs[:, 0]] = gap
-    return np.nanmedian(table, axis=1)
+    return posture_medians(gap, motions.pairs, motions.rot_hand.shape[0])
 
 
 def robust_outliers(values: np.ndarray, floor: float = 0.0, z: float = OUTLIER_Z, ratio: float = OUTLIER_RATIO) -> np.ndarray:
@@ -183,3 +181,25 @@ def robust_outliers(values: np.ndarray, floor: float = 0.0, z: float = OUTLIER_Z
     mad = 1.4826 * float(np.median(np.abs(values - median)))
     score = (values - median) / max(mad, 1e-12 * max(median, 1e-12))
     return (score > z) & (values > ratio * median) & (values > floor)
+
+
+def keep_majority(flags, minimum: int = 3) -> np.ndarray:
+    """``flags`` when the postures left keep a majority (at least half, and ``minimum``), else none.
+
+    Parameters
+    ----------
+    flags : array-like of bool, shape (n,)
+        Postures a robust rule would leave out.
+    minimum : int
+        Fewest postures to keep.
+
+    Returns
+    -------
+    ndarray of bool, shape (n,)
+        ``flags``, or all False: a rule that would drop most postures is judging the data, not outliers.
+    """
+    flags = np.asarray(flags, dtype=bool).copy()
+    n = flags.size
+    if n - flags.sum() < max(minimum, (n + 1) // 2):
+        flags[:] = False
+    return flags

@@ -6,13 +6,13 @@ Input checks live here, with messages an operator can act on; the solvers behind
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .compact_points import compact_points_from_corners, compact_points_from_poses
 from .eiv import solve_eiv
-from .consistency import check_consistent
+from .consistency import consistent_majority
 from .errors import CalibrationError
 from .kinematics import load_robot
 from .methods import METHODS, method_names
@@ -30,6 +30,7 @@ from .refine import (
     ANGLE_GAP_FLOOR_DEG,
     RESIDUAL_FLOOR_MM,
     angle_gaps_deg,
+    keep_majority,
     posture_residuals_to,
     refine_point_consistency,
     robust_outliers,
@@ -96,6 +97,9 @@ class CalibrationResult:
     cross_validation : dict or None
         Posture-level cross-validation (``crossval.CrossValidation.to_dict``): held-out prediction
         error of the board points, what the noise model predicts, and whether the error is systematic.
+    excluded : dict
+        ``{posture index: reason}`` of gross postures left out before solving (``problem.excluded``);
+        they are among ``outliers`` too.
     """
 
     method: str
@@ -109,6 +113,7 @@ class CalibrationResult:
     truth_errors: dict | None = None
     uncertainty: dict | None = None
     cross_validation: dict | None = None
+    excluded: dict = field(default_factory=dict)
 
     @property
     def parent(self) -> str:
@@ -130,6 +135,8 @@ class CalibrationResult:
             out["uncertainty"] = self.uncertainty
         if self.cross_validation is not None:
             out["cross_validation"] = self.cross_validation
+        if self.excluded:
+            out["excluded_before_solve"] = [{"posture": int(i), "reason": r} for i, r in self.excluded.items()]
         if self.truth_errors is not None:
             out["truth_errors"] = self.truth_errors
         return out
@@ -170,8 +177,10 @@ def problem_from_session(session: Session, check_units: bool = True,
         Refuse lengths that are not plausible millimetres (``plausibility.check_plausible``;
         default). Only tests of the solvers on deliberately odd data switch it off.
     check_consistency : bool, optional
-        Refuse poses that no rigid camera mount fits (``consistency.check_consistent``); default:
-        as ``check_units`` (both guard against data no real cell produces).
+        Refuse poses that no rigid camera mount fits (``consistency.check_consistent``), after leaving
+        out a minority of gross postures when that makes the rest fit (``consistency.consistent_majority``:
+        they are kept in the problem and named in ``problem.excluded``); default: as ``check_units``
+        (both guard against data no real cell produces).
 
     Raises
     ------
@@ -182,7 +191,7 @@ def problem_from_session(session: Session, check_units: bool = True,
         corners whose spacing does not match ``target.square_mm``.
     InconsistentPosesError
         Robot and board poses that no rigid camera mount fits (a wrong set-up, pose direction or
-        rotation convention), checked on the X-free invariants of AX = XB.
+        rotation convention), checked on the X-free invariants of AX = XB, and no consistent majority.
     """
     postures = session.postures
     if len(postures) < MIN_POSTURES:
@@ -234,10 +243,12 @@ def _session_joints(session: Session) -> np.ndarray | None:
 
 
 def _consistent(problem: HandEyeProblem, check: bool) -> HandEyeProblem:
-    """The problem, after ``consistency.check_consistent`` when ``check`` (the calibrate re-check)."""
-    if check:
-        check_consistent(problem.hand, problem.target2cam, problem.setup)
-    return problem
+    """The problem, after ``consistency.consistent_majority`` when ``check`` (the calibrate re-check),
+    with the gross postures it names in ``excluded``."""
+    if not check:
+        return problem
+    excluded = consistent_majority(problem.hand, problem.target2cam, problem.setup, problem.posture_ids)
+    return replace(problem, excluded=excluded) if excluded else problem
 
 
 def check_motion(problem: HandEyeProblem) -> None:
@@ -345,9 +356,7 @@ def _solve_robust(problem: HandEyeProblem):
     and outlier detection until the inlier set is stable; never drops more than half the postures."""
     n = problem.n
     gaps = angle_gaps_deg(relative_motions(problem))
-    gap_flags = robust_outliers(gaps, ANGLE_GAP_FLOOR_DEG)
-    if n - gap_flags.sum() < max(MIN_POSTURES, (n + 1) // 2):
-        gap_flags[:] = False
+    gap_flags = keep_majority(robust_outliers(gaps, ANGLE_GAP_FLOOR_DEG), MIN_POSTURES)
     start_problem = problem.subset(~gap_flags)
     try:
         x, start_details = _solve_paper(start_problem, "mcb", None)
@@ -421,6 +430,8 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
 def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | None = None,
                progress=None) -> CalibrationResult:
     """:func:`calibrate` without its guard against numerical failures."""
+    if problem.excluded:  # gross postures named before solving: solve without them, report them as outliers
+        return _with_excluded(problem, _calibrate(problem.subset(~problem.excluded_mask), method, truth, progress))
     method = (method or DEFAULT_METHOD).lower()
     if method not in ALL_METHODS:
         raise CalibrationError(f"unknown method {method!r}; choose one of {', '.join(ALL_METHODS)}")
@@ -459,6 +470,20 @@ def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict |
     if truth is not None:
         result.truth_errors = errors_against_truth(x, truth["x"])
     return result
+
+
+def _with_excluded(problem: HandEyeProblem, result: CalibrationResult) -> CalibrationResult:
+    """``result`` (solved without ``problem.excluded``) on the whole ``problem``: the excluded postures
+    join the outliers, with their residual against the kept postures' mean board points (eq. 21-22)."""
+    excluded = problem.excluded_mask
+    outliers = {int(i) for i in result.outliers} | set(problem.excluded)
+    kept = np.array([int(i) not in outliers for i in problem.posture_ids])
+    mean = fixed_points(problem.hand[kept], result.x, problem.points_cam[kept]).mean(axis=0)
+    gross = posture_residuals_to(problem.hand[excluded], result.x, problem.points_cam[excluded], mean)
+    gross_residuals = dict(zip((int(i) for i in problem.posture_ids[excluded]), (float(r) for r in gross)))
+    residuals = {int(i): result.residuals_mm.get(int(i), gross_residuals.get(int(i))) for i in problem.posture_ids}
+    return replace(result, residuals_mm=residuals, excluded=dict(problem.excluded),
+                   outliers=[int(i) for i in problem.posture_ids if int(i) in outliers])
 
 
 def calibrate_session(session: Session, method: str | None = None, truth: dict | None = None,

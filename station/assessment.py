@@ -34,6 +34,8 @@ __all__ = [
     "assess",
     "comparison_results",
     "corner_repeatability",
+    "d_org_note",
+    "held_out_rms_mm",
     "method_comparison",
 ]
 
@@ -60,7 +62,8 @@ class Assessment:
     verdict : Verdict or None
         PASS/FAIL against the thresholds; ``None`` when no verdict was asked for.
     comparison : list of dict or None
-        One row per compared method (:func:`method_comparison`); ``None`` when not compared.
+        One row per compared method, ranked by the held-out error (:func:`method_comparison`); ``None``
+        when not compared.
     findings : list or None
         Data checks on the poses (``calibration.diagnostics``); ``None`` when they could not run.
     repeatability : dict
@@ -96,6 +99,11 @@ class Assessment:
     def coverage(self) -> AxisCoverage:
         """Rotation-axis coverage of the kept postures (``calibration.quality_words``)."""
         return self.figures.coverage
+
+    @property
+    def comparison_note(self) -> str | None:
+        """Why the chosen method's d_org is not the comparison's lowest (:func:`d_org_note`), or ``None``."""
+        return d_org_note(self.comparison) if self.comparison else None
 
     @property
     def units(self):
@@ -210,12 +218,15 @@ def comparison_results(problem: HandEyeProblem, methods=COMPARISON_METHODS, trut
 
 
 def method_comparison(problem: HandEyeProblem, chosen, comparison: dict) -> list[dict]:
-    """One row per method: pose, differences from ``chosen`` and ``d_org`` on the same data.
+    """One row per method, ranked by the held-out error: pose, differences from ``chosen``, d_org.
 
-    ``d_org_mm`` is THE d_org (``calibration.quality_words.result_d_org``) of each method's X over
-    the postures the CHOSEN result kept and the same board points, so the chosen method's row shows
-    the very figure of the report's header and the verdict. ``d_org_incl_outliers_mm`` is the same over
-    every posture (``None`` when the chosen result left none out).
+    ``held_out_mm`` (:func:`held_out_rms_mm`) is the cross-validated RMS error of the board points:
+    it ranks the methods (rows in increasing order; ``None``, a method that failed on every fold,
+    last). ``d_org_mm`` is THE d_org (``calibration.quality_words.result_d_org``) of each method's X
+    over the postures the CHOSEN result kept and the same board points, so the chosen method's row
+    shows the very figure of the report's header and the verdict; it is in-sample (:func:`d_org_note`).
+    ``d_org_incl_outliers_mm`` is the same over every posture (``None`` when the chosen result left
+    none out).
     """
     rows = []
     for name, r in comparison.items():
@@ -225,6 +236,7 @@ def method_comparison(problem: HandEyeProblem, chosen, comparison: dict) -> list
             "position_mm": [float(v) for v in r.x[:3, 3]],
             "d_position_mm": float(np.linalg.norm(r.x[:3, 3] - chosen.x[:3, 3])),
             "d_rotation_deg": float(rotation_error_deg(r.x, chosen.x)),
+            "held_out_mm": held_out_rms_mm(problem, chosen, r),
             "d_org_mm": scatter.mm,
             "d_org_incl_outliers_mm": scatter.incl_outliers_mm,
             "outliers": [int(i) for i in r.outliers],
@@ -232,7 +244,39 @@ def method_comparison(problem: HandEyeProblem, chosen, comparison: dict) -> list
             "truth_errors": r.truth_errors,
             "chosen": r is chosen or (r.method == chosen.method and np.allclose(r.x, chosen.x)),
         })
-    return rows
+    return sorted(rows, key=lambda row: (row["held_out_mm"] is None, row["held_out_mm"] or 0.0))
+
+
+def held_out_rms_mm(problem: HandEyeProblem, chosen, result) -> float | None:
+    """The cross-validated RMS error (mm) of the board points of ``result``'s method.
+
+    ``calibration.crossval`` with its default folds over the postures the CHOSEN result kept, so every
+    method is scored on the same folds and points: each fold's postures are predicted by the method
+    solved on the others. A result that carries its own cross-validation over the same postures (the
+    ``ml`` default: the same folds and definition, its refits keeping the full fit's noise levels)
+    gives that figure instead of being solved again. ``None`` when no fold could be solved.
+    """
+    from ..calibration.crossval import cross_validate
+    from ..calibration.solve import calibrate
+
+    own = result.cross_validation
+    if own and "rms_mm" in own and set(map(int, result.outliers)) == set(map(int, chosen.outliers)):
+        return float(own["rms_mm"])
+    cv = cross_validate(problem, lambda training: calibrate(training, result.method).x,
+                        keep=kept_postures(problem, chosen))
+    return cv.rms_mm if np.isfinite(cv.rms_sq_mm2).any() else None
+
+
+def d_org_note(rows: list[dict]) -> str | None:
+    """One line on why the chosen method's d_org is not the lowest of the comparison (``None`` when it is)."""
+    chosen = next((r for r in rows if r["chosen"]), None)
+    lowest = min(rows, key=lambda r: r["d_org_mm"], default=None)
+    if chosen is None or lowest is None or round(chosen["d_org_mm"], 3) <= round(lowest["d_org_mm"], 3):
+        return None  # not lower where the outputs print it (three decimals)
+    return (f"{chosen['method']} does not have the lowest d_org ({chosen['d_org_mm']:.3f} mm; {lowest['method']} "
+            f"{lowest['d_org_mm']:.3f} mm): d_org is in-sample, measured on the postures each method was fitted to, "
+            f"and rewards fitting their noise; the held-out error (each posture predicted by a fit without it) ranks "
+            f"the methods.")
 
 
 def corner_repeatability(problem: HandEyeProblem, result) -> dict:

@@ -194,7 +194,7 @@ def _readable_value_axis(axis, nbins: int = 4) -> None:
 
 
 def plot_method_comparison(rows: list[dict]) -> bytes:
-    """Horizontal bars per method: position and rotation difference from the chosen result, d_org."""
+    """Horizontal bars per method: held-out error, position and rotation difference from the chosen result, d_org."""
     return _png(method_comparison_figure(rows))
 
 
@@ -202,16 +202,17 @@ def method_comparison_figure(rows: list[dict]):
     """The figure of :func:`plot_method_comparison` (a matplotlib ``Figure``)."""
     names = [r["method"] + (" (chosen)" if r["chosen"] else "") for r in rows]
     colours = [_BLUE if r["chosen"] else _GREY for r in rows]
-    panels = [("d_position_mm", "position difference\nfrom the chosen (mm)", "{:.3f}"),
+    panels = [("held_out_mm", "held-out error\n(mm RMS, ranks)", "{:.3f}"),
+              ("d_position_mm", "position difference\nfrom the chosen (mm)", "{:.3f}"),
               ("d_rotation_deg", "rotation difference\nfrom the chosen (deg)", "{:.4f}"),
-              ("d_org_mm", "d_org\n(mm)", "{:.3f}")]
+              ("d_org_mm", "d_org, in-sample\n(mm)", "{:.3f}")]
     if any(r["d_org_incl_outliers_mm"] is not None for r in rows):
         panels.append(("d_org_incl_outliers_mm", f"{D_ORG_ALL_NAME}\n(mm)", "{:.3f}"))
     fig = _figure(3.4 * len(panels) + 1.4, 0.42 * len(rows) + 1.9, layout="constrained")
     y = np.arange(len(rows))[::-1]
     for k, (key, title, fmt) in enumerate(panels):
         ax = fig.add_subplot(1, len(panels), k + 1)
-        values = np.array([np.nan if r[key] is None else r[key] for r in rows], dtype=float)
+        values = np.array([np.nan if r.get(key) is None else r[key] for r in rows], dtype=float)
         ax.barh(y, np.nan_to_num(values), color=colours, height=0.6)
         finite = values[np.isfinite(values)]
         resolution = 10.0 ** -len(fmt.format(0.0).split(".")[1])  # smaller values print as zero anyway
@@ -464,6 +465,8 @@ def _session_facts(a: Assessment) -> list:
         ("d_org", f'<span class="num" data-d-org="header">{scatter.mm:.3f} mm</span><br>'
                   f'<span class="note">{_e(scatter.basis())} (eq. 22)</span>'),
     ]
+    if result.excluded:
+        facts.append(("left out before solving", _excluded_html(result.excluded)))
     if scatter.incl_outliers_mm is not None:
         facts.append((D_ORG_ALL_NAME, f"{scatter.incl_outliers_mm:.3f} mm (the same over all {n} postures)"))
     facts.append(("solve time", f"{1000 * result.runtime_s:.1f} ms"))
@@ -504,7 +507,8 @@ def _checks_table(verdict: Verdict) -> str:
 def _comparison_table(rows: list[dict]) -> str:
     with_all = any(r["d_org_incl_outliers_mm"] is not None for r in rows)
     with_truth = any(r["truth_errors"] for r in rows)
-    head = ["method", "x (mm)", "y (mm)", "z (mm)", "&Delta; position (mm)", "&Delta; rotation (deg)", "d_org (mm)"]
+    head = ["method", "held-out (mm)", "x (mm)", "y (mm)", "z (mm)", "&Delta; position (mm)", "&Delta; rotation (deg)",
+            "d_org (mm)"]
     if with_all:
         head.append(f"{_e(D_ORG_ALL_NAME)} (mm)")
     if with_truth:
@@ -513,6 +517,7 @@ def _comparison_table(rows: list[dict]) -> str:
     out = ["<table><tr>" + "".join(f"<th>{h}</th>" for h in head) + "</tr>"]
     for r in rows:
         cells = [_e(r["method"] + (" (chosen)" if r["chosen"] else ""))]
+        cells.append(f'<td class="num">{_num(r.get("held_out_mm"))}</td>')
         cells += [f'<td class="num">{v:.3f}</td>' for v in r["position_mm"]]
         cells += [f'<td class="num">{r["d_position_mm"]:.3f}</td>', f'<td class="num">{r["d_rotation_deg"]:.4f}</td>',
                   f'<td class="num">{r["d_org_mm"]:.3f}</td>']
@@ -573,7 +578,15 @@ def _residuals_section(a: Assessment, fixed_frame: str) -> str:
         f"the others is a posture to check (board partly hidden or misdetected, robot not at rest)."
         + (f" Dashed line: the limit max_posture_residual_mm = {limit:g} mm." if limit is not None else "") + "</p>"
         + _img(plot_residuals(result, a.problem, limit), "per-posture residuals")
-        + f'<p class="note">{_e(residual_note)}</p></section>')
+        + f'<p class="note">{_e(residual_note)}</p>'
+        + (f'<p class="note">Outliers left out before solving (the robot and board poses of the session fit no '
+           f"rigid camera mount with them): {_excluded_html(result.excluded)}</p>" if result.excluded else "")
+        + "</section>")
+
+
+def _excluded_html(excluded: dict) -> str:
+    """Gross postures left out before solving, each with its reason (``CalibrationResult.excluded``)."""
+    return "<br>".join(f"posture {int(i)}: {_e(reason)}" for i, reason in excluded.items())
 
 
 def _coverage_section(a: Assessment) -> str:
@@ -599,13 +612,16 @@ def _comparison_section(a: Assessment) -> str:
     rows = a.comparison
     return (
         "<h2>3. Method comparison</h2><section>"
-        '<p class="how">The same data solved by other methods. &Delta; = difference from the chosen result '
+        '<p class="how">The same data solved by other methods, ranked by the held-out error: the RMS distance of a '
+        "posture's board points from where a fit without that posture puts them (the same folds for every method, "
+        "over the postures the chosen result kept). &Delta; = difference from the chosen result "
         "(position distance, rotation angle). d_org (eq. 22) is computed for every method on the same data, "
         f"{_e(a.d_org.basis())}, as in the header and the verdict, so the column compares "
         "like with like"
         + (f"; {_e(D_ORG_ALL_NAME)}: the same over all {a.problem.n} postures. " if a.result.outliers else ". ")
         + "Methods that agree within a few tenths of a millimetre confirm the result; one far off is usually a "
         "method thrown by outliers or weak geometry.</p>"
+        + (f'<p class="note" data-note="d-org">{_e(a.comparison_note)}</p>' if a.comparison_note else "")
         + _comparison_table(rows) + _img(plot_method_comparison(rows), "method comparison") + "</section>")
 
 

@@ -1,11 +1,15 @@
 """The JSON of ``handeye calibrate --json``: a presenter of ``station.assessment.Assessment``.
 
 The result's own keys (conventions.md, ``CalibrationResult.to_json``), plus ``station`` (where the
-data come from: ``real``, ``mock``, ``simulated`` or ``unknown``) and, when the assessment holds a
-verdict, ``verdict``. Nothing is computed here.
+data come from: ``real``, ``mock``, ``simulated`` or ``unknown``), when the assessment holds a
+verdict, ``verdict``, and when it holds a method comparison, ``method_comparison`` (its rows, ranked
+by the held-out error ``held_out_mm``) with ``method_comparison_note`` when the chosen method's
+in-sample d_org is not the lowest. Nothing is computed here.
 """
 
 from __future__ import annotations
+
+import math
 
 from .assessment import Assessment
 
@@ -18,4 +22,13 @@ def calibration_json(assessment: Assessment) -> dict:
     data["station"] = assessment.origin  # mock | real | simulated | unknown
     if assessment.verdict is not None:
         data["verdict"] = assessment.verdict.to_json()
+    if assessment.comparison:
+        data["method_comparison"] = [{key: _finite(value) for key, value in row.items()} for row in assessment.comparison]
+        if assessment.comparison_note:
+            data["method_comparison_note"] = assessment.comparison_note
     return data
+
+
+def _finite(value):
+    """``None`` for a float that JSON cannot hold (NaN, infinity); the value otherwise."""
+    return None if isinstance(value, float) and not math.isfinite(value) else value

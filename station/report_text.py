@@ -70,6 +70,7 @@ def _closing_lines(r) -> list[str]:
     if r.outliers:
         lines += ["", f"Outlier postures (excluded from the solution): {', '.join(map(str, r.outliers))}",
                   "  check them: board partly hidden or misdetected, robot not at rest, wrong pose pairing"]
+        lines += [f"  posture {i}: left out before solving: {reason}" for i, reason in r.excluded.items()]
     lines += [""] + _residual_table(r.residuals_mm, r.outliers)
     d = r.details
     extra = ""
@@ -107,7 +108,25 @@ def calibration_summary(assessment: Assessment) -> str:
         "",
         "Quality (lower is better):",
     ]
-    return "\n".join(lines + _quality_lines(assessment) + _closing_lines(r))
+    return "\n".join(lines + _quality_lines(assessment) + _closing_lines(r) + _comparison_lines(assessment))
+
+
+def _comparison_lines(assessment: Assessment) -> list[str]:
+    """The method comparison, ranked by the held-out error, and why d_org may rank otherwise."""
+    rows = assessment.comparison
+    if not rows:
+        return []
+    lines = ["", "Method comparison (ranked by the held-out error; d_org in-sample, over the same postures):",
+             "  method        held-out mm  d_org mm  d_pos mm  d_rot deg"]
+    for row in rows:
+        held_out = "n/a" if row["held_out_mm"] is None else f"{row['held_out_mm']:.3f}"
+        name = row["method"] + (" *" if row["chosen"] else "")
+        lines.append(f"  {name:<12}  {held_out:>11}  {row['d_org_mm']:8.3f}  {row['d_position_mm']:8.3f}  "
+                     f"{row['d_rotation_deg']:9.4f}")
+    lines.append("  (* = the chosen result)")
+    if assessment.comparison_note:
+        lines.append(f"  {assessment.comparison_note}")
+    return lines
 
 
 def _cross_validation_lines(r) -> list[str]:

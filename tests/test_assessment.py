@@ -81,12 +81,23 @@ def _count(monkeypatch, module, name, calls):
 def test_calibrate_with_report_and_json_assesses_once_and_solves_each_method_once(session_path, tmp_path, monkeypatch,
                                                                                    capsys):
     calls = {}
-    for module, name in ((solve, "_calibrate"), (assessment_module, "assess"), (assessment_module, "quality_figures")):
+    for module, name in ((assessment_module, "assess"), (assessment_module, "quality_figures")):
         _count(monkeypatch, module, name, calls)
+    solved = []  # (method, postures) of every solve
+    original = solve._calibrate
+    monkeypatch.setattr(solve, "_calibrate", lambda problem, method=None, *args, **kwargs: (
+        solved.append((method or DEFAULT_METHOD, problem.n)) or original(problem, method, *args, **kwargs)))
     out = tmp_path / "r.json"
     assert main(["calibrate", str(session_path), "--report", str(tmp_path / "r.html"), "--json", str(out)]) == 0
-    # each comparison method solved once, and the default once (it is not one of the comparison's)
-    assert calls == {"_calibrate": len({*COMPARISON_METHODS, DEFAULT_METHOD}), "assess": 1, "quality_figures": 1}
+    # each comparison method solved once on the whole session, and the default once (it is not one of the
+    # comparison's); the held-out error adds one solve per fold of each comparison method on the postures
+    # outside the fold (the default's own cross-validation is reused)
+    n = len(json.loads(out.read_text())["posture_residuals_mm"])
+    whole = sorted(method for method, postures in solved if postures == n)
+    assert whole == sorted({*COMPARISON_METHODS, DEFAULT_METHOD}) and calls == {"assess": 1, "quality_figures": 1}
+    folds = [(method, postures) for method, postures in solved if postures < n]
+    assert sorted({method for method, _ in folds}) == sorted(COMPARISON_METHODS)
+    assert len(folds) == 5 * len(COMPARISON_METHODS) and all(postures >= n - (n + 4) // 5 for _, postures in folds)
     printed = capsys.readouterr().out
     data = json.loads(out.read_text())
     assert data["verdict"]["passed"] and "verdict: PASS (10 of 10 checks)" in printed

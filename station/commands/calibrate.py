@@ -26,7 +26,11 @@ The paper's variants (Deniz & Cakir):
 Classic AX = XB solvers (calibration/classic/README.md says what each minimises):
   tsai, park, horaud, andreff, daniilidis, chou, lu, liang
 
-Before solving, the session's lengths are checked: a session that looks like metres, a posture in
+Before solving, the robot and board poses are checked against the X-free invariants of AX = XB: a
+session no rigid camera mount fits is refused with the likely cause; a few gross postures that alone
+break the check (robot and camera poses swapped, one posture in another rotation convention, a posture
+of another session) are named and left out, listed with the outliers (JSON "excluded_before_solve").
+Also before solving, the session's lengths are checked: a session that looks like metres, a posture in
 another unit, a flange beyond the robot's reach or corners whose spacing is not target.square_mm
 (within 5 %) is refused with the reason. A session really written in metres is converted only
 when asked: --units m.
@@ -40,7 +44,8 @@ sessions are flagged in the text and the HTML report: they are not a calibration
 --report [FILE] also writes the calibration report: one self-contained HTML file (plots embedded,
 no network needed) with a PASS/FAIL verdict against the quality thresholds, the tframe literal,
 uncertainty and cross-validated accuracy, outliers, per-posture residuals, rotation-axis coverage, a
-comparison with other methods, and the repeatability of the board corners in base.
+comparison with other methods ranked by their held-out (cross-validated) error, also printed and in
+the JSON ("method_comparison"), and the repeatability of the board corners in base.
 Without FILE it is SESSION/report.html (then put --report after SESSION). The verdict uses the
 default thresholds, or those of --thresholds FILE.yaml (lines 'key: number', or a station config's
 'quality:' section; a commented example with the defaults: station/quality_thresholds.yaml); keys:
