@@ -64,6 +64,8 @@ from .problem import EYE_IN_HAND, HandEyeProblem
 from .rotations import canonical_quaternions, quaternion_conjugate, quaternion_from_matrix, quaternion_multiply
 
 __all__ = [
+    "AXIS_SPREAD_NAME",
+    "MEDIAN_ANGLE_NAME",
     "D_ORG_ALL_NAME",
     "IMAGE_CELL_NAMES",
     "board_distances_mm",
@@ -94,6 +96,9 @@ MAX_AXIS_SPREAD_DEG = math.degrees(math.asin(math.sqrt(1.0 / 3.0)))
 MIN_AXIS_DIVERGENCE_DEG = 2.0
 #: The name of d_org over every posture, outliers included.
 D_ORG_ALL_NAME = "d_org incl. outliers"
+#: The names the operator reads for the two motion words, in the plan, guided capture and the verdict.
+AXIS_SPREAD_NAME = "rotation-axis spread"
+MEDIAN_ANGLE_NAME = "relative rotation angle (median)"
 
 
 # ------------------------------------------------------------------------------ relative rotations

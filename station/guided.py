@@ -33,6 +33,7 @@ from ..calibration.files import remove_stale_temporaries
 from ..calibration.kinematics import load_robot
 from ..calibration.quality_words import (
     IMAGE_CELL_NAMES,
+    MEDIAN_ANGLE_NAME,
     board_distances_mm,
     distance_spread_mm,
     hand_axis_coverage,
@@ -52,7 +53,7 @@ from .capture import (
 from .cell_plan import cell_check
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
-from .quality import QualityThresholds, config_thresholds, direction_name
+from .quality import QualityThresholds, config_thresholds, direction_name, motion_shortfalls
 from .runtime import StationLink
 
 __all__ = ["GuidedSummary", "Missing", "StillWatch", "guided_capture", "postures_needed", "what_is_missing"]
@@ -133,21 +134,15 @@ def what_is_missing(tool02base, distances_mm, cells: set, thresholds: QualityThr
 def _rotation_missing(tool02base: np.ndarray, thresholds: QualityThresholds) -> list:
     """The rotation words of the flange poses against the thresholds (a single posture: turn at all)."""
     if len(tool02base) < 2:
-        return [Missing("relative rotation angle (median)", "none yet", f">= {thresholds.min_median_rotation_deg:g} deg",
+        return [Missing(MEDIAN_ANGLE_NAME, "none yet", f">= {thresholds.min_median_rotation_deg:g} deg",
                         "turn the flange 20-45 deg from this posture, keeping the board in view")]
-    out = []
     coverage = hand_axis_coverage(tool02base, "tool0")
-    if coverage.spread_deg < thresholds.min_rotation_axis_spread_deg:
-        direction = direction_name(coverage.weakest_direction, "tool0")
-        hint = " (axis 6 alone does that)" if direction == "tool0 z" else ""
-        out.append(Missing("rotation-axis spread", f"{coverage.spread_deg:.1f} deg",
-                           f">= {thresholds.min_rotation_axis_spread_deg:g} deg",
-                           f"turn the flange about {direction}{hint} next, keeping the board in view"))
-    if coverage.median_angle_deg < thresholds.min_median_rotation_deg:
-        out.append(Missing("relative rotation angle (median)", f"{coverage.median_angle_deg:.1f} deg",
-                           f">= {thresholds.min_median_rotation_deg:g} deg",
-                           "turn the flange further between postures (20-45 deg)"))
-    return out
+    direction = direction_name(coverage.weakest_direction, "tool0")
+    hint = " (axis 6 alone does that)" if direction == "tool0 z" else ""
+    advice = {"min_rotation_axis_spread_deg": f"turn the flange about {direction}{hint} next, keeping the board in view",
+              "min_median_rotation_deg": "turn the flange further between postures (20-45 deg)"}
+    return [Missing(s.word, f"{s.value:.1f} deg", f">= {s.required:g} deg", advice[s.key])
+            for s in motion_shortfalls(coverage, thresholds)]
 
 
 class StillWatch:

@@ -24,6 +24,7 @@ From a start posture where the camera sees the board, the planner knows roughly 
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field, replace
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -36,7 +37,7 @@ from ..calibration.synthetic import NoiseConfig, Scene, SceneConfig, sample_sess
 from ..calibration.transforms import invert_transforms
 from ..calibration.views import NOMINAL_XB3, ViewSampling, sample_eye_in_hand_postures
 from .cell_plan import CellCheck, PostureVeto, Rejections, board_problem, clear_route, start_problem
-from .quality import QualityThresholds
+from .quality import QualityThresholds, motion_shortfalls
 
 __all__ = [
     "PlanScore",
@@ -102,15 +103,10 @@ class PlanScore:
     def verdict(self, thresholds: QualityThresholds | None = None) -> list[str]:
         """Warnings an operator should read before moving (empty when the plan looks good): the
         plan's figures below the verdict's thresholds (defaults when omitted)."""
-        t = thresholds or QualityThresholds()
-        out = []
-        if self.rotation_axis_spread_deg < t.min_rotation_axis_spread_deg:
-            out.append(f"rotation-axis spread {self.rotation_axis_spread_deg:.1f} deg < "
-                       f"{t.min_rotation_axis_spread_deg:g} deg (min_rotation_axis_spread_deg): widen the cone or the roll")
-        if self.median_pair_angle_deg < t.min_median_rotation_deg:
-            out.append(f"small rotations between postures (median {self.median_pair_angle_deg:.1f} deg < "
-                       f"{t.min_median_rotation_deg:g} deg): widen the cone")
-        return out
+        coverage = SimpleNamespace(spread_deg=self.rotation_axis_spread_deg, median_angle_deg=self.median_pair_angle_deg)
+        advice = {"min_rotation_axis_spread_deg": "widen the cone or the roll", "min_median_rotation_deg": "widen the cone"}
+        return [f"{s.word} {s.value:.1f} deg < {s.required:g} deg ({s.key}): {advice[s.key]}"
+                for s in motion_shortfalls(coverage, thresholds or QualityThresholds())]
 
 
 @dataclass(frozen=True)

@@ -37,7 +37,9 @@ import numpy as np
 from ..calibration.errors import HandEyeError, brief
 from ..calibration.problem import EYE_IN_HAND, HandEyeProblem
 from ..calibration.quality_words import (
+    AXIS_SPREAD_NAME,
     MAX_AXIS_SPREAD_DEG,
+    MEDIAN_ANGLE_NAME,
     AxisCoverage,
     DOrg,
     kept_postures,
@@ -52,7 +54,10 @@ __all__ = [
     "QualityThresholds",
     "ThresholdError",
     "Verdict",
+    "MotionShortfall",
     "camera_too_near",
+    "meets",
+    "motion_shortfalls",
     "config_thresholds",
     "load_thresholds",
     "quality_figures",
@@ -248,8 +253,8 @@ CHECK_LABELS = {
     "max_sigma_rotation_deg": ("camera rotation uncertainty, largest one-sigma axis", "deg", "{:.4f}"),
     "min_inlier_postures": ("consistent postures (not outliers)", "", "{:.0f}"),
     "max_outlier_fraction": ("share of postures rejected as outliers", "", "{:.0%}"),
-    "min_rotation_axis_spread_deg": ("rotation-axis spread (about the least exercised direction)", "deg", "{:.1f}"),
-    "min_median_rotation_deg": ("median relative rotation angle between two postures", "deg", "{:.1f}"),
+    "min_rotation_axis_spread_deg": (AXIS_SPREAD_NAME, "deg", "{:.1f}"),
+    "min_median_rotation_deg": (MEDIAN_ANGLE_NAME, "deg", "{:.1f}"),
     "min_camera_offset_mm": ("camera frame's distance from the flange (not inside it)", "mm", "{:.1f}"),
     "max_camera_offset_mm": ("camera frame's distance from the flange (not far off)", "mm", "{:.1f}"),
 }
@@ -313,10 +318,16 @@ def _postures_text(items) -> str:
     return ", ".join(f"{i} ({r:.2f} mm)" for i, r in items)
 
 
+def meets(key: str, value: float, limit: float) -> bool:
+    """Whether ``value`` meets the threshold ``key`` = ``limit``: at most a ``max_`` one, at least any other.
+    The one rule of every check of the verdict, the plan and guided capture."""
+    return bool(value <= limit if key.startswith("max_") else value >= limit)
+
+
 def _check(name: str, value, limit, advice_if_failed: str, note: str = "") -> Check:
     if value is None:
         return Check(name, None, limit, False, advice_if_failed)
-    passed = value <= limit if name.startswith("max_") else value >= limit
+    passed = meets(name, value, limit)
     return Check(name, float(value), limit, bool(passed), note if passed else advice_if_failed)
 
 
@@ -437,6 +448,35 @@ def _precision_checks(result, t: QualityThresholds, n_in: int) -> list:
                f"camera rotation uncertain to +-{sr.max():.4f} deg about camera {'xyz'[int(sr.argmax())]}: add postures "
                f"that tilt the camera further (20-45 deg) about different axes, with the board filling the image{more}"),
     ]
+
+
+class MotionShortfall(NamedTuple):
+    """A motion word of a set of flange poses below its threshold (:func:`motion_shortfalls`).
+
+    ``key`` is the threshold's key, ``word`` the quality word's name
+    (``calibration.quality_words``), ``value`` its figure (deg) and ``required`` the threshold (deg).
+    """
+
+    key: str
+    word: str
+    value: float
+    required: float
+
+
+def motion_shortfalls(coverage, thresholds: QualityThresholds) -> list:
+    """The one check of the motion words that the plan, guided capture and the verdict all make: the
+    rotation-axis spread and the median relative rotation angle of ``coverage`` (an
+    ``AxisCoverage``) against ``min_rotation_axis_spread_deg`` and ``min_median_rotation_deg``.
+
+    Returns
+    -------
+    list of MotionShortfall
+        Those below their threshold, spread first; each caller adds its own advice.
+    """
+    words = (("min_rotation_axis_spread_deg", AXIS_SPREAD_NAME, coverage.spread_deg),
+             ("min_median_rotation_deg", MEDIAN_ANGLE_NAME, coverage.median_angle_deg))
+    return [MotionShortfall(key, word, float(value), float(getattr(thresholds, key)))
+            for key, word, value in words if not meets(key, value, getattr(thresholds, key))]
 
 
 def _motion_checks(result, problem: HandEyeProblem, t: QualityThresholds, figures: QualityFigures) -> list:
