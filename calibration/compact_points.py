@@ -15,7 +15,7 @@ import numpy as np
 
 from .transforms import transform_from_rotation_translation
 
-__all__ = ["BoardGeometry", "CompactPoints", "board_corners", "compact_points_from_corners", "compact_points_from_poses"]
+__all__ = ["STATION_BOARD", "BoardGeometry", "CompactPoints", "board_corners", "compact_points_from_corners", "compact_points_from_poses"]
 
 
 @dataclass(frozen=True)
@@ -40,6 +40,11 @@ class BoardGeometry:
     def grid(self, square_mm: float | None = None) -> np.ndarray:
         """Corner coordinates in the target frame, shape ``(count, 3)``, index ``row * nx + col``."""
         return board_corners(self.corners, square_mm if square_mm is not None else (self.square_mm or 1.0))
+
+
+#: The station's checkerboard, the one default of every board setting: 13 x 8 inner corners (14 x 9
+#: squares) of 30 mm.
+STATION_BOARD = BoardGeometry((13, 8), 30.0)
 
 
 @dataclass(frozen=True)

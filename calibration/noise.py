@@ -39,7 +39,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from .kinematics import RobotModel
-from .rotations import quaternion_from_axis_angle, quaternion_multiply, rotate_vectors
+from .rotations import quaternion_from_axis_angle, quaternion_multiply, rotate_vectors, skew
 
 __all__ = [
     "XB3_FOCAL_PX",
@@ -66,16 +66,6 @@ XB3_FOCAL_PX = 983.0
 XB3_BASELINE_MM = 239.98
 #: Floor of every variance (mm², px²): noise-free data stay finite.
 VARIANCE_FLOOR = 1e-18
-
-
-def skew(v) -> np.ndarray:
-    """``[v]x`` for vectors ``(..., 3)``: shape ``(..., 3, 3)``, ``[v]x w = v x w``."""
-    v = np.asarray(v, dtype=float)
-    out = np.zeros(v.shape + (3,))
-    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
-    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
-    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
-    return out
 
 
 def adjoint(transform) -> np.ndarray:

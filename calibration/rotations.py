@@ -13,6 +13,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 __all__ = [
+    "skew",
     "UNIT_TOLERANCE",
     "check_quaternions",
     "canonical_quaternions",
@@ -222,3 +223,13 @@ def quaternion_from_matrix(matrix) -> np.ndarray:
     lead = matrix.shape[:-2]
     flat = Rotation.from_matrix(matrix.reshape(-1, 3, 3)).as_quat(scalar_first=True)
     return canonical_quaternions(flat.reshape(lead + (4,)))
+
+
+def skew(v) -> np.ndarray:
+    """Cross-product matrices ``[v]_x`` of vectors ``(..., 3)``, shape ``(..., 3, 3)``: ``[v]_x w = v x w``."""
+    v = np.asarray(v, dtype=float)
+    out = np.zeros(v.shape + (3,))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out

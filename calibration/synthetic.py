@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .compact_points import BoardGeometry, board_corners
+from .compact_points import STATION_BOARD, BoardGeometry, board_corners
 from .kinematics import RobotModel, inverse_kinematics, load_robot
 from .views import (
     NOMINAL_XB3_LEFT,
@@ -76,8 +76,8 @@ class SceneConfig:
     """
 
     postures: int = 30
-    corners: tuple = (13, 8)
-    square_mm: float = 30.0
+    corners: tuple = STATION_BOARD.corners
+    square_mm: float = STATION_BOARD.square_mm
     setup: str = EYE_IN_HAND
     robot: str = "IRB1400"
     distance_mm: tuple = (700.0, 1200.0)

@@ -28,7 +28,7 @@ from scipy.spatial.transform import Rotation
 
 from ..calibration.cell import CellModel
 from ..calibration.clearance import CellGuard
-from ..calibration.compact_points import BoardGeometry
+from ..calibration.compact_points import STATION_BOARD, BoardGeometry
 from ..calibration.kinematics import RobotModel, load_robot
 from ..calibration.transforms import transform_from_rotation_translation
 from ..drivers.camera.stereo import StereoModel, nominal_xb3_model
@@ -109,7 +109,7 @@ class MockStationSpec:
     protocol: str = "socket"
     cam2tool0: np.ndarray = field(default_factory=lambda: DEFAULT_MOUNT.copy())
     board2base: np.ndarray = field(default_factory=lambda: DEFAULT_BOARD.copy())
-    board: BoardGeometry = BoardGeometry((13, 8), 30.0)
+    board: BoardGeometry = STATION_BOARD
     start_joints_deg: tuple = DEFAULT_START
     kinematic_error_mm: float = 0.05
     kinematic_error_deg: float = 0.002

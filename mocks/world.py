@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..calibration.compact_points import BoardGeometry
+from ..calibration.compact_points import STATION_BOARD, BoardGeometry
+from ..calibration.views import look_at
 
 __all__ = ["PrintedBoard", "Lighting", "BoardOperator", "look_at", "board_view", "sample_board_views", "sheet_in_view",
            "hard_lighting"]
@@ -31,7 +32,7 @@ class PrintedBoard:
         White paper around the outer squares.
     """
 
-    geometry: BoardGeometry = BoardGeometry((13, 8), 30.0)
+    geometry: BoardGeometry = STATION_BOARD
     margin_mm: float = 30.0
 
     @property
@@ -165,24 +166,6 @@ def hard_lighting(rng, board: "PrintedBoard" = None) -> Lighting:
                     shadow_soft_mm=float(rng.uniform(3, 30)), vignetting=float(rng.uniform(0.2, 0.45)))
 
 
-def look_at(eye, target, up=(0.0, -1.0, 0.0)) -> np.ndarray:
-    """``cam2world`` of a camera at ``eye`` whose optical axis (z) points at ``target``; image y as close
-    to ``-up`` as possible (image y points down)."""
-    eye = np.asarray(eye, float)
-    z = np.asarray(target, float) - eye
-    z /= np.linalg.norm(z)
-    y = -np.asarray(up, float)
-    y = y - (y @ z) * z
-    if np.linalg.norm(y) < 1e-9:
-        y = np.array([0.0, 1.0, 0.0]) - z[1] * z
-    y /= np.linalg.norm(y)
-    x = np.cross(y, z)
-    out = np.eye(4)
-    out[:3, :3] = np.column_stack([x, y, z])
-    out[:3, 3] = eye
-    return out
-
-
 def board_view(distance_mm: float, tilt_deg: float = 0.0, tilt_azimuth_deg: float = 0.0, roll_deg: float = 0.0,
                board: PrintedBoard = PrintedBoard(), offset_px=(0.0, 0.0), f_px: float = 983.0) -> np.ndarray:
     """``target2cam`` of a camera looking at the board centre from ``distance_mm``.
@@ -196,7 +179,7 @@ def board_view(distance_mm: float, tilt_deg: float = 0.0, tilt_azimuth_deg: floa
     # Camera on the printed side: the board's z points into the board, so the camera sits at -z.
     direction = np.array([np.sin(tilt) * np.cos(az), np.sin(tilt) * np.sin(az), -np.cos(tilt)])
     eye = centre + distance_mm * direction
-    cam2target = look_at(eye, centre, up=(0.0, -1.0, 0.0))
+    cam2target = look_at(eye, centre, 0.0, up=(0.0, -1.0, 0.0))  # image y as close to +y (board frame) as can be
     roll = Rotation.from_rotvec([0, 0, np.radians(roll_deg)]).as_matrix()
     cam2target[:3, :3] = cam2target[:3, :3] @ roll
     # Shift the aim so the board centre lands offset_px from the image centre.

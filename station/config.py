@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.compact_points import BoardGeometry
+from ..calibration.compact_points import STATION_BOARD, BoardGeometry
 from ..calibration.errors import ConfigError, HandEyeError, brief
 from ..calibration.files import read_text_file
 from ..calibration.kinematics import load_robot
@@ -248,8 +248,8 @@ class TargetSettings:
     """``target``: the checkerboard (kept as a :class:`BoardGeometry`)."""
 
     type: str = setting("checkerboard", Custom(_as_is), "checkerboard (the only target; accepted as in session.yaml)")
-    corners: tuple = setting((13, 8), Custom(_corners), "inner corners along x (the long side), along y")
-    square_mm: float = setting(30.0, Number(1, 500), "square size", "mm")
+    corners: tuple = setting(STATION_BOARD.corners, Custom(_corners), "inner corners along x (the long side), along y")
+    square_mm: float = setting(STATION_BOARD.square_mm, Number(1, 500), "square size", "mm")
 
 
 @dataclass(frozen=True)
@@ -322,7 +322,7 @@ class StationConfig:
     robot: str = setting("IRB1400", Custom(_robot), "robot model (calibration/robots/*.yaml) or a robot YAML path")
     controller: ControllerSettings = section(ControllerSettings, "the controller")
     camera: CameraSettings = section(CameraSettings, "the camera")
-    target: BoardGeometry = setting(BoardGeometry((13, 8), 30.0), Custom(_target), "the checkerboard",
+    target: BoardGeometry = setting(STATION_BOARD, Custom(_target), "the checkerboard",
                                     keys=TargetSettings)
     plan: PlanSettings = section(PlanSettings, "posture planning")
     motion: MotionSettings = section(MotionSettings, "posture moves")

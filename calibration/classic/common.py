@@ -38,7 +38,7 @@ from scipy.spatial.transform import Rotation
 
 from ..errors import CalibrationError
 from ..quality_words import MIN_AXIS_DIVERGENCE_DEG, rotation_axis_divergence_deg
-from ..rotations import quaternion_from_matrix
+from ..rotations import quaternion_from_matrix, skew
 from ..transforms import invert_transforms, transform_from_rotation_translation
 
 __all__ = [
@@ -351,14 +351,6 @@ def rotation_from_scaled_matrix(matrix) -> np.ndarray:
     if not np.isfinite(det) or abs(det) <= 1e-9 * max(size, np.finfo(float).tiny):
         raise CalibrationError("the rotation system is singular; rotate the flange about at least two different axes")
     return nearest_rotation(np.sign(det) * matrix / abs(det) ** (1.0 / 3.0))
-
-
-def skew(v) -> np.ndarray:
-    """Cross-product matrices ``[v]_x`` of vectors ``(..., 3)``, shape ``(..., 3, 3)``."""
-    v = np.asarray(v, dtype=float)
-    x, y, z = v[..., 0], v[..., 1], v[..., 2]
-    zero = np.zeros_like(x)
-    return np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1), np.stack([-y, x, zero], -1)], -2)
 
 
 def _product_matrix(q, sign: float) -> np.ndarray:

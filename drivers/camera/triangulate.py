@@ -19,7 +19,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ...calibration.compact_points import BoardGeometry
+from ...calibration.compact_points import STATION_BOARD, BoardGeometry
 from ...calibration.files import read_file_bytes
 from ...calibration.plausibility import SQUARE_TOLERANCE
 from .checkerboard import as_board, observe_board
@@ -128,7 +128,7 @@ def _result(obs, board: BoardGeometry, model: StereoModel, source: str, start: f
                                obs.left.corners_px, obs.right.corners_px)
 
 
-def triangulate_images(left: np.ndarray, right: np.ndarray, board="13x8", square_mm: float | None = None,
+def triangulate_images(left: np.ndarray, right: np.ndarray, board=STATION_BOARD.corners, square_mm: float | None = None,
                        model: StereoModel | None = None) -> TriangulationResult:
     """Corners in mm from a left/right image pair already in memory (grey or BGR arrays).
 
@@ -142,7 +142,7 @@ def triangulate_images(left: np.ndarray, right: np.ndarray, board="13x8", square
     return _result(obs, board, model, "images", start)
 
 
-def triangulate_xb3_frame(buffer, board="13x8", square_mm: float | None = None, model: StereoModel | None = None,
+def triangulate_xb3_frame(buffer, board=STATION_BOARD.corners, square_mm: float | None = None, model: StereoModel | None = None,
                           *, colour: bool = True, width: int | None = None,
                           height: int | None = None) -> TriangulationResult:
     """Corners in mm from one raw XB3 frame (3-sensor RGB8 layout; the wide left-right pair).
@@ -169,7 +169,7 @@ def triangulate_xb3_frame(buffer, board="13x8", square_mm: float | None = None, 
     return _result(obs, board, model, "xb3-raw", start)
 
 
-def triangulate_files(*, left=None, right=None, xb3_raw=None, stereo=None, board="13x8", square_mm: float | None = 30.0,
+def triangulate_files(*, left=None, right=None, xb3_raw=None, stereo=None, board=STATION_BOARD.corners, square_mm: float | None = STATION_BOARD.square_mm,
                       colour: bool = True) -> TriangulationResult:
     """:func:`triangulate_images` or :func:`triangulate_xb3_frame` on files.
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..simulate import MAX_POSTURES
+from ..simulate import MAX_POSTURES, SimulateOptions
 from . import argtypes
 
 HELP = "write a synthetic session (IRB 1400, 13x8 board, chosen noise) with its truth"
@@ -38,7 +38,8 @@ def add_parser(sub):
     p.add_argument("--joint-offset", type=argtypes.floats, default=None, metavar="A1,..,An",
                    help="systematic offset added to every reported joint angle, degrees (one value per robot axis)")
     p.add_argument("--setup", choices=("eye_in_hand", "eye_to_hand"), default="eye_in_hand")
-    p.add_argument("--corners", type=argtypes.corners, default=(13, 8), metavar="NXxNY", help="inner corners (default 13x8)")
+    p.add_argument("--corners", type=argtypes.corners, default=SimulateOptions.corners, metavar="NXxNY",
+                   help="inner corners (default {}x{})".format(*SimulateOptions.corners))
     p.add_argument("--square-mm", type=float, default=30.0, help="square size in mm (default 30)")
     p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
     p.add_argument("--scene-seed", type=int, default=0, help="posture-set seed (default 0)")
