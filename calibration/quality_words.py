@@ -67,6 +67,7 @@ __all__ = [
     "AXIS_SPREAD_NAME",
     "MEDIAN_ANGLE_NAME",
     "D_ORG_ALL_NAME",
+    "METRIC_MEANINGS",
     "IMAGE_CELL_NAMES",
     "board_distances_mm",
     "distance_spread_mm",
@@ -96,6 +97,14 @@ MAX_AXIS_SPREAD_DEG = math.degrees(math.asin(math.sqrt(1.0 / 3.0)))
 MIN_AXIS_DIVERGENCE_DEG = 2.0
 #: The name of d_org over every posture, outliers included.
 D_ORG_ALL_NAME = "d_org incl. outliers"
+#: What each figure of a solution means, in the words both presenters (text summary, HTML report) print.
+METRIC_MEANINGS = {
+    "d_org": "mean distance of a board point from its mean position in the fixed frame (eq. 22)",
+    D_ORG_ALL_NAME: "d_org over every posture, the outliers included",
+    "d_back": "mean distance between the same board point seen from two postures (eq. 23)",
+    "dR": "rotation residual of AX = XB, ||R_A R_X - R_X R_B||_F, RMS over posture pairs (eq. 16)",
+    "dt": "translation residual of AX = XB, RMS over posture pairs (eq. 16)",
+}
 #: The names the operator reads for the two motion words, in the plan, guided capture and the verdict.
 AXIS_SPREAD_NAME = "rotation-axis spread"
 MEDIAN_ANGLE_NAME = "relative rotation angle (median)"

@@ -33,7 +33,7 @@ from scipy.spatial.transform import Rotation
 
 from ..calibration.errors import HandEyeError
 from ..calibration.problem import EYE_IN_HAND, HandEyeProblem
-from ..calibration.quality_words import D_ORG_ALL_NAME, AxisCoverage, hand_frame
+from ..calibration.quality_words import D_ORG_ALL_NAME, METRIC_MEANINGS, AxisCoverage, hand_frame
 from ..calibration.session import write_text_atomic
 from ..rapid.literals import pose_literal, rounded_pose
 from .assessment import Assessment
@@ -538,14 +538,14 @@ def _metrics_table(a: Assessment) -> str:
     result, scatter = a.result, a.d_org
     m = result.metrics
     rows = [
-        ("d_org", f"{scatter.mm:.3f} mm", "mean distance of a board point from its mean position in the fixed frame (eq. 22)"),
-        ("d_back", f"{m['d_back_mm']:.3f} mm", "mean distance between the same board point seen from two postures (eq. 23)"),
-        ("dR", f"{m['delta_r']:.5f}", "rotation residual of AX = XB, ||R_A R_X - R_X R_B||_F, RMS over posture pairs (eq. 16)"),
-        ("dt", f"{m['delta_t_mm']:.3f} mm", "translation residual of AX = XB, RMS over posture pairs (eq. 16)"),
+        ("d_org", f"{scatter.mm:.3f} mm", METRIC_MEANINGS["d_org"]),
+        ("d_back", f"{m['d_back_mm']:.3f} mm", METRIC_MEANINGS["d_back"]),
+        ("dR", f"{m['delta_r']:.5f}", METRIC_MEANINGS["dR"]),
+        ("dt", f"{m['delta_t_mm']:.3f} mm", METRIC_MEANINGS["dt"]),
     ]
     if scatter.incl_outliers_mm is not None:
         rows.insert(1, (D_ORG_ALL_NAME, f"{scatter.incl_outliers_mm:.3f} mm",
-                        f"d_org over all {a.problem.n} postures, the outliers included"))
+                        f"{METRIC_MEANINGS[D_ORG_ALL_NAME]} ({a.problem.n} postures)"))
     if result.truth_errors is not None:
         rows += [("rotation error", f"{result.truth_errors['rotation_error_deg']:.4f} deg", "against the synthetic truth"),
                  ("translation error", f"{result.truth_errors['translation_error_mm']:.3f} mm", "against the synthetic truth")]

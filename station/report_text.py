@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..calibration.quality_words import D_ORG_ALL_NAME
+from ..calibration.quality_words import D_ORG_ALL_NAME, METRIC_MEANINGS
 from ..rapid.literals import pose_literal, rounded_pose
 from .assessment import Assessment
 from .origin import origin_banner
@@ -41,15 +41,15 @@ def _origin_lines(origin: str) -> list[str]:
 def _quality_lines(assessment: Assessment) -> list[str]:
     r, scatter = assessment.result, assessment.d_org
     m = r.metrics
-    lines = [f"  d_org   {scatter.mm:.3f} mm   mean distance of a board point from its mean position (eq. 22)",
+    lines = [f"  d_org   {scatter.mm:.3f} mm   {METRIC_MEANINGS['d_org']}",
              f"          {scatter.basis()}"]
     if scatter.incl_outliers_mm is not None:
-        lines.append(f"  {D_ORG_ALL_NAME}  {scatter.incl_outliers_mm:.3f} mm   the same over all "
-                     f"{assessment.problem.n} postures")
+        lines.append(f"  {D_ORG_ALL_NAME}  {scatter.incl_outliers_mm:.3f} mm   {METRIC_MEANINGS[D_ORG_ALL_NAME]} "
+                     f"({assessment.problem.n} postures)")
     return lines + [
-        f"  d_back  {m['d_back_mm']:.3f} mm   mean distance of a board point between two postures (eq. 23)",
-        f"  dR      {m['delta_r']:.5f}     rotation residual of AX = XB, RMS over pairs (eq. 16)",
-        f"  dt      {m['delta_t_mm']:.3f} mm   translation residual of AX = XB, RMS over pairs (eq. 16)",
+        f"  d_back  {m['d_back_mm']:.3f} mm   {METRIC_MEANINGS['d_back']}",
+        f"  dR      {m['delta_r']:.5f}     {METRIC_MEANINGS['dR']}",
+        f"  dt      {m['delta_t_mm']:.3f} mm   {METRIC_MEANINGS['dt']}",
         "  (d_back, dR and dt over the same postures as d_org)",
     ]
 

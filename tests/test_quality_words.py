@@ -150,3 +150,20 @@ def test_each_quality_word_is_defined_in_one_module():
                 if defines or name in retired:
                     offenders.append(f"{path.relative_to(REPO)}:{node.lineno} {name}")
     assert not offenders, offenders
+
+
+def test_the_text_summary_and_the_report_give_each_figure_the_same_meaning(tmp_path, capsys):
+    """d_org, d_back, dR and dt were explained twice in different words (text and HTML)."""
+    from handeye.calibration.quality_words import METRIC_MEANINGS
+    from handeye.station.cli import main
+
+    session = tmp_path / "s"
+    assert main(["simulate", "-o", str(session), "--postures", "8", "--sigma-cam", "1"]) == 0
+    capsys.readouterr()
+    assert main(["calibrate", str(session), "--method", "mcb", "--report", str(tmp_path / "r.html")]) == 0
+    text = capsys.readouterr().out
+    html = (tmp_path / "r.html").read_text()
+    for name in ("d_org", "d_back", "dR", "dt"):
+        meaning = METRIC_MEANINGS[name]
+        assert meaning in text, name
+        assert meaning.replace("||", "||").replace("&", "&amp;") in html.replace("&#x27;", "'"), name
