@@ -35,7 +35,7 @@ from typing import Callable
 import numpy as np
 
 from ..calibration.compact_points import BoardGeometry
-from ..calibration.errors import HandEyeError, OutputError
+from ..calibration.errors import HandEyeError, OutputError, UsageError
 from ..calibration.files import make_folder, write_failure, write_text_atomic
 
 __all__ = ["StereoCalibrationConfig", "StereoCalibrationRun", "find_pairs", "detect_pairs", "capture_live",
@@ -49,6 +49,10 @@ NOVELTY_FRACTION = 0.04
 
 class StereoInputError(HandEyeError):
     """The pairs cannot be read or matched (no images, unmatched names, different sizes)."""
+
+
+class StereoUsageError(UsageError, StereoInputError):
+    """The sources of pairs are given wrongly (a folder and patterns together, or none)."""
 
 
 @dataclass(frozen=True)
@@ -152,7 +156,7 @@ def find_pairs(images=None, left=None, right=None, swap: bool = False) -> list[t
         Nothing found, unmatched images, or both a folder and globs given.
     """
     if images is not None and (left or right):
-        raise StereoInputError("give either a folder (--images) or --left and --right patterns, not both")
+        raise StereoUsageError("give either a folder (--images) or --left and --right patterns, not both")
     if images is not None:
         folder = Path(images)
         if not folder.is_dir():
@@ -180,7 +184,7 @@ def find_pairs(images=None, left=None, right=None, swap: bool = False) -> list[t
             rights = {f"#{k:03d}": p for k, p in enumerate(rfiles)}
         where = f"{left} / {right}"
     else:
-        raise StereoInputError("give image pairs: --images FOLDER, or --left 'L*.png' --right 'R*.png', or --camera")
+        raise StereoUsageError("give image pairs: --images FOLDER, or --left 'L*.png' --right 'R*.png', or --camera")
     unmatched = sorted(set(lefts) ^ set(rights))
     if unmatched:
         k = unmatched[0]

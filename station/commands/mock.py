@@ -94,7 +94,13 @@ def run(args) -> int:
         return 2
     import sys
 
+    from ...calibration.errors import UsageError
     from ...mocks.controller.service import MockControllerOptions, run_mock_controller
+    from ...rapid.station import IDLE_TIMEOUT_RANGE
+
+    low, high = IDLE_TIMEOUT_RANGE
+    if args.idle_timeout is not None and not low <= args.idle_timeout <= high:
+        raise UsageError(f"--idle-timeout must be {low:g} to {high:g} s; got {args.idle_timeout:g}")
 
     station = None
     if args.config:

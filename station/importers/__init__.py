@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from ...calibration.errors import SessionError
+from ...calibration.errors import SessionError, SessionUsageError
 from ...calibration.session import Session
 from .easy_handeye import looks_like_easy_handeye, read_easy_handeye
 from .head import head_text as _head
@@ -197,11 +197,11 @@ def read_any(paths, format: str | None = None, **options) -> Session:
     unknown = [k for k in given if k not in COMMON_OPTIONS + importer.options]
     if unknown:
         flag = "--" + unknown[0].replace("_", "-")
-        raise SessionError(f"{flag} does not apply to {format} files (it applies to: "
+        raise SessionUsageError(f"{flag} does not apply to {format} files (it applies to: "
                            f"{', '.join(n for n, i in IMPORTERS.items() if unknown[0] in i.options) or 'none'})")
     if isinstance(paths, (list, tuple)) and not importer.several_paths:
         if len(paths) != 1:
-            raise SessionError(f"{format} reads one file; got {len(paths)}")
+            raise SessionUsageError(f"{format} reads one file; got {len(paths)}")
         paths = paths[0]
     if isinstance(paths, (list, tuple)) and len(paths) == 1 and format in ("visp", "log", "opencv"):
         paths = paths[0]
