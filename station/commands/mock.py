@@ -16,7 +16,9 @@ The mock EXECUTES the RAPID program: the modules `handeye rapid generate` writes
 the modules of --program DIR (e.g. a capture's SESSION/rapid), run by handeye's RAPID interpreter on
 a simulated IRB 1400: joints and flange pose from its kinematics, motion time from the axis speeds
 (x --time-scale). A module the interpreter cannot run is refused at start with its name and line;
-a program that stops on an error ends the mock with that error.
+a program that stops on an error ends the mock with that error. A program that ends by itself (EXIT,
+Stop) or has not opened its link 3 s after it started is reported in one line on stderr; a socket
+program that ends before it listens is refused at start.
 
 Protocols and default ports:
 {protocols}
