@@ -28,6 +28,7 @@ import os
 import re
 import tempfile
 import time
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -221,13 +222,34 @@ def _detect(image, board, what: str):
     return det.corners_px, ""
 
 
+#: Pairs searched before a board size found in none of their images is refused (a wrong ``--board``).
+EARLY_PAIRS = 3
+_OTHER_SIZE = re.compile(r"has (\d+)x(\d+) inner corners, not")
+
+
+def _no_board_message(board: BoardGeometry, views) -> str:
+    """The refusal when no image of the first pairs shows a board of ``board``'s size: the size the
+    detector saw instead, when it saw one."""
+    nx, ny = board.corners
+    seen = Counter(found.groups() for v in views for note in (v.left_note, v.right_note)
+                   for found in [_OTHER_SIZE.search(note or "")] if found)
+    if seen:
+        (a, b), count = seen.most_common(1)[0]
+        hint = f" (they show a board of {a}x{b} inner corners, in {count} images: give --board {a}x{b})"
+    else:
+        hint = " (inner corners, long side first: 9x6 for a board of 10x7 squares) and that the whole board is in view"
+    return f"no checkerboard of {nx}x{ny} inner corners found in the first {len(views)} pairs: check --board{hint}"
+
+
 def detect_pairs(pairs, board: BoardGeometry, update: Callable | None = None) -> tuple[list, tuple]:
     """Detect the board in every pair of files; returns ``(views, image_size)``.
 
     Raises
     ------
     StereoInputError
-        An image cannot be read, or the images differ in size.
+        An image cannot be read, the images differ in size, or none of the first :data:`EARLY_PAIRS`
+        pairs shows a board of ``board``'s size (a wrong ``--board``: refused before the other pairs
+        are searched, which takes seconds an image when the board is not found).
     """
     from ..drivers.camera.stereo_calibration import ViewCorners
     from ..drivers.camera.triangulate import decode_image, read_image_bytes
@@ -249,6 +271,8 @@ def detect_pairs(pairs, board: BoardGeometry, update: Callable | None = None) ->
         views.append(ViewCorners(name, left, right, lnote, rnote))
         if update:
             update(k + 1, len(pairs), f"pair {name}")
+        if k + 1 == min(EARLY_PAIRS, len(pairs)) and all(v.left is None and v.right is None for v in views):
+            raise StereoInputError(_no_board_message(board, views))
     return views, size
 
 
