@@ -297,9 +297,72 @@ def _ids(ids, n):
     return [int(v) for v in (range(n) if ids is None else ids)]
 
 
+def _groups(i, j, linked, n: int) -> list:
+    """The groups of postures joined by the pairs ``(i[k], j[k])`` where ``linked[k]``, each a sorted list of
+    positions (the connected components of those pairs with at least two members), by first member."""
+    parent = list(range(n))
+
+    def root(k):
+        while parent[k] != k:
+            parent[k] = parent[parent[k]]
+            k = parent[k]
+        return k
+
+    for k in np.flatnonzero(linked):
+        parent[root(int(j[k]))] = root(int(i[k]))
+    members = {}
+    for k in range(n):
+        members.setdefault(root(k), []).append(k)
+    return sorted((m for m in members.values() if len(m) > 1), key=lambda m: m[0])
+
+
+def _names(ids) -> str:
+    return ", ".join(str(v) for v in ids)
+
+
+def _group_figures(group, i, j, figures) -> dict:
+    """The largest of each figure over the pairs inside ``group`` (``figures``: name -> per-pair values)."""
+    inside = np.isin(i, group) & np.isin(j, group)
+    return {name: float(np.max(values[inside])) for name, values in figures.items()}
+
+
+def _duplicate_finding(ids, f: dict, board_same: bool) -> Finding:
+    """One finding for postures ``ids`` (positions' indices) that are the same robot pose."""
+    board = ("the board pose too" if board_same else
+             f"but the board poses differ by up to {f['board_mm']:.1f} mm, {f['board_deg']:.2f} deg (did the board or "
+             f"camera move?)")
+    if len(ids) == 2:
+        head = f"postures {ids[0]} and {ids[1]}: the same robot pose ({f['robot_mm']:.2f} mm, {f['robot_deg']:.3f} deg apart)"
+        tail = "a sample taken twice adds no motion; keep one"
+    else:
+        head = (f"postures {_names(ids[1:])} are the same robot pose as posture {ids[0]} (up to {f['robot_mm']:.2f} mm, "
+                f"{f['robot_deg']:.3f} deg apart)")
+        tail = f"a sample taken {len(ids)} times adds no motion; keep one"
+    return Finding("duplicate_posture", f"{head}, {board}: {tail}", tuple(ids), f)
+
+
+def _stale_finding(ids, f: dict, moved: dict) -> Finding:
+    """One finding for postures ``ids`` that show the same board pose although the robot moved."""
+    motion = f"{moved['robot_mm']:.1f} mm, {moved['robot_deg']:.2f} deg"
+    if len(ids) == 2:
+        message = (f"postures {ids[0]} and {ids[1]}: the same board pose ({f['board_mm']:.2f} mm, {f['board_deg']:.3f} "
+                   f"deg apart) although the robot moved {motion}: a stale camera frame? drop posture {ids[1]} or "
+                   f"re-measure it")
+    else:
+        message = (f"postures {_names(ids[1:])} show the same board pose as posture {ids[0]} (up to {f['board_mm']:.2f} "
+                   f"mm, {f['board_deg']:.3f} deg apart) although the robot moved (at least {motion}): stale camera "
+                   f"frames? drop postures {_names(ids[1:])} or re-measure them")
+    return Finding("stale_target", message, tuple(ids), {**f, "robot_mm": moved["robot_mm"],
+                                                           "robot_deg": moved["robot_deg"]})
+
+
 def find_duplicates(tool0_in_base, target_in_camera, ids=None,
                     limits: DiagnosticLimits = DiagnosticLimits()) -> list:
-    """Robot poses taken twice, and board poses repeated while the robot moved (stale frames)."""
+    """Robot poses taken more than once, and board poses repeated while the robot moved (stale frames).
+
+    One finding per group of equal poses (the postures joined by equal pairs), naming the group's
+    first posture and the others: ``postures 3, 7, 12 are the same robot pose as posture 2``.
+    """
     a, b = _check_poses(tool0_in_base, target_in_camera)
     ids = _ids(ids, len(a))
     findings = []
@@ -307,30 +370,19 @@ def find_duplicates(tool0_in_base, target_in_camera, ids=None,
         return findings
     pairs = _pairs(len(a))
     i, j = pairs[:, 0], pairs[:, 1]
-    dt_a = np.linalg.norm(a[i, :3, 3] - a[j, :3, 3], axis=1)
-    dr_a = rotation_error_deg(a[i], a[j])
-    dt_b = np.linalg.norm(b[i, :3, 3] - b[j, :3, 3], axis=1)
-    dr_b = rotation_error_deg(b[i], b[j])
-    same_a = (dt_a < limits.duplicate_mm) & (dr_a < limits.duplicate_deg)
-    same_b = (dt_b < limits.duplicate_mm) & (dr_b < limits.duplicate_deg)
-    for k in np.flatnonzero(same_a):
-        p, q = ids[i[k]], ids[j[k]]
-        board = ("the board pose too" if same_b[k] else
-                 f"but the board poses differ by {dt_b[k]:.1f} mm, {dr_b[k]:.2f} deg (did the board or camera move?)")
-        findings.append(Finding(
-            "duplicate_posture",
-            f"postures {p} and {q}: the same robot pose ({dt_a[k]:.2f} mm, {dr_a[k]:.3f} deg apart), {board}: "
-            f"a sample taken twice adds no motion; keep one",
-            (p, q), {"robot_mm": float(dt_a[k]), "robot_deg": float(dr_a[k]),
-                     "board_mm": float(dt_b[k]), "board_deg": float(dr_b[k])}))
-    for k in np.flatnonzero(same_b & ~same_a):
-        p, q = ids[i[k]], ids[j[k]]
-        findings.append(Finding(
-            "stale_target",
-            f"postures {p} and {q}: the same board pose ({dt_b[k]:.2f} mm, {dr_b[k]:.3f} deg apart) although the robot "
-            f"moved {dt_a[k]:.1f} mm, {dr_a[k]:.2f} deg: a stale camera frame? drop posture {q} or re-measure it",
-            (p, q), {"robot_mm": float(dt_a[k]), "robot_deg": float(dr_a[k]),
-                     "board_mm": float(dt_b[k]), "board_deg": float(dr_b[k])}))
+    figures = {"robot_mm": np.linalg.norm(a[i, :3, 3] - a[j, :3, 3], axis=1), "robot_deg": rotation_error_deg(a[i], a[j]),
+               "board_mm": np.linalg.norm(b[i, :3, 3] - b[j, :3, 3], axis=1), "board_deg": rotation_error_deg(b[i], b[j])}
+    same_a = (figures["robot_mm"] < limits.duplicate_mm) & (figures["robot_deg"] < limits.duplicate_deg)
+    same_b = (figures["board_mm"] < limits.duplicate_mm) & (figures["board_deg"] < limits.duplicate_deg)
+    for group in _groups(i, j, same_a, len(a)):
+        inside = np.isin(i, group) & np.isin(j, group)
+        findings.append(_duplicate_finding([ids[k] for k in group], _group_figures(group, i, j, figures),
+                                           bool(np.all(same_b[inside]))))
+    stale = same_b & ~same_a
+    for group in _groups(i, j, stale, len(a)):
+        inside = np.isin(i, group) & np.isin(j, group) & stale
+        moved = {name: float(np.min(figures[name][inside])) for name in ("robot_mm", "robot_deg")}
+        findings.append(_stale_finding([ids[k] for k in group], _group_figures(group, i, j, figures), moved))
     return findings
 
 

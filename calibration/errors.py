@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import reprlib
 
-__all__ = ["HandEyeError", "SessionError", "CalibrationError", "ConfigError", "OutputError", "brief", "with_backend"]
+__all__ = ["HandEyeError", "UsageError", "SessionError", "SessionUsageError", "CalibrationError", "ConfigError", "OutputError",
+           "brief", "with_backend"]
 
 
 class _Brief(reprlib.Repr):
@@ -57,8 +58,21 @@ class ConfigError(HandEyeError):
         super().__init__(with_backend(message, backend))
 
 
+class UsageError(HandEyeError):
+    """The command line asks for what cannot be done: a flag missing, flags that exclude each other, a
+    flag value out of range, a flag that does not apply. ``handeye`` exits 2 on it, as on argparse's
+    own usage errors (every other error exits 1). A library error that is a usage error when a flag
+    carries the value derives from both (:class:`SessionUsageError`), so callers catching the
+    library's kind still catch it."""
+
+
 class SessionError(HandEyeError):
     """A session on disk is missing, malformed or holds values that cannot be used."""
+
+
+class SessionUsageError(UsageError, SessionError):
+    """An option of a session reader or importer given wrongly (``--square-mm`` without ``--board``, a
+    flag that does not apply to the format)."""
 
 
 class CalibrationError(HandEyeError):

@@ -19,6 +19,7 @@ room (``SessionError``, ``ConfigError``, ...) so the message reaches the operato
 
 from __future__ import annotations
 
+import codecs
 import errno
 import os
 import stat
@@ -31,6 +32,8 @@ from .yaml_text import parse_yaml
 
 __all__ = [
     "MAX_FILE_BYTES",
+    "HEAD_BYTES",
+    "binary_offset",
     "check_regular_file",
     "read_file_bytes",
     "read_text_file",
@@ -43,6 +46,9 @@ __all__ = [
 
 #: Largest file a reader accepts unless told otherwise (sessions, configs, imports are kilobytes).
 MAX_FILE_BYTES = 64 * 1024 * 1024
+#: How much of a text file is looked at before it is read whole: a binary file, or one in another
+#: encoding, is refused from these first bytes (a 50 MB image is not read to find its first byte wrong).
+HEAD_BYTES = 64 * 1024
 _UTF8_BOM = b"\xef\xbb\xbf"
 _UTF16_BOMS = (b"\xff\xfe", b"\xfe\xff")
 
@@ -161,9 +167,37 @@ def read_file_bytes(path, what: str = "file", error=SessionError, *, missing: st
     return data
 
 
+def binary_offset(data: bytes) -> int | None:
+    """The offset of the first NUL byte in the first 8 KB of ``data`` (text never holds one), else None."""
+    offset = data.find(b"\0", 0, 8192)
+    return None if offset < 0 else offset
+
+
+def _text_problem(data: bytes, complete: bool) -> str | None:
+    """Why ``data`` is not UTF-8 text, in words for a message; None when it is.
+
+    ``complete`` False: ``data`` is only the file's head, so a character cut at its end is no fault.
+    """
+    start = len(_UTF8_BOM) if data.startswith(_UTF8_BOM) else 0
+    try:
+        codecs.getincrementaldecoder("utf-8")().decode(data[start:], final=complete)
+    except UnicodeDecodeError as exc:
+        offset = start + exc.start
+        where = f"byte 0x{data[offset]:02x} at offset {offset}"
+        if data.startswith(_UTF16_BOMS):
+            return "is UTF-16 text: save it as UTF-8"
+        if binary_offset(data) is not None:
+            return f"is a binary file, not text ({where}): give the text file itself"
+        return f"is not UTF-8 text ({where}): save it as UTF-8"
+    return None
+
+
 def read_text_file(path, what: str = "file", error=SessionError, *, missing: str | None = None,
                    max_bytes: int | None = MAX_FILE_BYTES) -> str:
     """The UTF-8 text of a regular file (a leading byte-order mark dropped), or a one-line ``error``.
+
+    The first :data:`HEAD_BYTES` are checked before the file is read whole, so a large binary file is
+    refused from its head.
 
     Parameters
     ----------
@@ -183,20 +217,16 @@ def read_text_file(path, what: str = "file", error=SessionError, *, missing: str
         Everything :func:`read_file_bytes` refuses, and text that is not UTF-8 (the message names the
         first bad byte and its offset, and tells UTF-16 text and binary files apart).
     """
-    data = read_file_bytes(path, what, error, missing=missing, max_bytes=max_bytes)
+    data = read_file_bytes(path, what, error, missing=missing, head=HEAD_BYTES)
+    whole = len(data) < HEAD_BYTES and (max_bytes is None or len(data) <= max_bytes)
+    problem = _text_problem(data, complete=whole)
+    if problem is None and not whole:
+        data = read_file_bytes(path, what, error, missing=missing, max_bytes=max_bytes)
+        problem = _text_problem(data, complete=True)
+    if problem is not None:
+        raise error(f"{_describe(what, path)} {problem}")
     start = len(_UTF8_BOM) if data.startswith(_UTF8_BOM) else 0
-    try:
-        return data[start:].decode("utf-8")
-    except UnicodeDecodeError as exc:
-        offset = start + exc.start
-        where = f"byte 0x{data[offset]:02x} at offset {offset}"
-        if data.startswith(_UTF16_BOMS):
-            message = "is UTF-16 text: save it as UTF-8"
-        elif b"\0" in data[:8192]:
-            message = f"is a binary file, not text ({where}): give the text file itself"
-        else:
-            message = f"is not UTF-8 text ({where}): save it as UTF-8"
-        raise error(f"{_describe(what, path)} {message}") from None
+    return data[start:].decode("utf-8")
 
 
 # --------------------------------------------------------------------------- writing

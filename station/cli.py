@@ -12,7 +12,7 @@ import importlib
 import sys
 import warnings
 
-from ..calibration.errors import HandEyeError
+from ..calibration.errors import HandEyeError, UsageError
 
 #: Sub-commands in the order ``handeye --help`` lists them: a module name, or ``(command, module)``
 #: when the command's name cannot be a module's (``import`` is a Python keyword).
@@ -34,7 +34,10 @@ Every command explains itself: handeye COMMAND --help
 
 
 class OneLineParser(argparse.ArgumentParser):
-    """An argument parser whose usage errors are one line (``handeye CMD: error: ...``), exit code 2."""
+    """An argument parser whose usage errors are one line (``handeye CMD: error: ...``), exit code 2.
+
+    Usage errors found by the commands' own checks (flags that exclude each other, values out of range)
+    are :class:`~handeye.calibration.errors.UsageError`: ``main`` exits 2 on them too."""
 
     def error(self, message):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
@@ -65,6 +68,9 @@ def main(argv=None) -> int:
             # reported as one line below
             warnings.simplefilter("ignore", RuntimeWarning)
             return int(args._module.run(args) or 0)
+    except UsageError as exc:  # a flag combination or value our own code refuses: a usage error, as argparse's
+        print(f"handeye {args.command}: error: {exc}", file=sys.stderr)
+        return 2
     except HandEyeError as exc:
         print(f"handeye {args.command}: error: {exc}", file=sys.stderr)
         return 1

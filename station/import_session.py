@@ -9,7 +9,7 @@ import numpy as np
 
 from ..calibration.compact_points import BoardGeometry
 from ..calibration.diagnostics import diagnose
-from ..calibration.errors import SessionError
+from ..calibration.errors import SessionError, SessionUsageError
 from ..calibration.session import Session, create_session, write_posture
 from .importers import read_any
 from .importers.inference import format_table
@@ -62,10 +62,10 @@ _RESTATED = ("setup", "rotation_convention", "model_mismatch")
 def _board(options: ImportOptions) -> BoardGeometry | None:
     if options.board is None:
         if options.square_mm is not None:
-            raise SessionError("--square-mm needs --board (the inner-corner counts, e.g. --board 9x6)")
+            raise SessionUsageError("--square-mm needs --board (the inner-corner counts, e.g. --board 9x6)")
         return None
     if options.square_mm is not None and not options.square_mm > 0:
-        raise SessionError(f"--square-mm must be positive; got {options.square_mm}")
+        raise SessionUsageError(f"--square-mm must be positive; got {options.square_mm}")
     return BoardGeometry(tuple(int(c) for c in options.board), options.square_mm)
 
 

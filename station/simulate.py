@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..calibration.compact_points import STATION_BOARD
-from ..calibration.errors import HandEyeError
+from ..calibration.errors import HandEyeError, UsageError
 from .origin import SIMULATED
 
 #: Most postures a synthetic session may have (sampling takes about 0.05 s a posture; the triplet
@@ -37,13 +37,13 @@ def simulate_session(options: SimulateOptions, progress=lambda message: None) ->
     from ..calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session, truth_dict
 
     if not 3 <= options.postures <= MAX_POSTURES:
-        raise HandEyeError(f"postures must be between 3 and {MAX_POSTURES}; got {options.postures}")
+        raise UsageError(f"postures must be between 3 and {MAX_POSTURES}; got {options.postures}")
     robot = load_robot(SceneConfig.robot)
     offset = (0.0,) * robot.dof if options.joint_offset_deg is None else tuple(options.joint_offset_deg)
     if len(offset) != robot.dof:
-        raise HandEyeError(f"--joint-offset needs {robot.dof} values, one per axis of the {robot.name}; got {len(offset)}")
+        raise UsageError(f"--joint-offset needs {robot.dof} values, one per axis of the {robot.name}; got {len(offset)}")
     if options.square_mm <= 0:
-        raise HandEyeError(f"--square-mm must be positive; got {options.square_mm}")
+        raise UsageError(f"--square-mm must be positive; got {options.square_mm}")
     path = Path(options.output)
     if (path / "session.yaml").exists() and not options.overwrite:
         raise HandEyeError(f"{path} already holds a session; choose another folder or pass --overwrite")

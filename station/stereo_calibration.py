@@ -28,6 +28,7 @@ import os
 import re
 import tempfile
 import time
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -35,7 +36,7 @@ from typing import Callable
 import numpy as np
 
 from ..calibration.compact_points import BoardGeometry
-from ..calibration.errors import HandEyeError, OutputError
+from ..calibration.errors import HandEyeError, OutputError, UsageError
 from ..calibration.files import make_folder, write_failure, write_text_atomic
 
 __all__ = ["StereoCalibrationConfig", "StereoCalibrationRun", "find_pairs", "detect_pairs", "capture_live",
@@ -49,6 +50,10 @@ NOVELTY_FRACTION = 0.04
 
 class StereoInputError(HandEyeError):
     """The pairs cannot be read or matched (no images, unmatched names, different sizes)."""
+
+
+class StereoUsageError(UsageError, StereoInputError):
+    """The sources of pairs are given wrongly (a folder and patterns together, or none)."""
 
 
 @dataclass(frozen=True)
@@ -152,7 +157,7 @@ def find_pairs(images=None, left=None, right=None, swap: bool = False) -> list[t
         Nothing found, unmatched images, or both a folder and globs given.
     """
     if images is not None and (left or right):
-        raise StereoInputError("give either a folder (--images) or --left and --right patterns, not both")
+        raise StereoUsageError("give either a folder (--images) or --left and --right patterns, not both")
     if images is not None:
         folder = Path(images)
         if not folder.is_dir():
@@ -180,7 +185,7 @@ def find_pairs(images=None, left=None, right=None, swap: bool = False) -> list[t
             rights = {f"#{k:03d}": p for k, p in enumerate(rfiles)}
         where = f"{left} / {right}"
     else:
-        raise StereoInputError("give image pairs: --images FOLDER, or --left 'L*.png' --right 'R*.png', or --camera")
+        raise StereoUsageError("give image pairs: --images FOLDER, or --left 'L*.png' --right 'R*.png', or --camera")
     unmatched = sorted(set(lefts) ^ set(rights))
     if unmatched:
         k = unmatched[0]
@@ -217,13 +222,34 @@ def _detect(image, board, what: str):
     return det.corners_px, ""
 
 
+#: Pairs searched before a board size found in none of their images is refused (a wrong ``--board``).
+EARLY_PAIRS = 3
+_OTHER_SIZE = re.compile(r"has (\d+)x(\d+) inner corners, not")
+
+
+def _no_board_message(board: BoardGeometry, views) -> str:
+    """The refusal when no image of the first pairs shows a board of ``board``'s size: the size the
+    detector saw instead, when it saw one."""
+    nx, ny = board.corners
+    seen = Counter(found.groups() for v in views for note in (v.left_note, v.right_note)
+                   for found in [_OTHER_SIZE.search(note or "")] if found)
+    if seen:
+        (a, b), count = seen.most_common(1)[0]
+        hint = f" (they show a board of {a}x{b} inner corners, in {count} images: give --board {a}x{b})"
+    else:
+        hint = " (inner corners, long side first: 9x6 for a board of 10x7 squares) and that the whole board is in view"
+    return f"no checkerboard of {nx}x{ny} inner corners found in the first {len(views)} pairs: check --board{hint}"
+
+
 def detect_pairs(pairs, board: BoardGeometry, update: Callable | None = None) -> tuple[list, tuple]:
     """Detect the board in every pair of files; returns ``(views, image_size)``.
 
     Raises
     ------
     StereoInputError
-        An image cannot be read, or the images differ in size.
+        An image cannot be read, the images differ in size, or none of the first :data:`EARLY_PAIRS`
+        pairs shows a board of ``board``'s size (a wrong ``--board``: refused before the other pairs
+        are searched, which takes seconds an image when the board is not found).
     """
     from ..drivers.camera.stereo_calibration import ViewCorners
     from ..drivers.camera.triangulate import decode_image, read_image_bytes
@@ -245,6 +271,8 @@ def detect_pairs(pairs, board: BoardGeometry, update: Callable | None = None) ->
         views.append(ViewCorners(name, left, right, lnote, rnote))
         if update:
             update(k + 1, len(pairs), f"pair {name}")
+        if k + 1 == min(EARLY_PAIRS, len(pairs)) and all(v.left is None and v.right is None for v in views):
+            raise StereoInputError(_no_board_message(board, views))
     return views, size
 
 

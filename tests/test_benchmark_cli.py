@@ -20,7 +20,7 @@ def test_benchmark_smoke(tmp_path, capsys):
 
 
 def test_benchmark_rejects_bad_values(tmp_path, capsys):
-    assert main(["benchmark", "-o", str(tmp_path / "b"), "--postures", "2.5", "--sweep", "postures"]) == 1
+    assert main(["benchmark", "-o", str(tmp_path / "b"), "--postures", "2.5", "--sweep", "postures"]) == 2  # a usage error
     assert "whole numbers" in capsys.readouterr().err
 
 

@@ -65,7 +65,7 @@ def test_simulate_joint_offset_takes_one_value_per_robot_axis(tmp_path, capsys):
     truth = yaml.safe_load((path / "truth.yaml").read_text())
     assert truth["noise"]["joint_offset_deg"] == [0.1, 0.0, 0.0, 0.0, 0.0, 0.0]
     capsys.readouterr()
-    assert main(["simulate", "-o", str(tmp_path / "bad"), "--postures", "4", "--joint-offset", "1,2,3"]) == 1
+    assert main(["simulate", "-o", str(tmp_path / "bad"), "--postures", "4", "--joint-offset", "1,2,3"]) == 2  # usage
     err = capsys.readouterr().err.strip()
     assert err == "handeye simulate: error: --joint-offset needs 6 values, one per axis of the IRB1400; got 3"
     assert not (tmp_path / "bad").exists()

@@ -696,9 +696,9 @@ def test_cli_errors_are_one_line(tmp_path, capsys, eth):
     assert code == 1 and stderr.count("\n") == 1 and "no such file" in stderr
     src = write_moveit(tmp_path / "ok.json", eth.tool0, eth.target)
     code, _, stderr = run_cli(capsys, "import", src, "-o", out, "--max-postures", "10")
-    assert code == 1 and "--max-postures does not apply to moveit files" in stderr
+    assert code == 2 and "--max-postures does not apply to moveit files" in stderr  # usage errors exit 2
     code, _, stderr = run_cli(capsys, "import", src, "-o", out, "--square-mm", "30")
-    assert code == 1 and "--square-mm needs --board" in stderr
+    assert code == 2 and "--square-mm needs --board" in stderr
 
 
 def test_cli_warnings_for_odd_data(tmp_path, capsys, eih):

@@ -25,7 +25,7 @@ def _run(capsys, *args):
 
 
 def _one_line_error(code, err, message):
-    assert code == 1
+    assert code == (2 if message.startswith("give ") else 1)  # "give one source ...": usage errors exit 2
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("handeye stereo: error: "), err
     assert message in lines[0], lines[0]

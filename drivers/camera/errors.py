@@ -6,13 +6,18 @@ Each carries a one-line message that names the offending value and what to do ne
 
 from __future__ import annotations
 
+from ...calibration.errors import UsageError
 from ..errors import CameraError
 
-__all__ = ["CameraError", "FrameError", "BoardNotFound", "StereoModelError", "StereoMismatch", "SquareSizeMismatch"]
+__all__ = ["CameraError", "FrameError", "FrameUsageError", "BoardNotFound", "StereoModelError", "StereoMismatch", "SquareSizeMismatch"]
 
 
 class FrameError(CameraError):
     """A frame or image cannot be used: truncated raw buffer, wrong size, unreadable file."""
+
+
+class FrameUsageError(UsageError, FrameError):
+    """The images asked for are given wrongly on the command line (``--left`` without ``--right``)."""
 
 
 class BoardNotFound(CameraError):

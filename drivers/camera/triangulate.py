@@ -24,7 +24,7 @@ from ...calibration.files import read_file_bytes
 from ...calibration.plausibility import SQUARE_TOLERANCE
 from .checkerboard import as_board, observe_board
 from .decode import decode_xb3_frame, frame_bytes
-from .errors import FrameError, SquareSizeMismatch
+from .errors import FrameError, FrameUsageError, SquareSizeMismatch
 from .stereo import StereoModel, load_stereo_model, nominal_xb3_model
 
 __all__ = [
@@ -189,9 +189,9 @@ def triangulate_files(*, left=None, right=None, xb3_raw=None, stereo=None, board
     FrameError, StereoModelError, BoardNotFound, StereoMismatch, SquareSizeMismatch
     """
     if (xb3_raw is None) == (left is None and right is None):
-        raise FrameError("give either --left and --right images or one --xb3-raw frame")
+        raise FrameUsageError("give either --left and --right images or one --xb3-raw frame")
     if xb3_raw is None and (left is None or right is None):
-        raise FrameError("give both --left and --right (or one --xb3-raw frame)")
+        raise FrameUsageError("give both --left and --right (or one --xb3-raw frame)")
     model = load_stereo_model(stereo) if stereo else nominal_xb3_model()
     if xb3_raw is not None:
         data = read_image_bytes(xb3_raw)

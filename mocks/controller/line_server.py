@@ -13,6 +13,8 @@ program never knows.
 
 from __future__ import annotations
 
+import time
+
 from ...rapid.errors import RapidError
 from ...rapid.interpreter import Bindings
 from .network import MockSockets
@@ -51,9 +53,24 @@ class SocketControllerServer(RapidControllerServer):
         self.net.listening_event.clear()
 
     def _wait_ready(self) -> None:
-        if not self.net.listening_event.wait(_LISTEN_TIMEOUT_S):
-            raise RapidError(f"mock socket controller: the RAPID program did not listen within {_LISTEN_TIMEOUT_S:g} s"
-                             + (f" ({self.runner.error})" if self.runner.error else ""))
+        """Return once the program listens; else say at once how it ended (or that main ran to its end
+        without listening), or after ``_LISTEN_TIMEOUT_S`` that it does not listen."""
+        end = time.monotonic() + _LISTEN_TIMEOUT_S
+        while not self.net.listening_event.wait(0.05):
+            if self.runner.end_reason:
+                why = f"{self.runner.end_reason} before it listened"
+            elif self.runner.main_returns:
+                why = "ran main to its end without listening (SocketCreate, SocketBind, SocketListen)"
+            elif time.monotonic() > end:
+                why = f"did not listen within {_LISTEN_TIMEOUT_S:g} s"
+            else:
+                continue
+            raise RapidError(f"mock socket controller: the RAPID program {why}: "
+                             f"{self.fix_hint(error=bool(self.runner.error))}")
+
+    @property
+    def link_open(self) -> bool | None:
+        return self.net is not None and self.net.listening_event.is_set()
 
     @property
     def allowed_client(self) -> str | None:
@@ -96,6 +113,10 @@ class SerialControllerServer(RapidControllerServer):
     def _close_endpoint(self) -> None:
         if self.line is not None:
             self.line.close_all()
+
+    @property
+    def link_open(self) -> bool | None:
+        return self.line is not None and self.line.channel is not None and self.line.channel.open
 
     @property
     def port(self) -> int:

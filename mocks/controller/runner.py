@@ -11,6 +11,7 @@ sockets and channels close), as loading modules into a stopped task does.
 from __future__ import annotations
 
 import logging
+import time
 
 import numpy as np
 
@@ -99,7 +100,11 @@ class RapidRunner:
         """Run ``main`` until it first waits for the PC (or stops: then raise with the reason)."""
         self.task = Task(self.program, self.bindings)
         self.task.start()
-        if not self.task.wait_idle(timeout):
+        end = time.monotonic() + timeout
+        while not self.task.wait_idle(0.05):
+            if self.task.main_returns or not self.task.running or time.monotonic() > end:
+                break  # main ran to its end without waiting, or the program ended: the server tells how
+        if not self.task.wait_idle(0) and self.task.running and not self.task.main_returns:
             log.warning("%s: the RAPID program did not wait for the PC within %g s", self.name, timeout)
         if self.task.state == "error":
             raise RapidError(f"{self.name}: the RAPID program ({self.loaded.origin}) stopped at start: "
@@ -127,6 +132,24 @@ class RapidRunner:
     def error(self) -> str | None:
         """Why the program stopped on an error (None while it runs or after a normal stop)."""
         return None if self.task is None else self.task.error
+
+    @property
+    def end_reason(self) -> str | None:
+        """How the program ended by itself, in words (``stopped on an error: HeMain.mod:5: ERR_DIVZERO
+        ...``, ``ended on EXIT at HeMain.mod:4``); None while it runs or when it was asked to stop."""
+        task = self.task
+        if task is None or task.running:
+            return None
+        if task.error:
+            return f"stopped on an error: {task.error}"
+        if task.ended:
+            return f"ended on {task.ended}"
+        return None
+
+    @property
+    def main_returns(self) -> int:
+        """How many times ``main`` ran to its end (continuous mode starts it again)."""
+        return 0 if self.task is None else self.task.main_returns
 
     @property
     def pendant(self) -> list:

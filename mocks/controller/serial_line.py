@@ -54,6 +54,7 @@ class SerialLine(SerialBinding):
         self.owner: socket.socket | None = None
         self.rx = bytearray()
         self.heard = False  # bytes arrived since the last ClearIOBuff
+        self.channel: _Channel | None = None  # the program's channel, once it opened one
         self.requests = self.connections = self.takeovers = self.idle_resets = 0
 
     def close_all(self) -> None:
@@ -113,6 +114,7 @@ class SerialLine(SerialBinding):
     def open(self, task, name: str, binary: bool):
         channel = _Channel(self, name)
         task.resources.append(channel)
+        self.channel = channel
         return channel
 
     def read_line(self, task, handle, timeout) -> bytes:

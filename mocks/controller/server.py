@@ -144,6 +144,22 @@ class RapidControllerServer:
         return None if self.runner is None else self.runner.error
 
     @property
+    def link_open(self) -> bool | None:
+        """Whether the RAPID program opened its end of the link (the socket program listens, the serial
+        program opened its channel); None where the mock cannot tell (Modbus signals, RWS)."""
+        return None
+
+    def fix_hint(self, error: bool = False) -> str:
+        """What to do when the program does not serve the link (``error``: it stopped on an error), for the
+        messages."""
+        origin = str(self.source.origin)
+        where = "the generated modules" if origin.startswith("generated") else f"the modules in {origin}"
+        if error:
+            return f"fix that line of {where} (or leave out --program) and start the mock again"
+        return (f"its main must open the link and serve the PC, as the modules of `handeye rapid generate` do: fix "
+                f"{where} (or leave out --program) and start the mock again")
+
+    @property
     def has_write_key(self) -> bool:
         """True when the mock was given a write key (tool writes possible after KEY / with tool_key)."""
         return self._write_key is not None

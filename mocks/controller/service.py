@@ -3,7 +3,9 @@
 The mock runs RAPID: the modules generated for the chosen protocol (and the station's postures,
 timeouts and write key), or the modules of ``--program DIR``. A module the interpreter cannot run is
 refused at start, naming the module and line; a program that stops on an error later ends the mock
-with that error (exit status 1).
+with that error (exit status 1). A program that ends by itself (EXIT, Stop) or has not opened its link
+:data:`LINK_NOTICE_S` seconds after the start is reported in one line on stderr, with what to do; the
+mock keeps serving (a PC may load another program).
 """
 
 from __future__ import annotations
@@ -17,7 +19,10 @@ from ...rapid.station import IDLE_TIMEOUT_RANGE, RapidStation, default_station, 
 from ..backends import mock_protocols, mock_server
 from . import start_mock_controller
 
-__all__ = ["MockControllerOptions", "run_mock_controller", "is_loopback"]
+__all__ = ["MockControllerOptions", "run_mock_controller", "is_loopback", "LINK_NOTICE_S"]
+
+#: Seconds after the start when a program that has not opened its link (serial channel) is reported.
+LINK_NOTICE_S = 3.0
 
 
 @dataclass(frozen=True)
@@ -154,7 +159,7 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
             cell = _start_cell(server, options)
         announce(_banner(server, options, len(server.robot.postures), idle)
                  + (f"\n{cell.banner()}" if cell is not None else ""))
-        failure = _serve(server, options.duration_s)
+        failure = _serve(server, options.duration_s, warn)
     except KeyboardInterrupt:
         failure = None
     finally:
@@ -162,20 +167,58 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
             cell.stop()
         server.stop()
     if failure:
-        warn(f"the mock controller's RAPID program stopped: {failure}")
+        warn(f"the mock controller's RAPID program {failure}; {server.fix_hint(error=True)}")
         return 1
     announce("mock controller stopped")
     return 0
 
 
-def _serve(server, duration_s: float | None) -> str | None:
-    """Serve until Ctrl-C or ``duration_s``; the RAPID program's error if it stopped on one."""
+def _serve(server, duration_s: float | None, warn=_warn) -> str | None:
+    """Serve until Ctrl-C or ``duration_s``; ``stopped on an error: ...`` if the RAPID program stopped on one.
+
+    ``warn`` gets one line when the program ends by itself (EXIT, Stop) and when it has not opened its
+    link :data:`LINK_NOTICE_S` seconds after it started (each once per program run).
+    """
     end = None if duration_s is None else time.monotonic() + duration_s
-    while end is None or time.monotonic() < end:
-        if server.program_error:
-            return server.program_error
+    watch = _ProgramWatch(server, warn)
+    while True:
+        failure = watch.look()
+        if failure or (end is not None and time.monotonic() >= end):
+            return failure
         time.sleep(0.1 if end is None else max(0.0, min(0.1, end - time.monotonic())))
-    return server.program_error
+
+
+class _ProgramWatch:
+    """Looks at the mock's running RAPID program and says, once per run, what the operator must know."""
+
+    def __init__(self, server, warn):
+        self.server, self.warn = server, warn
+        self.task, self.since, self.said = None, 0.0, set()
+
+    def look(self) -> str | None:
+        """The program's error (``stopped on an error: ...``), or None after saying what is new."""
+        runner = self.server.program
+        task = runner.task if runner is not None else None
+        if task is None:
+            return None
+        if self.server.program_error:
+            return runner.end_reason
+        if task is not self.task:  # a new run (a PC loaded another program)
+            self.task, self.since, self.said = task, time.monotonic(), set()
+        if runner.end_reason:
+            self._say("end", f"the mock controller's RAPID program {runner.end_reason}: the PC cannot reach the mock "
+                             f"any more; {self.server.fix_hint()}")
+        elif self.server.link_open is False and time.monotonic() - self.since >= LINK_NOTICE_S:
+            looped = f" (its main ran to its end {runner.main_returns} times)" if runner.main_returns else ""
+            self._say("link", f"the mock controller's RAPID program has not opened its {self.server.kind} link "
+                              f"{LINK_NOTICE_S:g} s after it started{looped}: the PC cannot connect; "
+                              f"{self.server.fix_hint()}")
+        return None
+
+    def _say(self, what: str, line: str) -> None:
+        if what not in self.said:
+            self.said.add(what)
+            self.warn(line)
 
 
 def _rehearsal_arm(station: RapidStation, options: MockControllerOptions):

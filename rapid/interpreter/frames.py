@@ -58,7 +58,7 @@ class TryNextSignal(BaseException):
 
 
 class ExitSignal(BaseException):
-    """EXIT: the program ends."""
+    """EXIT: the program ends (``args[0]``: where, ``Module.mod:12``, when known)."""
 
 
 class StopSignal(BaseException):

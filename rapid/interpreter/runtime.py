@@ -60,6 +60,11 @@ class Task:
         (``EXIT``) or ``error``.
     error : str or None
         Why the program stopped on an error (``HeSocket.mod:123: ERR_SOCK_CLOSED ...``).
+    ended : str or None
+        How the program ended by itself other than on an error (``EXIT at HeMain.mod:4``, ``a Stop
+        instruction``); None while it runs, after an error, or when it was asked to stop.
+    main_returns : int
+        How many times ``main`` ran to its end (continuous run mode starts it again).
     pendant : collections.deque
         The last lines ``TPWrite`` wrote.
     """
@@ -69,7 +74,8 @@ class Task:
         self.errno = 0
         self.attention = False
         self.next_due = math.inf
-        self.state, self.error = "ready", None
+        self.state, self.error, self.ended = "ready", None, None
+        self.main_returns = 0
         self.pendant: deque = deque(maxlen=200)
         self.resources: list = []  # what bindings opened for this task (closed when it ends)
         self._timers: dict[int, _Timer] = {}
@@ -102,14 +108,16 @@ class Task:
         try:
             while True:  # continuous run mode: main starts again when it returns
                 main.run(Frame(self, main, main.size))
+                self.main_returns += 1
                 self.service()
         except TaskStopped:
             self.state = "stopped"
         except StopSignal:
-            self.state = "stopped"
+            self.state, self.ended = "stopped", "a Stop instruction"
             log.warning("RAPID task %s: stopped by the Stop instruction", self.name)
-        except ExitSignal:
+        except ExitSignal as signal:
             self.state = "exited"
+            self.ended = f"EXIT at {signal.args[0]}" if signal.args else "EXIT"
         except (RapidRuntimeError, RapidFatalError) as err:
             self.state, self.error = "error", str(err)
             log.error("RAPID task %s stopped: %s", self.name, err)

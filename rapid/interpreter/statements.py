@@ -158,8 +158,10 @@ class _StatementCompiler(Compiler):
         return trynext
 
     def _exit_stmt(self, node):
+        where = f"{self.source}:{node.line}"
+
         def leave(f):
-            raise ExitSignal()
+            raise ExitSignal(where)
         return leave
 
     def _connect_stmt(self, node):

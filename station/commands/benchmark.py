@@ -50,7 +50,7 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from ...calibration.errors import HandEyeError
+    from ...calibration.errors import UsageError
     from ..benchmark import BenchmarkOptions, benchmark
     from ..progress import progress_bar
 
@@ -69,12 +69,12 @@ def run(args) -> int:
         changes["sigma_rob_values"] = args.sigma_rob
     if args.postures:
         if any(v < 3 or v != int(v) for v in args.postures):
-            raise HandEyeError("--postures values must be whole numbers >= 3")
+            raise UsageError("--postures values must be whole numbers >= 3")
         changes["postures_values"] = tuple(int(v) for v in args.postures)
     if args.methods:
         changes["methods"] = tuple(m.strip() for m in args.methods.split(",") if m.strip())
     if args.trials < 1 or args.pose_trials < 1:
-        raise HandEyeError("--trials and --pose-trials must be at least 1")
+        raise UsageError("--trials and --pose-trials must be at least 1")
     options = BenchmarkOptions(**{**options.__dict__, **changes})
     with progress_bar("benchmark") as update:
         summary = benchmark(options, update)

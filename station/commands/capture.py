@@ -101,20 +101,20 @@ def run(args) -> int:
     import threading
     from dataclasses import replace
 
-    from ...calibration.errors import HandEyeError
+    from ...calibration.errors import UsageError
     from ..capture import capture
     from ..config import default_config, load_config
     from ..progress import progress_bar
     from ..runtime import MOCK_BANNER, open_station, rehearsal_banner
 
     if not args.config and not args.mock:
-        raise HandEyeError("give --config STATION.yaml for a real station or --mock for the embedded one")
+        raise UsageError("give --config STATION.yaml for a real station or --mock for the embedded one")
     config = load_config(args.config) if args.config else default_config()
     if args.mock:
         config = config.as_mock()
     if args.postures is not None:
         if not 3 <= args.postures <= 255:
-            raise HandEyeError(f"--postures must be between 3 and 255; got {args.postures}")
+            raise UsageError(f"--postures must be between 3 and 255; got {args.postures}")
         config = replace(config, plan=replace(config.plan, postures=args.postures))
     args.session = str(config.session_folder(args.session))  # the config's output folder, when it names one
     tag = "MOCK " if config.is_mock or config.is_rehearsal else ""

@@ -41,13 +41,13 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from ...calibration.errors import HandEyeError
+    from ...calibration.errors import UsageError
     from ..demo import DemoOptions, run_demo
     from ..output import check_output_file, write_json
     from ..progress import progress_bar
 
     if not 3 <= args.postures <= 255:
-        raise HandEyeError(f"--postures must be between 3 and 255; got {args.postures}")
+        raise UsageError(f"--postures must be between 3 and 255; got {args.postures}")
     if args.json:  # an unwritable --json fails before the run
         check_output_file(args.json)
     from ..runtime import MOCK_BANNER

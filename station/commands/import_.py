@@ -20,6 +20,7 @@ Formats (--format; detected from the files when omitted; station/importers/FORMA
                 [tx ty tz θux θuy θuz] metres/radians; an app folder of <robot>_image-<i>.png measures
                 the chessboard (chessboard-data.txt, or --board/--square-mm) or an AprilTag (--tag-mm)
   opencv        OpenCV FileStorage T1_<i> = end effector in base, T2_<i> = marker in camera (camodocal)
+                (or camodocal's folder: its result file CalibratedTransform.yml is skipped and named)
   stream        two CSV streams "t,x,y,z,qx,qy,qz,qw": robot (hand in base) then camera (camera in
                 target, the ETH layout); each camera sample pairs with the nearest robot stamp within
                 --tolerance-ms; --max-postures keeps the slowest pair per time window;

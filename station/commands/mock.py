@@ -16,7 +16,9 @@ The mock EXECUTES the RAPID program: the modules `handeye rapid generate` writes
 the modules of --program DIR (e.g. a capture's SESSION/rapid), run by handeye's RAPID interpreter on
 a simulated IRB 1400: joints and flange pose from its kinematics, motion time from the axis speeds
 (x --time-scale). A module the interpreter cannot run is refused at start with its name and line;
-a program that stops on an error ends the mock with that error.
+a program that stops on an error ends the mock with that error. A program that ends by itself (EXIT,
+Stop) or has not opened its link 3 s after it started is reported in one line on stderr; a socket
+program that ends before it listens is refused at start.
 
 Protocols and default ports:
 {protocols}
@@ -96,7 +98,13 @@ def run(args) -> int:
         return 2
     import sys
 
+    from ...calibration.errors import UsageError
     from ...mocks.controller.service import MockControllerOptions, run_mock_controller
+    from ...rapid.station import IDLE_TIMEOUT_RANGE
+
+    low, high = IDLE_TIMEOUT_RANGE
+    if args.idle_timeout is not None and not low <= args.idle_timeout <= high:
+        raise UsageError(f"--idle-timeout must be {low:g} to {high:g} s; got {args.idle_timeout:g}")
 
     station = None
     if args.config:

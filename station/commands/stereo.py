@@ -134,16 +134,16 @@ def add_parser(sub):
 def _calibrate(args) -> int:
     from pathlib import Path
 
-    from ...calibration.errors import HandEyeError
+    from ...calibration.errors import UsageError
     from ...drivers.camera.checkerboard import as_board
     from ..progress import progress_bar
     from ..stereo_calibration import StereoCalibrationConfig, run_stereo_calibration
 
     sources = sum(bool(x) for x in (args.images, args.left or args.right, args.camera))
     if sources != 1:
-        raise HandEyeError("give one source of pairs: --images FOLDER, --left and --right patterns, or --camera")
+        raise UsageError("give one source of pairs: --images FOLDER, --left and --right patterns, or --camera")
     if bool(args.left) != bool(args.right):
-        raise HandEyeError("give both --left and --right patterns")
+        raise UsageError("give both --left and --right patterns")
     config = StereoCalibrationConfig(
         output=Path(args.output), board=as_board(args.board, args.square_mm),
         images=Path(args.images) if args.images else None, left=args.left, right=args.right, camera=args.camera,

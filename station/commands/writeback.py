@@ -44,7 +44,7 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from ...calibration.errors import HandEyeError
+    from ...calibration.errors import UsageError
     from ...calibration.plausibility import session_in_mm
     from ...calibration.session import read_session
     from ..assessment import assess
@@ -56,7 +56,7 @@ def run(args) -> int:
     from ..writeback import check_session_origin, side_by_side, writeback
 
     if not args.dry_run and not args.config and not args.mock:
-        raise HandEyeError("give --config STATION.yaml (the real controller), --mock, or --dry-run")
+        raise UsageError("give --config STATION.yaml (the real controller), --mock, or --dry-run")
     config = load_config(args.config) if args.config else default_config()
     if args.mock:
         config = config.as_mock()

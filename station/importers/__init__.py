@@ -32,13 +32,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from ...calibration.errors import SessionError
-from ...calibration.files import read_file_bytes
+from ...calibration.errors import SessionError, SessionUsageError
 from ...calibration.session import Session
 from .easy_handeye import looks_like_easy_handeye, read_easy_handeye
+from .head import head_text as _head
 from .log import looks_like_log, read_log
 from .moveit import looks_like_moveit, read_moveit
-from .opencv_storage import looks_like_opencv, read_opencv
+from .opencv_storage import looks_like_opencv, pairs_files, read_opencv
 from .plain import looks_like_plain_csv, looks_like_plain_json, read_plain
 from .stream import looks_like_stream, read_stream
 from .visp import looks_like_visp, read_visp
@@ -80,7 +80,7 @@ IMPORTERS = {
     "visp": Importer("visp", read_visp, "ViSP pose vectors: folder of pose_fPe_<i>.yaml (or *_pose_rPe_<i>.yaml) + pose_cPo_<i>.yaml",
                      None, ("tag_mm",), several_paths=True),
     "opencv": Importer("opencv", read_opencv, "OpenCV FileStorage pose pairs T1_<i> (robot) / T2_<i> (camera), camodocal layout",
-                       None, ("robot_prefix", "camera_prefix")),
+                       None, ("robot_prefix", "camera_prefix"), several_paths=True),
     "stream": Importer("stream", read_stream, "two time-stamped CSV pose streams (t,x,y,z,qx,qy,qz,qw), robot then camera",
                        None, ("quaternion_order", "tolerance_s", "max_postures", "rest_mm_s",
                                        "rest_deg_s"), several_paths=True),
@@ -92,12 +92,6 @@ IMPORTERS = {
                     "conventions inferred from the data", None, ("euler", "quaternion_order"), several_paths=True),
 }
 FORMAT_NAMES = tuple(IMPORTERS)
-
-
-def _head(path: Path, size: int = 4096) -> str:
-    """The first ``size`` bytes of an input as text (a folder, named pipe or device is refused)."""
-    data = read_file_bytes(path, "input file", SessionError, missing=f"{path}: no such file", head=size)
-    return data.decode("utf-8", errors="replace")
 
 
 def _formats_hint() -> str:
@@ -124,6 +118,8 @@ def detect_format(paths) -> str:
         if all(looks_like_stream(_head(p)) for p in paths):
             return "stream"
     if len(paths) > 1:
+        if all(p.is_file() for p in paths) and pairs_files(paths):
+            return "opencv"  # camodocal's pairs and its result file
         if all(p.is_file() and looks_like_visp(p) for p in paths):
             return "visp"
         if len(paths) == 2 and all(p.is_file() and looks_like_log(p, _head(p)) for p in paths):
@@ -134,11 +130,13 @@ def detect_format(paths) -> str:
     if path.is_dir():
         if looks_like_visp(path):
             return "visp"
+        if pairs_files(path):
+            return "opencv"  # a camodocal folder: its pairs, its result beside them
         csvs = [p for p in path.iterdir() if p.suffix.lower() == ".csv"]
-        if len(csvs) == 2 and all(looks_like_stream(_head(p)) for p in csvs):
+        if len(csvs) == 2 and all(looks_like_stream(_head(p, strict=False)) for p in csvs):
             return "stream"
         files = [p for p in path.iterdir() if p.is_file() and not p.name.startswith(".")]
-        if len(files) in (1, 2) and all(looks_like_log(p, _head(p)) for p in files):
+        if len(files) in (1, 2) and all(looks_like_log(p, _head(p, strict=False)) for p in files):
             return "log"
         raise SessionError(f"{path}: a folder without ViSP pose files, two CSV streams or one or two logs; "
                            f"{_formats_hint()}")
@@ -199,13 +197,13 @@ def read_any(paths, format: str | None = None, **options) -> Session:
     unknown = [k for k in given if k not in COMMON_OPTIONS + importer.options]
     if unknown:
         flag = "--" + unknown[0].replace("_", "-")
-        raise SessionError(f"{flag} does not apply to {format} files (it applies to: "
+        raise SessionUsageError(f"{flag} does not apply to {format} files (it applies to: "
                            f"{', '.join(n for n, i in IMPORTERS.items() if unknown[0] in i.options) or 'none'})")
     if isinstance(paths, (list, tuple)) and not importer.several_paths:
         if len(paths) != 1:
-            raise SessionError(f"{format} reads one file; got {len(paths)}")
+            raise SessionUsageError(f"{format} reads one file; got {len(paths)}")
         paths = paths[0]
-    if isinstance(paths, (list, tuple)) and len(paths) == 1 and format in ("visp", "log"):
+    if isinstance(paths, (list, tuple)) and len(paths) == 1 and format in ("visp", "log", "opencv"):
         paths = paths[0]
     session = importer.reader(paths, **given)
     session.extra["import"]["format_how"] = how

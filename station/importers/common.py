@@ -24,6 +24,7 @@ from ...calibration.errors import SessionError, brief
 from ...calibration.files import parse_yaml, read_text_file
 from ...calibration.problem import SETUPS
 from ...calibration.session import MAX_LENGTH_MM, MAX_LENGTH_WORDS, Posture, Session
+from .head import check_log_head, read_head
 from .inference import METRES_BELOW, Constraints, Side, SideReading, infer
 
 __all__ = [
@@ -398,7 +399,9 @@ def build_session(
 
 def read_text(path) -> str:
     """The UTF-8 text of ``path``, or a one-line :class:`SessionError` (missing, a folder, a named pipe,
-    unreadable, over 64 MB, not UTF-8; see ``calibration.files.read_text_file``)."""
+    unreadable, over 64 MB, not UTF-8; see ``calibration.files.read_text_file``; empty, binary, or
+    without a number in its first 64 KB: ``head.check_log_head``, before the file is read whole)."""
+    check_log_head(path, read_head(path))
     return read_text_file(Path(path), "input file", SessionError, missing=f"{path}: no such file")
 
 

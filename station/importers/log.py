@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...calibration.errors import SessionError, brief
+from ...calibration.errors import SessionError, SessionUsageError, brief
 from ...calibration.session import Session, parse_yaml
 from .common import QUATERNION_ORDERS, Dropped, build_session, parse_json, read_text
 from .conventions import POSE_WIDTHS, PoseConvention, conventions_for_width, parse_rotation_spec, vendor_units
@@ -344,7 +344,7 @@ def _rotation_flags(euler) -> dict:
             try:
                 allowed = parse_rotation_spec(value.strip())
             except ValueError as exc:
-                raise SessionError(str(exc)) from None
+                raise SessionUsageError(str(exc)) from None
             for s in sides:
                 for width, conventions in allowed.items():
                     out[s].setdefault(width, []).extend(conventions)

@@ -13,8 +13,12 @@ Layout, YAML or XML as OpenCV writes them::
        ...
 
 Pairs are ``T1_<i>`` / ``T2_<i>`` for ``i = 0, 1, ...`` (other prefixes by option). The file is read
-with ``cv2.FileStorage``. Default set-up: detected from the data when they decide it clearly, else
-``eye_to_hand`` (the camodocal example, an AR tag on the arm seen by a fixed camera).
+with ``cv2.FileStorage``. A folder (or several files) is read as camodocal leaves it: its pairs file
+(``TransformPairsInput.yml``; a ``TransformPairsOutput.yml`` with the same pairs is read once) and,
+beside it, the tool's own result (``CalibratedTransform.yml``: ``ArmTipToMarkerTagTransform`` or
+``eeTeye``, one 4x4 matrix), which is skipped and named in the notes, as is any other file.
+Default set-up: detected from the data when they decide it clearly, else ``eye_to_hand`` (the
+camodocal example, an AR tag on the arm seen by a fixed camera).
 """
 
 from __future__ import annotations
@@ -28,13 +32,16 @@ import numpy as np
 from ...calibration.errors import SessionError
 from ...calibration.session import Session
 from .common import Dropped, EntryErrors, build_session, read_text, rigid_transform
+from .head import head_text
 
-__all__ = ["FORMAT", "DEFAULT_SETUP", "read_opencv", "looks_like_opencv"]
+__all__ = ["FORMAT", "DEFAULT_SETUP", "read_opencv", "looks_like_opencv", "pairs_files"]
 
 FORMAT = "opencv"
 #: No default set-up: the files this tool writes declare what their poses are, and with the data
 #: that decides the set-up (``inference``); the set-up of the source's own example data is only a hint.
 DEFAULT_SETUP = None
+#: The suffixes of OpenCV FileStorage files looked into in a folder (XML, YAML).
+_SUFFIXES = (".yml", ".yaml", ".xml")
 _KEY = re.compile(r"^([A-Za-z][A-Za-z0-9]*)_(\d+)$")
 
 
@@ -43,6 +50,54 @@ def looks_like_opencv(path, head: str) -> bool:
     start = head.lstrip()
     return (start.startswith("%YAML:1.") or "<opencv_storage>" in head[:200]) and (
         "opencv-matrix" in head or "T1_0" in head)
+
+
+def _has_pairs(head: str, robot_prefix: str = "T1", camera_prefix: str = "T2") -> bool:
+    """An OpenCV FileStorage head naming a ``T1_<i>`` / ``T2_<i>`` matrix (YAML key or XML element)."""
+    names = f"(?:{re.escape(robot_prefix)}|{re.escape(camera_prefix)})"
+    return looks_like_opencv("", head) and re.search(rf"^\s*<?{names}_\d+\b", head, re.M) is not None
+
+
+def _skipped(path: Path, head: str) -> str:
+    """Why a file beside the pairs is left out, for the notes."""
+    start = head.lstrip()
+    if start.startswith("%YAML:1.") or "<opencv_storage>" in head[:200]:
+        keys = re.findall(r"^<?([A-Za-z_]\w*)[:> ]", head, re.M)
+        keys = [k for k in keys if k not in ("opencv_storage", "rows", "cols", "dt", "data")]
+        what = f" ({', '.join(keys[:2])})" if keys else ""
+        return f"{path.name} skipped: an OpenCV file without pose pairs{what}, e.g. camodocal's own result"
+    return f"{path.name} skipped: not an OpenCV file of pose pairs"
+
+
+def pairs_files(paths, robot_prefix: str = "T1", camera_prefix: str = "T2") -> tuple[Path, list] | None:
+    """The file of pose pairs among ``paths`` (a folder, or files) and notes on the files left out.
+
+    Returns
+    -------
+    (Path, list of str) or None
+        None when no file holds ``T1_<i>`` / ``T2_<i>`` pairs.
+
+    Raises
+    ------
+    SessionError
+        Two files hold different pairs.
+    """
+    paths = [Path(p) for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
+    folder = len(paths) == 1 and paths[0].is_dir()
+    if folder:
+        paths = sorted(p for p in paths[0].iterdir() if p.is_file() and not p.name.startswith("."))
+    heads = {p: head_text(p, strict=False) for p in paths
+             if p.is_file() and (not folder or p.suffix.lower() in _SUFFIXES)}
+    pairs = [p for p in paths if p in heads and _has_pairs(heads[p], robot_prefix, camera_prefix)]
+    if not pairs:
+        return None
+    notes = [_skipped(p, heads.get(p, "")) for p in paths if p not in pairs]
+    for other in pairs[1:]:
+        if read_text(other) != read_text(pairs[0]):
+            raise SessionError(f"{pairs[0].name} and {other.name} both hold {robot_prefix}_<i> / {camera_prefix}_<i> "
+                               f"pose pairs, and they differ: give one of them")
+        notes.append(f"{other.name} skipped: the same pairs as {pairs[0].name}")
+    return pairs[0], notes
 
 
 def _cv_message(exc: BaseException) -> str:
@@ -55,6 +110,22 @@ def _cv_message(exc: BaseException) -> str:
     if found:
         return f"{found.group(1).strip()}: {found.group(2).strip()}"
     return text.splitlines()[0] if text else type(exc).__name__
+
+
+def _source(path, robot_prefix: str, camera_prefix: str) -> tuple[Path, list]:
+    """The pairs file to read (``path`` itself, or the one in a folder or among files) and the notes on
+    the files left out."""
+    several = isinstance(path, (list, tuple))
+    if not several and not Path(path).is_dir():
+        return Path(path), []
+    if several and len(path) == 1 and not Path(path[0]).is_dir():
+        return Path(path[0]), []
+    found = pairs_files(path, robot_prefix, camera_prefix)
+    if found is None:
+        where = ", ".join(str(p) for p in path) if several else f"{path}"
+        raise SessionError(f"{where}: no file holds {robot_prefix}_<i> / {camera_prefix}_<i> pose pairs "
+                           f"(camodocal's TransformPairsInput.yml)")
+    return found
 
 
 def read_opencv(path, *, setup=None, units=None, board=None, skip_invalid: bool = False,
@@ -82,7 +153,7 @@ def read_opencv(path, *, setup=None, units=None, board=None, skip_invalid: bool 
 
     from ...drivers.camera.stereo import refuse_base64_filestorage
 
-    path = Path(path)
+    path, skipped = _source(path, robot_prefix, camera_prefix)
     # a regular UTF-8 file of sane size without base64 values: cv2 would hang on a named pipe or on a
     # damaged !!binary value
     refuse_base64_filestorage(read_text(path), path, SessionError)
@@ -97,7 +168,7 @@ def read_opencv(path, *, setup=None, units=None, board=None, skip_invalid: bool 
             raise SessionError(f"{path}: not a readable OpenCV FileStorage file")
         try:
             return _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, camera_prefix,
-                                  robot_pose, camera_pose)
+                               robot_pose, camera_pose, skipped)
         except (cv2.error, SystemError) as exc:
             raise SessionError(f"{path}: not a readable OpenCV FileStorage file ({_cv_message(exc)})") from None
         finally:
@@ -122,7 +193,7 @@ def _read_matrix(storage, name: str):
 
 
 def _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, camera_prefix, robot_pose=None,
-                camera_pose=None) -> Session:
+                camera_pose=None, skipped=()) -> Session:
     import cv2
 
     indices = set()
@@ -163,7 +234,7 @@ def _read_pairs(path, storage, setup, units, board, skip_invalid, robot_prefix, 
         robot.append(pair[0])
         camera.append(pair[1])
         labels.append(f"{robot_prefix}_{i} + {camera_prefix}_{i}")
-    notes = []
+    notes = list(skipped)
     if declared is not None and declared != len(indices):
         notes.append(f"frameCount says {declared} but the file holds {len(indices)} numbered pairs")
     return build_session(FORMAT, path, np.array(robot).reshape(-1, 4, 4), np.array(camera).reshape(-1, 4, 4), labels,

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ...calibration.errors import SessionError
+from ...calibration.errors import SessionError, SessionUsageError
 from ...calibration.invariants import MIN_MOTION_DEG, fit_hand_eye, pair_indices
 from ...calibration.problem import EYE_IN_HAND, EYE_TO_HAND
 from ...calibration.transforms import invert_transforms, rotation_error_deg
@@ -435,7 +435,7 @@ def badness(r: Reading) -> float:
 def check_flag(name: str, value, allowed) -> None:
     """Refuse a flag value outside ``allowed`` in one line."""
     if value is not None and value not in allowed:
-        raise SessionError(f"--{name.replace('_', '-')} must be one of {', '.join(allowed)}; got {value!r}")
+        raise SessionUsageError(f"--{name.replace('_', '-')} must be one of {', '.join(allowed)}; got {value!r}")
 
 
 def scores_words(r: Reading) -> str:

@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...calibration.errors import SessionError
+from ...calibration.errors import SessionError, SessionUsageError
 from ...calibration.session import Session, parse_yaml
 from .common import Dropped, EntryErrors, build_session, flat_numbers, read_text, transform_from_rotvec
 from .visp_images import find_images, measure_board_pose, measure_tag_pose, read_chessboard_data, read_visp_camera
@@ -141,7 +141,7 @@ def read_visp(path, *, setup=None, units=None, board=None, skip_invalid: bool = 
     if not robot_files:
         raise SessionError(f"{where}: no robot pose files (pose_fPe_<i>.yaml or <robot>_pose_rPe_<i>.yaml)")
     if tag_mm is not None and not (np.isfinite(tag_mm) and 0 < tag_mm <= 10000):
-        raise SessionError(f"--tag-mm must be the tag's side in mm (0 .. 10000); got {tag_mm}")
+        raise SessionUsageError(f"--tag-mm must be the tag's side in mm (0 .. 10000); got {tag_mm}")
     if not camera_files:
         images = find_images(files)
         if images:
