@@ -238,8 +238,7 @@ def sample_eye_in_hand_postures(
     corners = np.asarray(corners_target, float)
     centre, normal_out, e1, e2 = _board_view_frame(board, corners)
     side = np.asarray(sampling.side, float)
-    seed = None if seed_joints is None else np.asarray(seed_joints, float)
-    anchor = seed
+    anchor = None if seed_joints is None else np.asarray(seed_joints, float)
     joints = []
     attempts = 0
     limit = max_attempts if max_attempts is not None else 200 * count
@@ -251,11 +250,9 @@ def sample_eye_in_hand_postures(
             raise RuntimeError(f"only {len(joints)} of {count} postures found; widen the distance or cone, or move the board")
         cam2base = _view_point(rng, sampling, centre, normal_out, (e1, e2), side)
         tool02base = cam2base @ invert_transforms(x)
-        if not robot.may_reach(tool02base[:3, 3]):
-            continue
-        if not board_visible(invert_transforms(cam2base) @ board, corners, views, sampling.margin_px):
-            continue
-        if pose_veto is not None and not pose_veto(tool02base):
+        if not (robot.may_reach(tool02base[:3, 3])  # in this order: the vetoes count what they reject
+                and board_visible(invert_transforms(cam2base) @ board, corners, views, sampling.margin_px)
+                and (pose_veto is None or pose_veto(tool02base))):
             continue
         found = _posture_near(robot, tool02base, anchor, sampling)
         if found is None:

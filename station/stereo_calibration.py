@@ -462,6 +462,21 @@ def _factory_comparison(path, calibration) -> dict:
     return out
 
 
+def _coverage(views, result, size):
+    """The coverage map's data: where the corners of each view were used (and, drawn in red, where the
+    board was found but the view left out)."""
+    from ..drivers.camera.coverage import Coverage
+
+    coverage = Coverage(size)
+    for v, report in zip(views, result.views):
+        pose = result.left.poses.get(v.name, result.right.poses.get(v.name))
+        coverage.add(v.left if report.used_left else None, v.right if report.used_right else None, pose)
+        for side in ("left", "right"):  # found but left out: drawn in red on the map
+            if getattr(v, side) is not None and not getattr(report, f"used_{side}"):
+                coverage.add(**{side: getattr(v, side)}, used=False)
+    return coverage
+
+
 def run_stereo_calibration(config: StereoCalibrationConfig, *, say: Callable = print, camera=None,
                            follow: Callable | None = None, progress=None) -> StereoCalibrationRun:
     """Collect the pairs (files or live), calibrate, write the model, the report and the coverage map.
@@ -483,7 +498,7 @@ def run_stereo_calibration(config: StereoCalibrationConfig, *, say: Callable = p
     HandEyeError
         One line: bad input, a calibration that cannot be made, a file that cannot be written.
     """
-    from ..drivers.camera.coverage import Coverage, coverage_map
+    from ..drivers.camera.coverage import coverage_map
     from ..drivers.camera.stereo_calibration import calibrate_stereo
 
     progress = progress or _no_progress
@@ -519,13 +534,7 @@ def run_stereo_calibration(config: StereoCalibrationConfig, *, say: Callable = p
     result = calibrate_stereo(views, config.board, size, distortion=config.distortion, refine=config.refine,
                               name=f"stereo calibration of {source}")
     seconds["calibrate"] = time.perf_counter() - t0
-    coverage = Coverage(size)
-    for v, report in zip(views, result.views):
-        pose = result.left.poses.get(v.name, result.right.poses.get(v.name))
-        coverage.add(v.left if report.used_left else None, v.right if report.used_right else None, pose)
-        for side in ("left", "right"):  # found but left out: drawn in red on the map
-            if getattr(v, side) is not None and not getattr(report, f"used_{side}"):
-                coverage.add(**{side: getattr(v, side)}, used=False)
+    coverage = _coverage(views, result, size)
     factory = _factory_comparison(config.factory, result) if config.factory else None
     extra = {"rms_px": result.rms_px, "epipolar_rms_px": result.epipolar_rms_px, "baseline_mm": result.baseline_mm,
              "pairs_used": result.pairs_used, "calibrated_with": "handeye stereo calibrate",

@@ -312,6 +312,73 @@ def epipolar_errors(model: StereoModel, left_px, right_px) -> np.ndarray:
     return np.concatenate([d_r, d_l])
 
 
+def _stereo_without_outlier_pairs(obj, pairs: list, left, right, size, flags: int, reports: dict):
+    """The fixed-intrinsics stereo fit (``cv2.stereoCalibrate`` output) and its per-pair RMS (px), after
+    dropping, one at a time, pairs far above the median (:func:`_outlier`); ``pairs`` loses them and their
+    reports say why."""
+    total, dropped = len(pairs), 0
+    fixed = cv2.CALIB_FIX_INTRINSIC | flags  # the model flags too: RATIONAL_MODEL keeps its 8 coefficients
+    while True:
+        out = _stereo(obj, pairs, left, right, size, fixed)
+        per_pair = np.sqrt(np.mean(out[-1] ** 2, axis=1))
+        drop = _outlier(per_pair, dropped, total, MIN_PAIRS)
+        if drop is None:
+            return out, per_pair
+        index, median = drop
+        reports[pairs[index].name].reasons.append(
+            f"pair: RMS {per_pair[index]:.2f} px under the pair's geometry is {per_pair[index] / max(median, 1e-9):.1f}x "
+            f"the median {median:.2f} px (the board moved between the two exposures?): not used for the pair")
+        del pairs[index]
+        dropped += 1
+
+
+def _refined_stereo(obj, pairs: list, left, right, size, flags: int, out, per_pair, warnings: list):
+    """The joint refinement (intrinsics and extrinsics together) of the fit ``out`` when it lowers the RMS
+    without moving the baseline or a focal length beyond :data:`BASELINE_SHIFT` / :data:`FOCAL_SHIFT`.
+
+    Returns ``(out, per_pair, refined)``: the refined fit and its per-pair RMS, or the given ones (a
+    refinement that moved too far adds a warning to ``warnings``)."""
+    rms, k1, _, k2, _, _, t = out[:7]
+    ref = _stereo(obj, pairs, left, right, size, flags | cv2.CALIB_USE_INTRINSIC_GUESS, REFINE_CRITERIA)
+    r_rms, r_k1, _, r_k2, _, _, r_t = ref[:7]
+    baseline_shift = abs(np.linalg.norm(r_t) - np.linalg.norm(t)) / np.linalg.norm(t)
+    focal_shift = max(abs(r_k1[0, 0] / k1[0, 0] - 1), abs(r_k2[0, 0] / k2[0, 0] - 1),
+                      abs(r_k1[1, 1] / k1[1, 1] - 1), abs(r_k2[1, 1] / k2[1, 1] - 1))
+    if not (np.isfinite(r_rms) and r_rms < rms):
+        return out, per_pair, False  # no better: the per-camera intrinsics stand
+    if baseline_shift <= BASELINE_SHIFT and focal_shift <= FOCAL_SHIFT:
+        return ref, np.sqrt(np.mean(ref[-1] ** 2, axis=1)), True
+    warnings.append(
+        f"the joint refinement moved the baseline by {100 * baseline_shift:.1f} % and a focal length by "
+        f"{100 * focal_shift:.1f} %: kept the per-camera intrinsics (capture more varied views to refine)")
+    return out, per_pair, False
+
+
+def _view_reports(views: list) -> tuple[dict, tuple]:
+    """A :class:`ViewReport` per view name, saying which images show no board and which pairs look
+    swapped, and the swap votes ``(agree, disagree, wrong)`` (:func:`swap_votes`).
+
+    Raises
+    ------
+    StereoSwapped
+        When most pairs say the left and right images are swapped.
+    """
+    reports = {v.name: ViewReport(v.name) for v in views}
+    for v in views:
+        for side in ("left", "right"):
+            if getattr(v, side) is None:
+                reports[v.name].reasons.append(f"{side}: {getattr(v, side + '_note') or 'board not found'}")
+    agree, disagree, wrong = swap_votes(views)
+    if disagree > agree and disagree >= 2:
+        raise StereoSwapped(_swap_message(agree, disagree, "the board's columns say so"))
+    for v in views:
+        if v.name in wrong:
+            reports[v.name].reasons.append(
+                "pair: the board sits further left in the left image than in the right one (this pair's files are "
+                "swapped, or the two images are not one frame): not used")
+    return reports, (agree, disagree, wrong)
+
+
 def calibrate_stereo(views, board: BoardGeometry, image_size, *, distortion: str = "k1k2p1p2k3",
                      refine: bool = True, name: str = "") -> StereoCalibration:
     """Calibrate the stereo head from the board's corners in a set of pairs (see the module docstring).
@@ -349,19 +416,7 @@ def calibrate_stereo(views, board: BoardGeometry, image_size, *, distortion: str
     names = [v.name for v in views]
     if len(set(names)) != len(names):
         raise StereoCalibrationError("two pairs have the same name; name each pair once")
-    reports = {v.name: ViewReport(v.name) for v in views}
-    for v in views:
-        for side in ("left", "right"):
-            if getattr(v, side) is None:
-                reports[v.name].reasons.append(f"{side}: {getattr(v, side + '_note') or 'board not found'}")
-    agree, disagree, wrong = swap_votes(views)
-    if disagree > agree and disagree >= 2:
-        raise StereoSwapped(_swap_message(agree, disagree, "the board's columns say so"))
-    for v in views:
-        if v.name in wrong:
-            reports[v.name].reasons.append(
-                "pair: the board sits further left in the left image than in the right one (this pair's files are "
-                "swapped, or the two images are not one frame): not used")
+    reports, (agree, disagree, wrong) = _view_reports(views)
     usable = [v for v in views if v.name not in wrong]
     left = _calibrate_camera("left", [(v.name, v.left) for v in usable if v.left is not None], obj, size, flags,
                              reports)
@@ -372,39 +427,11 @@ def calibrate_stereo(views, board: BoardGeometry, image_size, *, distortion: str
         raise StereoCalibrationError(
             f"only {len(pairs)} pair(s) show the board in both images; at least {MIN_PAIRS} are needed (15-25 "
             f"recommended): hold the board where both cameras see it")
-    total, dropped = len(pairs), 0
-    fixed = cv2.CALIB_FIX_INTRINSIC | flags  # the model flags too: RATIONAL_MODEL keeps its 8 coefficients
-    while True:
-        out = _stereo(obj, pairs, left, right, size, fixed)
-        per_pair = np.sqrt(np.mean(out[-1] ** 2, axis=1))
-        drop = _outlier(per_pair, dropped, total, MIN_PAIRS)
-        if drop is None:
-            break
-        index, median = drop
-        reports[pairs[index].name].reasons.append(
-            f"pair: RMS {per_pair[index]:.2f} px under the pair's geometry is {per_pair[index] / max(median, 1e-9):.1f}x "
-            f"the median {median:.2f} px (the board moved between the two exposures?): not used for the pair")
-        del pairs[index]
-        dropped += 1
+    out, per_pair = _stereo_without_outlier_pairs(obj, pairs, left, right, size, flags, reports)
+    warnings = []
+    out, per_pair_final, refined = (_refined_stereo(obj, pairs, left, right, size, flags, out, per_pair, warnings)
+                                    if refine else (out, per_pair, False))
     rms, k1, d1, k2, d2, r, t = out[:7]
-    per_pair_final = per_pair
-    refined, warnings = False, []
-    if refine:
-        ref = _stereo(obj, pairs, left, right, size, flags | cv2.CALIB_USE_INTRINSIC_GUESS, REFINE_CRITERIA)
-        r_rms, r_k1, r_d1, r_k2, r_d2, r_r, r_t = ref[:7]
-        baseline_shift = abs(np.linalg.norm(r_t) - np.linalg.norm(t)) / np.linalg.norm(t)
-        focal_shift = max(abs(r_k1[0, 0] / k1[0, 0] - 1), abs(r_k2[0, 0] / k2[0, 0] - 1),
-                          abs(r_k1[1, 1] / k1[1, 1] - 1), abs(r_k2[1, 1] / k2[1, 1] - 1))
-        if not (np.isfinite(r_rms) and r_rms < rms):
-            pass  # no better: the per-camera intrinsics stand
-        elif baseline_shift <= BASELINE_SHIFT and focal_shift <= FOCAL_SHIFT:
-            rms, k1, d1, k2, d2, r, t = r_rms, r_k1, r_d1, r_k2, r_d2, r_r, r_t
-            per_pair_final = np.sqrt(np.mean(ref[-1] ** 2, axis=1))
-            refined = True
-        else:
-            warnings.append(
-                f"the joint refinement moved the baseline by {100 * baseline_shift:.1f} % and a focal length by "
-                f"{100 * focal_shift:.1f} %: kept the per-camera intrinsics (capture more varied views to refine)")
     t = np.asarray(t, float).ravel()
     if t[0] > 0 and abs(t[0]) > abs(t[1]):
         raise StereoSwapped(_swap_message(agree, disagree, f"T = ({t[0]:.1f}, {t[1]:.1f}, {t[2]:.1f}) mm puts camera 2 "
