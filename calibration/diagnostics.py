@@ -40,7 +40,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from .errors import brief
-from .invariants import bounded_pairs
+from .invariants import bounded_pairs, posture_medians as posture_median_gaps
 from .problem import EYE_IN_HAND, EYE_TO_HAND, SETUPS, hand_poses
 from .transforms import invert_transforms, rotation_error_deg
 
@@ -192,33 +192,6 @@ def pair_angle_gaps(tool0_in_base, target_in_camera, pairs) -> np.ndarray:
     a, b = _check_poses(tool0_in_base, target_in_camera)
     i, j = np.asarray(pairs, dtype=int).reshape(-1, 2).T
     return np.abs(rotation_error_deg(a[i, :3, :3], a[j, :3, :3]) - rotation_error_deg(b[i, :3, :3], b[j, :3, :3]))
-
-
-def posture_median_gaps(gaps, pairs, n: int) -> np.ndarray:
-    """Per posture, the median of the (non-NaN) ``gaps`` of the pairs it is part of, shape ``(n,)``
-    (NaN for a posture in no pair): :func:`posture_angle_gaps` of a gap matrix, from a list of pairs.
-
-    Parameters
-    ----------
-    gaps : array-like, shape (m,)
-    pairs : array-like of int, shape (m, 2)
-    n : int
-    """
-    gaps = np.asarray(gaps, dtype=float)
-    pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
-    posture = np.concatenate([pairs[:, 0], pairs[:, 1]])
-    values = np.concatenate([gaps, gaps])
-    finite = ~np.isnan(values)
-    posture, values = posture[finite], values[finite]
-    order = np.lexsort((values, posture))
-    values = values[order]
-    counts = np.bincount(posture, minlength=n)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    out = np.full(n, np.nan)
-    has = counts > 0
-    lo, hi = starts[has] + (counts[has] - 1) // 2, starts[has] + counts[has] // 2
-    out[has] = 0.5 * (values[lo] + values[hi])
-    return out
 
 
 def _usable(rotvec_a, rotvec_b, limits: DiagnosticLimits) -> np.ndarray:

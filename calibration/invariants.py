@@ -40,6 +40,7 @@ __all__ = [
     "pair_indices",
     "bounded_pairs",
     "pairs_used",
+    "posture_medians",
     "relative_angles_deg",
     "screw_pitches",
     "relative_motions",
@@ -88,8 +89,9 @@ def pair_indices(n: int, max_pairs: int | None = None, seed: int = 0) -> np.ndar
     return _pairs_of_ranks(n, keep)
 
 
-#: Up to this many posture pairs (200 postures) the checks use every pair, as they always did.
-ALL_PAIRS_UP_TO = 20000
+#: Up to this many posture pairs (316 postures: a guided capture stops at 255) the checks use every
+#: pair, as they always did.
+ALL_PAIRS_UP_TO = 50000
 #: Above it, each posture is paired with its neighbour in time and at least this many random partners.
 RANDOM_PARTNERS = 10
 
@@ -123,13 +125,41 @@ def bounded_pairs(n: int, seed: int = 0) -> np.ndarray:
     return np.stack([key // n, key % n], axis=1).astype(np.intp)
 
 
-def pairs_used(pairs, n: int) -> str:
-    """``"all 4950 pairs"`` or ``"200000 of 49995000 pairs (neighbours in time and a fixed random sample)"``:
-    how many posture pairs a check used, for the text that states the check."""
+def posture_medians(gaps, pairs, n: int) -> np.ndarray:
+    """Per posture, the median of the (non-NaN) values ``gaps`` of the pairs it is part of, shape ``(n,)``
+    (NaN for a posture in no pair): the row medians of the symmetric ``(n, n)`` matrix of the values,
+    without building it.
+
+    Parameters
+    ----------
+    gaps : array-like, shape (m,)
+    pairs : array-like of int, shape (m, 2)
+    n : int
+    """
+    gaps = np.asarray(gaps, dtype=float)
+    pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
+    posture = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    values = np.concatenate([gaps, gaps])
+    finite = ~np.isnan(values)
+    posture, values = posture[finite], values[finite]
+    order = np.lexsort((values, posture))
+    values = values[order]
+    counts = np.bincount(posture, minlength=n)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    out = np.full(n, np.nan)
+    has = counts > 0
+    lo, hi = starts[has] + (counts[has] - 1) // 2, starts[has] + counts[has] // 2
+    out[has] = 0.5 * (values[lo] + values[hi])
+    return out
+
+
+def pairs_used(count: int, n: int) -> str:
+    """How many posture pairs a check used, for the text that states it: ``"all 4950 posture pairs"``
+    or ``"109888 of 49995000 posture pairs (neighbours in time and a fixed random sample)"``."""
     total = int(n) * (int(n) - 1) // 2
-    if len(pairs) >= total:
-        return f"all {total} pairs"
-    return f"{len(pairs)} of {total} pairs (neighbours in time and a fixed random sample)"
+    if int(count) >= total:
+        return f"all {total} posture pairs"
+    return f"{int(count)} of {total} posture pairs (neighbours in time and a fixed random sample)"
 
 
 def relative_angles_deg(rotations, pairs) -> np.ndarray:

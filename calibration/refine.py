@@ -27,6 +27,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
+from .invariants import posture_medians
 from .triplets import RelativeMotions
 
 __all__ = [
@@ -167,12 +168,8 @@ def _uncertainty(fit, n: int, k: int) -> tuple[np.ndarray, np.ndarray]:
 
 def angle_gaps_deg(motions: RelativeMotions) -> np.ndarray:
     """Per posture: median over the others of ``|angle(A_ij) - angle(B_ij)|`` in degrees (X-free)."""
-    n = motions.rot_hand.shape[0]
     gap = np.abs(motions.angle_a_deg - motions.angle_b_deg)
-    table = np.full((n, n), np.nan)
-    table[motions.pairs[:, 0], motions.pairs[:, 1]] = gap
-    table[motions.pairs[:, 1], motions.pairs[:, 0]] = gap
-    return np.nanmedian(table, axis=1)
+    return posture_medians(gap, motions.pairs, motions.rot_hand.shape[0])
 
 
 def robust_outliers(values: np.ndarray, floor: float = 0.0, z: float = OUTLIER_Z, ratio: float = OUTLIER_RATIO) -> np.ndarray:
