@@ -331,6 +331,9 @@ _ROTATION_BASES = {"camera_tilt": np.diag([0.0, 0.0, 0.0, 1.0, 1.0, 0.0]), "came
 CENTRE_LR = 16.27
 #: Lower bound of the variances while the centre is searched (mm², rad²): keeps every ``S_i`` invertible.
 CENTRE_THETA_FLOOR = 1e-12
+#: The centre search of a larger session runs on this many of its postures, evenly spread in capture
+#: order (the fits that follow use them all): its cost no longer grows with a stream's length.
+CENTRE_POSTURES = 2000
 
 
 def _lever(centre) -> np.ndarray:
@@ -392,12 +395,17 @@ def board_centre(obs: "Observations", fit: "MLFit", keep, start) -> tuple[np.nda
 
     ``obs`` holds the rotation components about the board origin; the residuals of ``fit`` (its
     ``X, T``) are held, the centre and the variance components (bounded below by
-    :data:`CENTRE_THETA_FLOOR`) searched together (BFGS). Returns the centre (mm) and the
-    variance components, ``None`` when the search fails.
+    :data:`CENTRE_THETA_FLOOR`) searched together (BFGS), over at most :data:`CENTRE_POSTURES` of
+    the postures ``keep``. Returns the centre (mm) and the variance components, ``None`` when the
+    search fails.
     """
     from scipy.optimize import minimize  # noqa: PLC0415
 
     keep = np.asarray(keep, bool)
+    if keep.sum() > CENTRE_POSTURES:
+        kept = np.flatnonzero(keep)
+        keep = np.zeros_like(keep)
+        keep[kept[np.linspace(0, len(kept) - 1, CENTRE_POSTURES).round().astype(int)]] = True
     sub = obs.subset(keep)
     rotation = np.array([c.side == "board" and c.name in _ROTATION_BASES for c in sub.components])
     start_theta = np.log(np.maximum(fit.theta - CENTRE_THETA_FLOOR, CENTRE_THETA_FLOOR))
