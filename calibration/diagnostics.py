@@ -36,9 +36,11 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from .errors import brief
+from .invariants import bounded_pairs, posture_medians as posture_median_gaps
 from .problem import EYE_IN_HAND, EYE_TO_HAND, SETUPS, hand_poses
 from .transforms import invert_transforms, rotation_error_deg
 
@@ -47,6 +49,8 @@ __all__ = [
     "DiagnosticLimits",
     "relative_angle_gaps",
     "posture_angle_gaps",
+    "pair_angle_gaps",
+    "posture_median_gaps",
     "screw_pitch_scale",
     "setup_rotation_residuals",
     "hand_eye_fit",
@@ -168,8 +172,26 @@ def _relative_motions(hand, target_in_camera, pairs):
 
 
 def _pairs(n: int) -> np.ndarray:
-    i, j = np.triu_indices(n, k=1)
-    return np.stack([i, j], axis=1)
+    """The pairs the checks use: every pair of a small session, a bounded sample of a large one
+    (``invariants.bounded_pairs``), so that the checks cost time and memory linear in ``n``."""
+    return bounded_pairs(n)
+
+
+def pair_angle_gaps(tool0_in_base, target_in_camera, pairs) -> np.ndarray:
+    """``|angle(A_ij) - angle(B_ij)|`` in degrees for the given pairs (as :func:`relative_angle_gaps`).
+
+    Parameters
+    ----------
+    tool0_in_base, target_in_camera : array-like, shape (n, 4, 4)
+    pairs : array-like of int, shape (m, 2)
+
+    Returns
+    -------
+    ndarray, shape (m,)
+    """
+    a, b = _check_poses(tool0_in_base, target_in_camera)
+    i, j = np.asarray(pairs, dtype=int).reshape(-1, 2).T
+    return np.abs(rotation_error_deg(a[i, :3, :3], a[j, :3, :3]) - rotation_error_deg(b[i, :3, :3], b[j, :3, :3]))
 
 
 def _usable(rotvec_a, rotvec_b, limits: DiagnosticLimits) -> np.ndarray:
@@ -293,6 +315,22 @@ def hand_eye_fit(tool0_in_base, target_in_camera, setup: str,
     }
 
 
+def _close_pairs(a, b, distance_mm: float) -> np.ndarray:
+    """Pairs ``(i, j)``, ``i < j``, lexicographic, whose robot positions or board positions are within
+    ``distance_mm``: the only pairs that can be duplicates, found in ``O(n log n)`` (a k-d tree), not by
+    comparing every pair."""
+    found = [np.zeros((0, 2), dtype=np.intp)]
+    for poses in (a, b):
+        finite = np.flatnonzero(np.all(np.isfinite(poses[:, :3, 3]), axis=1))
+        if len(finite) > 1:
+            close = cKDTree(poses[finite, :3, 3]).query_pairs(distance_mm, output_type="ndarray")
+            found.append(np.sort(finite[close], axis=1).reshape(-1, 2))
+    pairs = np.concatenate(found)
+    key = np.sort(pairs[:, 0].astype(np.int64) * len(a) + pairs[:, 1])
+    key = key[np.r_[True, key[1:] != key[:-1]]] if len(key) else key
+    return np.stack([key // len(a), key % len(a)], axis=1).astype(np.intp)
+
+
 def _ids(ids, n):
     return [int(v) for v in (range(n) if ids is None else ids)]
 
@@ -368,7 +406,7 @@ def find_duplicates(tool0_in_base, target_in_camera, ids=None,
     findings = []
     if len(a) < 2:
         return findings
-    pairs = _pairs(len(a))
+    pairs = _close_pairs(a, b, limits.duplicate_mm)
     i, j = pairs[:, 0], pairs[:, 1]
     figures = {"robot_mm": np.linalg.norm(a[i, :3, 3] - a[j, :3, 3], axis=1), "robot_deg": rotation_error_deg(a[i], a[j]),
                "board_mm": np.linalg.norm(b[i, :3, 3] - b[j, :3, 3], axis=1), "board_deg": rotation_error_deg(b[i], b[j])}
@@ -451,8 +489,8 @@ def find_inconsistent_postures(tool0_in_base, target_in_camera, ids=None,
     ids = _ids(ids, len(a))
     if len(a) < 4:
         return []
-    gaps = relative_angle_gaps(a, b)
-    per_posture = posture_angle_gaps(gaps)
+    pairs = _pairs(len(a))  # every pair of a small session (the gap matrix's rows), a sample of a large one
+    per_posture = posture_median_gaps(pair_angle_gaps(a, b, pairs), pairs, len(a))
     typical = float(np.median(per_posture))
     if typical > limits.convention_gap_deg:
         return [Finding(
@@ -466,7 +504,8 @@ def find_inconsistent_postures(tool0_in_base, target_in_camera, ids=None,
     for k in np.flatnonzero(per_posture > threshold):
         flipped = b.copy()
         flipped[k] = b[k] @ flip
-        flipped_gap = float(posture_angle_gaps(relative_angle_gaps(a, flipped))[k])
+        mine = pairs[(pairs[:, 0] == k) | (pairs[:, 1] == k)]
+        flipped_gap = float(posture_median_gaps(pair_angle_gaps(a, flipped, mine), mine, len(a))[k])
         values = {"median_gap_deg": float(per_posture[k]), "typical_gap_deg": typical,
                   "threshold_deg": threshold, "flipped_gap_deg": flipped_gap}
         if flipped_gap <= threshold:

@@ -85,6 +85,7 @@ from .noise import (
     stereo_point_shape,
     twist_between,
 )
+from .invariants import bounded_pairs, posture_medians
 from .metrics import fixed_points
 from .problem import EYE_IN_HAND, HandEyeProblem
 from .rotations import quaternion_from_matrix
@@ -330,6 +331,9 @@ _ROTATION_BASES = {"camera_tilt": np.diag([0.0, 0.0, 0.0, 1.0, 1.0, 0.0]), "came
 CENTRE_LR = 16.27
 #: Lower bound of the variances while the centre is searched (mm², rad²): keeps every ``S_i`` invertible.
 CENTRE_THETA_FLOOR = 1e-12
+#: The centre search of a larger session runs on this many of its postures, evenly spread in capture
+#: order (the fits that follow use them all): its cost no longer grows with a stream's length.
+CENTRE_POSTURES = 2000
 
 
 def _lever(centre) -> np.ndarray:
@@ -391,12 +395,17 @@ def board_centre(obs: "Observations", fit: "MLFit", keep, start) -> tuple[np.nda
 
     ``obs`` holds the rotation components about the board origin; the residuals of ``fit`` (its
     ``X, T``) are held, the centre and the variance components (bounded below by
-    :data:`CENTRE_THETA_FLOOR`) searched together (BFGS). Returns the centre (mm) and the
-    variance components, ``None`` when the search fails.
+    :data:`CENTRE_THETA_FLOOR`) searched together (BFGS), over at most :data:`CENTRE_POSTURES` of
+    the postures ``keep``. Returns the centre (mm) and the variance components, ``None`` when the
+    search fails.
     """
     from scipy.optimize import minimize  # noqa: PLC0415
 
     keep = np.asarray(keep, bool)
+    if keep.sum() > CENTRE_POSTURES:
+        kept = np.flatnonzero(keep)
+        keep = np.zeros_like(keep)
+        keep[kept[np.linspace(0, len(kept) - 1, CENTRE_POSTURES).round().astype(int)]] = True
     sub = obs.subset(keep)
     rotation = np.array([c.side == "board" and c.name in _ROTATION_BASES for c in sub.components])
     start_theta = np.log(np.maximum(fit.theta - CENTRE_THETA_FLOOR, CENTRE_THETA_FLOOR))
@@ -870,16 +879,17 @@ def angle_gaps_deg(hand: np.ndarray, board: np.ndarray) -> np.ndarray:
     """Per posture: median over the others of ``|angle(A_ij) - angle(B_ij)|`` (eq. 30, X-free), degrees.
 
     ``A_ij = A_i^-1 A_j`` and ``B_ij = B_i B_j^-1`` rotate by the same angle for the true motion
-    whatever ``X`` is; the angles come from quaternion dot products, ``n^2`` of them at once.
+    whatever ``X`` is; the angles come from quaternion dot products. Over every pair of a small set,
+    over ``invariants.bounded_pairs`` (neighbours in time and random partners) of a large one.
     """
     qa = quaternion_from_matrix(hand[:, :3, :3])
     qb = quaternion_from_matrix(board[:, :3, :3])
-    angle_a = 2.0 * np.arccos(np.clip(np.abs(qa @ qa.T), 0.0, 1.0))
+    pairs = bounded_pairs(len(qa))
+    i, j = pairs[:, 0], pairs[:, 1]
+    angle_a = 2.0 * np.arccos(np.clip(np.abs(np.einsum("pi,pi->p", qa[i], qa[j])), 0.0, 1.0))
     # the angle of B_i B_j^-1 is the angle between R_Bi and R_Bj, as for A_i^-1 A_j
-    angle_b = 2.0 * np.arccos(np.clip(np.abs(qb @ qb.T), 0.0, 1.0))
-    gap = np.abs(angle_a - angle_b)
-    np.fill_diagonal(gap, np.nan)
-    return np.degrees(np.nanmedian(gap, axis=1))
+    angle_b = 2.0 * np.arccos(np.clip(np.abs(np.einsum("pi,pi->p", qb[i], qb[j])), 0.0, 1.0))
+    return np.degrees(posture_medians(np.abs(angle_a - angle_b), pairs, len(qa)))
 
 
 def varied_rotation_subset(hand: np.ndarray, candidates: np.ndarray, size: int) -> np.ndarray:

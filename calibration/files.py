@@ -325,6 +325,87 @@ def write_bytes_atomic(path, data: bytes) -> Path:
     return _write_atomic(path, lambda fd: os.fdopen(fd, "wb"), bytes(data), "bytes")
 
 
+def write_texts_atomic(files, encoding: str = "utf-8") -> list:
+    """Write many files as :func:`write_text_atomic` writes one (temporary file, flushed to disk,
+    renamed over the target), with one flush to disk for all of them instead of one per file: every
+    temporary file is written first, then the data synced at once (``os.sync`` where it exists, else
+    each file), then each renamed, then each folder synced once. A session of 10,000 postures is
+    written in seconds, not minutes. A file that cannot be written stops the batch before any rename, and
+    no temporary file is left behind.
+
+    Parameters
+    ----------
+    files : iterable of (path, str)
+
+    Returns
+    -------
+    list of Path
+
+    Raises
+    ------
+    OutputError
+        As :func:`write_text_atomic`, naming the first file that cannot be written.
+    """
+    written = []  # (temporary, target)
+    try:
+        for path, text in files:
+            written.append((_write_temporary(Path(path), text, encoding), Path(path)))
+        if hasattr(os, "sync"):
+            os.sync()
+        else:  # pragma: no cover - platforms without sync(2)
+            for tmp, _ in written:
+                _fsync_path(tmp, os.O_RDWR)
+        for tmp, path in written:
+            try:
+                os.replace(tmp, path)
+            except OSError as exc:
+                raise write_failure(path, exc) from None
+    finally:
+        for tmp, _ in written:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+    for folder in {path.parent for _, path in written}:
+        try:  # make the renames durable
+            _fsync_path(folder, os.O_RDONLY)
+        except OSError:
+            pass
+    return [path for _, path in written]
+
+
+def _fsync_path(path, flags: int) -> None:
+    fd = os.open(path, flags)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _write_temporary(path: Path, text: str, encoding: str) -> str:
+    """``text`` in a new temporary file beside ``path`` (not yet synced): its name."""
+    if path.is_dir():
+        raise OutputError(f"cannot write {path}: it is a folder; give a file name")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=_temporary_prefix(path), suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        raise write_failure(path, exc) from None
+    try:
+        with os.fdopen(fd, "w", encoding=encoding) as handle:
+            umask = os.umask(0)
+            os.umask(umask)
+            os.fchmod(handle.fileno(), 0o666 & ~umask)
+            handle.write(text)
+    except BaseException as exc:
+        os.unlink(tmp)
+        if isinstance(exc, OSError):
+            raise write_failure(path, exc) from None
+        if isinstance(exc, UnicodeEncodeError):
+            raise OutputError(f"cannot write {path}: it would hold {exc.object[exc.start:exc.end]!r}, which "
+                              f"{encoding} cannot store; remove that character") from None
+        raise
+    return tmp
+
+
 def _write_atomic(path, opener, content, encoding: str) -> Path:
     path = Path(path)
     if path.is_dir():

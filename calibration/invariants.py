@@ -35,7 +35,12 @@ from .transforms import invert_transforms
 __all__ = [
     "MIN_MOTION_DEG",
     "InvariantFit",
+    "ALL_PAIRS_UP_TO",
+    "RANDOM_PARTNERS",
     "pair_indices",
+    "bounded_pairs",
+    "pairs_used",
+    "posture_medians",
     "relative_angles_deg",
     "screw_pitches",
     "relative_motions",
@@ -48,8 +53,21 @@ __all__ = [
 MIN_MOTION_DEG = 3.0
 
 
+def _pairs_of_ranks(n: int, ranks) -> np.ndarray:
+    """Pairs ``(i, j)``, ``i < j``, at positions ``ranks`` of the lexicographic list of all pairs of
+    ``n`` postures (the order of ``np.triu_indices``), without building that list: shape ``(m, 2)``."""
+    ranks = np.asarray(ranks, dtype=np.int64)
+    rows = np.arange(n - 1, dtype=np.int64)
+    starts = rows * (n - 1) - rows * (rows - 1) // 2  # rank of pair (i, i + 1)
+    i = np.searchsorted(starts, ranks, side="right") - 1
+    return np.stack([i, ranks - starts[i] + i + 1], axis=1).astype(np.intp)
+
+
 def pair_indices(n: int, max_pairs: int | None = None, seed: int = 0) -> np.ndarray:
     """Index pairs ``(i, j)``, ``i < j``, of ``n`` postures: all of them, or an even sample.
+
+    The sample never builds the list of all ``n(n-1)/2`` pairs: memory and time grow with
+    ``max_pairs``, not with ``n^2`` (it is the same sample as drawing from that list).
 
     Parameters
     ----------
@@ -61,13 +79,88 @@ def pair_indices(n: int, max_pairs: int | None = None, seed: int = 0) -> np.ndar
     Returns
     -------
     ndarray of int, shape (m, 2)
+        Lexicographic order.
     """
-    i, j = np.triu_indices(int(n), k=1)
-    pairs = np.stack([i, j], axis=1)
-    if max_pairs is not None and len(pairs) > max_pairs:
-        keep = np.sort(np.random.default_rng(seed).choice(len(pairs), size=int(max_pairs), replace=False))
-        pairs = pairs[keep]
-    return pairs
+    n = int(n)
+    total = n * (n - 1) // 2
+    if max_pairs is None or total <= max_pairs:
+        i, j = np.triu_indices(n, k=1)
+        return np.stack([i, j], axis=1)
+    keep = np.sort(np.random.default_rng(seed).choice(total, size=int(max_pairs), replace=False))
+    return _pairs_of_ranks(n, keep)
+
+
+#: Up to this many posture pairs (316 postures: a guided capture stops at 255) the checks use every
+#: pair, as they always did.
+ALL_PAIRS_UP_TO = 50000
+#: Above it, each posture is paired with its neighbour in time and at least this many random partners.
+RANDOM_PARTNERS = 10
+
+
+def bounded_pairs(n: int, seed: int = 0) -> np.ndarray:
+    """The posture pairs the pairwise checks use: every pair up to :data:`ALL_PAIRS_UP_TO` of them;
+    above, each posture ``i`` with its neighbour in time ``i + 1`` and ``k`` random partners,
+    ``k = max(RANDOM_PARTNERS, ALL_PAIRS_UP_TO // n)`` (seeded: the same pairs for the same ``n``), so
+    that the cost grows linearly with ``n`` and every posture takes part in ``2k + 2`` pairs or so.
+
+    Parameters
+    ----------
+    n : int
+    seed : int
+
+    Returns
+    -------
+    ndarray of int, shape (m, 2)
+        ``i < j``, lexicographic order, no pair twice; ``m = n(n-1)/2``, or ``m <= (k + 1) n``.
+    """
+    n = int(n)
+    if n * (n - 1) // 2 <= ALL_PAIRS_UP_TO:
+        return pair_indices(n)
+    k = max(RANDOM_PARTNERS, ALL_PAIRS_UP_TO // n)
+    first = np.repeat(np.arange(n), k + 1)
+    offset = np.random.default_rng(seed).integers(1, n, size=(n, k + 1))
+    offset[:, 0] = 1  # the neighbour in time
+    second = (first + offset.reshape(-1)) % n
+    key = np.sort(np.minimum(first, second).astype(np.int64) * n + np.maximum(first, second))
+    key = key[np.r_[True, key[1:] != key[:-1]]]  # (np.unique: the same, many times slower here)
+    return np.stack([key // n, key % n], axis=1).astype(np.intp)
+
+
+def posture_medians(gaps, pairs, n: int) -> np.ndarray:
+    """Per posture, the median of the (non-NaN) values ``gaps`` of the pairs it is part of, shape ``(n,)``
+    (NaN for a posture in no pair): the row medians of the symmetric ``(n, n)`` matrix of the values,
+    without building it.
+
+    Parameters
+    ----------
+    gaps : array-like, shape (m,)
+    pairs : array-like of int, shape (m, 2)
+    n : int
+    """
+    gaps = np.asarray(gaps, dtype=float)
+    pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
+    posture = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    values = np.concatenate([gaps, gaps])
+    finite = ~np.isnan(values)
+    posture, values = posture[finite], values[finite]
+    order = np.lexsort((values, posture))
+    values = values[order]
+    counts = np.bincount(posture, minlength=n)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    out = np.full(n, np.nan)
+    has = counts > 0
+    lo, hi = starts[has] + (counts[has] - 1) // 2, starts[has] + counts[has] // 2
+    out[has] = 0.5 * (values[lo] + values[hi])
+    return out
+
+
+def pairs_used(count: int, n: int) -> str:
+    """How many posture pairs a check used, for the text that states it: ``"all 4950 posture pairs"``
+    or ``"109888 of 49995000 posture pairs (neighbours in time and a fixed random sample)"``."""
+    total = int(n) * (int(n) - 1) // 2
+    if int(count) >= total:
+        return f"all {total} posture pairs"
+    return f"{int(count)} of {total} posture pairs (neighbours in time and a fixed random sample)"
 
 
 def relative_angles_deg(rotations, pairs) -> np.ndarray:

@@ -128,12 +128,25 @@ def d_org(fixed) -> float:
     return float(np.linalg.norm(fixed - fixed.mean(axis=0), axis=-1).mean())
 
 
-def d_back(fixed) -> float:
-    """Mean distance between the same point seen from two postures (eq. 23), averaged over points, mm."""
+def d_back(fixed, pairs=None) -> float:
+    """Mean distance between the same point seen from two postures (eq. 23), averaged over points, mm.
+
+    Parameters
+    ----------
+    fixed : array-like, shape (n, m, 3)
+    pairs : array-like of int, shape (p, 2), optional
+        The posture pairs to average over (e.g. ``invariants.bounded_pairs`` of a large session);
+        default every pair ``i < j``, as eq. 23. Taken a block at a time, so memory stays bounded.
+    """
     fixed = np.asarray(fixed, float)
-    n = fixed.shape[0]
-    i, j = np.triu_indices(n, k=1)
-    return float(np.linalg.norm(fixed[i] - fixed[j], axis=-1).mean())
+    if pairs is None:
+        i, j = np.triu_indices(fixed.shape[0], k=1)
+        return float(np.linalg.norm(fixed[i] - fixed[j], axis=-1).mean())
+    pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
+    block = max(1, 2_000_000 // max(fixed.shape[1], 1))
+    total = sum(float(np.linalg.norm(fixed[p[:, 0]] - fixed[p[:, 1]], axis=-1).sum())
+                for p in (pairs[k:k + block] for k in range(0, len(pairs), block)))
+    return total / (len(pairs) * fixed.shape[1])
 
 
 def posture_residuals(fixed) -> np.ndarray:

@@ -59,6 +59,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .invariants import bounded_pairs
 from .metrics import d_org, fixed_points
 from .problem import EYE_IN_HAND, HandEyeProblem
 from .rotations import canonical_quaternions, quaternion_conjugate, quaternion_from_matrix, quaternion_multiply
@@ -111,21 +112,23 @@ MEDIAN_ANGLE_NAME = "relative rotation angle (median)"
 
 
 # ------------------------------------------------------------------------------ relative rotations
-def relative_rotation_quaternions(hand) -> np.ndarray:
+def relative_rotation_quaternions(hand, pairs=None) -> np.ndarray:
     """``Q_A^ij = conj(Q_i) * Q_j`` (Algorithm 1, step 2) of every pair ``i < j``, ``w >= 0``.
 
     Parameters
     ----------
     hand : array-like, shape (n, 4, 4)
         Hand poses ``A_i`` (only their rotations are used).
+    pairs : array-like of int, shape (p, 2), optional
+        Only these pairs (e.g. ``invariants.bounded_pairs`` of a large set); default every pair.
 
     Returns
     -------
-    ndarray, shape (n(n-1)/2, 4)
+    ndarray, shape (n(n-1)/2, 4) or (p, 4)
         Unit quaternions ``(w, x, y, z)``, pairs in lexicographic order (``np.triu_indices``).
     """
     q = quaternion_from_matrix(np.asarray(hand, float)[:, :3, :3])
-    i, j = np.triu_indices(len(q), k=1)
+    i, j = np.triu_indices(len(q), k=1) if pairs is None else np.asarray(pairs, dtype=int).reshape(-1, 2).T
     return canonical_quaternions(quaternion_multiply(quaternion_conjugate(q[i]), q[j]))
 
 
@@ -213,7 +216,8 @@ def rotation_axis_divergence_deg(axes) -> float:
 
 @dataclass(frozen=True)
 class AxisCoverage:
-    """The rotation-axis coverage of a set of hand poses (all posture pairs).
+    """The rotation-axis coverage of a set of hand poses (all posture pairs; a bounded sample of them,
+    ``invariants.bounded_pairs``, for a large set).
 
     Attributes
     ----------
@@ -267,7 +271,8 @@ def hand_axis_coverage(hand, frame: str = "tool0") -> AxisCoverage:
     frame : str
         Name of the hand frame, for the labels.
     """
-    q = relative_rotation_quaternions(hand) if len(hand) else np.zeros((0, 4))
+    # every pair up to ALL_PAIRS_UP_TO of them, else neighbours in time and random partners
+    q = relative_rotation_quaternions(hand, bounded_pairs(len(hand))) if len(hand) else np.zeros((0, 4))
     angles = relative_rotation_angles_deg(q)
     vectors = q[:, 1:]
     rotvec_deg = angles[:, None] * vectors / np.maximum(np.linalg.norm(vectors, axis=1, keepdims=True), 1e-15)

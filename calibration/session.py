@@ -23,7 +23,7 @@ import yaml
 
 from .compact_points import BoardGeometry
 from .errors import SessionError, brief
-from .files import make_folder, parse_yaml, read_text_file, write_failure, write_text_atomic
+from .files import make_folder, parse_yaml, read_text_file, write_failure, write_text_atomic, write_texts_atomic
 from .problem import SETUPS
 from .transforms import pose_from_transform, transform_from_pose
 
@@ -36,6 +36,7 @@ __all__ = [
     "write_yaml_atomic",
     "create_session",
     "write_posture",
+    "write_postures",
     "read_session",
     "read_truth",
     "write_truth",
@@ -131,9 +132,17 @@ def _rounded_pose(transform) -> dict:
     }
 
 
+#: libyaml's emitter where it is installed: the same text as yaml.safe_dump, four times faster.
+_SAFE_DUMPER = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
+
+
+def _yaml_text(data: dict) -> str:
+    return yaml.dump(data, Dumper=_SAFE_DUMPER, sort_keys=False, default_flow_style=None, width=120)
+
+
 def write_yaml_atomic(path: Path, data: dict) -> None:
     """Write ``data`` as YAML to ``path`` atomically (see :func:`write_text_atomic`)."""
-    write_text_atomic(path, yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=120))
+    write_text_atomic(path, _yaml_text(data))
 
 
 def create_session(path, session: Session, overwrite: bool = False) -> Path:
@@ -172,6 +181,12 @@ def write_posture(path, posture: Posture) -> Path:
     target = posture_file(path, posture.index)
     write_yaml_atomic(target, posture.to_dict())
     return target
+
+
+def write_postures(path, postures) -> list:
+    """Write many posture files, each atomically, with one flush to disk for all
+    (``files.write_texts_atomic``); returns their paths."""
+    return write_texts_atomic((posture_file(path, p.index), _yaml_text(p.to_dict())) for p in postures)
 
 
 def _load_yaml(path: Path, what: str) -> dict:

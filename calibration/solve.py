@@ -14,6 +14,7 @@ from .compact_points import compact_points_from_corners, compact_points_from_pos
 from .eiv import solve_eiv
 from .consistency import consistent_majority
 from .errors import CalibrationError
+from .invariants import bounded_pairs
 from .kinematics import load_robot
 from .methods import METHODS, method_names
 from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points, posture_residuals
@@ -264,7 +265,8 @@ def check_motion(problem: HandEyeProblem) -> None:
     """
     # Q_A of every pair (Algorithm 1, step 2): quality_words.relative_rotation_quaternions of the hand. Built
     # with Q_B here, so a board whose points are not finite fails in this first step, as it always has.
-    q_rel = relative_motions(problem).q_a
+    # Every pair of a small session, neighbours in time and random partners of a large one (bounded_pairs).
+    q_rel = relative_motions(problem, bounded_pairs(problem.n)).q_a
     angles = relative_rotation_angles_deg(q_rel)
     if angles.max() < MIN_ROTATION_DEG:
         raise CalibrationError(
@@ -294,15 +296,16 @@ def truth_from_dict(truth: dict | None) -> dict | None:
 
 def _summarise(problem: HandEyeProblem, x: np.ndarray) -> tuple[dict, dict]:
     fixed = fixed_points(problem.hand, x, problem.points_cam)
-    motions_pairs = np.stack(np.triu_indices(problem.n, k=1), axis=1)
+    motions_pairs = bounded_pairs(problem.n)  # every pair up to 200 postures, else a bounded sample
     delta_r, delta_t = axxb_residuals(problem.hand, problem.target2cam, x, motions_pairs)
     metrics = {
         "d_org_mm": d_org(fixed),
-        "d_back_mm": d_back(fixed),
+        "d_back_mm": d_back(fixed, motions_pairs),
         "delta_r": float(np.sqrt(np.mean(delta_r**2))),
         "delta_t_mm": float(np.sqrt(np.mean(delta_t**2))),
         "points": "corners" if problem.points_cam.shape[1] > 3 else "compact",
         "postures": problem.n,
+        "posture_pairs": int(len(motions_pairs)),
     }
     residuals = {int(i): float(r) for i, r in zip(problem.posture_ids, posture_residuals(fixed))}
     return metrics, residuals

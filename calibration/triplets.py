@@ -67,8 +67,9 @@ class RelativeMotions:
     ----------
     pairs : ndarray, shape (p, 2)
         ``(i, j)`` with ``i < j``.
-    pair_lookup : ndarray, shape (n, n)
-        ``pair_lookup[i, j]`` = row of pair ``(i, j)`` (``-1`` on and below the diagonal).
+    pair_lookup : ndarray, shape (n, n), or None
+        ``pair_lookup[i, j]`` = row of pair ``(i, j)`` (``-1`` on and below the diagonal); ``None``
+        for motions of chosen pairs only (:func:`relative_motions` with ``pairs``).
     q_hand : ndarray, shape (n, 4)
         ``Q_A^i``: hand rotations, ``w >= 0``.
     rot_hand : ndarray, shape (n, 3, 3)
@@ -78,7 +79,7 @@ class RelativeMotions:
     """
 
     pairs: np.ndarray
-    pair_lookup: np.ndarray
+    pair_lookup: np.ndarray | None
     q_hand: np.ndarray
     rot_hand: np.ndarray
     pos_hand: np.ndarray
@@ -94,12 +95,16 @@ class RelativeMotions:
         return np.degrees(2.0 * np.arccos(np.clip(self.q_b[:, 0], -1.0, 1.0)))
 
 
-def relative_motions(problem: HandEyeProblem) -> RelativeMotions:
-    """Algorithm 1, step 2, for all pairs ``i < j``."""
+def relative_motions(problem: HandEyeProblem, pairs=None) -> RelativeMotions:
+    """Algorithm 1, step 2, for all pairs ``i < j``, or for the given ``pairs`` (shape ``(p, 2)``,
+    ``i < j``; then without ``pair_lookup``, which the triplets need: a check of the motion, not a solve)."""
     n = problem.n
-    pairs = pair_indices(n)
-    lookup = -np.ones((n, n), dtype=np.intp)
-    lookup[pairs[:, 0], pairs[:, 1]] = np.arange(len(pairs))
+    lookup = None
+    if pairs is None:
+        pairs = pair_indices(n)
+        lookup = -np.ones((n, n), dtype=np.intp)
+        lookup[pairs[:, 0], pairs[:, 1]] = np.arange(len(pairs))
+    pairs = np.asarray(pairs, dtype=np.intp).reshape(-1, 2)
     rot_hand = problem.hand[:, :3, :3]
     q_hand = quaternion_from_matrix(rot_hand)
     i, j = pairs[:, 0], pairs[:, 1]

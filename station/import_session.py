@@ -10,7 +10,8 @@ import numpy as np
 from ..calibration.compact_points import BoardGeometry
 from ..calibration.diagnostics import diagnose
 from ..calibration.errors import SessionError, SessionUsageError
-from ..calibration.session import Session, create_session, write_posture
+from ..calibration.invariants import bounded_pairs, pairs_used
+from ..calibration.session import Session, create_session, write_postures
 from .importers import read_any
 from .importers.inference import format_table
 
@@ -99,8 +100,7 @@ def import_to_session(options: ImportOptions, progress=lambda message: None) -> 
         (out / "truth.yaml").unlink()  # belonged to the replaced (synthetic) session
         removed.append("truth.yaml")
     create_session(out, session, overwrite=options.overwrite)
-    for posture in session.postures:
-        write_posture(out, posture)
+    write_postures(out, session.postures)
     progress(f"wrote {len(session.postures)} postures")
     return ImportOutcome(out, session, findings, removed)
 
@@ -127,6 +127,10 @@ def import_summary(outcome: ImportOutcome) -> list:
     if conventions.get("decided_by"):
         lines.append(f"  decided:  by {', then '.join(conventions['decided_by'])}")
     lines.append(f"  postures: {len(session.postures)} from {r.get('entries_read')} entries")
+    decimated = r.get("decimated")
+    if decimated:
+        lines.append(f"  decimated: stream of {decimated['rows']} rows ({decimated['pairs']} pairs within the stamp "
+                     f"tolerance) decimated to {decimated['postures']} postures by {decimated['how']}")
     if session.target is not None:
         square = f", {session.target.square_mm:g} mm squares" if session.target.square_mm else ""
         lines.append(f"  target:   {session.target.corners[0]}x{session.target.corners[1]} inner corners{square}")
@@ -144,6 +148,7 @@ def import_summary(outcome: ImportOutcome) -> list:
     if table:
         lines.append("  readings of the poses (X-free invariants of AX = XB; misfits near 0 fit):")
         lines += [f"    {line}" for line in table]
-    lines.append(f"  checks:   {len(outcome.findings)} finding(s)" + (" (see warnings)" if outcome.findings else ": nothing odd"))
+    lines.append(f"  checks:   {len(outcome.findings)} finding(s)" + (" (see warnings)" if outcome.findings else ": nothing odd")
+                 + f", pairwise on {pairs_used(len(bounded_pairs(len(session.postures))), len(session.postures))}")
     lines.append(f"session written to {outcome.path}; next: handeye calibrate {outcome.path}")
     return lines

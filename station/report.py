@@ -32,6 +32,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..calibration.errors import HandEyeError
+from ..calibration.invariants import bounded_pairs, pairs_used
 from ..calibration.problem import EYE_IN_HAND, HandEyeProblem
 from ..calibration.quality_words import D_ORG_ALL_NAME, METRIC_MEANINGS, AxisCoverage, hand_frame
 from ..calibration.session import write_text_atomic
@@ -662,10 +663,12 @@ def _preview_section(png: bytes | None, missing: str | None = None) -> str:
             + _img(png, "capture plan preview: the cell from above and from the side") + "</section>")
 
 
-def _findings_section(findings) -> str:
+def _findings_section(findings, postures: int) -> str:
     items = "".join(f"<li>{_e(f)}</li>" for f in findings)
     body = f"<ul>{items}</ul>" if findings else '<p class="note">Nothing odd found in the poses.</p>'
-    return "<h2>Data checks before solving</h2><section>" + body + "</section>"
+    pairs = pairs_used(len(bounded_pairs(postures)), postures)
+    return ("<h2>Data checks before solving</h2><section>" + body
+            + f'<p class="how">The pairwise checks ran on {_e(pairs)}.</p></section>')
 
 
 _FOOTER = (
@@ -712,7 +715,7 @@ def write_report(path_html, assessment: Assessment, title: str = "Hand-eye calib
                  _repeatability_section(a, fixed_frame),
                  "<h2>5. Quality metrics</h2><section>" + _metrics_table(a) + "</section>"]
     if a.findings is not None:
-        sections.append(_findings_section(a.findings))
+        sections.append(_findings_section(a.findings, a.problem.n))
     if a.plan_preview is not None or a.plan_preview_missing is not None:
         sections.append(_preview_section(a.plan_preview, a.plan_preview_missing))
     sections.append(_FOOTER)

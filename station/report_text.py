@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..calibration.invariants import pairs_used
 from ..calibration.quality_words import D_ORG_ALL_NAME, METRIC_MEANINGS
 from ..rapid.literals import pose_literal, rounded_pose
 from .assessment import Assessment
@@ -50,8 +51,16 @@ def _quality_lines(assessment: Assessment) -> list[str]:
         f"  d_back  {m['d_back_mm']:.3f} mm   {METRIC_MEANINGS['d_back']}",
         f"  dR      {m['delta_r']:.5f}     {METRIC_MEANINGS['dR']}",
         f"  dt      {m['delta_t_mm']:.3f} mm   {METRIC_MEANINGS['dt']}",
-        "  (d_back, dR and dt over the same postures as d_org)",
+        "  (d_back, dR and dt over the same postures as d_org" + _pairs_note(m) + ")",
     ]
+
+
+def _pairs_note(metrics: dict) -> str:
+    """``"; over 109888 of 49995000 posture pairs (...)"`` when a large session's pairs were sampled."""
+    n, count = metrics.get("postures"), metrics.get("posture_pairs")
+    if n is None or count is None or count >= n * (n - 1) // 2:
+        return ""
+    return f"; over {pairs_used(count, n)}"
 
 
 def _closing_lines(r) -> list[str]:

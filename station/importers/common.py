@@ -23,7 +23,7 @@ from ...calibration.compact_points import BoardGeometry
 from ...calibration.errors import SessionError, brief
 from ...calibration.files import parse_yaml, read_text_file
 from ...calibration.problem import SETUPS
-from ...calibration.session import MAX_LENGTH_MM, MAX_LENGTH_WORDS, Posture, Session
+from ...calibration.session import MAX_LENGTH_MM, MAX_LENGTH_WORDS, MAX_POSTURE_INDEX, Posture, Session
 from .head import check_log_head, read_head
 from .inference import METRES_BELOW, Constraints, Side, SideReading, infer
 
@@ -295,6 +295,28 @@ def _check_lengths(where, labels, robot_mm, camera_mm) -> None:
                                f"{MAX_LENGTH_WORDS}: is the unit right? (--units)")
 
 
+#: The most postures a session holds: its posture files are postures/0000.yaml .. 9999.yaml.
+MAX_POSTURES = MAX_POSTURE_INDEX + 1
+
+
+def check_posture_count(where, n: int, format_name: str) -> None:
+    """Refuse more pose pairs than a session holds (:data:`MAX_POSTURES`), in one line saying what to do.
+
+    Raises
+    ------
+    SessionError
+    """
+    if n <= MAX_POSTURES:
+        return
+    if format_name == "stream":
+        fix = f"keep at most {MAX_POSTURES} with --max-postures N (the slowest pair in each of N time windows)"
+    else:
+        fix = ("for a time-stamped log of a moving robot, import the robot and camera streams with --format stream, "
+               f"which keeps the slowest pair per time window; else split the log into parts of at most {MAX_POSTURES} rows")
+    raise SessionError(f"{where}: {n} pose pairs, more than the {MAX_POSTURES} postures a session holds "
+                       f"(posture indices 0..{MAX_POSTURE_INDEX}); {fix}")
+
+
 def build_session(
     format_name: str,
     source,
@@ -360,6 +382,7 @@ def build_session(
     robot_side = _side("robot", robot, robot_words, robot_declared, None)
     camera_side = _side("camera", camera, camera_words, camera_declared, None)
     n = len(robot_side.readings[0].poses)
+    check_posture_count(where, n, format_name)
     if n == 0:
         why = "; ".join(f"{d['count']} {d['reason']}" for d in dropped.as_list())
         raise SessionError(f"{where}: no usable pose pair" + (f" ({why})" if why else ""))

@@ -33,7 +33,7 @@ import numpy as np
 
 from ...calibration.errors import SessionError, SessionUsageError, brief
 from ...calibration.session import Session, parse_yaml
-from .common import QUATERNION_ORDERS, Dropped, build_session, parse_json, read_text
+from .common import QUATERNION_ORDERS, Dropped, build_session, check_posture_count, parse_json, read_text
 from .conventions import POSE_WIDTHS, PoseConvention, conventions_for_width, parse_rotation_spec, vendor_units
 from .inference import Side, SideReading
 from .log_text import Table, matrices_from_rows, parse_table
@@ -428,17 +428,26 @@ def _flag_values(euler, side: str) -> list:
 def _paired(robot: Group, camera: Group, path) -> tuple:
     """The two groups restricted to the postures they share (by posture number when both have one)."""
     if robot.keys is not None and camera.keys is not None:
-        common = [k for k in robot.keys if k in set(camera.keys)]
+        robot_at, camera_at = _first_places(robot.keys), _first_places(camera.keys)  # as list.index, in O(n)
+        common = [k for k in robot.keys if k in camera_at]
         if len(common) < len(robot.keys) or len(common) < len(camera.keys):
-            ri = [robot.keys.index(k) for k in common]
-            ci = [camera.keys.index(k) for k in common]
+            ri = [robot_at[k] for k in common]
+            ci = [camera_at[k] for k in common]
             return _take(robot, ri), _take(camera, ci), len(robot.keys) + len(camera.keys) - 2 * len(common)
-        ci = [camera.keys.index(k) for k in robot.keys]
+        ci = [camera_at[k] for k in robot.keys]
         return robot, _take(camera, ci), 0
     if len(robot.values) != len(camera.values):
         raise SessionError(f"{path}: {len(robot.values)} robot poses but {len(camera.values)} camera poses: pair them "
                            f"posture by posture (time-stamped streams: --format stream)")
     return robot, camera, 0
+
+
+def _first_places(keys: list) -> dict:
+    """``{key: index of its first occurrence}``."""
+    places = {}
+    for k, key in enumerate(keys):
+        places.setdefault(key, k)
+    return places
 
 
 def _take(group: Group, index: list) -> Group:
@@ -525,6 +534,7 @@ def read_log(paths, *, setup=None, units=None, board=None, skip_invalid: bool = 
         stage = 0
         try:
             robot, camera, unpaired = _paired(robot, camera, files[0])
+            check_posture_count(files[0], len(robot.values), FORMAT)  # before the readings multiply the poses
             dropped = Dropped()
             for _ in range(unpaired):
                 dropped.add("pose without a partner of the same posture number", "")

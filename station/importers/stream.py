@@ -28,6 +28,7 @@ from scipy.spatial.transform import Rotation
 from ...calibration.errors import SessionError, brief
 from ...calibration.session import Session
 from .common import (
+    ROTATION_TOLERANCE,
     Dropped,
     EntryErrors,
     build_session,
@@ -35,7 +36,6 @@ from .common import (
     check_units,
     detect_unit,
     read_text,
-    transform_from_quaternion,
 )
 
 __all__ = ["FORMAT", "DEFAULT_SETUP", "CAMERA_POSES", "read_stream", "read_pose_stream", "pair_by_stamp",
@@ -94,6 +94,9 @@ def split_stream_files(paths) -> tuple[Path, Path]:
 def read_pose_stream(path, order: str = "xyzw", errors: EntryErrors | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Stamps ``(n,)`` and poses ``(n, 4, 4)`` (file units) of one CSV stream.
 
+    The lines are split one by one and the poses converted all at once (a 250-Hz log has hundreds
+    of thousands of lines); malformed lines are reported in file order, as they come.
+
     Parameters
     ----------
     path : str or Path
@@ -109,8 +112,27 @@ def read_pose_stream(path, order: str = "xyzw", errors: EntryErrors | None = Non
     """
     check_quaternion_order(order)
     errors = errors or EntryErrors(path, False, Dropped())
-    text = read_text(path)
-    stamps, poses = [], []
+    numbers, rows, problems = _stream_rows(read_text(path), order)
+    values = np.array(rows, dtype=float).reshape(-1, 8)
+    reasons = _pose_problems(values, order)
+    problems += [(numbers[k], reasons[k]) for k in range(len(rows)) if reasons[k]]
+    for number, reason in sorted(problems):
+        errors.bad(f"line {number}", reason)
+    good = np.array([not r for r in reasons], dtype=bool)
+    if not good.any():
+        raise SessionError(f"{path}: no pose lines")
+    values = values[good]
+    q = values[:, 4:8] / np.linalg.norm(values[:, 4:8], axis=1, keepdims=True)
+    poses = np.broadcast_to(np.eye(4), (len(values), 4, 4)).copy()
+    poses[:, :3, :3] = Rotation.from_quat(q, scalar_first=(order == "wxyz")).as_matrix()
+    poses[:, :3, 3] = values[:, 1:4]
+    return values[:, 0], poses
+
+
+def _stream_rows(text: str, order: str) -> tuple[list, list, list]:
+    """The line numbers and values of the lines of 8 numbers, and ``(line, reason)`` of the others
+    (blank lines, comments and a header line left out)."""
+    numbers, rows, problems = [], [], []
     first = True
     for number, line in enumerate(text.splitlines(), start=1):
         stripped = line.strip()
@@ -121,28 +143,34 @@ def read_pose_stream(path, order: str = "xyzw", errors: EntryErrors | None = Non
             first = False
             continue  # a header line
         first = False
-        label = f"line {number}"
         if len(fields) != 8:
-            errors.bad(label, f"expected 8 values (t, x, y, z, quaternion {order}); got {len(fields)}")
+            problems.append((number, f"expected 8 values (t, x, y, z, quaternion {order}); got {len(fields)}"))
             continue
         try:
-            values = [float(f) for f in fields]
+            rows.append([float(f) for f in fields])
         except ValueError:
-            errors.bad(label, f"not a number in {stripped[:60]!r}")
+            problems.append((number, f"not a number in {stripped[:60]!r}"))
             continue
-        try:
-            pose = transform_from_quaternion(values[1:4], values[4:8], order)
-        except ValueError as exc:
-            errors.bad(label, str(exc))
-            continue
-        if not np.isfinite(values[0]):
-            errors.bad(label, "the stamp is not finite")
-            continue
-        stamps.append(values[0])
-        poses.append(pose)
-    if not stamps:
-        raise SessionError(f"{path}: no pose lines")
-    return np.array(stamps), np.array(poses)
+        numbers.append(number)
+    return numbers, rows, problems
+
+
+def _pose_problems(values: np.ndarray, order: str) -> list:
+    """Per row of ``(n, 8)`` stream values: why it is not a pose (as ``transform_from_quaternion``
+    says it, then an infinite stamp), or ``""``."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        finite = np.all(np.isfinite(values[:, 1:8]), axis=1)
+        norm = np.linalg.norm(values[:, 4:8], axis=1)
+    stamp = np.isfinite(values[:, 0])
+    out = [""] * len(values)
+    for k in np.flatnonzero(~finite | (np.abs(norm - 1.0) > ROTATION_TOLERANCE) | ~stamp):
+        if not finite[k]:
+            out[k] = "holds NaN or inf"
+        elif abs(norm[k] - 1.0) > ROTATION_TOLERANCE:
+            out[k] = f"quaternion ({order}) has norm {norm[k]:.6g}, not 1"
+        else:
+            out[k] = "the stamp is not finite"
+    return out
 
 
 def pair_by_stamp(robot_t, camera_t, tolerance_s: float) -> tuple[np.ndarray, np.ndarray]:
@@ -202,12 +230,9 @@ def _slowest_per_window(candidates, camera_t, v, w, max_postures: int, dropped: 
     edges = np.linspace(camera_t[candidates[0]], camera_t[candidates[-1]], max_postures + 1)
     window = np.clip(np.searchsorted(edges, camera_t[candidates], side="right") - 1, 0, max_postures - 1)
     score = v[candidates] / 100.0 + w[candidates] / 10.0  # 100 mm/s ~ 10 deg/s
-    chosen = []
-    for b in range(max_postures):
-        members = np.flatnonzero(window == b)
-        if len(members):
-            chosen.append(candidates[members[np.argmin(score[members])]])
-    chosen = np.array(chosen, dtype=int)
+    order = np.lexsort((np.arange(len(candidates)), score, window))  # by window, slowest (then earliest) first
+    first = order[np.r_[True, window[order][1:] != window[order][:-1]]]
+    chosen = np.sort(candidates[first]).astype(int)
     for k in np.setdiff1d(candidates, chosen):
         dropped.add(f"decimated (kept the slowest pair in each of {max_postures} time windows)",
                     f"t={camera_t[k]:.3f}")
@@ -275,12 +300,16 @@ def read_stream(paths, *, setup=None, units=None, board=None, skip_invalid: bool
     speed_v, speed_w = _hand_speeds(robot_t, robot_poses, 1000.0 if robot_unit == "m" else 1.0)
     v, w = speed_v[nearest], speed_w[nearest]
     keep &= ~_moving(keep, v, w, camera_t, rest_mm_s, rest_deg_s, dropped)
-    candidates = _slowest_per_window(np.flatnonzero(keep), camera_t, v, w, max_postures, dropped)
+    paired = np.flatnonzero(keep)
+    candidates = _slowest_per_window(paired, camera_t, v, w, max_postures, dropped)
     labels = [f"t={camera_t[k]:.4f} (robot t={robot_t[nearest[k]]:.4f}, {offset[k] * 1000:.1f} ms apart)"
               for k in candidates]
     details = {"pairing": {"tolerance_ms": tolerance_s * 1000.0, "robot_samples": int(len(robot_t)),
                            "camera_samples": int(len(camera_t)),
                            "max_postures": int(max_postures)}}
+    if len(candidates) < len(paired):
+        details["decimated"] = {"rows": int(len(camera_t)), "pairs": int(len(paired)), "postures": int(len(candidates)),
+                                "how": f"keeping the slowest pair in each of {max_postures} time windows (--max-postures)"}
     return build_session(FORMAT, [robot_path, camera_path], robot_poses[nearest[candidates]],
                          camera_poses[candidates], labels, setup=setup, default_setup=DEFAULT_SETUP, units=units,
                          documented_units="m", board=board, dropped=dropped, entries_read=len(camera_t),
