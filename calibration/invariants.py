@@ -46,7 +46,6 @@ __all__ = [
     "relative_motions",
     "fit_hand_eye",
     "angle_gap_deg",
-    "posture_medians",
 ]
 
 #: Relative motions smaller than this (or this close to 180 deg) have no usable rotation axis.
@@ -324,28 +323,3 @@ def fit_hand_eye(hand, target2cam, pairs=None, min_motion_deg: float = MIN_MOTIO
         x=x,
         g=g,
     )
-
-
-def posture_medians(values, pairs, n: int) -> np.ndarray:
-    """Per posture: the median of a pair quantity over the pairs it belongs to.
-
-    Parameters
-    ----------
-    values : array-like, shape (m,)
-        One value per pair; NaN values are left out.
-    pairs : array-like of int, shape (m, 2)
-    n : int
-        Number of postures.
-
-    Returns
-    -------
-    ndarray, shape (n,)
-        NaN for a posture without a (finite) pair value.
-    """
-    pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
-    table = np.full((int(n), int(n)), np.nan)
-    table[pairs[:, 0], pairs[:, 1]] = values
-    table[pairs[:, 1], pairs[:, 0]] = values
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # "All-NaN slice": a posture without a usable pair
-        return np.nanmedian(table, axis=1)
