@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .station_board import STATION_CORNERS, STATION_SQUARE_MM
+
 from .transforms import transform_from_rotation_translation
 
 __all__ = ["STATION_BOARD", "BoardGeometry", "CompactPoints", "board_corners", "compact_points_from_corners", "compact_points_from_poses"]
@@ -44,7 +46,7 @@ class BoardGeometry:
 
 #: The station's checkerboard, the one default of every board setting: 13 x 8 inner corners (14 x 9
 #: squares) of 30 mm.
-STATION_BOARD = BoardGeometry((13, 8), 30.0)
+STATION_BOARD = BoardGeometry(STATION_CORNERS, STATION_SQUARE_MM)
 
 
 @dataclass(frozen=True)

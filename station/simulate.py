@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..calibration.compact_points import STATION_BOARD
+from ..calibration.station_board import STATION_CORNERS, STATION_SQUARE_MM
 from ..calibration.errors import HandEyeError, UsageError
 from .origin import SIMULATED
 
@@ -23,8 +23,8 @@ class SimulateOptions:
     camera_noise: str = "paper"
     joint_offset_deg: tuple | None = None  # one value per robot axis; None: no offset
     setup: str = "eye_in_hand"
-    corners: tuple = STATION_BOARD.corners
-    square_mm: float = STATION_BOARD.square_mm
+    corners: tuple = STATION_CORNERS
+    square_mm: float = STATION_SQUARE_MM
     seed: int = 0
     scene_seed: int = 0
     overwrite: bool = False

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ...calibration.compact_points import STATION_BOARD
+from ...calibration.station_board import STATION_CORNERS
 from . import argtypes
 
 HELP = "board corners in mm (camera frame) from a stereo image pair or a raw XB3 frame"
@@ -47,8 +47,8 @@ def add_parser(sub):
     p.add_argument("--right", metavar="R.png", help="right image (camera 2)")
     p.add_argument("--xb3-raw", metavar="FRAME", help="raw XB3 frame (3-sensor RGB8 layout)")
     p.add_argument("--stereo", metavar="STEREO.yaml", help="stereo model (default: nominal XB3 wide pair)")
-    p.add_argument("--board", metavar="NXxNY", type=argtypes.corners, default=STATION_BOARD.corners,
-                   help="inner corners, long side first (default {}x{})".format(*STATION_BOARD.corners))
+    p.add_argument("--board", metavar="NXxNY", type=argtypes.corners, default=STATION_CORNERS,
+                   help="inner corners, long side first (default {}x{})".format(*STATION_CORNERS))
     p.add_argument("--square-mm", metavar="MM", type=argtypes.positive, default=30.0,
                    help="square size in mm (default 30); corners measured more than 5%% apart from it are refused")
     p.add_argument("--mono", action="store_true", help="--xb3-raw frame of a mono head (planes are grey, not Bayer)")
