@@ -125,10 +125,7 @@ def _z_rms(x, x_true, uncertainty) -> float:
 
 def run_benchmark(options: BenchmarkOptions, progress=None) -> list[dict]:
     """Run the sweeps; returns one row per (cell, trial, method). ``progress(done, total, label)``."""
-    ours = tuple(options.methods) if options.methods else method_names()
-    unknown = [m for m in ours if not m.startswith("opencv_") and get_method(m) is None]
-    if unknown:
-        raise HandEyeError(f"--methods: {METHODS.unknown(unknown[0])} (or opencv_<name>)")
+    ours = _methods(options)
     use_opencv = options.opencv and opencv_available()
     ocv = [m[len("opencv_"):] for m in ours if m.startswith("opencv_")] if options.methods else list(OPENCV_METHODS)
     ocv = ocv if use_opencv else []
@@ -160,6 +157,21 @@ def run_benchmark(options: BenchmarkOptions, progress=None) -> list[dict]:
             if progress:
                 progress(done, total, f"{sweep} = {value:g}, trial {trial + 1}")
     return rows
+
+
+def _methods(options: BenchmarkOptions) -> tuple[str, ...]:
+    """The methods to run: ``options.methods``, or every row of the methods table (plug-ins' too).
+
+    Raises
+    ------
+    HandEyeError
+        A name that is neither a method nor ``opencv_<name>``, in one line.
+    """
+    ours = tuple(options.methods) if options.methods else method_names()
+    unknown = [m for m in ours if not m.startswith("opencv_") and get_method(m) is None]
+    if unknown:
+        raise HandEyeError(f"--methods: {METHODS.unknown(unknown[0])} (or opencv_<name>)")
+    return ours
 
 
 def _trial_problem(options, scenes, largest, sweep, value, noise, postures, trial):
@@ -307,6 +319,7 @@ def _bars(axes, methods: dict, colours) -> None:
 
 def benchmark(options: BenchmarkOptions, progress=None) -> dict:
     """Run, then write ``results.csv``, ``summary.md`` and plots into ``options.output``."""
+    _methods(options)  # an unknown method fails before anything is written
     folder = make_folder(options.output)  # fails before the long run, not after
     started = time.time()
     rows = run_benchmark(options, progress)

@@ -108,6 +108,9 @@ def run(args) -> int:
 
     if args.json:  # an unwritable --json fails before any solving
         check_output_file(args.json)
+    from ...calibration.solve import method_row
+
+    method_row(args.method)  # an unknown --method, too (the table, a plug-in's methods included)
     wants_report = args.report is not None
     thresholds = None
     if args.thresholds:  # a bad thresholds file fails before any solving
