@@ -10,7 +10,6 @@ import json
 import sys
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from handeye.calibration.methods import METHODS, comparison_methods, method_names
