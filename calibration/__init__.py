@@ -6,8 +6,9 @@ It runs on numpy and scipy alone. The names below load on first use (importing t
     result = calibrate_session(read_session("cal_01"))            # the default method (ml)
     print(result.x, result.metrics["d_org_mm"])
 
-Methods are the rows of :data:`METHODS` (``handeye.calibration.methods``); robots are the YAML
-files of ``calibration/robots`` (:func:`load_robot`).
+Methods are the rows of :data:`METHODS` (``handeye.calibration.methods``; another package adds one
+through the entry-point group ``handeye.methods``, :func:`method_names` lists them all); robots are
+the YAML files of ``calibration/robots`` (:func:`load_robot`).
 """
 
 from __future__ import annotations
@@ -22,9 +23,11 @@ _EXPORTS = {
     "problem_from_session": "solve",
     "CalibrationResult": "solve",
     "ALL_METHODS": "solve",
-    "DEFAULT_METHOD": "solve",
+    "DEFAULT_METHOD": "methods",
     "METHODS": "methods",
     "Method": "methods",
+    "method_names": "methods",
+    "register_method": "methods",
     "read_session": "session",
     "create_session": "session",
     "write_posture": "session",
@@ -54,9 +57,9 @@ if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
     from .compact_points import BoardGeometry  # noqa: F401
     from .errors import CalibrationError, ConfigError, HandEyeError, OutputError, SessionError  # noqa: F401
     from .kinematics import RobotModel, known_robots, load_robot  # noqa: F401
-    from .methods import METHODS, Method  # noqa: F401
+    from .methods import DEFAULT_METHOD, METHODS, Method, method_names, register_method  # noqa: F401
     from .metrics import d_back, d_org  # noqa: F401
     from .problem import EYE_IN_HAND, EYE_TO_HAND, HandEyeProblem  # noqa: F401
     from .session import Posture, Session, create_session, read_session, write_posture  # noqa: F401
-    from .solve import ALL_METHODS, DEFAULT_METHOD, CalibrationResult, calibrate, calibrate_session, problem_from_session  # noqa: F401
+    from .solve import ALL_METHODS, CalibrationResult, calibrate, calibrate_session, problem_from_session  # noqa: F401
     from .transforms import pose_from_transform, transform_from_pose  # noqa: F401

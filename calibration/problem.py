@@ -18,11 +18,13 @@ import numpy as np
 from .compact_points import CompactPoints
 from .transforms import invert_transforms
 
-__all__ = ["EYE_IN_HAND", "EYE_TO_HAND", "SETUPS", "HandEyeProblem", "hand_poses"]
+__all__ = ["EYE_IN_HAND", "EYE_TO_HAND", "SETUPS", "MIN_POSTURES", "HandEyeProblem", "hand_poses"]
 
 EYE_IN_HAND = "eye_in_hand"
 EYE_TO_HAND = "eye_to_hand"
 SETUPS = (EYE_IN_HAND, EYE_TO_HAND)
+#: The fewest postures any method solves from (three give two independent motions).
+MIN_POSTURES = 3
 
 
 def hand_poses(tool02base, setup: str) -> np.ndarray:

@@ -5,7 +5,9 @@ The fixed-frame position of board point ``p`` seen at posture ``n`` is affine in
 
     x_np(θ) = R_n R_X q_np + R_n t_X + p_n = G_np θ + p_n        (eq. 13)
 
-so all candidates are scored with one matrix product per chunk. The criteria:
+so all candidates are scored with one matrix product per chunk. The criteria (each the ``solver`` of
+its row of the methods table, ``calibration.methods``; :func:`select_candidate` takes the row's name or
+the function):
 
 ``mcr``  least rotational error δR (eq. 16), summed over all pairs: a quadratic form in vec(R_X).
 ``mct``  least translational error δt (eq. 16), summed over all pairs: a quadratic form in θ.
@@ -28,13 +30,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .methods import get_method, method_names
 from .parallel import map_chunks
 from .rotations import matrix_from_quaternion
 from .triplets import Candidates, RelativeMotions
 
-__all__ = ["CRITERIA", "CandidateScorer", "Selection", "select_candidate"]
-
-CRITERIA = ("mcr", "mct", "mco", "mcb", "mcy")
+__all__ = [
+    "CandidateScorer",
+    "Selection",
+    "SelectionInputs",
+    "select_candidate",
+    "least_rotation_residual",
+    "least_translation_residual",
+    "least_d_org",
+    "least_d_back",
+    "least_truth_distance",
+]
 
 #: Candidates scored per chunk (bounds the memory: chunk * n * points * 3 doubles).
 CHUNK = 4096
@@ -69,6 +80,28 @@ class Selection:
     score: float
     scores: np.ndarray
     exact_evaluations: int
+
+
+@dataclass(frozen=True)
+class SelectionInputs:
+    """What a selection criterion may need besides the candidates.
+
+    Attributes
+    ----------
+    scorer : CandidateScorer
+        Built on the compact points (``p = 3``) of the problem.
+    motions : RelativeMotions or None
+        The posture pairs' relative motions (``mcr``, ``mct``).
+    centres_cam : ndarray, shape (n, 3), or None
+        The board centre per posture in the camera frame (``mct``).
+    truth_points : ndarray, shape (p, 3), or None
+        True fixed-frame positions of the scorer's points (``mcy``; synthetic sessions only).
+    """
+
+    scorer: "CandidateScorer"
+    motions: RelativeMotions | None = None
+    centres_cam: np.ndarray | None = None
+    truth_points: np.ndarray | None = None
 
 
 class CandidateScorer:
@@ -216,53 +249,94 @@ def _translation_form(motions: RelativeMotions, centres_cam: np.ndarray, r_b: np
 
 
 def select_candidate(
-    criterion: str,
+    criterion,
     candidates: Candidates,
     scorer: CandidateScorer,
     motions: RelativeMotions | None = None,
     centres_cam: np.ndarray | None = None,
     truth_points: np.ndarray | None = None,
 ) -> Selection:
-    """Pick the valid candidate that minimises ``criterion`` (one of :data:`CRITERIA`).
+    """Pick the valid candidate that minimises ``criterion``.
 
     Parameters
     ----------
-    criterion : str
+    criterion : str or callable
+        The name of a paper method whose row holds a criterion (``mcr``, ``mct``, ``mco``, ``mcb``,
+        ``mcy`` and any plug-in's), or the criterion itself: ``criterion(theta, inputs) -> Selection``
+        over the columns of ``theta (12, c)``, the valid candidates, with ``inputs`` a
+        :class:`SelectionInputs`.
     candidates : Candidates
     scorer : CandidateScorer
         Built on the compact points (``p = 3``) of the problem.
     motions, centres_cam : needed by ``mcr`` and ``mct``.
     truth_points : ndarray, shape (p, 3)
         True fixed-frame positions of the scorer's points; needed by ``mcy``.
+
+    Returns
+    -------
+    Selection
+        ``index`` is a row of ``candidates``; ``scores`` has one entry per candidate (NaN where not scored).
+
+    Raises
+    ------
+    ValueError
+        No valid candidate, an unknown criterion name, or a criterion without the inputs it needs.
     """
+    choose = _criterion(criterion)
     valid = np.flatnonzero(candidates.valid)
     if len(valid) == 0:
         raise ValueError("no triplet of postures gives a well-posed solution")
     theta = _theta(candidates.rotation[valid], candidates.translation[valid])
+    chosen = choose(theta, SelectionInputs(scorer, motions, centres_cam, truth_points))
     scores = np.full(len(candidates), np.nan)
-    evaluated = len(valid)
-    if criterion == "mcr":
-        k = _rotation_form(motions, matrix_from_quaternion(motions.q_b))
-        u = theta[:9]
-        total = 6.0 * len(motions.pairs) - 2.0 * np.einsum("ic,ij,jc->c", u, k, u)
-        values = np.sqrt(np.maximum(total, 0.0) / len(motions.pairs))
-    elif criterion == "mct":
-        h, g, c = _translation_form(motions, centres_cam, matrix_from_quaternion(motions.q_b))
-        total = np.einsum("ic,ij,jc->c", theta, h, theta) + 2.0 * g @ theta + c
-        values = np.sqrt(np.maximum(total, 0.0) / len(motions.pairs))
-    elif criterion == "mco":
-        values = _chunked(lambda t: scorer.radius_statistics(t)[0].mean(axis=0), theta)
-    elif criterion == "mcy":
-        if truth_points is None:
-            raise ValueError("mcy needs the true board points (synthetic sessions only)")
-        values = _chunked(lambda t: scorer.distance_to(t, truth_points), theta)
-    elif criterion == "mcb":
-        return _select_d_back(valid, theta, scorer, scores)
-    else:
-        raise ValueError(f"unknown selection criterion {criterion!r}; use one of {', '.join(CRITERIA)}")
-    scores[valid] = values
-    best = int(valid[np.argmin(values)])
-    return Selection(best, float(scores[best]), scores, evaluated)
+    scores[valid] = chosen.scores
+    return Selection(int(valid[chosen.index]), float(chosen.score), scores, int(chosen.exact_evaluations))
+
+
+def _criterion(criterion):
+    """The criterion function of ``criterion`` (a function, or the name of its row in the methods table)."""
+    if callable(criterion):
+        return criterion
+    row = get_method(criterion)
+    if row is None or row.kind != "paper" or row.solver is None:
+        named = method_names("paper", lambda m: m.solver is not None)
+        raise ValueError(f"unknown selection criterion {criterion!r}; use one of {', '.join(named)}")
+    return row.load()
+
+
+def _least(values: np.ndarray) -> Selection:
+    """The column of the least value, every column scored."""
+    best = int(np.argmin(values))
+    return Selection(best, float(values[best]), values, len(values))
+
+
+def least_rotation_residual(theta: np.ndarray, inputs: SelectionInputs) -> Selection:
+    """``mcr``: the least rotational error δR of AX = XB (eq. 16), RMS over all pairs."""
+    motions = inputs.motions
+    k = _rotation_form(motions, matrix_from_quaternion(motions.q_b))
+    u = theta[:9]
+    total = 6.0 * len(motions.pairs) - 2.0 * np.einsum("ic,ij,jc->c", u, k, u)
+    return _least(np.sqrt(np.maximum(total, 0.0) / len(motions.pairs)))
+
+
+def least_translation_residual(theta: np.ndarray, inputs: SelectionInputs) -> Selection:
+    """``mct``: the least translational error δt of AX = XB (eq. 16), RMS over all pairs, mm."""
+    motions = inputs.motions
+    h, g, c = _translation_form(motions, inputs.centres_cam, matrix_from_quaternion(motions.q_b))
+    total = np.einsum("ic,ij,jc->c", theta, h, theta) + 2.0 * g @ theta + c
+    return _least(np.sqrt(np.maximum(total, 0.0) / len(motions.pairs)))
+
+
+def least_d_org(theta: np.ndarray, inputs: SelectionInputs) -> Selection:
+    """``mco``: the least d_org (eq. 22), the mean distance to the mean point, mm."""
+    return _least(_chunked(lambda t: inputs.scorer.radius_statistics(t)[0].mean(axis=0), theta))
+
+
+def least_truth_distance(theta: np.ndarray, inputs: SelectionInputs) -> Selection:
+    """``mcy``: the least mean distance to the true board points, mm (synthetic sessions only)."""
+    if inputs.truth_points is None:
+        raise ValueError("mcy needs the true board points (synthetic sessions only)")
+    return _least(_chunked(lambda t: inputs.scorer.distance_to(t, inputs.truth_points), theta))
 
 
 def _stage_one(theta: np.ndarray, scorer: CandidateScorer) -> tuple[np.ndarray, np.ndarray]:
@@ -285,7 +359,11 @@ def _stage_one(theta: np.ndarray, scorer: CandidateScorer) -> tuple[np.ndarray, 
     return lower, rows[keep]
 
 
-def _select_d_back(valid: np.ndarray, theta: np.ndarray, scorer: CandidateScorer, scores: np.ndarray) -> Selection:
+def least_d_back(theta: np.ndarray, inputs: SelectionInputs) -> Selection:
+    """``mcb``: the least d_back (eq. 23), mm; the exact minimiser, most candidates only bounded
+    (see the module docstring); ``scores`` holds the exact values, NaN for the others."""
+    scorer = inputs.scorer
+    scores = np.full(theta.shape[1], np.nan)
     # Stage 1: a candidate whose lower bound exceeds some candidate's upper bound cannot win.
     lower, survivors = _stage_one(theta, scorer)
     # Stage 2: a tighter lower bound (1-D projections) for the survivors only.
@@ -301,9 +379,8 @@ def _select_d_back(valid: np.ndarray, theta: np.ndarray, scorer: CandidateScorer
             break
         exact = scorer.d_back(theta[:, rows])
         evaluated += len(rows)
-        scores[valid[rows]] = exact
+        scores[rows] = exact
         k = int(np.argmin(exact))
         if exact[k] < best_score or (exact[k] == best_score and rows[k] < best_row):
             best_score, best_row = float(exact[k]), int(rows[k])
-    best = int(valid[best_row])
-    return Selection(best, best_score, scores, evaluated)
+    return Selection(best_row, best_score, scores, evaluated)

@@ -11,15 +11,15 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .compact_points import compact_points_from_corners, compact_points_from_poses
-from .eiv import solve_eiv
 from .consistency import consistent_majority
 from .errors import CalibrationError
 from .invariants import bounded_pairs
 from .kinematics import load_robot
-from .methods import METHODS, method_names
+from .methods import DEFAULT_METHOD, METHODS, Method, get_method, method_names
 from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points, posture_residuals
+from .paper import solve_paper, truth_board_points
 from .plausibility import check_plausible
-from .problem import EYE_IN_HAND, HandEyeProblem, hand_poses
+from .problem import EYE_IN_HAND, MIN_POSTURES, HandEyeProblem, hand_poses
 from .quality_words import (
     MIN_AXIS_ANGLE_DEG,
     MIN_AXIS_DIVERGENCE_DEG,
@@ -27,19 +27,10 @@ from .quality_words import (
     rotation_axis_divergence_deg,
     usable_axes,
 )
-from .refine import (
-    ANGLE_GAP_FLOOR_DEG,
-    RESIDUAL_FLOOR_MM,
-    angle_gaps_deg,
-    keep_majority,
-    posture_residuals_to,
-    refine_point_consistency,
-    robust_outliers,
-)
-from .selection import CandidateScorer, select_candidate
+from .refine import posture_residuals_to
 from .session import Session
 from .transforms import pose_from_transform, transform_from_pose
-from .triplets import all_postures_solution, relative_motions, triplet_candidates
+from .triplets import relative_motions
 
 __all__ = [
     "PAPER_METHODS",
@@ -52,21 +43,26 @@ __all__ = [
     "check_motion",
     "calibrate",
     "calibrate_session",
+    "method_row",
     "truth_from_dict",
 ]
 
-#: The paper's variants (section 4): MC without selection, the others select among triplets.
-PAPER_METHODS = method_names("paper")
-#: mcb, outlier postures out, robust point-consistency refinement, uncertainty (the default before ``ml``).
+#: The ``robust`` estimator's name (mcb, outlier postures out, robust refinement, uncertainty).
 ROBUST_METHOD = "robust"
-#: The recommended default: maximum likelihood with errors in variables (calibration/eiv.py).
-ML_METHOD = "ml"
-DEFAULT_METHOD = ML_METHOD
-#: Every method name ``calibrate`` accepts (the table of ``methods``): the paper's, the default, the
-#: robust pipeline, the classic solvers.
-ALL_METHODS = method_names()
+#: The recommended default's name (``methods.DEFAULT_METHOD``): maximum likelihood with errors in variables.
+ML_METHOD = DEFAULT_METHOD
 
-MIN_POSTURES = 3
+
+def __getattr__(name: str):
+    """``ALL_METHODS`` (every name ``calibrate`` accepts) and ``PAPER_METHODS`` (the paper's variants),
+    read from the methods table now, so they hold the methods of installed plug-ins too."""
+    if name == "ALL_METHODS":
+        return method_names()
+    if name == "PAPER_METHODS":
+        return method_names("paper")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 MIN_ROTATION_DEG = MIN_AXIS_ANGLE_DEG
 
 
@@ -101,6 +97,10 @@ class CalibrationResult:
     excluded : dict
         ``{posture index: reason}`` of gross postures left out before solving (``problem.excluded``);
         they are among ``outliers`` too.
+    residuals_on : str
+        What ``residuals_mm`` measure: ``"compact"``, the three compact board points (methods that
+        judge postures: the estimators), or ``"points"``, the problem's points (the board corners, or
+        the compact points of a session of board poses).
     """
 
     method: str
@@ -115,6 +115,7 @@ class CalibrationResult:
     uncertainty: dict | None = None
     cross_validation: dict | None = None
     excluded: dict = field(default_factory=dict)
+    residuals_on: str = "points"
 
     @property
     def parent(self) -> str:
@@ -311,33 +312,6 @@ def _summarise(problem: HandEyeProblem, x: np.ndarray) -> tuple[dict, dict]:
     return metrics, residuals
 
 
-def _solve_paper(problem: HandEyeProblem, method: str, truth: dict | None) -> tuple[np.ndarray, dict]:
-    motions = relative_motions(problem)
-    if method == "mc":
-        return all_postures_solution(problem, motions), {"candidates": 0}
-    candidates = triplet_candidates(problem, motions)
-    scorer = CandidateScorer(problem.hand, problem.compact.points)
-    truth_points = None
-    if method == "mcy":
-        if truth is None:
-            raise CalibrationError("mcy needs the true board pose (truth.yaml of a synthetic session)")
-        t = truth["target2fixed"]
-        truth_points = problem.compact.target_points @ t[:3, :3].T + t[:3, 3]
-    try:
-        selection = select_candidate(method, candidates, scorer, motions, problem.compact.points[:, 0, :], truth_points)
-    except ValueError as exc:
-        raise CalibrationError(f"{exc}: rotate the flange about different axes between postures") from None
-    triplet = candidates.triplets[selection.index]
-    details = {
-        "candidates": int(len(candidates)),
-        "valid_candidates": int(candidates.valid.sum()),
-        "exact_evaluations": int(selection.exact_evaluations),
-        "selected_triplet": [int(problem.posture_ids[i]) for i in triplet],
-        "criterion_value": selection.score,
-    }
-    return candidates.transform(selection.index), details
-
-
 _WARM = False
 
 
@@ -349,51 +323,6 @@ def _warm_up_numerics() -> None:
         np.linalg.eigh(np.broadcast_to(np.eye(4), (8, 4, 4)))
         _ = a @ a
         _WARM = True
-
-
-MAX_OUTLIER_ROUNDS = 5
-
-
-def _solve_robust(problem: HandEyeProblem):
-    """mcb on the postures that keep the rotation-angle invariant, then alternate robust refinement
-    and outlier detection until the inlier set is stable; never drops more than half the postures."""
-    n = problem.n
-    gaps = angle_gaps_deg(relative_motions(problem))
-    gap_flags = keep_majority(robust_outliers(gaps, ANGLE_GAP_FLOOR_DEG), MIN_POSTURES)
-    start_problem = problem.subset(~gap_flags)
-    try:
-        x, start_details = _solve_paper(start_problem, "mcb", None)
-    except CalibrationError:
-        x, start_details = _solve_paper(problem, "mcb", None)
-    flags = gap_flags.copy()
-    for rounds in range(1, MAX_OUTLIER_ROUNDS + 1):
-        keep = ~flags
-        refinement = refine_point_consistency(problem.hand[keep], problem.compact.points[keep], x)
-        x = refinement.x
-        residuals = posture_residuals_to(problem.hand, x, problem.compact.points, refinement.fixed_points)
-        new_flags = robust_outliers(residuals, RESIDUAL_FLOOR_MM) | gap_flags
-        if new_flags.sum() > n // 2:  # keep the better half at least
-            new_flags = residuals > np.sort(residuals)[n - n // 2 - 1]
-        if n - new_flags.sum() < MIN_POSTURES or np.array_equal(new_flags, flags):
-            break
-        flags = new_flags
-    else:  # the inlier set kept changing: the answer is the refinement over the last one
-        refinement = refine_point_consistency(problem.hand[~flags], problem.compact.points[~flags], x)
-        x = refinement.x
-        residuals = posture_residuals_to(problem.hand, x, problem.compact.points, refinement.fixed_points)
-    details = {
-        "start": {"method": "mcb", **start_details},
-        "outlier_rounds": rounds,
-        "refinement": {"loss": "soft_l1", "evaluations": refinement.iterations, "converged": refinement.success},
-        "angle_gap_deg": {str(int(i)): float(g) for i, g in zip(problem.posture_ids, gaps)},
-    }
-    uncertainty = {
-        "translation_mm": [float(v) for v in refinement.sigma_translation_mm],
-        "rotation_deg": [float(v) for v in refinement.sigma_rotation_deg],
-        "level": "one sigma of the random errors (sandwich covariance of the refinement); "
-                 "systematic robot errors are not included",
-    }
-    return x, details, flags, residuals, uncertainty
 
 
 def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | None = None,
@@ -435,44 +364,86 @@ def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict |
     """:func:`calibrate` without its guard against numerical failures."""
     if problem.excluded:  # gross postures named before solving: solve without them, report them as outliers
         return _with_excluded(problem, _calibrate(problem.subset(~problem.excluded_mask), method, truth, progress))
-    method = (method or DEFAULT_METHOD).lower()
-    if method not in ALL_METHODS:
-        raise CalibrationError(f"unknown method {method!r}; choose one of {', '.join(ALL_METHODS)}")
+    row = method_row(method)
     if problem.n < MIN_POSTURES:
         raise CalibrationError(f"at least {MIN_POSTURES} postures are needed; got {problem.n}")
     check_motion(problem)
+    if row.needs_truth and truth is None:
+        raise CalibrationError(f"{row.name} needs the true board pose (truth.yaml of a synthetic session)")
+    solver = _load_solver(row)
     _warm_up_numerics()
     start = time.perf_counter()
-    outliers, uncertainty, cross_validation = [], None, None
-    if method == ML_METHOD:
-        solution = solve_eiv(problem, progress)
-        runtime = time.perf_counter() - start
-        x, details, flags = solution.x, solution.details, solution.outliers
-        metrics, _ = _summarise(problem.subset(~flags), x)
-        residuals = {int(i): float(r) for i, r in zip(problem.posture_ids, solution.residuals_mm)}
-        outliers = [int(i) for i in problem.posture_ids[flags]]
-        uncertainty = solution.uncertainty
-        cross_validation = solution.cross_validation
-    elif method == ROBUST_METHOD:
-        x, details, flags, posture_res, uncertainty = _solve_robust(problem)
-        runtime = time.perf_counter() - start
-        metrics, _ = _summarise(problem.subset(~flags), x)
-        residuals = {int(i): float(r) for i, r in zip(problem.posture_ids, posture_res)}
-        outliers = [int(i) for i in problem.posture_ids[flags]]
-    elif METHODS[method].kind == "classic":
-        x = METHODS[method].solver(problem.hand, problem.target2cam)
-        runtime = time.perf_counter() - start
-        details = {"reference": METHODS[method].reference}
+    solved = _BY_KIND[row.kind](row, solver, problem, truth, progress)
+    runtime = time.perf_counter() - start
+    x, outliers = solved.x, []
+    if solved.outliers is None:  # no judgement of postures: every posture's residual on the problem's points
         metrics, residuals = _summarise(problem, x)
     else:
-        x, details = _solve_paper(problem, method, truth)
-        runtime = time.perf_counter() - start
-        metrics, residuals = _summarise(problem, x)
-    result = CalibrationResult(method, problem.setup, x, metrics, residuals, outliers, runtime, details,
-                               uncertainty=uncertainty, cross_validation=cross_validation)
+        flags = np.asarray(solved.outliers, bool)
+        metrics, _ = _summarise(problem.subset(~flags), x)
+        residuals = {int(i): float(r) for i, r in zip(problem.posture_ids, solved.residuals_mm)}
+        outliers = [int(i) for i in problem.posture_ids[flags]]
+    result = CalibrationResult(row.name, problem.setup, x, metrics, residuals, outliers, runtime, solved.details,
+                               uncertainty=solved.uncertainty, cross_validation=solved.cross_validation,
+                               residuals_on="compact" if solved.outliers is not None else "points")
     if truth is not None:
         result.truth_errors = errors_against_truth(x, truth["x"])
     return result
+
+
+def method_row(method: str | None) -> Method:
+    """The methods table's row of ``method`` (any case; None: :data:`DEFAULT_METHOD`).
+
+    Raises
+    ------
+    CalibrationError
+        A name that is not in the table (nor added by an installed plug-in), in one line.
+    """
+    row = get_method(method or DEFAULT_METHOD)
+    if row is None:
+        raise CalibrationError(METHODS.unknown(str(method).lower()))
+    return row
+
+
+def _load_solver(row: Method):
+    """The row's solver, imported now (before the clock starts); a plug-in that cannot be imported is one line."""
+    try:
+        return row.load()
+    except (ImportError, AttributeError) as exc:
+        raise CalibrationError(f"the solver of method {row.name} ({row.solver}) cannot be loaded: {exc}; "
+                               f"reinstall the package that provides it") from None
+
+
+@dataclass(frozen=True)
+class _Solved:
+    """What a ``paper`` or ``classic`` method gives: ``X`` and its details, no judgement of postures
+    (the attributes an ``estimator``'s solution has, its judgements None)."""
+
+    x: np.ndarray
+    details: dict
+    outliers: None = None
+    residuals_mm: None = None
+    uncertainty: None = None
+    cross_validation: None = None
+
+
+def _by_estimator(row: Method, solver, problem: HandEyeProblem, truth, progress):
+    """``estimator``: the whole pipeline on the problem."""
+    return solver(problem, progress)
+
+
+def _by_selection(row: Method, solver, problem: HandEyeProblem, truth, progress) -> _Solved:
+    """``paper``: Algorithm 1 with the row's selection criterion (none: all postures at once)."""
+    return _Solved(*solve_paper(problem, solver, truth_board_points(problem, truth) if row.needs_truth else None))
+
+
+def _by_axxb(row: Method, solver, problem: HandEyeProblem, truth, progress) -> _Solved:
+    """``classic``: an AX = XB solver on the hand and board poses."""
+    return _Solved(solver(problem.hand, problem.target2cam), {"reference": row.reference})
+
+
+#: How each kind of method is called (``calibration.methods``, "Kinds").
+_BY_KIND = {"estimator": _by_estimator, "paper": _by_selection, "classic": _by_axxb}
 
 
 def _with_excluded(problem: HandEyeProblem, result: CalibrationResult) -> CalibrationResult:

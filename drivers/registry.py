@@ -13,32 +13,19 @@ to handeye::
 
 Entry points are read at the first question asked of a registry (and again after :meth:`Registry.refresh`),
 so importing handeye never imports a plug-in. Everything that lists back ends (config validation,
-command-line choices, the runtime, the mocks, test parameters) asks the registry.
+command-line choices, the runtime, the mocks, test parameters) asks the registry. The machinery is
+:class:`handeye.calibration.registry.Registry`, shared with the calibration methods.
 """
 
 from __future__ import annotations
 
-import importlib
-import importlib.metadata
-import logging
-from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass, replace
-from typing import Generic, TypeVar
+from dataclasses import dataclass
+from typing import TypeVar
+
+from ..calibration.registry import Registry as _Registry
+from ..calibration.registry import load_target
 
 __all__ = ["Backend", "Registry", "load_target"]
-
-log = logging.getLogger(__name__)
-
-
-def load_target(target):
-    """The object a ``"module:attribute"`` string names (imported now), or ``target`` itself."""
-    if not isinstance(target, str):
-        return target
-    module_name, _, attribute = target.partition(":")
-    obj = importlib.import_module(module_name)
-    for part in attribute.split(".") if attribute else ():
-        obj = getattr(obj, part)
-    return obj
 
 
 @dataclass(frozen=True)
@@ -67,8 +54,9 @@ class Backend:
 B = TypeVar("B", bound=Backend)
 
 
-class Registry(Mapping, Generic[B]):
-    """Back ends of one kind by name, in registration order (the package's first, then plug-ins).
+class Registry(_Registry[B]):
+    """Back ends of one kind by name, in registration order (the package's first, then plug-ins):
+    :class:`handeye.calibration.registry.Registry` whose entry points may also name a class.
 
     Parameters
     ----------
@@ -81,47 +69,6 @@ class Registry(Mapping, Generic[B]):
         then described with the defaults of ``entry_type``.
     """
 
-    def __init__(self, kind: str, group: str, entry_type: type[B]):
-        self.kind, self.group, self.entry_type = kind, group, entry_type
-        self._registered: dict[str, B] = {}
-        self._discovered: dict[str, B] | None = None  # None: entry points not read yet
-
-    # ------------------------------------------------------------------ filling
-    def register(self, backend: B) -> B:
-        """Add ``backend`` (or replace the one of the same name); returns it."""
-        if not isinstance(backend, self.entry_type):
-            raise TypeError(f"a {self.kind} is registered as a {self.entry_type.__name__}; got {type(backend).__name__}")
-        backend = replace(backend, name=backend.name.lower())
-        self._registered[backend.name] = backend
-        return backend
-
-    def unregister(self, name: str) -> None:
-        """Remove a back end registered in code (entry points come back at the next refresh)."""
-        self._registered.pop(name.lower(), None)
-
-    def update(self, name: str, **changes) -> B:
-        """Change some fields of a registered back end (``mock=...`` from the mocks); returns it."""
-        return self.register(replace(self[name], **changes))
-
-    def refresh(self) -> None:
-        """Forget the entry points read so far: the next question reads them again (new installs)."""
-        self._discovered = None
-        importlib.invalidate_caches()
-
-    def _entry_points(self) -> dict[str, B]:
-        if self._discovered is None:
-            found: dict[str, B] = {}
-            for point in importlib.metadata.entry_points(group=self.group):
-                try:
-                    backend = self._describe(point.name, point.load())
-                except Exception as exc:  # a broken plug-in must not break the package
-                    log.warning("%s %r from entry point %s is unusable: %s", self.kind, point.name, point.value, exc)
-                    continue
-                if backend.name not in self._registered:
-                    found.setdefault(backend.name, backend)
-            self._discovered = found
-        return self._discovered
-
     def _describe(self, name: str, obj) -> B:
         if isinstance(obj, self.entry_type):
             return obj
@@ -129,26 +76,3 @@ class Registry(Mapping, Generic[B]):
             return self.entry_type(name=name.lower(), target=obj, help=f"{name} ({obj.__module__}.{obj.__qualname__})")
         raise TypeError(f"an entry point of {self.group} must name a {self.entry_type.__name__} or a class; "
                         f"got {type(obj).__name__}")
-
-    # ------------------------------------------------------------------ asking
-    def __getitem__(self, name: str) -> B:
-        key = str(name).lower()
-        backend = self._registered.get(key) or self._entry_points().get(key)
-        if backend is None:
-            raise KeyError(name)
-        return backend
-
-    def __iter__(self) -> Iterator[str]:
-        yield from list(self._registered)
-        yield from [name for name in self._entry_points() if name not in self._registered]
-
-    def __len__(self) -> int:
-        return sum(1 for _ in self)
-
-    def names(self, where: Callable[[B], bool] | None = None) -> tuple[str, ...]:
-        """The names, in order; only those whose back end satisfies ``where`` when given."""
-        return tuple(name for name in self if where is None or where(self[name]))
-
-    def unknown(self, name, names=None) -> str:
-        """The one-line message for a name that is not registered."""
-        return f"unknown {self.kind} {name!r}; choose one of {', '.join(self.names() if names is None else names)}"

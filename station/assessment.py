@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..calibration.errors import CalibrationError, HandEyeError
+from ..calibration.methods import comparison_methods
 from ..calibration.metrics import fixed_points
 from ..calibration.problem import EYE_IN_HAND, HandEyeProblem
 from ..calibration.quality_words import AxisCoverage, DOrg, kept_postures, result_d_org
@@ -30,6 +31,7 @@ from .quality import QualityFigures, QualityThresholds, Verdict, quality_figures
 
 __all__ = [
     "COMPARISON_METHODS",
+    "comparison_methods",
     "Assessment",
     "assess",
     "comparison_results",
@@ -39,8 +41,13 @@ __all__ = [
     "method_comparison",
 ]
 
-#: Methods the report compares by default: the robust pipeline (the default before ml), the paper's mcb and mc, three classics.
-COMPARISON_METHODS = ("robust", "mcb", "mc", "park", "tsai", "daniilidis")
+
+def __getattr__(name: str):
+    """``COMPARISON_METHODS``: the methods the report compares, read now from the methods table
+    (``calibration.methods.comparison_methods``: the rows marked ``in_comparison``, a plug-in's too)."""
+    if name == "COMPARISON_METHODS":
+        return comparison_methods()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass(frozen=True)
@@ -124,7 +131,7 @@ def assess(outcome: CalibrationOutcome, thresholds: QualityThresholds | None = N
     judge : bool
         Compute the verdict (``handeye calibrate`` without ``--report`` or ``--thresholds`` shows none).
     methods : sequence of str
-        Methods to compare (e.g. :data:`COMPARISON_METHODS`); the outcome's own result is reused for
+        Methods to compare (e.g. :func:`comparison_methods`); the outcome's own result is reused for
         its method. Empty: no comparison (``Assessment.comparison`` is ``None``).
     tooldata_literal : str, optional
         The RAPID tooldata literal to show beside the pose.
@@ -185,7 +192,7 @@ def _findings(problem: HandEyeProblem) -> list | None:
         return None
 
 
-def comparison_results(problem: HandEyeProblem, methods=COMPARISON_METHODS, truth: dict | None = None,
+def comparison_results(problem: HandEyeProblem, methods=None, truth: dict | None = None,
                        known: dict | None = None) -> dict:
     """Solve ``problem`` with several methods: ``{method: CalibrationResult}``.
 
@@ -194,7 +201,8 @@ def comparison_results(problem: HandEyeProblem, methods=COMPARISON_METHODS, trut
     Parameters
     ----------
     problem : HandEyeProblem
-    methods : sequence of str
+    methods : sequence of str, optional
+        Default: :func:`comparison_methods`, the table's methods marked for the comparison.
     truth : dict, optional
         ``{'x', 'target2fixed'}`` of a synthetic session (fills ``truth_errors``).
     known : dict, optional
@@ -204,7 +212,7 @@ def comparison_results(problem: HandEyeProblem, methods=COMPARISON_METHODS, trut
 
     known = dict(known or {})
     out = {}
-    for method in methods:
+    for method in comparison_methods() if methods is None else methods:
         if method in known:
             out[method] = known[method]
             continue

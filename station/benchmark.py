@@ -25,7 +25,8 @@ import numpy as np
 from ..calibration.errors import CalibrationError, HandEyeError
 from ..calibration.files import make_folder, write_text_atomic
 from ..calibration.metrics import d_back, d_org, errors_against_truth, fixed_points
-from ..calibration.solve import ALL_METHODS, calibrate, problem_from_session
+from ..calibration.methods import DEFAULT_METHOD, METHODS, get_method, method_names
+from ..calibration.solve import calibrate, problem_from_session
 from ..calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session
 from ..calibration.synthetic_poses import opencv_test_problem
 from .opencv_reference import OPENCV_METHODS, opencv_available, solve_opencv
@@ -60,7 +61,8 @@ class BenchmarkOptions:
     pose_noise_trials, pose_noise_poses : int
         Trials and poses per trial of the ``pose_noise`` sweep (OpenCV's test: 100 x 10).
     methods : tuple of str or None
-        Method names (``None``: all of ours and, when available, OpenCV's as ``opencv_<name>``).
+        Method names (``None``: every method of the table, plug-ins' too, and, when available,
+        OpenCV's as ``opencv_<name>``).
     """
 
     output: str = "benchmarks/paper"
@@ -123,7 +125,7 @@ def _z_rms(x, x_true, uncertainty) -> float:
 
 def run_benchmark(options: BenchmarkOptions, progress=None) -> list[dict]:
     """Run the sweeps; returns one row per (cell, trial, method). ``progress(done, total, label)``."""
-    ours = tuple(options.methods) if options.methods else ALL_METHODS
+    ours = _methods(options)
     use_opencv = options.opencv and opencv_available()
     ocv = [m[len("opencv_"):] for m in ours if m.startswith("opencv_")] if options.methods else list(OPENCV_METHODS)
     ocv = ocv if use_opencv else []
@@ -155,6 +157,21 @@ def run_benchmark(options: BenchmarkOptions, progress=None) -> list[dict]:
             if progress:
                 progress(done, total, f"{sweep} = {value:g}, trial {trial + 1}")
     return rows
+
+
+def _methods(options: BenchmarkOptions) -> tuple[str, ...]:
+    """The methods to run: ``options.methods``, or every row of the methods table (plug-ins' too).
+
+    Raises
+    ------
+    HandEyeError
+        A name that is neither a method nor ``opencv_<name>``, in one line.
+    """
+    ours = tuple(options.methods) if options.methods else method_names()
+    unknown = [m for m in ours if not m.startswith("opencv_") and get_method(m) is None]
+    if unknown:
+        raise HandEyeError(f"--methods: {METHODS.unknown(unknown[0])} (or opencv_<name>)")
+    return ours
 
 
 def _trial_problem(options, scenes, largest, sweep, value, noise, postures, trial):
@@ -259,11 +276,7 @@ def plot(table: dict, folder: Path) -> list[Path]:
                     continue
                 # the noise-free cell is exact for everyone (1e-12): leave it out of the noise plots
                 values = [v for v in sorted(cells) if sweep == "postures" or v > 0]
-                style = "-" if name.startswith("mc") or name in ("robust", "ml") else ("--" if not name.startswith("opencv") else ":")
-                if name == "truth":
-                    style = "-."
-                width = 3.0 if name == "ml" else (2.0 if name in ("mcb", "robust") else 1.2)
-                colour = "black" if name == "truth" else ("red" if name == "ml" else colours[index % len(colours)])
+                style, width, colour = _line_style(name, colours[index % len(colours)])
                 ax.plot(values, [cells[v][key] for v in values], style, marker="o", markersize=3, linewidth=width,
                         label=name, color=colour)
             ax.set_xlabel(sweep)
@@ -279,12 +292,24 @@ def plot(table: dict, folder: Path) -> list[Path]:
     return paths
 
 
+def _line_style(name: str, colour) -> tuple[str, float, object]:
+    """Line style, width and colour of a method's curve: the truth dash-dotted black, the default
+    thick red, the paper's variants and the estimators solid (mcb and robust wider), the classic
+    solvers dashed, OpenCV's dotted."""
+    if name == "truth":
+        return "-.", 1.2, "black"
+    row = get_method(name)
+    style = "-" if row is not None and row.kind in ("paper", "estimator") else (":" if name.startswith("opencv") else "--")
+    width = 3.0 if name == DEFAULT_METHOD else (2.0 if name in ("mcb", "robust") else 1.2)
+    return style, width, "red" if name == DEFAULT_METHOD else colour
+
+
 def _bars(axes, methods: dict, colours) -> None:
     """One horizontal bar per method and metric (sweeps with a single cell)."""
     for ax, (key, label) in zip(axes.ravel(), METRICS):
         names = [n for n in methods if not (n == "truth" and "error" in key)]
         values = [next(iter(methods[n].values()))[key] for n in names]
-        colour = ["black" if n == "truth" else ("red" if n == "ml" else colours[i % len(colours)]) for i, n in enumerate(names)]
+        colour = [_line_style(n, colours[i % len(colours)])[2] for i, n in enumerate(names)]
         ax.barh(names, values, color=colour)
         ax.set_xscale("log")
         ax.set_title(label)
@@ -294,6 +319,7 @@ def _bars(axes, methods: dict, colours) -> None:
 
 def benchmark(options: BenchmarkOptions, progress=None) -> dict:
     """Run, then write ``results.csv``, ``summary.md`` and plots into ``options.output``."""
+    _methods(options)  # an unknown method fails before anything is written
     folder = make_folder(options.output)  # fails before the long run, not after
     started = time.time()
     rows = run_benchmark(options, progress)

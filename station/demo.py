@@ -17,7 +17,7 @@ from pathlib import Path
 from ..calibration.errors import HandEyeError
 from ..calibration.files import make_folder, write_failure, write_text_atomic
 from ..calibration.transforms import pose_from_transform, rotation_error_deg, translation_error_mm
-from .assessment import COMPARISON_METHODS, Assessment, assess
+from .assessment import Assessment, assess, comparison_methods
 from .calibrate import calibrate_session_folder
 from .capture import capture
 from .config import StationConfig, default_config
@@ -113,7 +113,7 @@ def _assess(session_dir: Path, config: StationConfig, compare: bool, progress) -
     result = outcome.result
     progress(f"calibrated {outcome.problem.n} postures in {result.runtime_s * 1000:.0f} ms (the default estimator), "
              f"outliers: {result.outliers or 'none'}")
-    assessment = assess(outcome, config_thresholds(config), methods=COMPARISON_METHODS if compare else (),
+    assessment = assess(outcome, config_thresholds(config), methods=comparison_methods() if compare else (),
                         tooldata_literal=tooldata_literal(result.x, config.tool.mass_kg, config.tool.cog_mm))
     progress(assessment.verdict.line())
     return assessment

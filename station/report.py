@@ -567,7 +567,7 @@ def _residuals_section(a: Assessment, fixed_frame: str) -> str:
     result = a.result
     limit = a.verdict.thresholds.max_posture_residual_mm if a.verdict is not None else None
     points_text = ("three board points (the fitted board's centre and one point along each board axis)"
-                   if result.method == "robust" else "board points")
+                   if result.residuals_on == "compact" else "board points")
     outliers = [int(i) for i in result.outliers]
     residual_note = ("Outliers (left out of the solution): "
                      + ", ".join(f"posture {i}: {result.residuals_mm.get(i, float('nan')):.2f} mm" for i in outliers)

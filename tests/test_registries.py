@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from handeye.calibration.methods import METHODS
 from handeye.drivers.camera import CameraError, open_camera
 from handeye.drivers.camera.backends import CAMERAS, CameraBackend, register_backend
 from handeye.drivers.controller import InvalidRequest, open_controller
@@ -31,11 +32,14 @@ def plugin(monkeypatch):
     monkeypatch.syspath_prepend(str(PLUGIN))
     CONTROLLERS.refresh()
     CAMERAS.refresh()
+    METHODS.refresh()  # its .dist-info adds a method too (tests/test_method_plugin.py)
     yield
     monkeypatch.undo()
     sys.modules.pop("handeye_test_plugin", None)
+    sys.modules.pop("handeye_test_plugin_method", None)
     CONTROLLERS.refresh()
     CAMERAS.refresh()
+    METHODS.refresh()
 
 
 def _choices(argv_prefix, option="--protocol"):

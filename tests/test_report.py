@@ -143,6 +143,18 @@ def test_outlier_postures_are_listed_with_their_residuals_and_plotted_apart(tmp_
         assert np.linalg.norm(rep["centre_deviation"][index] - expected) < 0.3
 
 
+@pytest.mark.parametrize("method, points", [
+    ("ml", "three board points (the fitted board's centre"),  # the estimators measure the compact points
+    ("robust", "three board points (the fitted board's centre"),
+    ("mcb", "board points, carried into"),  # the others every corner
+])
+def test_the_residual_section_names_the_points_the_method_measured(tmp_path, method, points):
+    problem = problem_from_session(sample_session(scene(12), GOOD_NOISE))
+    result = calibrate(problem, method)
+    page = write_report(tmp_path / "r.html", assessed(problem, result, "synthetic")).read_text()
+    assert f"the mean distance of that posture's {points}" in page
+
+
 def test_bad_session_fails_with_advice(tmp_path, capsys):
     sc = scene(8)
     noise = NoiseConfig(sigma_cam_mm=5.0, seed=3)

@@ -28,14 +28,12 @@ __all__ = [
     "solve_liang",
 ]
 
-#: CLI name (conventions.md) -> solver.
-CLASSIC_METHODS = {
-    "tsai": solve_tsai,
-    "park": solve_park,
-    "horaud": solve_horaud,
-    "andreff": solve_andreff,
-    "daniilidis": solve_daniilidis,
-    "chou": solve_chou,
-    "lu": solve_lu,
-    "liang": solve_liang,
-}
+
+def __getattr__(name: str):
+    """``CLASSIC_METHODS``: ``{name: solver}`` of the methods table's ``classic`` rows (read now, so
+    it holds a plug-in's AX = XB solver too); the table (``calibration.methods``) is the one list."""
+    if name == "CLASSIC_METHODS":
+        from ..methods import METHODS, method_names
+
+        return {method: METHODS[method].load() for method in method_names("classic")}
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

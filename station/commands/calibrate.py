@@ -6,26 +6,42 @@ import argparse
 
 HELP = "solve a session for the camera pose (cam2tool0, or cam2base eye-to-hand)"
 
-EPILOG = """\
-Methods (--method); without it the recommended default runs:
-  ml      (default) maximum likelihood with errors in variables: camera corners weighted by their
-          stereo covariance, robot poses corrected with a prior from the joint noise (and the arm's
-          kinematic deviations when a likelihood-ratio test finds them), noise levels estimated from
-          the data, outlier postures excluded, a one-sigma uncertainty and a 5-fold cross-validation
-          of the held-out board points (calibration/eiv.py)
-  robust  mcb, then outlier postures detected and excluded, a robust refinement of the point
-          consistency over the inliers, and a one-sigma uncertainty (the default before ml)
-The paper's variants (Deniz & Cakir):
-  mc    all postures at once (Horn least squares over every pair; no selection)
-  mcb   best triplet by back-projection d_back, eq. 23 (mean distance between the same board point
-        seen from two postures)
-  mco   best triplet by d_org, eq. 22 (mean distance to the mean point)
-  mcr   best triplet by the rotation residual of AX = XB (eq. 16)
-  mct   best triplet by the translation residual of AX = XB (eq. 16)
-  mcy   best triplet by the distance to the true board points (synthetic sessions only)
-Classic AX = XB solvers (calibration/classic/README.md says what each minimises):
-  tsai, park, horaud, andreff, daniilidis, chou, lu, liang
+#: How the help introduces each kind of method (``calibration.methods.KINDS``), and the citation its
+#: rows share (a row citing another work names it).
+_KIND_HEADINGS = {
+    "estimator": ("Estimators:", "handeye, after Deniz & Cakir (2018)"),
+    "paper": ("The paper's variants (Deniz & Cakir 2018):", "Deniz & Cakir (2018)"),
+    "classic": ("AX = XB solvers (calibration/classic/README.md says what each published one minimises):", None),
+}
 
+
+def methods_help(width: int = 100) -> str:
+    """The ``--method`` section of the help: every row of the methods table (a plug-in's too), by kind."""
+    import textwrap
+
+    from ...calibration.methods import DEFAULT_METHOD, METHODS, method_names
+
+    lines = [f"Methods (--method); without it the recommended default ({DEFAULT_METHOD}) runs:"]
+    for kind, (heading, shared) in _KIND_HEADINGS.items():
+        names = method_names(kind)
+        if not names:
+            continue
+        column = max(len(name) for name in names) + 4
+        lines.append(heading)
+        for name in names:
+            row = METHODS[name]
+            text = row.reference.rstrip(".") if shared is None else row.summary
+            if shared is not None and row.citation != shared:
+                text += f" ({row.citation})"
+            text = ("(default) " if name == DEFAULT_METHOD else "") + text
+            lines += textwrap.wrap(text, width, initial_indent=f"  {name:<{column - 2}}",
+                                   subsequent_indent=" " * column, break_on_hyphens=False)
+    lines.append("Other installed packages add methods through the entry-point group handeye.methods; "
+                 "they are listed above, under their kind.")
+    return "\n".join(lines) + "\n\n"
+
+
+EPILOG = """\
 Before solving, the robot and board poses are checked against the X-free invariants of AX = XB: a
 session no rigid camera mount fits is refused with the likely cause; a few gross postures that alone
 break the check (robot and camera poses swapped, one posture in another rotation convention, a posture
@@ -67,7 +83,7 @@ Examples:
 
 
 def add_parser(sub):
-    p = sub.add_parser("calibrate", help=HELP, description=HELP, epilog=EPILOG,
+    p = sub.add_parser("calibrate", help=HELP, description=HELP, epilog=methods_help() + EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("session", metavar="SESSION", help="session folder (handeye-session/1)")
     p.add_argument("--method", metavar="NAME", help="solver (see below); default: the recommended one")
@@ -84,7 +100,7 @@ def add_parser(sub):
 def run(args) -> int:
     import sys
 
-    from ..assessment import COMPARISON_METHODS, assess
+    from ..assessment import assess, comparison_methods
     from ..calibrate import calibrate_session_folder, report_path_for
     from ..output import check_output_file, write_json
     from ..report_json import calibration_json
@@ -92,6 +108,9 @@ def run(args) -> int:
 
     if args.json:  # an unwritable --json fails before any solving
         check_output_file(args.json)
+    from ...calibration.solve import method_row
+
+    method_row(args.method)  # an unknown --method, too (the table, a plug-in's methods included)
     wants_report = args.report is not None
     thresholds = None
     if args.thresholds:  # a bad thresholds file fails before any solving
@@ -108,7 +127,7 @@ def run(args) -> int:
     with delayed_progress("calibrate") as update:  # shown only when solving takes over a second
         outcome = calibrate_session_folder(args.session, args.method, args.units, progress=update)
     assessment = assess(outcome, thresholds, judge=wants_report or bool(args.thresholds),
-                        methods=COMPARISON_METHODS if wants_report else ())
+                        methods=comparison_methods() if wants_report else ())
     written = None
     if wants_report:
         from ..report import write_report

@@ -1,0 +1,140 @@
+"""Extensions by name: one registry per kind (calibration methods here; controllers and cameras in
+``handeye.drivers``), filled by the package in code and by other installed packages through entry
+points, the way python-can finds its interfaces.
+
+Each entry is a frozen dataclass with a ``name``. The package registers its own in code; another
+installed package adds one through an entry point of the registry's group, without any change to
+handeye::
+
+    # pyproject.toml of the other package
+    [project.entry-points."handeye.methods"]
+    kabsch = "handeye_kabsch:METHOD"      # a handeye.calibration.methods.Method
+
+Entry points are read at the first question asked of a registry (and again after
+:meth:`Registry.refresh`), so importing handeye never imports a plug-in; a plug-in that cannot be
+loaded is skipped with a warning. Everything that lists entries asks the registry.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.metadata
+import logging
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import replace
+from typing import Generic, TypeVar
+
+__all__ = ["Registry", "load_target"]
+
+log = logging.getLogger(__name__)
+
+E = TypeVar("E")
+
+
+def load_target(target):
+    """The object a ``"module:attribute"`` string names (imported now), or ``target`` itself."""
+    if not isinstance(target, str):
+        return target
+    module_name, _, attribute = target.partition(":")
+    obj = importlib.import_module(module_name)
+    for part in attribute.split(".") if attribute else ():
+        obj = getattr(obj, part)
+    return obj
+
+
+class Registry(Mapping, Generic[E]):
+    """Entries of one kind by name, in registration order (the package's first, then plug-ins).
+
+    ``registry[name] = entry`` registers (the entry's own name must be ``name``) and ``del
+    registry[name]`` unregisters, so a test can swap an entry with ``monkeypatch.setitem``.
+
+    Parameters
+    ----------
+    kind : str
+        What they are, for messages (``method``, ``controller protocol``).
+    group : str
+        The entry-point group other packages register theirs in (``handeye.methods``).
+    entry_type : type
+        The dataclass of this kind's entries; an entry point must name one (subclasses may accept
+        more, see :meth:`_describe`).
+    """
+
+    def __init__(self, kind: str, group: str, entry_type: type[E]):
+        self.kind, self.group, self.entry_type = kind, group, entry_type
+        self._registered: dict[str, E] = {}
+        self._discovered: dict[str, E] | None = None  # None: entry points not read yet
+
+    # ------------------------------------------------------------------ filling
+    def register(self, entry: E) -> E:
+        """Add ``entry`` (or replace the one of the same name); returns it."""
+        if not isinstance(entry, self.entry_type):
+            raise TypeError(f"a {self.kind} is registered as a {self.entry_type.__name__}; got {type(entry).__name__}")
+        entry = replace(entry, name=entry.name.lower())
+        self._registered[entry.name] = entry
+        return entry
+
+    def unregister(self, name: str) -> None:
+        """Remove an entry registered in code (entry points come back at the next refresh)."""
+        self._registered.pop(name.lower(), None)
+
+    def update(self, name: str, **changes) -> E:
+        """Change some fields of a registered entry (``mock=...`` from the mocks); returns it."""
+        return self.register(replace(self[name], **changes))
+
+    def refresh(self) -> None:
+        """Forget the entry points read so far: the next question reads them again (new installs)."""
+        self._discovered = None
+        importlib.invalidate_caches()
+
+    def __setitem__(self, name: str, entry: E) -> None:
+        if getattr(entry, "name", "").lower() != str(name).lower():
+            raise ValueError(f"a {self.kind} named {getattr(entry, 'name', None)!r} cannot be registered as {name!r}")
+        self.register(entry)
+
+    def __delitem__(self, name: str) -> None:
+        if str(name).lower() not in self._registered:
+            raise KeyError(name)
+        self.unregister(name)
+
+    def _entry_points(self) -> dict[str, E]:
+        if self._discovered is None:
+            found: dict[str, E] = {}
+            for point in importlib.metadata.entry_points(group=self.group):
+                try:
+                    entry = self._describe(point.name, point.load())
+                except Exception as exc:  # a broken plug-in must not break the package
+                    log.warning("%s %r from entry point %s is unusable: %s", self.kind, point.name, point.value, exc)
+                    continue
+                if entry.name not in self._registered:
+                    found.setdefault(entry.name, entry)
+            self._discovered = found
+        return self._discovered
+
+    def _describe(self, name: str, obj) -> E:
+        """The entry an entry point's object stands for (here: the object itself, of ``entry_type``)."""
+        if isinstance(obj, self.entry_type):
+            return replace(obj, name=obj.name.lower())
+        raise TypeError(f"an entry point of {self.group} must name a {self.entry_type.__name__}; got {type(obj).__name__}")
+
+    # ------------------------------------------------------------------ asking
+    def __getitem__(self, name: str) -> E:
+        key = str(name).lower()
+        entry = self._registered.get(key) or self._entry_points().get(key)
+        if entry is None:
+            raise KeyError(name)
+        return entry
+
+    def __iter__(self) -> Iterator[str]:
+        yield from list(self._registered)
+        yield from [name for name in self._entry_points() if name not in self._registered]
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
+
+    def names(self, where: Callable[[E], bool] | None = None) -> tuple[str, ...]:
+        """The names, in order; only those whose entry satisfies ``where`` when given."""
+        return tuple(name for name in self if where is None or where(self[name]))
+
+    def unknown(self, name, names=None) -> str:
+        """The one-line message for a name that is not registered."""
+        return f"unknown {self.kind} {name!r}; choose one of {', '.join(self.names() if names is None else names)}"
