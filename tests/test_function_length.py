@@ -1,14 +1,16 @@
-"""Small functions with one job: no function in station/ or calibration/ has a body over 80 lines.
+"""Small functions with one job: no function in any room is over 80 lines.
 
-The body is counted from its first statement (the docstring included) to its last line, for every
-function and method, nested ones too. A function that must stay longer is named below with the reason.
+A function is counted from its ``def`` line to its last line (signature and docstring included), for
+every function and method, nested ones too, in every room (calibration, drivers, station, rapid,
+mocks). A function that must stay longer (a numeric kernel that reads best as one block) is named
+below with the reason.
 """
 
 import ast
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-ROOMS = ("station", "calibration")
+ROOMS = ("calibration", "drivers", "station", "rapid", "mocks")
 MAX_BODY_LINES = 80
 
 #: (file, function) -> why it may be longer. Numeric kernels that read best as one block go here,
@@ -28,7 +30,7 @@ def _walk(node, file, prefix):
     for child in ast.iter_child_nodes(node):
         if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef)):
             name = f"{prefix}{child.name}"
-            yield file, name, child.end_lineno - child.body[0].lineno + 1, child.lineno
+            yield file, name, child.end_lineno - child.lineno + 1, child.lineno
             yield from _walk(child, file, f"{name}.")
         elif isinstance(child, ast.ClassDef):
             yield from _walk(child, file, f"{prefix}{child.name}.")
@@ -36,7 +38,7 @@ def _walk(node, file, prefix):
             yield from _walk(child, file, prefix)
 
 
-def test_no_function_body_over_80_lines():
+def test_no_function_over_80_lines():
     long = [f"{file}:{line} {name} ({lines} lines)" for file, name, lines, line in _function_bodies()
             if lines > MAX_BODY_LINES and (file, name) not in ALLOWED]
     assert not long, f"split these into functions with one job each (or name a numeric kernel in ALLOWED): {long}"
@@ -52,4 +54,4 @@ def test_allow_list_names_only_long_functions():
 def test_the_counter_sees_a_long_function():
     source = "def f():\n    '''doc'''\n" + "    x = 1\n" * 85 + "\n\nclass C:\n    def g(self):\n        return 1\n"
     found = {name: lines for _, name, lines, _ in _walk(ast.parse(source), "x.py", "")}
-    assert found == {"f": 86, "C.g": 1}
+    assert found == {"f": 87, "C.g": 2}

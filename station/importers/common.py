@@ -317,6 +317,45 @@ def check_posture_count(where, n: int, format_name: str) -> None:
                        f"(posture indices 0..{MAX_POSTURE_INDEX}); {fix}")
 
 
+def _check_pair_count(where, n: int, format_name: str, dropped: Dropped) -> None:
+    """Refuse more pose pairs than a session holds (:func:`check_posture_count`), or none at all
+    (saying what was dropped and why)."""
+    check_posture_count(where, n, format_name)
+    if n == 0:
+        why = "; ".join(f"{d['count']} {d['reason']}" for d in dropped.as_list())
+        raise SessionError(f"{where}: no usable pose pair" + (f" ({why})" if why else ""))
+
+
+def _inferred_postures(where, robot_side, camera_side, constraints, labels) -> tuple:
+    """``(inference, postures)``: the reading :func:`~.inference.infer` chooses, and the postures in mm
+    it gives, each with its ``source`` label (lengths checked against the session format's limits)."""
+    try:
+        inference = infer(robot_side, camera_side, constraints)
+    except SessionError as exc:
+        raise SessionError(f"{where}: {exc}") from None
+    robot_mm, camera_mm = inference.robot_mm, inference.camera_mm
+    _check_lengths(where, labels, robot_mm, camera_mm)
+    postures = [
+        Posture(index=k, tool0_in_base=robot_mm[k], target_in_camera=camera_mm[k], extra={"source": str(labels[k])})
+        for k in range(len(robot_mm))
+    ]
+    return inference, postures
+
+
+def _import_record(source, inference, unit_info: dict, notes: list, dropped: Dropped) -> dict:
+    """The parts of a session's ``import`` record that say where it came from and how it was read."""
+    sources = [str(source)] if isinstance(source, (str, Path)) else [str(s) for s in source]
+    return {
+        "source": sources[0] if len(sources) == 1 else sources,
+        "units": unit_info,
+        "conventions": {k: inference.record[k] for k in ("robot", "camera", "setup", "decided_by")},
+        "inference": {k: inference.record[k] for k in ("scores", "candidates")},
+        "dropped": dropped.as_list(),
+        "notes": notes,
+        "warnings": list(inference.warnings),
+    }
+
+
 def build_session(
     format_name: str,
     source,
@@ -382,41 +421,20 @@ def build_session(
     robot_side = _side("robot", robot, robot_words, robot_declared, None)
     camera_side = _side("camera", camera, camera_words, camera_declared, None)
     n = len(robot_side.readings[0].poses)
-    check_posture_count(where, n, format_name)
-    if n == 0:
-        why = "; ".join(f"{d['count']} {d['reason']}" for d in dropped.as_list())
-        raise SessionError(f"{where}: no usable pose pair" + (f" ({why})" if why else ""))
+    _check_pair_count(where, n, format_name, dropped)
     constraints = Constraints(setup=setup, robot_pose=robot_pose, camera_pose=camera_pose, units=units,
                               declared_setup=declared_setup, default_setup=default_setup,
                               conventions_given=conventions_given)
-    try:
-        inference = infer(robot_side, camera_side, constraints)
-    except SessionError as exc:
-        raise SessionError(f"{where}: {exc}") from None
-    robot_mm, camera_mm = inference.robot_mm, inference.camera_mm
-    _check_lengths(where, labels, robot_mm, camera_mm)
+    inference, postures = _inferred_postures(where, robot_side, camera_side, constraints, labels)
     unit_info = _units_record(inference, robot_side, camera_side, units, documented_units, notes)
     notes += inference.notes
-    postures = [
-        Posture(index=k, tool0_in_base=robot_mm[k], target_in_camera=camera_mm[k], extra={"source": str(labels[k])})
-        for k in range(n)
-    ]
-    sources = [str(source)] if isinstance(source, (str, Path)) else [str(s) for s in source]
-    record = {
-        "format": format_name,
-        "source": sources[0] if len(sources) == 1 else sources,
-        "units": unit_info,
-        "setup_how": _setup_how(inference, setup, declared_setup, default_setup),
-        "conventions": {k: inference.record[k] for k in ("robot", "camera", "setup", "decided_by")},
-        "inference": {k: inference.record[k] for k in ("scores", "candidates")},
-        "entries_read": int(entries_read if entries_read is not None else n + dropped.total),
-        "postures": len(postures),
-        "dropped": dropped.as_list(),
-        "notes": notes,
-        "warnings": list(inference.warnings),
-    }
-    if details:
-        record.update(details)
+    read = _import_record(source, inference, unit_info, notes, dropped)
+    record = {"format": format_name, "setup_how": _setup_how(inference, setup, declared_setup, default_setup),
+              "entries_read": int(entries_read if entries_read is not None else n + dropped.total),
+              "postures": len(postures), **read}
+    order = ("format", "source", "units", "setup_how", "conventions", "inference", "entries_read", "postures",
+             "dropped", "notes", "warnings")
+    record = {**{key: record[key] for key in order}, **(details or {})}  # the order session.yaml shows
     return Session(setup=inference.setup, robot=None, target=board, postures=postures, extra={"import": record})
 
 
