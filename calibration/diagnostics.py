@@ -40,9 +40,9 @@ from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from .errors import brief
-from .invariants import bounded_pairs, posture_medians as posture_median_gaps
+from .invariants import bounded_pairs, posture_medians as posture_median_gaps, relative_motions
 from .problem import EYE_IN_HAND, EYE_TO_HAND, SETUPS, hand_poses
-from .transforms import invert_transforms, rotation_error_deg
+from .transforms import rotation_error_deg
 
 __all__ = [
     "Finding",
@@ -164,13 +164,6 @@ def posture_angle_gaps(gaps) -> np.ndarray:
     return np.nanmedian(np.asarray(gaps, dtype=float), axis=1)
 
 
-def _relative_motions(hand, target_in_camera, pairs):
-    i, j = pairs[:, 0], pairs[:, 1]
-    rel_a = invert_transforms(hand[i]) @ hand[j]  # A_ij = A_i^-1 A_j
-    rel_b = target_in_camera[i] @ invert_transforms(target_in_camera[j])  # B_ij = B_i B_j^-1
-    return rel_a, rel_b
-
-
 def _pairs(n: int) -> np.ndarray:
     """The pairs the checks use: every pair of a small session, a bounded sample of a large one
     (``invariants.bounded_pairs``), so that the checks cost time and memory linear in ``n``."""
@@ -224,7 +217,7 @@ def screw_pitch_scale(tool0_in_base, target_in_camera, limits: DiagnosticLimits 
     if len(a) < 2:
         return None
     pairs = _pairs(len(a))
-    rel_a, rel_b = _relative_motions(a, b, pairs)  # eye-in-hand form; the pitch is set-up free
+    rel_a, rel_b = relative_motions(a, b, pairs)  # eye-in-hand form; the pitch is set-up free
     va = Rotation.from_matrix(rel_a[:, :3, :3]).as_rotvec()
     vb = Rotation.from_matrix(rel_b[:, :3, :3]).as_rotvec()
     ok = _usable(va, vb, limits)
@@ -262,7 +255,7 @@ def setup_rotation_residuals(tool0_in_base, target_in_camera,
         if len(pairs) < 2:
             out[setup] = float("nan")
             continue
-        rel_a, rel_b = _relative_motions(hand_poses(a, setup), b, pairs)
+        rel_a, rel_b = relative_motions(hand_poses(a, setup), b, pairs)
         va = Rotation.from_matrix(rel_a[:, :3, :3]).as_rotvec()
         vb = Rotation.from_matrix(rel_b[:, :3, :3]).as_rotvec()
         ok = _usable(va, vb, limits)
@@ -295,7 +288,7 @@ def hand_eye_fit(tool0_in_base, target_in_camera, setup: str,
     pairs = _pairs(len(a))
     if len(pairs) < 2:
         return nan
-    rel_a, rel_b = _relative_motions(hand_poses(a, setup), b, pairs)
+    rel_a, rel_b = relative_motions(hand_poses(a, setup), b, pairs)
     va = Rotation.from_matrix(rel_a[:, :3, :3]).as_rotvec()
     vb = Rotation.from_matrix(rel_b[:, :3, :3]).as_rotvec()
     ok = _usable(va, vb, limits)

@@ -948,19 +948,13 @@ class EivSolution:
 
 
 def _mcb_start(problem: HandEyeProblem, subset: np.ndarray) -> tuple[np.ndarray, dict]:
-    """Algorithm 1 with selection by d_back (eq. 23) on the postures ``subset``."""
-    from .selection import CandidateScorer, select_candidate  # noqa: PLC0415
-    from .triplets import relative_motions, triplet_candidates  # noqa: PLC0415
+    """Algorithm 1 with selection by d_back (eq. 23), the paper's mcb, on the postures ``subset``."""
+    from .paper import solve_paper  # noqa: PLC0415
+    from .selection import least_d_back  # noqa: PLC0415
 
-    sub = problem.subset(subset)
-    motions = relative_motions(sub)
-    candidates = triplet_candidates(sub, motions)
-    selection = select_candidate("mcb", candidates, CandidateScorer(sub.hand, sub.compact.points), motions,
-                                 sub.compact.points[:, 0, :])
-    triplet = candidates.triplets[selection.index]
-    return candidates.transform(selection.index), {
-        "method": "mcb", "postures": int(len(subset)), "candidates": int(len(candidates)),
-        "selected_triplet": [int(sub.posture_ids[i]) for i in triplet], "criterion_value": float(selection.score)}
+    x, details = solve_paper(problem.subset(subset), least_d_back)
+    return x, {"method": "mcb", "postures": int(len(subset)), "candidates": details["candidates"],
+               "selected_triplet": details["selected_triplet"], "criterion_value": float(details["criterion_value"])}
 
 
 def _compact_residuals(problem: HandEyeProblem, x: np.ndarray, target: np.ndarray) -> np.ndarray:
@@ -1163,7 +1157,7 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
         Cross-validation folds (default ``crossval.DEFAULT_FOLDS``; 0 skips the cross-validation).
     """
     from .crossval import DEFAULT_FOLDS  # noqa: PLC0415
-    from .refine import ANGLE_GAP_FLOOR_DEG, RESIDUAL_FLOOR_MM, robust_outliers  # noqa: PLC0415
+    from .refine import ANGLE_GAP_FLOOR_DEG, RESIDUAL_FLOOR_MM, keep_majority, robust_outliers  # noqa: PLC0415
 
     folds = DEFAULT_FOLDS if folds is None else folds
     n = problem.n
@@ -1171,9 +1165,7 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
     total = 3 + folds
     obs = observations(problem)
     gaps = angle_gaps_deg(obs.hand, obs.board)
-    gap_flags = robust_outliers(gaps, ANGLE_GAP_FLOOR_DEG)
-    if n - gap_flags.sum() < max(MIN_POSTURES_KEPT, (n + 1) // 2):
-        gap_flags[:] = False
+    gap_flags = keep_majority(robust_outliers(gaps, ANGLE_GAP_FLOOR_DEG), MIN_POSTURES_KEPT)
     x, start = _start(problem, obs, gap_flags)
     report(1, total, f"start: {start['method']} on {start['postures']} postures")
     # gross outliers of the start: point residuals far out of the others' spread

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .absolute_orientation import rotation_between_vectors
+from .invariants import pair_indices
 from .problem import HandEyeProblem
 from .rotations import (
     canonical_quaternions,
@@ -43,12 +44,6 @@ __all__ = [
 MIN_EIGEN_GAP = 1e-3
 #: Triplets whose translation system has a reciprocal condition number below this are dropped.
 MIN_TRANSLATION_RCOND = 1e-4
-
-
-def pair_indices(n: int) -> np.ndarray:
-    """All pairs ``i < j`` of ``n`` postures, shape ``(n(n-1)/2, 2)``, lexicographic order."""
-    i, j = np.triu_indices(n, k=1)
-    return np.stack([i, j], axis=1)
 
 
 def triplet_indices(n: int) -> np.ndarray:

@@ -37,9 +37,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..errors import CalibrationError
+from ..invariants import relative_motions
 from ..quality_words import MIN_AXIS_DIVERGENCE_DEG, rotation_axis_divergence_deg
 from ..rotations import quaternion_from_matrix, skew
-from ..transforms import invert_transforms, transform_from_rotation_translation
+from ..transforms import transform_from_rotation_translation
 
 __all__ = [
     "MIN_POSTURES",
@@ -210,22 +211,6 @@ def check_pairs(pairs, n: int) -> np.ndarray:
     if np.any(arr[:, 0] == arr[:, 1]):
         raise CalibrationError("a pair (i, i) carries no motion; give pairs of two different postures")
     return arr
-
-
-def relative_motions(hand, target2cam, pairs) -> tuple[np.ndarray, np.ndarray]:
-    """``A_ij = A_i^-1 A_j`` and ``B_ij = B_i B_j^-1`` for every pair.
-
-    Parameters
-    ----------
-    hand, target2cam : ndarray, shape (n, 4, 4)
-    pairs : ndarray of int, shape (p, 2)
-
-    Returns
-    -------
-    a, b : ndarray, shape (p, 4, 4)
-    """
-    i, j = pairs[:, 0], pairs[:, 1]
-    return invert_transforms(hand[i]) @ hand[j], target2cam[i] @ invert_transforms(target2cam[j])
 
 
 def rotation_angles_deg(rotation) -> np.ndarray:
