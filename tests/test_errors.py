@@ -17,6 +17,8 @@ from handeye.drivers.controller.backends import CONTROLLERS
 REPO = Path(__file__).resolve().parents[1]
 #: Exceptions that never leave their module (turned into one of the package's before they do).
 INTERNAL = {"LinkDown",
+            # a key written twice, caught inside the YAML and JSON readers and turned into their one-line error
+            "DuplicateKeyError", "_DuplicateJsonKey",
             # the mock RWS server's error answers (turned into HTTP responses, never raised out of it)
             "HttpError",
             # the RAPID interpreter's control flow (RETURN, RETRY, TRYNEXT, EXIT, Stop, a task asked to stop):
