@@ -13,10 +13,10 @@ import pytest
 from handeye.drivers.camera import CameraError, open_camera
 from handeye.drivers.camera.backends import CAMERAS, CameraBackend, register_backend
 from handeye.drivers.controller import InvalidRequest, open_controller
-from handeye.drivers.controller.backends import CONTROLLERS, ControllerLink
+from handeye.drivers.controller.backends import CONTROLLERS, RAPID_LINKS, ControllerBackend, ControllerLink
 from handeye.mocks.backends import mock_protocols
 from handeye.mocks.controller import start_mock_controller
-from handeye.rapid.links import LINK_MODULES
+from handeye.rapid.links import BUILT_IN_LINKS
 from handeye.station.cli import build_parser, main
 from handeye.station.config import ConfigError, config_from_dict
 from handeye.station.runtime import _controller_options, open_station
@@ -58,9 +58,10 @@ def test_the_package_registers_its_back_ends_and_the_mocks_theirs():
     assert "loopback" not in CONTROLLERS and "blank" not in CAMERAS
 
 
-def test_rapid_has_a_link_module_for_every_controller_back_end():
-    # rapid keeps its own table (it must not import the drivers): this is where the two meet
-    assert tuple(LINK_MODULES) == CONTROLLERS.names()
+def test_every_controller_back_end_carries_its_rapid_link_module():
+    # the back end's entry names its RAPID module; rapid, standing alone, knows the package's own
+    assert tuple(RAPID_LINKS) == CONTROLLERS.names()
+    assert all(RAPID_LINKS[name] is BUILT_IN_LINKS[name] for name in BUILT_IN_CONTROLLERS)
 
 
 def test_every_list_of_back_ends_is_the_registry():
@@ -68,7 +69,7 @@ def test_every_list_of_back_ends_is_the_registry():
     assert _choices(["robot", "status"]) == CONTROLLERS.names()
     assert _choices(["mock", "controller"]) == mock_protocols()
     assert _choices(["demo"]) == mock_protocols()
-    assert _choices(["rapid", "generate"]) == tuple(LINK_MODULES)
+    assert _choices(["rapid", "generate"]) == CONTROLLERS.names()
     with pytest.raises(ConfigError, match="controller.protocol must be one of socket, serial, modbus, rws, mock; got 'x'"):
         config_from_dict({"controller": {"protocol": "x"}, "camera": {"backend": "xb3"}})
     with pytest.raises(ConfigError, match="camera.backend must be one of xb3, mock; got 'x'"):
@@ -119,8 +120,8 @@ def test_a_back_end_registered_in_code_appears_and_goes(monkeypatch):
 # ------------------------------------------------------------------------------------ a plug-in package
 def test_entry_points_add_a_controller_and_a_camera(plugin):
     assert CONTROLLERS.names() == BUILT_IN_CONTROLLERS + ("loopback",)
-    assert CONTROLLERS["loopback"].default_port == 11025 and CONTROLLERS["loopback"].mock is None
-    assert "loopback" not in mock_protocols()  # no mock serves it: not a choice of the mock station
+    assert CONTROLLERS["loopback"].default_port == 11025 and CONTROLLERS["loopback"].mock.default_port == 11026
+    assert mock_protocols()[-1] == "loopback" and RAPID_LINKS["loopback"].module == "HeLoop"
     assert CAMERAS.names() == ("xb3", "mock", "blank") and "BlankCamera" in CAMERAS["blank"].help
     with open_camera("blank", grey=9) as camera:
         assert camera.grab().left.max() == 9
@@ -168,3 +169,44 @@ def test_a_broken_entry_point_is_skipped_with_a_warning(plugin, monkeypatch, cap
     CONTROLLERS.refresh()
     assert CONTROLLERS.names() == BUILT_IN_CONTROLLERS
     assert "controller protocol 'loopback' from entry point handeye_test_plugin:CONTROLLER is unusable" in caplog.text
+
+
+def test_the_plugin_protocol_gets_its_own_rapid_module(plugin, tmp_path, capsys):
+    config = tmp_path / "station.yaml"
+    config.write_text("controller:\n  protocol: loopback\n  write_key: plugin-key-1\ncamera:\n  backend: xb3\n")
+    assert "loopback" in _choices(["rapid", "generate"])
+    assert main(["rapid", "generate", "--config", str(config), "-o", str(tmp_path / "out")]) == 0
+    written = sorted(p.name for p in (tmp_path / "out").iterdir())
+    assert written == ["HeKey.sys", "HeLoop.mod", "HeMain.mod", "HeTool.mod"]
+    text = (tmp_path / "out" / "HeLoop.mod").read_text()
+    assert text.startswith("MODULE HeLoop\n  ! the test plug-in's link") and "$" not in text
+    assert "plugin-key-1" not in text and "HeKeyMatches" in text  # keyed like the built-in line links
+    assert "HeLoop.mod" in capsys.readouterr().out
+
+
+def test_the_demo_runs_on_the_plugin_protocol(plugin, tmp_path, capsys, no_leaked_threads):
+    """The plug-in's own mock runs the plug-in's own RAPID module, which the capture generated."""
+    assert "loopback" in _choices(["demo"]) and "loopback" in _choices(["mock", "controller"])
+    out = tmp_path / "demo.json"
+    code = main(["demo", "--session", str(tmp_path / "demo"), "--json", str(out), "--protocol", "loopback",
+                 "--postures", "12", "--no-report"])
+    result = json.loads(out.read_text())
+    assert code == 0 and result["protocol"] == "loopback" and result["readback_ok"] is True
+    assert result["errors"]["rotation_error_deg"] <= 0.05 and result["errors"]["translation_error_mm"] <= 0.5
+    assert sorted(p.name for p in (tmp_path / "demo" / "session" / "rapid").iterdir()) == \
+        ["HeLoop.mod", "HeMain.mod", "HeTool.mod"]
+
+
+def test_a_protocol_without_a_rapid_module_is_refused_by_rapid_generate(tmp_path, capsys):
+    CONTROLLERS.register(ControllerBackend("bare", "handeye_test_plugin:LoopbackController", default_port=1))
+    try:
+        assert "bare" in CONTROLLERS and "bare" not in RAPID_LINKS and "bare" not in _choices(["rapid", "generate"])
+        config = tmp_path / "station.yaml"
+        config.write_text("controller:\n  protocol: bare\ncamera:\n  backend: xb3\n")
+        assert main(["rapid", "generate", "--config", str(config), "-o", str(tmp_path / "out")]) == 1
+        err = capsys.readouterr().err
+        assert "controller.protocol must be one of socket, serial, modbus, rws (a protocol with a RAPID link module)" \
+               f"; got 'bare'" in err and len(err.strip().splitlines()) == 1
+    finally:
+        CONTROLLERS.unregister("bare")
+    assert not (tmp_path / "out").exists()

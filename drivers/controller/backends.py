@@ -2,22 +2,25 @@
 
 A back end is a :class:`ControllerBackend`: its name (the ``--protocol`` and ``controller.protocol``
 word), its class, the port it listens on by default, how its options are built from where the
-station config (or the command line) says the controller is, the mock that serves it (filled in by
-``handeye.mocks``; the drivers never name the mocks) and one line of help. Another package adds one
-with :func:`register_backend` or an entry point in the ``handeye.controllers`` group.
+station config (or the command line) says the controller is, the RAPID link module the controller
+runs for it (a ``rapid.links.RapidLink``: a template or a renderer), the mock that serves it (the
+package's own are filled in by ``handeye.mocks``; the drivers never name the mocks) and one line of
+help. Another package adds one with :func:`register_backend` or an entry point in the
+``handeye.controllers`` group, bringing its own RAPID link and mock in the same entry.
 
 Nothing here imports a hardware library: the class is imported when the back end is opened.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 
 from ..registry import Backend, Registry, load_target
 from .errors import InvalidRequest
 
-__all__ = ["ControllerBackend", "ControllerLink", "MockServer", "CONTROLLERS", "register_backend", "tcp_options"]
+__all__ = ["ControllerBackend", "ControllerLink", "MockServer", "CONTROLLERS", "RAPID_LINKS", "register_backend",
+           "tcp_options"]
 
 
 @dataclass(frozen=True)
@@ -106,11 +109,16 @@ class ControllerBackend(Backend):
         :class:`ControllerLink` (default: :func:`tcp_options`).
     mock : MockServer or None
         The simulated controller serving it (None: no mock).
+    rapid_link : str or object or None
+        The RAPID link module its controller runs (a ``handeye.rapid.links.RapidLink``, or
+        ``"module:attribute"`` naming one, imported when asked); None: no generated program
+        (``handeye capture`` and ``rapid generate`` refuse the protocol).
     """
 
     default_port: int | None = None
     options: Callable = tcp_options
     mock: MockServer | None = None
+    rapid_link: object = None
 
     def link_options(self, link) -> dict:
         """The class's keyword options for ``link`` (a :class:`ControllerLink` or a config section)."""
@@ -142,19 +150,43 @@ def _rws_options(link: ControllerLink, backend: ControllerBackend) -> dict:
 CONTROLLERS: Registry[ControllerBackend] = Registry("controller protocol", "handeye.controllers", ControllerBackend)
 
 _HERE = __package__
+_LINKS = f"{__package__.rsplit('.', 2)[0]}.rapid.links"  # handeye.rapid.links: the RAPID side of each
 CONTROLLERS.register(ControllerBackend(
-    "socket", f"{_HERE}.socket_client:SocketController", default_port=1025,
+    "socket", f"{_HERE}.socket_client:SocketController", default_port=1025, rapid_link=f"{_LINKS}:HE_SOCKET",
     help="TCP to the HeSocket RAPID module:   --host H --port P (default 1025)"))
 CONTROLLERS.register(ControllerBackend(
-    "serial", f"{_HERE}.serial_client:SerialController", options=_serial_options,
+    "serial", f"{_HERE}.serial_client:SerialController", options=_serial_options, rapid_link=f"{_LINKS}:HE_SERIAL",
     help="serial channel (HeSerial module):   --url DEVICE_OR_URL [--baudrate B]"))
 CONTROLLERS.register(ControllerBackend(
     "modbus", f"{_HERE}.modbus_client:ModbusController", default_port=502, options=_modbus_options,
+    rapid_link=f"{_LINKS}:HE_IO",
     help="Modbus TCP gateway (HeIo module):   --host H --port P (default 502) [--register-map MAP]"))
 CONTROLLERS.register(ControllerBackend(
-    "rws", f"{_HERE}.rws_client:RwsController", default_port=80, options=_rws_options,
+    "rws", f"{_HERE}.rws_client:RwsController", default_port=80, options=_rws_options, rapid_link=f"{_LINKS}:HE_RWS",
     help="Robot Web Services (RobotWare 6/7, HeRws module): --host H [--port P] [--user U --password W] "
          "[--tls-fingerprint SHA256 for RobotWare 7]"))
+
+
+class _RapidLinks(Mapping):
+    """Protocol -> the RAPID link module of every controller back end that carries one, in registry
+    order (plug-ins included; each loaded when asked). What the station hands to ``rapid``
+    (``RapidStation.links``), which never reads the registry itself."""
+
+    def __getitem__(self, name: str):
+        backend = CONTROLLERS.get(str(name).lower())
+        if backend is None or backend.rapid_link is None:
+            raise KeyError(name)
+        return load_target(backend.rapid_link)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(CONTROLLERS.names(lambda backend: backend.rapid_link is not None))
+
+    def __len__(self) -> int:
+        return len(CONTROLLERS.names(lambda backend: backend.rapid_link is not None))
+
+
+#: The RAPID link module of every controller back end that has one (read from :data:`CONTROLLERS`).
+RAPID_LINKS: Mapping = _RapidLinks()
 
 
 def register_backend(backend: ControllerBackend) -> ControllerBackend:

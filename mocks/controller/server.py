@@ -113,7 +113,7 @@ class RapidControllerServer:
         start it; the system modules loaded before (HeKey.sys) stay, as on a controller. Loading the
         modules that run already changes nothing (the program is not restarted)."""
         if not isinstance(program, ControllerProgram):
-            program = program_from_folder(program, self.kind)
+            program = program_from_folder(program, self.protocol)
         program = keep_system_modules(program, self.source)
         if sorted((m.source, m.text) for m in program.modules) == sorted((m.source, m.text) for m in self.source.modules):
             return  # the same modules are loaded already: the program keeps running (a resumed capture)

@@ -13,6 +13,7 @@ import sys
 import time
 from dataclasses import dataclass, field
 
+from ...drivers.controller.backends import RAPID_LINKS
 from ...rapid.station import IDLE_TIMEOUT_RANGE, RapidStation, default_station, load_station
 from ..backends import mock_protocols, mock_server
 from . import start_mock_controller
@@ -127,7 +128,8 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
         raise InvalidRequest(f"unknown protocol {options.protocol!r}; choose one of {', '.join(mock_protocols())}")
     if not options.time_scale > 0:
         raise InvalidRequest(f"--time-scale must be > 0; got {options.time_scale}")
-    station = options.station or (load_station(options.config) if options.config else default_station())
+    station = options.station or (load_station(options.config, links=RAPID_LINKS) if options.config
+                                  else default_station())
     idle = station.idle_timeout_s if options.idle_timeout_s is None else options.idle_timeout_s
     low, high = IDLE_TIMEOUT_RANGE
     if not low <= idle <= high:

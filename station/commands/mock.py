@@ -100,12 +100,13 @@ def run(args) -> int:
 
     station = None
     if args.config:
+        from ...drivers.controller.backends import RAPID_LINKS
         from ...rapid.station import default_station, station_from_dict
         from ..config import load_config
 
         config = load_config(args.config)
         postures = config.postures if config.postures is not None else default_station().postures
-        station = station_from_dict(config.rapid_dict(postures), args.config)
+        station = station_from_dict(config.rapid_dict(postures), args.config, links=RAPID_LINKS)
     options = MockControllerOptions(protocol=args.protocol, port=args.port, host=args.host, station=station,
                                     time_scale=args.time_scale, allowed_client=args.allow_client,
                                     register_map=args.register_map, duration_s=args.duration,

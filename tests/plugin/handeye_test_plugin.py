@@ -2,17 +2,22 @@
 line protocol over TCP on another default port) and a camera back end (``blank``, grey frames)
 through the entry points of its ``.dist-info``, with no change to handeye.
 
-The controller is declared by a ``ControllerBackend`` (name, class, default port, help); the camera
-by its class alone (the registry describes it with the defaults).
+The controller is declared by one ``ControllerBackend`` (name, class, default port, help), which
+also brings the RAPID module its controller runs (``HeLoop``, from this package's own template) and
+the mock that serves it (the socket mock's server, running HeLoop); the camera by its class alone
+(the registry describes it with the defaults).
 """
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from handeye.drivers.camera import Camera, StereoFrame
-from handeye.drivers.controller.backends import ControllerBackend
+from handeye.drivers.controller.backends import ControllerBackend, MockServer
 from handeye.drivers.controller.socket_client import SocketController
+from handeye.rapid.links import RapidLink
 
 
 class LoopbackController(SocketController):
@@ -21,8 +26,21 @@ class LoopbackController(SocketController):
     protocol = "loopback"
 
 
+#: The RAPID module of the loopback link: this package's template, filled with handeye's link fields.
+RAPID_LINK = RapidLink("HeLoop", Path(__file__).with_name("HeLoop.mod.tmpl"))
+
+
+def _mock_server(*args, **kwargs):
+    """The mock controller of the loopback link: the socket mock running HeLoop (imported when it starts)."""
+    from handeye.mocks.controller.line_server import SocketControllerServer
+
+    return SocketControllerServer(*args, **kwargs)
+
+
 CONTROLLER = ControllerBackend("loopback", f"{__name__}:LoopbackController", default_port=11025,
-                               help="the test plug-in's TCP link:   --host H --port P (default 11025)")
+                               help="the test plug-in's TCP link:   --host H --port P (default 11025)",
+                               rapid_link=RAPID_LINK,
+                               mock=MockServer(_mock_server, 11026, help="HeLoop executed: the line protocol over TCP"))
 
 
 class BlankCamera(Camera):
