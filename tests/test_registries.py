@@ -13,12 +13,18 @@ import pytest
 from handeye.drivers.camera import CameraError, open_camera
 from handeye.drivers.camera.backends import CAMERAS, CameraBackend, register_backend
 from handeye.drivers.controller import InvalidRequest, open_controller
-from handeye.drivers.controller.backends import CONTROLLERS, RAPID_LINKS, ControllerBackend, ControllerLink
+from handeye.drivers.controller.backends import (
+    CONTROLLERS,
+    RAPID_LINKS,
+    ControllerBackend,
+    ControllerLink,
+    link_settings,
+)
 from handeye.mocks.backends import mock_protocols
 from handeye.mocks.controller import start_mock_controller
 from handeye.rapid.links import BUILT_IN_LINKS
 from handeye.station.cli import build_parser, main
-from handeye.station.config import ConfigError, config_from_dict
+from handeye.station.config import ConfigError, config_from_dict, describe_keys
 from handeye.station.runtime import _controller_options, open_station
 
 PLUGIN = Path(__file__).with_name("plugin")
@@ -145,10 +151,12 @@ def test_the_plugin_controller_is_a_choice_of_robot_joints(plugin, capsys, no_le
 
 def test_a_station_on_plugin_back_ends_opens_them(plugin, no_leaked_threads):
     with start_mock_controller("socket", time_scale=0.002) as server:
-        config = config_from_dict({"controller": {"protocol": "loopback", "host": "127.0.0.1", "port": server.port},
+        config = config_from_dict({"controller": {"protocol": "loopback", "host": "127.0.0.1", "port": server.port,
+                                                  "loop_label": "cell 4"},
                                    "camera": {"backend": "blank"}})
         with open_station(config) as link:
             assert type(link.controller).__name__ == "LoopbackController" and link.controller.protocol == "loopback"
+            assert link.controller.label == "cell 4"  # the plug-in's own setting, from the station file
             assert type(link.camera).__name__ == "BlankCamera" and link.camera.is_connected
             assert link.controller.info().postures == len(server.robot.postures)
 
@@ -210,3 +218,39 @@ def test_a_protocol_without_a_rapid_module_is_refused_by_rapid_generate(tmp_path
     finally:
         CONTROLLERS.unregister("bare")
     assert not (tmp_path / "out").exists()
+
+
+# ------------------------------------------------------------------------------------ settings described once
+def test_a_station_file_sets_every_link_setting_a_back_end_declares():
+    config = config_from_dict({"controller": {"protocol": "serial", "serial_url": "/dev/ttyS1", "baudrate": 19200},
+                               "camera": {"backend": "xb3"}})
+    assert {k: _controller_options(config)[k] for k in ("url", "baudrate")} == {"url": "/dev/ttyS1", "baudrate": 19200}
+    with pytest.raises(ConfigError, match="controller.baudrate must be a whole number; got 'fast'"):
+        config_from_dict({"controller": {"protocol": "serial", "baudrate": "fast"}, "camera": {"backend": "xb3"}})
+    with pytest.raises(ConfigError, match="controller.tls_fingerprint must be the SHA-256"):
+        config_from_dict({"controller": {"protocol": "rws", "tls_fingerprint": "ab"}, "camera": {"backend": "xb3"}})
+    declared = [(s.key, names) for s, names in (link_settings()[k] for k in link_settings())]
+    assert [k for k, _ in declared] == ["serial_url", "baudrate", "modbus_map", "username", "password", "tls_fingerprint"]
+    documented = {line.split(":")[0] for line in describe_keys()}
+    assert {f"controller.{key}" for key, _ in declared} <= documented
+
+
+def test_the_plugin_link_setting_is_a_config_key_a_flag_and_a_keyword(plugin, capsys, no_leaked_threads):
+    assert "controller.loop_label: loopback: a label the link keeps" in describe_keys()
+    config = config_from_dict({"controller": {"protocol": "loopback", "loop_label": "A"}, "camera": {"backend": "xb3"}})
+    assert config.controller.loop_label == "A" and _controller_options(config)["label"] == "A"
+    assert config_from_dict({"controller": {"protocol": "loopback"}, "camera": {"backend": "xb3"}}).controller.loop_label \
+        == "plain"
+    with pytest.raises(ConfigError, match="controller.loop_label must be a text"):
+        config_from_dict({"controller": {"protocol": "loopback", "loop_label": 3}, "camera": {"backend": "xb3"}})
+    assert CONTROLLERS["loopback"].link_options(ControllerLink(loop_label="B"))["label"] == "B"
+    parser = build_parser()
+    args = parser.parse_args(["robot", "status", "--protocol", "loopback", "--loop-label", "C"])
+    from handeye.station.commands.robot import _options
+
+    assert args.link_loop_label == "C" and _options(args)["label"] == "C"
+
+
+def test_without_the_plugin_its_setting_is_unknown():
+    with pytest.raises(ConfigError, match="unknown key controller.loop_label"):
+        config_from_dict({"controller": {"protocol": "socket", "loop_label": "A"}, "camera": {"backend": "xb3"}})

@@ -15,15 +15,21 @@ from pathlib import Path
 import numpy as np
 
 from handeye.drivers.camera import Camera, StereoFrame
-from handeye.drivers.controller.backends import ControllerBackend, MockServer
+from handeye.drivers.controller.backends import ControllerBackend, LinkSetting, MockServer
 from handeye.drivers.controller.socket_client import SocketController
 from handeye.rapid.links import RapidLink
 
 
 class LoopbackController(SocketController):
-    """The socket back end under another name: what a plug-in's own protocol would subclass."""
+    """The socket back end under another name: what a plug-in's own protocol would subclass. Its own
+    setting ``label`` (``controller.loop_label`` in a station config, ``--loop-label`` on the command
+    line) is only kept."""
 
     protocol = "loopback"
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 11025, *, label: str = "", **options):
+        super().__init__(host, port, **options)
+        self.label = label
 
 
 #: The RAPID module of the loopback link: this package's template, filled with handeye's link fields.
@@ -39,6 +45,8 @@ def _mock_server(*args, **kwargs):
 
 CONTROLLER = ControllerBackend("loopback", f"{__name__}:LoopbackController", default_port=11025,
                                help="the test plug-in's TCP link:   --host H --port P (default 11025)",
+                               link_settings=(LinkSetting("loop_label", str, "plain", "a label the link keeps",
+                                                          keyword="label", metavar="TEXT"),),
                                rapid_link=RAPID_LINK,
                                mock=MockServer(_mock_server, 11026, help="HeLoop executed: the line protocol over TCP"))
 
