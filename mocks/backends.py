@@ -1,7 +1,8 @@
 """The mocks register themselves with the drivers' back-end registries (the drivers never name them).
 
 Importing ``handeye.mocks`` (any of its modules) runs this: the simulated controller servers become
-the ``mock`` of the ``socket``, ``serial`` and ``modbus`` back ends, and the simulated XB3 becomes the
+the ``mock`` of the package's controller back ends (:data:`MOCK_SERVERS`; a plug-in's back end brings
+its own in its registry entry), and the simulated XB3 becomes the
 camera back end ``mock``. Nothing heavy is imported here: the classes load when a mock starts.
 """
 

@@ -76,7 +76,7 @@ class RapidStation:
     """Settings of the generated RAPID program (see the module docstring for the YAML keys)."""
 
     robot: str = "IRB1400"
-    protocol: str = "socket"
+    protocol: str = PROTOCOLS[0]  # the package's first link (default_station.yaml names it)
     pc_address: str = "127.0.0.1"
     controller_address: str = "127.0.0.1"
     port: int = 1025

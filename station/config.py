@@ -37,6 +37,7 @@ from ..calibration.files import read_text_file
 from ..calibration.kinematics import load_robot
 from ..calibration.session import parse_yaml
 from ..calibration.transforms import pose_from_transform, transform_from_pose
+from ..drivers.controller.backends import DEFAULT_PROTOCOL
 from .cell_settings import CellSettings, GuidedSettings
 from .schema import (
     Custom,
@@ -343,7 +344,7 @@ class CaptureSettings:
 class MockSettings:
     """``mock``: the embedded mock station (``--mock``, mock back ends, the demo)."""
 
-    protocol: str = setting("socket", Text(mock_protocols), "its controller link: a back end a mock serves")
+    protocol: str = setting(DEFAULT_PROTOCOL, Text(mock_protocols), "its controller link: a back end a mock serves")
     seed: int = setting(7, Number(0, SEED_MAX, integer=True), "seeds the arm's errors and the sensor noise")
     kinematic_error_mm: float = setting(0.05, Number(0, 10), "the simulated arm's DH length errors", "mm")
     kinematic_error_deg: float = setting(0.002, Number(0, 10), "the simulated arm's DH angle errors", "deg")
@@ -502,7 +503,8 @@ def _check_hardware_named(data: dict, config: StationConfig) -> None:
     controller_mock, camera_mock = config.controller.protocol == MOCK, config.camera.backend == MOCK
     if config.camera.mock_arm is not None and not (camera_mock and not controller_mock):
         raise ConfigError(f"camera.mock_arm is for a rehearsal: camera.backend {MOCK} with a real controller protocol "
-                          f"(socket, serial, modbus) pointing at `handeye mock controller`; here controller.protocol is "
+                          f"({', '.join(controller_protocols())}) pointing at `handeye mock controller`; here "
+                          "controller.protocol is "
                           f"{config.controller.protocol} and camera.backend {config.camera.backend}")
     if controller_mock and not camera_mock:
         raise ConfigError(f"controller.protocol is {MOCK} but camera.backend is {config.camera.backend}: the embedded mock "

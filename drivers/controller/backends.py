@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from ..registry import Backend, Registry, load_target
 from .errors import InvalidRequest
 
-__all__ = ["ControllerBackend", "ControllerLink", "LinkSetting", "MockServer", "CONTROLLERS", "RAPID_LINKS",
+__all__ = ["ControllerBackend", "ControllerLink", "LinkSetting", "MockServer", "CONTROLLERS", "DEFAULT_PROTOCOL", "RAPID_LINKS",
            "link_settings", "register_backend", "setting_options", "standard_options", "tcp_options"]
 
 
@@ -253,6 +253,9 @@ _RWS = (
                 "port 443); none: RobotWare 6 over HTTP", metavar="SHA256", check=_fingerprint),
 )
 
+
+#: The protocol a command or a mock uses when none is named (``--protocol``, ``mock.protocol``).
+DEFAULT_PROTOCOL = "socket"
 
 #: Every controller back end by name: the package's (socket, serial, modbus, rws), then plug-ins.
 CONTROLLERS: Registry[ControllerBackend] = Registry("controller protocol", "handeye.controllers", ControllerBackend)

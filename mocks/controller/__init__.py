@@ -1,6 +1,6 @@
 """Mock ABB controller: real servers on 127.0.0.1 that EXECUTE the generated RAPID program.
 
-``start_mock_controller("socket" | "serial" | "modbus")`` builds a simulated IRB 1400
+``start_mock_controller(PROTOCOL)`` (any of :func:`mock_protocols`) builds a simulated IRB 1400
 (:class:`~handeye.mocks.robot.SimulatedRobot`), loads the RAPID modules of that link into the
 interpreter (generated for the station, or ``program=DIR``), binds them to real TCP sockets, a serial
 line or a Modbus gateway and to the arm, and runs ``main``. Use it as a context manager so threads
@@ -20,6 +20,7 @@ included). A program the interpreter cannot run is refused at start with its mod
 
 from __future__ import annotations
 
+from ...drivers.controller.backends import DEFAULT_PROTOCOL
 from ...rapid.station import default_station
 from ..backends import mock_protocols, mock_server
 from ..robot import SimulatedRobot
@@ -58,7 +59,7 @@ def _program(protocol, program, station, postures, ack_timeout_s, idle_timeout_s
                              idle_timeout_s=idle_timeout_s, write_key=write_key, pc_address=allowed_client)
 
 
-def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", port: int = 0, postures=None,
+def start_mock_controller(protocol: str = DEFAULT_PROTOCOL, *, host: str = "127.0.0.1", port: int = 0, postures=None,
                           robot: SimulatedRobot | None = None, time_scale: float = 1.0, speed_fraction: float = 0.25,
                           ack_timeout_s: float | None = 30.0, allowed_client: str | None = None,
                           register_map=None, faults: Faults | None = None,
@@ -69,8 +70,8 @@ def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", 
     Parameters
     ----------
     protocol : str
-        ``socket``, ``serial`` (TCP stream for pyserial's ``socket://`` URL), ``modbus``, or any
-        back end a mock serves (:func:`mock_protocols`).
+        Any back end a mock serves (:func:`mock_protocols`; default
+        :data:`~handeye.drivers.controller.backends.DEFAULT_PROTOCOL`).
     host, port : str, int
         Where to listen (port 0: a free port; read ``server.port``).
     postures : array-like, shape (n, dof), optional

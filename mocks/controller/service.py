@@ -13,7 +13,7 @@ import sys
 import time
 from dataclasses import dataclass, field
 
-from ...drivers.controller.backends import RAPID_LINKS
+from ...drivers.controller.backends import DEFAULT_PROTOCOL, RAPID_LINKS
 from ...rapid.station import IDLE_TIMEOUT_RANGE, RapidStation, default_station, load_station
 from ..backends import mock_protocols, mock_server
 from . import start_mock_controller
@@ -28,7 +28,7 @@ class MockControllerOptions:
     Attributes
     ----------
     protocol : str
-        ``socket``, ``serial``, ``modbus`` (any of :func:`~handeye.mocks.backends.mock_protocols`).
+        Any of :func:`~handeye.mocks.backends.mock_protocols`.
     port : int or None
         None: the mock's default port (``mock_server(protocol).default_port``); 0: any free port.
     host : str
@@ -59,7 +59,7 @@ class MockControllerOptions:
         station (0: a free port); None: no camera.
     """
 
-    protocol: str = "socket"
+    protocol: str = DEFAULT_PROTOCOL
     port: int | None = None
     host: str = "127.0.0.1"
     config: str | None = None
@@ -86,30 +86,11 @@ def is_loopback(host: str) -> bool:
 
 
 def _banner(server, options: MockControllerOptions, postures: int, idle_timeout_s: float) -> str:
-    where = f"{server.host}:{server.port}"
     runs = f"RAPID from {options.program}" if options.program else f"the RAPID generated for {options.protocol}"
     head = f"mock {options.protocol} controller (simulated IRB 1400 running {runs}, {postures} approved postures)"
-    if server.has_write_key:
-        writes = "tool writes need the write key (KEY / tool_key)"
-    else:
-        writes = "tool writes refused: no write key (start it with --write-key KEY or --config STATION.yaml)"
-    link = f"  idle timeout {idle_timeout_s:g} s; {writes}"
-    if options.protocol == "rws":
-        gen = server.generation
-        auth = f"--user '{server.username}' --password {server.password}"
-        pin = f" --tls-fingerprint {server.tls_fingerprint}" if gen == 2 else ""
-        writes = "tool writes by symbol, authorised by the RWS user and mastership"
-        if gen == 2:
-            writes += ("\n  its self-signed certificate is made anew at every start: pin the fingerprint "
-                       "printed now, it changes the next time")
-        return (f"{head}: Robot Web Services {gen}.0 (RobotWare {server.robotware}, "
-                f"{'HTTPS, Basic' if gen == 2 else 'HTTP, Digest'}) listening on {where}; stop with Ctrl-C\n  {writes}\n"
-                f"  try: handeye robot joints --protocol rws --host {server.host} --port {server.port} {auth}{pin} --json")
-    if options.protocol == "serial":
-        return (f"{head}: serial line on pyserial URL {server.url}; stop with Ctrl-C\n{link}\n"
-                f"  try: handeye robot joints --protocol serial --url {server.url} --json")
-    return (f"{head} listening on {where}; stop with Ctrl-C\n{link}\n"
-            f"  try: handeye robot joints --protocol {options.protocol} --host {server.host} --port {server.port} --json")
+    # where it listens, its link and the flags that reach it are the server's own (its protocol's module)
+    return (f"{head}{server.listening()}; stop with Ctrl-C\n  {server.link_note(idle_timeout_s)}\n"
+            f"  try: handeye robot joints --protocol {options.protocol} {server.client_flags()} --json")
 
 
 def _warn(text: str) -> None:
@@ -146,7 +127,7 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
                                        time_scale=options.time_scale, ack_timeout_s=station.ack_timeout_s,
                                        allowed_client=options.allowed_client, register_map=options.register_map,
                                        idle_timeout_s=idle, write_key=key, station=station, program=options.program,
-                                       **({"generation": options.rws_generation} if options.protocol == "rws" else {}))
+                                       generation=options.rws_generation)  # taken by the mocks whose options name it
     except OSError as exc:
         raise InvalidRequest(f"cannot listen on {options.host}:{port} ({exc}); pick another --port "
                              "(0 = any free port)") from None

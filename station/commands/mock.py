@@ -60,7 +60,9 @@ def add_parser(sub):
     c = targets.add_parser("controller", help=controller_help, description=controller_help,
                            epilog=CONTROLLER_EPILOG.format(protocols=lines),
                            formatter_class=argparse.RawDescriptionHelpFormatter)
-    c.add_argument("--protocol", choices=names, default="socket", help="default socket")
+    from ...drivers.controller.backends import DEFAULT_PROTOCOL
+
+    c.add_argument("--protocol", choices=names, default=DEFAULT_PROTOCOL, help=f"default {DEFAULT_PROTOCOL}")
     c.add_argument("--port", type=argtypes.port, default=None, help="TCP port (defaults above; 0 = any free port)")
     c.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     c.add_argument("--config", metavar="STATION.yaml",

@@ -23,11 +23,10 @@ def _epilog(backends) -> str:
 
 def _link_options(p, backends) -> None:
     """``--protocol``, ``--host``, ``--port`` and one flag per back-end link setting (``link_settings()``)."""
-    from ...drivers.controller.backends import link_settings
+    from ...drivers.controller.backends import DEFAULT_PROTOCOL, link_settings
 
     ports = ", ".join(f"{name} {backends[name].default_port}" for name in backends if backends[name].default_port)
-    first = backends.names()[0]
-    p.add_argument("--protocol", choices=tuple(backends), default=first, help=f"default {first}")
+    p.add_argument("--protocol", choices=tuple(backends), default=DEFAULT_PROTOCOL, help=f"default {DEFAULT_PROTOCOL}")
     p.add_argument("--host", default="127.0.0.1", help="controller or gateway address (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=None, help=f"TCP port (default: {ports})")
     for key, (setting, names) in link_settings().items():
