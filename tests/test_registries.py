@@ -254,3 +254,20 @@ def test_the_plugin_link_setting_is_a_config_key_a_flag_and_a_keyword(plugin, ca
 def test_without_the_plugin_its_setting_is_unknown():
     with pytest.raises(ConfigError, match="unknown key controller.loop_label"):
         config_from_dict({"controller": {"protocol": "socket", "loop_label": "A"}, "camera": {"backend": "xb3"}})
+
+
+def test_the_plugin_mock_option_is_a_flag_of_mock_controller(plugin, no_leaked_threads):
+    from handeye.mocks.backends import mock_settings
+    from handeye.mocks.controller.service import MockControllerOptions, run_mock_controller
+
+    assert mock_settings()["note"][1] == ("loopback",) and mock_settings()["generation"][1] == ("rws",)
+    args = build_parser().parse_args(["mock", "controller", "--protocol", "loopback", "--loop-note", "hello"])
+    assert args.server_note == "hello"
+    with start_mock_controller("loopback", time_scale=0.002, note="kept", generation=2) as server:
+        assert server.note == "kept" and server.protocol == "loopback"  # generation: not the loopback mock's
+    lines = []
+    options = MockControllerOptions(protocol="loopback", port=0, server_options={"note": "x"}, duration_s=0.2,
+                                    time_scale=0.002)
+    assert run_mock_controller(options, announce=lines.append, warn=lines.append) == 0
+    assert lines[0].startswith("mock loopback controller (simulated IRB 1400 running the RAPID generated for loopback")
+    assert "try: handeye robot joints --protocol loopback --host 127.0.0.1 --port " in lines[0]

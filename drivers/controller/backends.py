@@ -145,8 +145,9 @@ class MockServer:
         ``robot``: the simulated arm); it has ``start``, ``stop`` and ``client_options()``.
     default_port : int
         Where ``handeye mock controller`` listens when no ``--port`` is given (unprivileged).
-    options : tuple of str
-        The extra keyword options the server takes (``allowed_client``, ``register_map`` ...).
+    options : tuple of LinkSetting (or str)
+        The extra keyword options the server takes, described once (key, type, default, help, flag):
+        the flags of ``handeye mock controller`` come from them. A bare name is an option without a flag.
     help : str
         One line for ``handeye mock controller --help``: what it serves.
     variants : tuple of (str, dict)
@@ -162,6 +163,10 @@ class MockServer:
 
     def load(self) -> type:
         return load_target(self.target)
+
+    def settings(self) -> tuple:
+        """:attr:`options` as :class:`LinkSetting` s (a bare name: a text option without a flag of its own)."""
+        return tuple(o if isinstance(o, LinkSetting) else LinkSetting(str(o)) for o in self.options)
 
 
 def tcp_options(link: ControllerLink, backend: "ControllerBackend") -> dict:

@@ -62,9 +62,9 @@ def _program(protocol, program, station, postures, ack_timeout_s, idle_timeout_s
 def start_mock_controller(protocol: str = DEFAULT_PROTOCOL, *, host: str = "127.0.0.1", port: int = 0, postures=None,
                           robot: SimulatedRobot | None = None, time_scale: float = 1.0, speed_fraction: float = 0.25,
                           ack_timeout_s: float | None = 30.0, allowed_client: str | None = None,
-                          register_map=None, faults: Faults | None = None,
+                          faults: Faults | None = None,
                           idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None,
-                          program=None, station=None, start: bool = True, generation: int | None = None):
+                          program=None, station=None, start: bool = True, **server_options):
     """A started mock controller of ``protocol`` running its RAPID program.
 
     Parameters
@@ -84,8 +84,6 @@ def start_mock_controller(protocol: str = DEFAULT_PROTOCOL, *, host: str = "127.
         The program's acknowledgement timeout (state LATE after it; None: never, in practice).
     allowed_client : str, optional
         Socket: the PC address the program accepts (``HE_PC_ADDRESS``; default 127.0.0.1).
-    register_map : path or RegisterMap, optional
-        Modbus only.
     idle_timeout_s : float
         The link's idle timeout rendered into the program (and the gateway's, for Modbus).
     write_key : str, optional
@@ -97,9 +95,11 @@ def start_mock_controller(protocol: str = DEFAULT_PROTOCOL, *, host: str = "127.
         The station the modules are generated for (default: the built-in one).
     start : bool
         Start the server (default); else call ``server.start()`` or use ``with``.
-    generation : int, optional
-        RWS only: 1 (RobotWare 6, HTTP) or 2 (RobotWare 7, HTTPS). A :class:`MockVariant` protocol
-        brings its own (``mock_variants()``); default 1.
+    **server_options
+        The mock server's own options (``MockServer.options`` of the protocol: the Modbus mock's
+        ``register_map``, path or RegisterMap; the RWS mock's ``generation``, 1 or 2 ...); None or
+        an option its server does not take is left out. A :class:`MockVariant` protocol brings its own
+        (``mock_variants()``).
     """
     mock = mock_server(protocol)
     variant, protocol = getattr(protocol, "options", {}), str(protocol)
@@ -108,10 +108,9 @@ def start_mock_controller(protocol: str = DEFAULT_PROTOCOL, *, host: str = "127.
     if robot is None:
         robot = SimulatedRobot(postures if postures is not None else (station or default_station()).postures,
                                time_scale=time_scale, speed_fraction=speed_fraction)
-    offered = {"register_map": register_map, **variant}
-    if generation is not None:
-        offered["generation"] = generation
+    offered = {**variant, **{name: value for name, value in server_options.items() if value is not None}}
+    taken = [setting.key for setting in mock.settings()]
     server = mock.load()(source, robot, host, port, faults=faults, idle_timeout_s=idle_timeout_s, write_key=write_key,
-                         **{name: offered[name] for name in mock.options if name in offered})
+                         **{name: offered[name] for name in taken if name in offered})
     server.protocol = str(protocol).lower()
     return server.start() if start else server

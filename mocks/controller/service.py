@@ -41,9 +41,10 @@ class MockControllerOptions:
     time_scale : float
         Wall-clock seconds per simulated second of motion.
     allowed_client : str or None
-        Socket only: the PC address rendered into the program (``HE_PC_ADDRESS``; None: the station's).
-    register_map : str or None
-        Modbus only: register map YAML.
+        The PC address rendered into the program (``HE_PC_ADDRESS``; None: the station's).
+    server_options : dict
+        The protocol's mock server's own options by key (``MockServer.options``: ``register_map``,
+        ``generation`` ...); the options of another protocol's mock are left out.
     duration_s : float or None
         Stop after this long (None: until Ctrl-C).
     idle_timeout_s : float or None
@@ -65,14 +66,13 @@ class MockControllerOptions:
     config: str | None = None
     time_scale: float = 1.0
     allowed_client: str | None = None
-    register_map: str | None = None
+    server_options: dict = field(default_factory=dict)
     duration_s: float | None = None
     idle_timeout_s: float | None = None
     write_key: str | None = field(default=None, repr=False)
     station: RapidStation | None = None
     program: str | None = None
     camera_port: int | None = None
-    rws_generation: int = 1
 
 
 def is_loopback(host: str) -> bool:
@@ -125,9 +125,9 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
         server = start_mock_controller(options.protocol, host=options.host, port=port, postures=station.postures,
                                        robot=robot,
                                        time_scale=options.time_scale, ack_timeout_s=station.ack_timeout_s,
-                                       allowed_client=options.allowed_client, register_map=options.register_map,
+                                       allowed_client=options.allowed_client,
                                        idle_timeout_s=idle, write_key=key, station=station, program=options.program,
-                                       generation=options.rws_generation)  # taken by the mocks whose options name it
+                                       **options.server_options)
     except OSError as exc:
         raise InvalidRequest(f"cannot listen on {options.host}:{port} ({exc}); pick another --port "
                              "(0 = any free port)") from None

@@ -30,7 +30,7 @@ def _link_options(p, backends) -> None:
     p.add_argument("--host", default="127.0.0.1", help="controller or gateway address (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=None, help=f"TCP port (default: {ports})")
     for key, (setting, names) in link_settings().items():
-        p.add_argument(setting.option, dest=f"link_{key}", type=setting.type, default=None,
+        p.add_argument(setting.option, dest=f"link_{key}", type=argtypes.setting_value(setting), default=None,
                        metavar=setting.metavar or setting.key.upper(),
                        help=f"{', '.join(names)}: {setting.help}")
     p.add_argument("--timeout", type=argtypes.positive, default=2.0, metavar="S", help="seconds per call (default 2)")

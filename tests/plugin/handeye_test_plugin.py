@@ -36,11 +36,14 @@ class LoopbackController(SocketController):
 RAPID_LINK = RapidLink("HeLoop", Path(__file__).with_name("HeLoop.mod.tmpl"))
 
 
-def _mock_server(*args, **kwargs):
-    """The mock controller of the loopback link: the socket mock running HeLoop (imported when it starts)."""
+def _mock_server(*args, note: str = "", **kwargs):
+    """The mock controller of the loopback link: the socket mock running HeLoop (imported when it
+    starts), with an option of its own (``note``, kept: ``--loop-note`` of ``handeye mock controller``)."""
     from handeye.mocks.controller.line_server import SocketControllerServer
 
-    return SocketControllerServer(*args, **kwargs)
+    server = SocketControllerServer(*args, **kwargs)
+    server.note = note
+    return server
 
 
 CONTROLLER = ControllerBackend("loopback", f"{__name__}:LoopbackController", default_port=11025,
@@ -48,7 +51,9 @@ CONTROLLER = ControllerBackend("loopback", f"{__name__}:LoopbackController", def
                                link_settings=(LinkSetting("loop_label", str, "plain", "a label the link keeps",
                                                           keyword="label", metavar="TEXT"),),
                                rapid_link=RAPID_LINK,
-                               mock=MockServer(_mock_server, 11026, help="HeLoop executed: the line protocol over TCP"))
+                               mock=MockServer(_mock_server, 11026, help="HeLoop executed: the line protocol over TCP",
+                                               options=(LinkSetting("note", str, None, "a note the mock keeps",
+                                                                    flag="--loop-note"),)))
 
 
 class BlankCamera(Camera):
