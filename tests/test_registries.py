@@ -271,3 +271,18 @@ def test_the_plugin_mock_option_is_a_flag_of_mock_controller(plugin, no_leaked_t
     assert run_mock_controller(options, announce=lines.append, warn=lines.append) == 0
     assert lines[0].startswith("mock loopback controller (simulated IRB 1400 running the RAPID generated for loopback")
     assert "try: handeye robot joints --protocol loopback --host 127.0.0.1 --port " in lines[0]
+
+
+def test_the_contract_tests_run_on_the_plugin_protocol():
+    # installed, the plug-in's protocol is a parameter of the contract tests like a built-in one
+    import os
+    import re
+    import subprocess
+
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(PLUGIN), os.environ.get("PYTHONPATH")]))}
+    contract = Path(__file__).parent / "controller" / "test_contract.py"
+    done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(contract), "-k", "loopback"],
+                          env=env, capture_output=True, text=True, timeout=900)
+    summary = done.stdout.strip().splitlines()[-1]
+    assert done.returncode == 0 and re.match(r"\d+ passed, \d+ deselected", summary), done.stdout[-2000:]
+    assert int(summary.split()[0]) >= 10
