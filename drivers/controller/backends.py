@@ -1,8 +1,9 @@
 """The controller back ends: each described once, in :data:`CONTROLLERS`.
 
 A back end is a :class:`ControllerBackend`: its name (the ``--protocol`` and ``controller.protocol``
-word), its class, the port it listens on by default, how its options are built from where the
-station config (or the command line) says the controller is, the RAPID link module the controller
+word), its class, the port it listens on by default, its own link settings (:class:`LinkSetting`:
+key, type, default, help, flag; the station config's keys, the flags of ``handeye robot``,
+:class:`ControllerLink` and the class's keywords all come from them), the RAPID link module the controller
 runs for it (a ``rapid.links.RapidLink``: a template or a renderer), the mock that serves it (the
 package's own are filled in by ``handeye.mocks``; the drivers never name the mocks) and one line of
 help. Another package adds one with :func:`register_backend` or an entry point in the
