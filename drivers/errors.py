@@ -47,7 +47,7 @@ class StationError(HandEyeError):
     message : str
         One line naming the offending value.
     backend : str, optional
-        Name of the back end that raised it (``socket``, ``serial``, ``modbus``, ``xb3`` ...): kept as
+        Name of the back end that raised it (a registered back end's name: ``socket``, ``xb3`` ...): kept as
         :attr:`backend` and put in front of the message.
 
     Attributes

@@ -1,5 +1,5 @@
-"""Simulated station hardware: an IRB 1400 controller (socket, serial, Modbus servers on 127.0.0.1
-that execute the generated RAPID in handeye's interpreter) and a Bumblebee XB3, built on the same
+"""Simulated station hardware: an IRB 1400 controller (a server per controller back end that brings
+a mock, on 127.0.0.1, executing the generated RAPID in handeye's interpreter) and a Bumblebee XB3, built on the same
 kinematics and frame layout as the real paths; ``mocks.cell`` serves the XB3 on a standalone mock
 controller's arm to a rehearsal station.
 

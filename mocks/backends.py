@@ -1,16 +1,18 @@
 """The mocks register themselves with the drivers' back-end registries (the drivers never name them).
 
 Importing ``handeye.mocks`` (any of its modules) runs this: the simulated controller servers become
-the ``mock`` of the ``socket``, ``serial`` and ``modbus`` back ends, and the simulated XB3 becomes the
+the ``mock`` of the package's controller back ends (:data:`MOCK_SERVERS`; a plug-in's back end brings
+its own in its registry entry), and the simulated XB3 becomes the
 camera back end ``mock``. Nothing heavy is imported here: the classes load when a mock starts.
 """
 
 from __future__ import annotations
 
 from ..drivers.camera.backends import CAMERAS, CameraBackend
-from ..drivers.controller.backends import CONTROLLERS, MockServer
+from ..drivers.controller.backends import CONTROLLERS, LinkSetting, MockServer
 
-__all__ = ["MOCK_SERVERS", "MOCK_CAMERA", "MockVariant", "mock_protocols", "mock_server", "mock_variants"]
+__all__ = ["MOCK_SERVERS", "MOCK_CAMERA", "MockVariant", "mock_protocols", "mock_server", "mock_settings",
+           "mock_variants"]
 
 _HERE = __package__  # handeye.mocks
 
@@ -20,9 +22,15 @@ MOCK_SERVERS = {
                          help="HeSocket executed: TCP line protocol (rapid/PROTOCOL.md)"),
     "serial": MockServer(f"{_HERE}.controller.line_server:SerialControllerServer", 1026,
                          help="HeSerial executed on a line behind pyserial's socket://HOST:PORT URL"),
-    "modbus": MockServer(f"{_HERE}.controller.modbus_server:ModbusControllerServer", 5020, ("register_map",),
+    "modbus": MockServer(f"{_HERE}.controller.modbus_server:ModbusControllerServer", 5020,
+                         (LinkSetting("register_map", str, None, "register map YAML (default: the built-in one)",
+                                      metavar="MAP.yaml"),),
                          help="HeIo executed behind a Modbus TCP gateway (drivers/controller/modbus_map.yaml)"),
-    "rws": MockServer(f"{_HERE}.controller.rws_server:RwsControllerServer", 8080, ("generation",),
+    "rws": MockServer(f"{_HERE}.controller.rws_server:RwsControllerServer", 8080,
+                      (LinkSetting("generation", int, 1, "1 = RobotWare 6 (HTTP, Digest; default), 2 = RobotWare 7 "
+                                   "(HTTPS with a self-signed certificate, Basic; the banner prints its fingerprint, "
+                                   "which is new at every start: a certificate is made for each run)",
+                                   flag="--rws-generation", low=1, high=2, metavar="{1,2}"),),
                       help="HeRws executed behind Robot Web Services (--rws-generation 1: RobotWare 6 HTTP/Digest; "
                            "2: RobotWare 7 HTTPS/Basic)",
                       variants=(("rws1", {"generation": 1}), ("rws2", {"generation": 2}))),
@@ -50,6 +58,17 @@ CAMERAS.register(MOCK_CAMERA)
 def mock_protocols() -> tuple[str, ...]:
     """The controller back ends a mock serves, in registry order (plug-ins that bring a mock included)."""
     return CONTROLLERS.names(lambda backend: backend.mock is not None)
+
+
+def mock_settings() -> dict:
+    """Every mock server's own options by key, with the protocols whose mock takes it (registry order):
+    the flags of ``handeye mock controller`` beyond the common ones."""
+    out: dict = {}
+    for name in mock_protocols():
+        for setting in CONTROLLERS[name].mock.settings():
+            first, names = out.get(setting.key, (setting, ()))
+            out[setting.key] = (first, names + (name,))
+    return out
 
 
 def mock_server(protocol: str) -> MockServer:

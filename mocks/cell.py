@@ -136,7 +136,7 @@ class CellService:
     def info(self) -> dict:
         c = self.controller
         where = {"protocol": c.protocol, "host": c.host, "port": c.port}
-        if c.protocol == "serial":
+        if getattr(c, "url", None) is not None:  # a line behind a URL (pyserial's socket://HOST:PORT)
             where["url"] = c.url
         w, h = self.camera.model.image_size
         return {"ok": True, "mock": True, "what": "handeye mock controller", "controller": where,

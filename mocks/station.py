@@ -3,7 +3,7 @@ XB3 on its flange looking at a printed board, with a hidden true camera mount.
 
 What makes it honest:
 
-- The controller is a real server on 127.0.0.1 (socket, serial-over-TCP or Modbus TCP) that runs
+- The controller is a real server on 127.0.0.1 (the mock of its controller back end) that runs
   the generated RAPID program in the interpreter, driving the simulated arm; the PC talks to it with
   the real drivers. A capture's modules (``SESSION/rapid``) are loaded into it and executed.
 - The camera renders real XB3 frames (``mocks.camera``) that go through the real decoding,
@@ -32,6 +32,7 @@ from ..calibration.compact_points import STATION_BOARD, BoardGeometry
 from ..calibration.kinematics import RobotModel, load_robot
 from ..calibration.transforms import transform_from_rotation_translation
 from ..drivers.camera.stereo import StereoModel, nominal_xb3_model
+from ..drivers.controller.backends import DEFAULT_PROTOCOL
 from .camera import MockCamera, RenderOptions
 from .controller import start_mock_controller
 from .robot import SimulatedRobot
@@ -75,7 +76,7 @@ class MockStationSpec:
     Attributes
     ----------
     protocol : str
-        Controller link: ``socket``, ``serial`` or ``modbus``.
+        Controller link: any back end a mock serves (:func:`~handeye.mocks.backends.mock_protocols`).
     cam2tool0 : ndarray, shape (4, 4)
         The hidden true camera mount.
     board2base : ndarray, shape (4, 4)
@@ -106,7 +107,7 @@ class MockStationSpec:
         (as the controller sees the volumes) are refused too.
     """
 
-    protocol: str = "socket"
+    protocol: str = DEFAULT_PROTOCOL
     cam2tool0: np.ndarray = field(default_factory=lambda: DEFAULT_MOUNT.copy())
     board2base: np.ndarray = field(default_factory=lambda: DEFAULT_BOARD.copy())
     board: BoardGeometry = STATION_BOARD

@@ -6,8 +6,10 @@ Names load on first use (importing the package is cheap)::
     from handeye.rapid import default_station, render_program, write_modules
     write_modules(render_program(default_station(), protocol="socket"), "rapid_out")
 
-``rapid`` never imports the drivers: its table of link modules (:data:`LINK_MODULES`) is its own,
-and a test holds it to the drivers' registry of controller back ends.
+``rapid`` never imports the drivers: a controller back end carries its link module (a
+:class:`~handeye.rapid.links.RapidLink`) in the drivers' registry, and whoever reads the registry
+hands the links to the station (``RapidStation.links``); standing alone, ``rapid`` knows the
+package's own (:data:`~handeye.rapid.links.BUILT_IN_LINKS`).
 """
 
 from __future__ import annotations
@@ -17,6 +19,8 @@ from typing import TYPE_CHECKING
 from ..calibration.lazy import lazy_exports
 
 _EXPORTS = {
+    "RapidLink": "links",
+    "BUILT_IN_LINKS": "links",
     "LINK_MODULES": "links",
     "PROTOCOLS": "links",
     "RapidStation": "station",
@@ -42,5 +46,5 @@ if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
     from .checks import check_program  # noqa: F401
     from .errors import ConfigError, RapidError  # noqa: F401
     from .generate import RapidModule, render_key, render_link, render_main, render_program, render_tool, write_modules  # noqa: F401
-    from .links import LINK_MODULES, PROTOCOLS  # noqa: F401
+    from .links import BUILT_IN_LINKS, LINK_MODULES, PROTOCOLS, RapidLink  # noqa: F401
     from .station import RapidStation, check_postures, default_station, load_station, station_from_dict  # noqa: F401

@@ -40,7 +40,7 @@ from .cell import CELL_MODULE, ZONE_TOOL, needs_cell_module, render_cell_text
 from .checks import check_program
 from .errors import RapidError
 from .literals import format_num, jointtarget_literal, speeddata_literal, tooldata_literal
-from .links import LINK_MODULES, PROTOCOLS
+from .links import LINK_MODULES, RapidLink, read_template
 from .station import RapidStation, check_postures, default_station, load_station
 
 __all__ = [
@@ -50,6 +50,8 @@ __all__ = [
     "RapidModule",
     "render_main",
     "render_link",
+    "link_fields",
+    "station_link",
     "render_tool",
     "render_cell",
     "render_key",
@@ -85,9 +87,6 @@ KEY_TRIES = 3
 SOCKET_SLICE_S = 0.5
 SOCKET_ACCEPT_POLL_S = 0.05
 
-_TEMPLATES = Path(__file__).with_name("templates")
-
-
 @dataclass(frozen=True)
 class RapidModule:
     """One rendered module."""
@@ -102,7 +101,7 @@ class RapidModule:
 
 
 def _template(name: str) -> string.Template:
-    return string.Template((_TEMPLATES / name).read_text())
+    return read_template(name)
 
 
 def _ascii(text: str) -> str:
@@ -153,39 +152,47 @@ def render_cell(station: RapidStation) -> RapidModule:
     return RapidModule(CELL_MODULE, render_cell_text(station, _header(station)))
 
 
-def render_link(station: RapidStation, protocol: str | None = None) -> RapidModule:
-    """The link module of ``protocol`` (default: the station's): HeSocket, HeSerial or HeIo."""
-    protocol = protocol or station.protocol
-    if protocol not in PROTOCOLS:
-        raise RapidError(f"unknown protocol {protocol!r}; choose one of {', '.join(PROTOCOLS)}")
+def link_fields(station: RapidStation) -> dict:
+    """The fields every link template is filled from (see :mod:`handeye.rapid.links`)."""
     keyed = station.write_key is not None  # the key itself goes into HeKey.sys only
-    common = {"header": _header(station), "ack_timeout": format_num(station.ack_timeout_s, 3),
+    fields = {"header": _header(station), "ack_timeout": format_num(station.ack_timeout_s, 3),
               "tool": station.tool_name, "protocol_version": RAPID_PROTOCOL_VERSION, "key_tries": KEY_TRIES,
               "idle_timeout": format_num(station.idle_timeout_s, 3)}
-    if protocol == "modbus":
-        gate = _template("key_io.tmpl" if keyed else "key_io_none.tmpl").template.rstrip("\n")
-        text = _template("HeIo.mod.tmpl").substitute(common, publish_period=format_num(IO_PUBLISH_S, 3),
-                                                     tool_key_check=gate)
-        return RapidModule(LINK_MODULES[protocol], text)
-    if protocol == "rws":
-        # Robot Web Services: the PC writes the tool data by symbol (authorised by the controller's
-        # own users and mastership), so HeRws has no tool path and needs no key.
-        text = _template("HeRws.mod.tmpl").substitute(common, poll=format_num(RWS_POLL_S, 3))
-        return RapidModule(LINK_MODULES[protocol], text)
-    session = _template("session_data.tmpl").substitute(common).rstrip("\n")
-    key_check = _template("key_check.tmpl" if keyed else "key_check_none.tmpl").template.rstrip("\n")
-    dispatcher = _template("dispatcher.tmpl").substitute(common, key_check=key_check).rstrip("\n")
-    if protocol == "socket":
-        bind = "GetSysInfo(\\LanIp)" if station.controller_address == "auto" else f'"{station.controller_address}"'
-        slice_s = max(SOCKET_ACCEPT_POLL_S, min(SOCKET_SLICE_S, station.idle_timeout_s / 2))
-        text = _template("HeSocket.mod.tmpl").substitute(common, session_data=session, dispatcher=dispatcher,
-                                                         pc_address=station.pc_address, port=station.port,
-                                                         bind_address=bind, slice=format_num(slice_s, 3),
-                                                         accept_poll=format_num(SOCKET_ACCEPT_POLL_S, 3))
-    else:
-        text = _template("HeSerial.mod.tmpl").substitute(common, session_data=session, dispatcher=dispatcher,
-                                                         channel=station.serial_channel)
-    return RapidModule(LINK_MODULES[protocol], text)
+    fields["session_data"] = _template("session_data.tmpl").substitute(fields).rstrip("\n")
+    fields["key_check"] = _template("key_check.tmpl" if keyed else "key_check_none.tmpl").template.rstrip("\n")
+    fields["dispatcher"] = _template("dispatcher.tmpl").substitute(fields).rstrip("\n")
+    # the line protocol over TCP: the address bound, the accept and receive slices
+    fields["bind_address"] = ("GetSysInfo(\\LanIp)" if station.controller_address == "auto"
+                              else f'"{station.controller_address}"')
+    fields["slice"] = format_num(max(SOCKET_ACCEPT_POLL_S, min(SOCKET_SLICE_S, station.idle_timeout_s / 2)), 3)
+    fields["accept_poll"] = format_num(SOCKET_ACCEPT_POLL_S, 3)
+    fields.update(pc_address=station.pc_address, port=station.port, channel=station.serial_channel)
+    # the I/O handshake: publishing period and the tool key's gate; the RWS handshake's poll rate
+    fields["publish_period"] = format_num(IO_PUBLISH_S, 3)
+    fields["tool_key_check"] = _template("key_io.tmpl" if keyed else "key_io_none.tmpl").template.rstrip("\n")
+    fields["poll"] = format_num(RWS_POLL_S, 3)
+    return fields
+
+
+def station_link(station: RapidStation, protocol: str | None = None) -> RapidLink:
+    """The link module of ``protocol`` (default: the station's) among ``station.links``.
+
+    Raises
+    ------
+    RapidError
+        No link module for that protocol.
+    """
+    protocol = protocol or station.protocol
+    if protocol not in station.links:
+        raise RapidError(f"no RAPID link module for protocol {protocol!r}; choose one of {', '.join(station.links)}")
+    return station.links[protocol]
+
+
+def render_link(station: RapidStation, protocol: str | None = None) -> RapidModule:
+    """The link module of ``protocol`` (default: the station's): its :class:`~handeye.rapid.links.RapidLink`
+    among ``station.links`` (HeSocket, HeSerial, HeIo, HeRws, or a plug-in's) filled from :func:`link_fields`."""
+    link = station_link(station, protocol)
+    return RapidModule(link.module, link.text(station, link_fields(station)))
 
 
 def render_tool(station: RapidStation, cam2tool0=None, comments=()) -> RapidModule:
@@ -295,11 +302,11 @@ def _write_secret(path: Path, text: str) -> Path:
 def generate_station_modules(output, config=None, protocol: str | None = None) -> list[Path]:
     """Render the station's program (``config``: a station YAML path; None: the built-in station) into ``output``.
 
-    With a write key in the station, ``HeKey.sys`` is written beside the program modules (not for
-    ``rws``: Robot Web Services authorises tool writes by the controller's users, HeRws has no key check).
+    With a write key in the station, ``HeKey.sys`` is written beside the program modules (not for a link
+    whose controller authorises tool writes itself, ``RapidLink.write_key`` False: HeRws).
     """
     station = load_station(config) if config is not None else default_station()
     modules = render_program(station, protocol=protocol)
-    if station.write_key is not None and (protocol or station.protocol) != "rws":
+    if station.write_key is not None and station_link(station, protocol).write_key:
         modules.append(render_key(station))
     return write_modules(modules, output)

@@ -5,7 +5,7 @@ rest of the station and ignored here)::
 
     robot: IRB1400                     # robot model (joint limits for the checks)
     controller:
-      protocol: socket                 # socket | serial | modbus: which link module to generate
+      protocol: socket                 # a protocol with a RAPID link module: which one to generate
       pc_address: 192.168.125.10       # the only client the socket server accepts
       controller_address: auto         # address the socket server binds: auto = GetSysInfo(\\LanIp)
       port: 1025                       # TCP port of the socket server
@@ -51,7 +51,7 @@ from ..calibration.files import parse_yaml, read_text_file
 from ..calibration.kinematics import load_robot
 from .cell import check_world_zones
 from .errors import ConfigError
-from .links import PROTOCOLS
+from .links import BUILT_IN_LINKS, PROTOCOLS
 
 __all__ = ["PROTOCOLS", "RapidStation", "default_station", "load_station", "station_from_dict", "check_postures",
            "DEFAULT_STATION_FILE", "RAPID_IDENTIFIER", "WRITE_KEY_PATTERN", "IDLE_TIMEOUT_RANGE"]
@@ -76,7 +76,7 @@ class RapidStation:
     """Settings of the generated RAPID program (see the module docstring for the YAML keys)."""
 
     robot: str = "IRB1400"
-    protocol: str = "socket"
+    protocol: str = PROTOCOLS[0]  # the package's first link (default_station.yaml names it)
     pc_address: str = "127.0.0.1"
     controller_address: str = "127.0.0.1"
     port: int = 1025
@@ -94,6 +94,9 @@ class RapidStation:
     speed_override_pct: float = 100.0
     world_zones: tuple = ()
     zone_tcp: tuple | None = None
+    #: Protocol -> its RAPID link module (``rapid.links.RapidLink``): the package's own, or what the
+    #: caller hands over from the controller registry (plug-ins included).
+    links: object = field(default_factory=lambda: BUILT_IN_LINKS, compare=False, repr=False)
 
     @property
     def postures_array(self) -> np.ndarray:
@@ -163,8 +166,9 @@ def _checked(station: RapidStation) -> RapidStation:
         load_robot(station.robot)
     except ValueError as exc:
         raise ConfigError(f"{src}: {exc}") from None
-    if station.protocol not in PROTOCOLS:
-        raise ConfigError(f"{src}: controller.protocol must be one of {', '.join(PROTOCOLS)}; got {station.protocol!r}")
+    if station.protocol not in station.links:
+        raise ConfigError(f"{src}: controller.protocol must be one of {', '.join(station.links)} (a protocol with a "
+                          f"RAPID link module); got {station.protocol!r}")
     pc = _ipv4(station.pc_address, "controller.pc_address", src)
     ctrl = _ipv4(station.controller_address, "controller.controller_address", src, allow_auto=True)
     port = station.port
@@ -205,12 +209,17 @@ def _checked(station: RapidStation) -> RapidStation:
                    postures=tuple(tuple(float(v) for v in row) for row in postures))
 
 
-def station_from_dict(data: dict, source: str = "station config", base: RapidStation | None = None) -> RapidStation:
-    """A checked station from the YAML structure; missing keys come from ``base`` (default: built-in)."""
+def station_from_dict(data: dict, source: str = "station config", base: RapidStation | None = None,
+                      links=None) -> RapidStation:
+    """A checked station from the YAML structure; missing keys come from ``base`` (default: built-in).
+
+    ``links``: protocol -> ``RapidLink`` of every protocol the station may name (default: ``base``'s,
+    the package's own); the station config passes the controller registry's.
+    """
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: expected a mapping of sections (controller, motion, tool, postures)")
     station = base or default_station()
-    changes = {"source": source}
+    changes = {"source": source, **({"links": links} if links is not None else {})}
     for section, keys in _SECTIONS.items():
         values = data.get(section, {}) or {}
         if not isinstance(values, dict):
@@ -232,14 +241,14 @@ def station_from_dict(data: dict, source: str = "station config", base: RapidSta
     return _checked(replace(station, **changes))
 
 
-def load_station(path) -> RapidStation:
-    """Read a station YAML file (see the module docstring)."""
+def load_station(path, links=None) -> RapidStation:
+    """Read a station YAML file (see the module docstring); ``links`` as in :func:`station_from_dict`."""
     file = Path(path)
     text = read_text_file(file, "station config", ConfigError,
                           missing=f"station config {file} not found; write one (see `handeye rapid generate --help`) "
                                   "or leave --config out to use the built-in mock station")
     data = parse_yaml(text, file, ConfigError)
-    return station_from_dict(data or {}, str(file))
+    return station_from_dict(data or {}, str(file), links=links)
 
 
 _DEFAULT: RapidStation | None = None

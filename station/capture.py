@@ -391,6 +391,7 @@ def open_capture(config: StationConfig, session_dir: Path, link: StationLink, pr
 
 def _session_program(config: StationConfig, plan_joints: np.ndarray, board2base, link: StationLink | None) -> list:
     """The RAPID modules of the plan (``rapid.generate.RapidModule``), as :func:`write_program` writes them."""
+    from ..drivers.controller.backends import RAPID_LINKS
     from ..rapid.generate import render_program
     from ..rapid.station import station_from_dict
 
@@ -399,7 +400,7 @@ def _session_program(config: StationConfig, plan_joints: np.ndarray, board2base,
         # the embedded station's controller holds a key of its own (HeKey.sys, handed to the PC): its
         # link module asks HeKey for it. The key itself never goes into the program modules.
         data["controller"]["write_key"] = link.mock.write_key
-    return render_program(station_from_dict(data, config.source), plan_joints)
+    return render_program(station_from_dict(data, config.source, links=RAPID_LINKS), plan_joints)
 
 
 def _same_text(path: Path, text: str) -> bool:

@@ -24,7 +24,9 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, fields, replace
+from collections.abc import Callable
+from dataclasses import dataclass, field, fields, replace
+from typing import ClassVar
 from pathlib import Path
 
 import numpy as np
@@ -35,6 +37,7 @@ from ..calibration.files import read_text_file
 from ..calibration.kinematics import load_robot
 from ..calibration.session import parse_yaml
 from ..calibration.transforms import pose_from_transform, transform_from_pose
+from ..drivers.controller.backends import DEFAULT_PROTOCOL
 from .cell_settings import CellSettings, GuidedSettings
 from .schema import (
     Custom,
@@ -45,6 +48,7 @@ from .schema import (
     Range,
     Text,
     check_section,
+    declared_fields,
     numbers,
     rule_of,
     schema_keys,
@@ -101,15 +105,43 @@ def _write_key(value, key: str, context) -> str | None:
     return value
 
 
-def _fingerprint(value, key: str, context) -> str:
-    """A SHA-256 certificate fingerprint (``check_fingerprint`` of the controller drivers)."""
-    from ..drivers.controller.errors import InvalidRequest  # noqa: PLC0415
-    from ..drivers.controller.types import check_fingerprint  # noqa: PLC0415
+def _link_settings() -> dict:
+    """``key -> (LinkSetting, back-end names)`` of every registered controller back end."""
+    from ..drivers.controller.backends import link_settings  # noqa: PLC0415
 
-    try:
-        return check_fingerprint(value, key)
-    except InvalidRequest as exc:
-        raise ConfigError(str(exc)) from None
+    return link_settings()
+
+
+def _checked_by(check: Callable, rule) -> Callable:
+    """A rule that runs ``rule`` and then a back end's own ``check(value, name)`` (InvalidRequest -> ConfigError)."""
+    from ..drivers.controller.errors import InvalidRequest  # noqa: PLC0415
+
+    def checked(value, key: str, context):
+        value = rule(value, key, context)
+        try:
+            return check(value, key)
+        except InvalidRequest as exc:
+            raise ConfigError(str(exc)) from None
+
+    return checked
+
+
+def link_fields() -> tuple:
+    """The ``controller`` keys the back ends declare (``ControllerBackend.link_settings``), as
+    :func:`~handeye.station.schema.setting` fields: rule from the type and range, the back ends'
+    names in front of the doc, secret as declared."""
+    out = []
+    for key, (declared, names) in _link_settings().items():
+        kinds = {int: Number(declared.low, declared.high, integer=True), float: Number(declared.low, declared.high)}
+        rule = kinds.get(declared.type, Text())
+        if declared.check is not None:
+            rule = Custom(_checked_by(declared.check, rule))
+        if declared.default is None:
+            rule = Optional(rule)
+        made = setting(declared.default, rule, f"{', '.join(names)}: {declared.help}", secret=declared.secret)
+        made.name = key
+        out.append(made)
+    return tuple(out)
 
 
 def _mount(value, key: str, context) -> tuple:
@@ -198,14 +230,11 @@ class ControllerSettings:
     """``controller``: the robot controller's link, and the settings of the generated RAPID program."""
 
     protocol: str = setting(MOCK, Text(lambda: controller_protocols() + (MOCK,)),
-                            "link protocol: a registered back end (socket, serial, modbus), or mock", required=True)
+                            "link protocol: a registered controller back end, or mock", required=True)
     host: str = setting("127.0.0.1", Text(what="the controller's IP address or host name"),
-                        "controller (socket) or gateway (modbus) address")
+                        "address of the controller (or of its gateway)")
     port: int | None = setting(None, Optional(Number(1, 65535, integer=True)),
-                               "TCP port (null: the link's own: socket 1025, modbus 502, rws 80, or 443 with "
-                               "tls_fingerprint)")
-    serial_url: str = setting("socket://127.0.0.1:1026", Text(), "serial: device or pyserial URL")
-    modbus_map: str | None = setting(None, Optional(Text()), "modbus: register map YAML (null: the built-in one)")
+                               "TCP port (null: the back end's own default port)")
     timeout_s: float = setting(2.0, Number(0.001, 3600), "budget of one request", "s")
     motion_timeout_s: float = setting(120.0, Number(0.001, 3600), "budget for a move to a posture", "s")
     pc_address: str = setting("127.0.0.1", Text(), "RAPID: the only client the socket server accepts (this PC)")
@@ -216,11 +245,24 @@ class ControllerSettings:
     idle_timeout_s: float = setting(5.0, Number(0.1, 10), "RAPID and PC: a link silent this long is dropped", "s")
     write_key: str | None = setting(None, Custom(_write_key), "the secret tool-data writes need (8-32 letters, "
                                     "digits, _ or -; HeKey.sys)", secret=True)
-    username: str = setting("Default User", Text(), "rws: the controller user (give the station its own)")
-    password: str | None = setting(None, Optional(Text()), "rws: that user's password (null: RobotWare's default "
-                                   "account's)", secret=True)
-    tls_fingerprint: str | None = setting(None, Optional(Custom(_fingerprint)), "rws, RobotWare 7: SHA-256 of the "
-                                          "controller's certificate (HTTPS, pinned); null: RobotWare 6 over HTTP")
+    #: The back ends' own settings a file sets (``serial_url``, ``modbus_map`` ...), by key: declared
+    #: by each back end (``ControllerBackend.link_settings``), read as attributes (``c.serial_url``).
+    backend_settings: dict = field(default_factory=dict, hash=False, repr=False)  # may hold secrets
+
+    EXTRA_FIELD: ClassVar[str] = "backend_settings"
+
+    @staticmethod
+    def extra_settings() -> tuple:
+        """The keys the registered controller back ends declare (:func:`link_fields`)."""
+        return link_fields()
+
+    def __getattr__(self, name: str):
+        if name.startswith("_") or name == "backend_settings":
+            raise AttributeError(name)
+        declared = _link_settings().get(name)
+        if declared is None:
+            raise AttributeError(f"no controller key {name!r}")
+        return self.__dict__.get("backend_settings", {}).get(name, declared[0].default)
 
 
 @dataclass(frozen=True)
@@ -302,7 +344,7 @@ class CaptureSettings:
 class MockSettings:
     """``mock``: the embedded mock station (``--mock``, mock back ends, the demo)."""
 
-    protocol: str = setting("socket", Text(mock_protocols), "its controller link: a back end a mock serves")
+    protocol: str = setting(DEFAULT_PROTOCOL, Text(mock_protocols), "its controller link: a back end a mock serves")
     seed: int = setting(7, Number(0, SEED_MAX, integer=True), "seeds the arm's errors and the sensor noise")
     kinematic_error_mm: float = setting(0.05, Number(0, 10), "the simulated arm's DH length errors", "mm")
     kinematic_error_deg: float = setting(0.002, Number(0, 10), "the simulated arm's DH angle errors", "deg")
@@ -398,7 +440,7 @@ class StationConfig:
                "target": {"corners": list(self.target.corners), "square_mm": self.target.square_mm}}
         for name in ("controller", "camera", "plan", "motion", "tool", "capture", "guided", "mock"):
             settings = getattr(self, name)
-            section = {f.name: getattr(settings, f.name) for f in fields(settings)}
+            section = {f.name: getattr(settings, f.name) for f in declared_fields(type(settings))}
             for secret in secret_fields(type(settings)):
                 section[secret] = None if section[secret] is None else "<set>"  # never the secret
             out[name] = _plain(section)
@@ -461,7 +503,8 @@ def _check_hardware_named(data: dict, config: StationConfig) -> None:
     controller_mock, camera_mock = config.controller.protocol == MOCK, config.camera.backend == MOCK
     if config.camera.mock_arm is not None and not (camera_mock and not controller_mock):
         raise ConfigError(f"camera.mock_arm is for a rehearsal: camera.backend {MOCK} with a real controller protocol "
-                          f"(socket, serial, modbus) pointing at `handeye mock controller`; here controller.protocol is "
+                          f"({', '.join(controller_protocols())}) pointing at `handeye mock controller`; here "
+                          "controller.protocol is "
                           f"{config.controller.protocol} and camera.backend {config.camera.backend}")
     if controller_mock and not camera_mock:
         raise ConfigError(f"controller.protocol is {MOCK} but camera.backend is {config.camera.backend}: the embedded mock "

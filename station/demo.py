@@ -17,6 +17,7 @@ from pathlib import Path
 from ..calibration.errors import HandEyeError
 from ..calibration.files import make_folder, write_failure, write_text_atomic
 from ..calibration.transforms import pose_from_transform, rotation_error_deg, translation_error_mm
+from ..drivers.controller.backends import DEFAULT_PROTOCOL
 from .assessment import Assessment, assess, comparison_methods
 from .calibrate import calibrate_session_folder
 from .capture import capture
@@ -37,7 +38,7 @@ DEMO_MARKER = ".handeye-demo"
 class DemoOptions:
     session: str = "handeye_demo"
     postures: int = 30
-    protocol: str = "socket"
+    protocol: str = DEFAULT_PROTOCOL
     seed: int = 7
     report: bool = True
 

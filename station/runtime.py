@@ -127,17 +127,19 @@ def check_rehearsal(config: StationConfig) -> dict:
     from ..calibration.errors import ConfigError
     from ..mocks.cell import cell_info
 
+    from ..drivers.controller.backends import CONTROLLERS
+
     served = cell_info(config.camera.mock_arm)["controller"]
     c = config.controller
-    if c.protocol == "serial":
-        same = served["protocol"] == "serial" and served.get("url") == c.serial_url
-        named = c.serial_url
+    options = CONTROLLERS[c.protocol].link_options(c)
+    if "url" in options:  # a line behind a URL: the URL is the address
+        address, named = {"url": options["url"]}, options["url"]
     else:
-        from ..drivers.controller.backends import CONTROLLERS
-
-        port = CONTROLLERS[c.protocol].link_options(c).get("port")
-        same = served["protocol"] == c.protocol and served["port"] == port and _same_host(served["host"], c.host)
-        named = f"{c.protocol} {c.host}:{port}"
+        address = {"host": options.get("host"), "port": options.get("port")}
+        named = f"{c.protocol} {address['host']}:{address['port']}"
+    same = served["protocol"] == c.protocol and all(
+        _same_host(served.get(key), value) if key == "host" else served.get(key) == value
+        for key, value in address.items())
     if not same:
         where = served.get("url") or f"{served['host']}:{served['port']}"
         raise ConfigError(f"camera.mock_arm {config.camera.mock_arm} is the camera of the mock {served['protocol']} "

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field, fields, replace
 from ..calibration.errors import ConfigError, brief
 
 __all__ = ["Rule", "Number", "Numbers", "Range", "Text", "Flag", "Optional", "Custom", "Section", "setting", "section",
-           "rule_of", "check_section", "schema_keys", "secret_fields", "number", "numbers", "text"]
+           "rule_of", "check_section", "declared_fields", "schema_keys", "secret_fields", "number", "numbers", "text"]
 
 #: Largest finite float: ``abs(v) <= _FLOAT_MAX`` is false for NaN, inf and integers too large for a
 #: float (where ``math.isfinite`` would raise OverflowError).
@@ -179,12 +179,20 @@ def setting(default, rule: Rule, doc: str, unit: str = "", *, required: bool = F
 @dataclass(frozen=True)
 class Section(Rule):
     """A mapping of the keys of ``cls`` (a dataclass of :func:`setting` fields); the missing keep
-    their defaults."""
+    their defaults. The keys declared elsewhere (:func:`declared_fields`) that differ from their
+    default go, as a dict, into the field ``cls.EXTRA_FIELD``."""
 
     cls: type
 
     def __call__(self, value, key, context):
-        return replace(self.cls(), **check_section(self.cls, value or {}, key, context))
+        changes = check_section(self.cls, value or {}, key, context)
+        own = {f.name for f in fields(self.cls)}
+        defaults = {f.name: f.default for f in declared_fields(self.cls) if f.name not in own}
+        extra = {name: v for name, v in changes.items() if name in defaults and v != defaults[name]}
+        changes = {name: v for name, v in changes.items() if name in own}
+        if extra:
+            changes[self.cls.EXTRA_FIELD] = extra
+        return replace(self.cls(), **changes)
 
 
 def section(cls, doc: str):
@@ -195,6 +203,15 @@ def section(cls, doc: str):
 def rule_of(f) -> Rule | None:
     """The rule of a dataclass field (None: not a config key)."""
     return f.metadata.get("rule")
+
+
+def declared_fields(cls) -> list:
+    """The config keys of ``cls``: its :func:`setting` fields, then the keys declared elsewhere that
+    its section takes (``cls.extra_settings()``, fields made with :func:`setting` and named: the
+    controller back ends' own link settings, which their registry describes)."""
+    own = [f for f in fields(cls) if rule_of(f) is not None]
+    extra = getattr(cls, "extra_settings", None)
+    return own + (list(extra()) if extra is not None else [])
 
 
 def _printable(key) -> str:
@@ -212,19 +229,17 @@ def check_section(cls, data, name: str, context: dict) -> dict:
     section = data if data is not None else {}
     if not isinstance(section, dict):
         raise ConfigError(f"{name} must be a mapping of keys; got {brief(section)}")
-    allowed = {f.name for f in fields(cls) if rule_of(f) is not None}
+    rules = {f.name: rule_of(f) for f in declared_fields(cls)}
+    allowed = set(rules)
     unknown = sorted(set(section) - allowed, key=brief)
     if unknown:
         raise ConfigError(f"unknown key {name}.{_printable(unknown[0])}; known keys of {name}: {', '.join(sorted(allowed))}")
-    rules = {f.name: rule_of(f) for f in fields(cls)}
     return {key: rules[key](value, f"{name}.{key}", context) for key, value in section.items()}
 
 
 def schema_keys(cls, prefix: str = ""):
     """``(key path, field)`` of every config key of ``cls``, sections expanded (``controller.port``)."""
-    for f in fields(cls):
-        if rule_of(f) is None:
-            continue
+    for f in declared_fields(cls):
         path = f"{prefix}{f.name}"
         if f.metadata.get("keys") is not None:
             yield from schema_keys(f.metadata["keys"], path + ".")
@@ -233,5 +248,5 @@ def schema_keys(cls, prefix: str = ""):
 
 
 def secret_fields(cls) -> tuple[str, ...]:
-    """Names of the fields of ``cls`` declared secret."""
-    return tuple(f.name for f in fields(cls) if f.metadata.get("secret"))
+    """Names of the keys of ``cls`` declared secret (:func:`declared_fields`)."""
+    return tuple(f.name for f in declared_fields(cls) if f.metadata.get("secret"))

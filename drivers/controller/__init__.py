@@ -1,5 +1,5 @@
-"""The robot controller link: one interface, back ends by name (``socket``, ``serial``, ``modbus``,
-or one a plug-in registers).
+"""The robot controller link: one interface, back ends by name (the package's
+``socket``, ``serial``, ``modbus`` and ``rws``, or one a plug-in registers: :data:`CONTROLLERS`).
 
 >>> from handeye.drivers.controller import open_controller           # doctest: +SKIP
 >>> with open_controller("socket", host="192.168.125.1", port=1025) as robot:

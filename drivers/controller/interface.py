@@ -1,6 +1,6 @@
 """The controller interface every back end implements, and ``open_controller`` to pick one by name.
 
-A back end is a class with a name (``socket``, ``serial``, ``modbus``); :func:`open_controller`
+A back end is a class with a name (a :data:`~handeye.drivers.controller.backends.CONTROLLERS` entry); :func:`open_controller`
 builds it from keyword options and connects. All methods take an optional ``timeout`` (seconds)
 that bounds the whole call, reconnects included; a call that has to (re)connect first is allowed
 at least ``idle_timeout + timeout`` (the controller may still be freeing itself from a silent
@@ -363,7 +363,7 @@ class Controller(ABC):
 
 
 def open_controller(name: str, *, connect: bool = True, **options) -> Controller:
-    """A controller back end by name (``socket``, ``serial``, ``modbus``, or a registered one), connected
+    """A controller back end by name (any registered one: :data:`~.backends.CONTROLLERS`), connected
     unless ``connect=False``.
 
     Options are the back end's keyword arguments (``host``, ``port``, ``url``, ``register_map``,

@@ -1,6 +1,6 @@
 """Mock ABB controller: real servers on 127.0.0.1 that EXECUTE the generated RAPID program.
 
-``start_mock_controller("socket" | "serial" | "modbus")`` builds a simulated IRB 1400
+``start_mock_controller(PROTOCOL)`` (any of :func:`mock_protocols`) builds a simulated IRB 1400
 (:class:`~handeye.mocks.robot.SimulatedRobot`), loads the RAPID modules of that link into the
 interpreter (generated for the station, or ``program=DIR``), binds them to real TCP sockets, a serial
 line or a Modbus gateway and to the arm, and runs ``main``. Use it as a context manager so threads
@@ -20,6 +20,7 @@ included). A program the interpreter cannot run is refused at start with its mod
 
 from __future__ import annotations
 
+from ...drivers.controller.backends import DEFAULT_PROTOCOL
 from ...rapid.station import default_station
 from ..backends import mock_protocols, mock_server
 from ..robot import SimulatedRobot
@@ -58,19 +59,19 @@ def _program(protocol, program, station, postures, ack_timeout_s, idle_timeout_s
                              idle_timeout_s=idle_timeout_s, write_key=write_key, pc_address=allowed_client)
 
 
-def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", port: int = 0, postures=None,
+def start_mock_controller(protocol: str = DEFAULT_PROTOCOL, *, host: str = "127.0.0.1", port: int = 0, postures=None,
                           robot: SimulatedRobot | None = None, time_scale: float = 1.0, speed_fraction: float = 0.25,
                           ack_timeout_s: float | None = 30.0, allowed_client: str | None = None,
-                          register_map=None, faults: Faults | None = None,
+                          faults: Faults | None = None,
                           idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None,
-                          program=None, station=None, start: bool = True, generation: int | None = None):
+                          program=None, station=None, start: bool = True, **server_options):
     """A started mock controller of ``protocol`` running its RAPID program.
 
     Parameters
     ----------
     protocol : str
-        ``socket``, ``serial`` (TCP stream for pyserial's ``socket://`` URL), ``modbus``, or any
-        back end a mock serves (:func:`mock_protocols`).
+        Any back end a mock serves (:func:`mock_protocols`; default
+        :data:`~handeye.drivers.controller.backends.DEFAULT_PROTOCOL`).
     host, port : str, int
         Where to listen (port 0: a free port; read ``server.port``).
     postures : array-like, shape (n, dof), optional
@@ -83,8 +84,6 @@ def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", 
         The program's acknowledgement timeout (state LATE after it; None: never, in practice).
     allowed_client : str, optional
         Socket: the PC address the program accepts (``HE_PC_ADDRESS``; default 127.0.0.1).
-    register_map : path or RegisterMap, optional
-        Modbus only.
     idle_timeout_s : float
         The link's idle timeout rendered into the program (and the gateway's, for Modbus).
     write_key : str, optional
@@ -96,9 +95,11 @@ def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", 
         The station the modules are generated for (default: the built-in one).
     start : bool
         Start the server (default); else call ``server.start()`` or use ``with``.
-    generation : int, optional
-        RWS only: 1 (RobotWare 6, HTTP) or 2 (RobotWare 7, HTTPS). A :class:`MockVariant` protocol
-        brings its own (``mock_variants()``); default 1.
+    **server_options
+        The mock server's own options (``MockServer.options`` of the protocol: the Modbus mock's
+        ``register_map``, path or RegisterMap; the RWS mock's ``generation``, 1 or 2 ...); None or
+        an option its server does not take is left out. A :class:`MockVariant` protocol brings its own
+        (``mock_variants()``).
     """
     mock = mock_server(protocol)
     variant, protocol = getattr(protocol, "options", {}), str(protocol)
@@ -107,10 +108,9 @@ def start_mock_controller(protocol: str = "socket", *, host: str = "127.0.0.1", 
     if robot is None:
         robot = SimulatedRobot(postures if postures is not None else (station or default_station()).postures,
                                time_scale=time_scale, speed_fraction=speed_fraction)
-    offered = {"register_map": register_map, **variant}
-    if generation is not None:
-        offered["generation"] = generation
+    offered = {**variant, **{name: value for name, value in server_options.items() if value is not None}}
+    taken = [setting.key for setting in mock.settings()]
     server = mock.load()(source, robot, host, port, faults=faults, idle_timeout_s=idle_timeout_s, write_key=write_key,
-                         **{name: offered[name] for name in mock.options if name in offered})
+                         **{name: offered[name] for name in taken if name in offered})
     server.protocol = str(protocol).lower()
     return server.start() if start else server

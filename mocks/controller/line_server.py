@@ -134,3 +134,9 @@ class SerialControllerServer(RapidControllerServer):
 
     def client_options(self) -> dict:
         return self._client_key({"url": self.url, "idle_timeout": self.idle_timeout_s})
+
+    def listening(self) -> str:
+        return f": serial line on pyserial URL {self.url}"
+
+    def client_flags(self) -> str:
+        return f"--url {self.url}"

@@ -272,6 +272,22 @@ class RwsControllerServer(RapidControllerServer):
     def tls_fingerprint(self) -> str | None:
         return self_signed_certificate()[2] if self.generation == 2 else None
 
+    def listening(self) -> str:
+        security = "HTTPS, Basic" if self.generation == 2 else "HTTP, Digest"
+        return (f": Robot Web Services {self.generation}.0 (RobotWare {self.robotware}, {security}) listening on "
+                f"{self.host}:{self.port}")
+
+    def link_note(self, idle_timeout_s: float) -> str:
+        writes = "tool writes by symbol, authorised by the RWS user and mastership"
+        if self.generation == 2:
+            writes += ("\n  its self-signed certificate is made anew at every start: pin the fingerprint "
+                       "printed now, it changes the next time")
+        return writes
+
+    def client_flags(self) -> str:
+        pin = f" --tls-fingerprint {self.tls_fingerprint}" if self.generation == 2 else ""
+        return f"--host {self.host} --port {self.port} --user '{self.username}' --password {self.password}{pin}"
+
     def client_options(self) -> dict:
         options = {"host": self.host, "port": self.port, "username": self.username, "password": self.password,
                    "idle_timeout": self.idle_timeout_s}

@@ -1,5 +1,5 @@
 """What every mock controller server shares: the RAPID program run by the interpreter on the
-simulated arm, behind the endpoint of its link (TCP socket, serial line, Modbus gateway).
+simulated arm, behind the endpoint of its link (a TCP socket, a serial line, a gateway, a web server).
 
 A server is built from a :class:`~handeye.mocks.controller.sources.ControllerProgram` and a
 :class:`~handeye.mocks.robot.SimulatedRobot`; :meth:`start` opens the endpoint, loads the program
@@ -113,7 +113,7 @@ class RapidControllerServer:
         start it; the system modules loaded before (HeKey.sys) stay, as on a controller. Loading the
         modules that run already changes nothing (the program is not restarted)."""
         if not isinstance(program, ControllerProgram):
-            program = program_from_folder(program, self.kind)
+            program = program_from_folder(program, self.protocol)
         program = keep_system_modules(program, self.source)
         if sorted((m.source, m.text) for m in program.modules) == sorted((m.source, m.text) for m in self.source.modules):
             return  # the same modules are loaded already: the program keeps running (a resumed capture)
@@ -163,6 +163,21 @@ class RapidControllerServer:
     def has_write_key(self) -> bool:
         """True when the mock was given a write key (tool writes possible after KEY / with tool_key)."""
         return self._write_key is not None
+
+    # ------------------------------------------------------------------ its banner (handeye mock controller)
+    def listening(self) -> str:
+        """Where a client reaches it, after the banner's head (`` listening on HOST:PORT``)."""
+        return f" listening on {self.host}:{self.port}"
+
+    def link_note(self, idle_timeout_s: float) -> str:
+        """The banner's line on the link: its idle timeout and whether tool writes are possible."""
+        writes = ("tool writes need the write key (KEY / tool_key)" if self.has_write_key else
+                  "tool writes refused: no write key (start it with --write-key KEY or --config STATION.yaml)")
+        return f"idle timeout {idle_timeout_s:g} s; {writes}"
+
+    def client_flags(self) -> str:
+        """The ``handeye robot`` flags that reach it."""
+        return f"--host {self.host} --port {self.port}"
 
     def _client_key(self, options: dict) -> dict:
         if self._write_key is not None:

@@ -15,6 +15,7 @@ import sys
 import time
 from dataclasses import dataclass, field
 
+from ...drivers.controller.backends import DEFAULT_PROTOCOL, RAPID_LINKS
 from ...rapid.station import IDLE_TIMEOUT_RANGE, RapidStation, default_station, load_station
 from ..backends import mock_protocols, mock_server
 from . import start_mock_controller
@@ -32,7 +33,7 @@ class MockControllerOptions:
     Attributes
     ----------
     protocol : str
-        ``socket``, ``serial``, ``modbus`` (any of :func:`~handeye.mocks.backends.mock_protocols`).
+        Any of :func:`~handeye.mocks.backends.mock_protocols`.
     port : int or None
         None: the mock's default port (``mock_server(protocol).default_port``); 0: any free port.
     host : str
@@ -45,9 +46,10 @@ class MockControllerOptions:
     time_scale : float
         Wall-clock seconds per simulated second of motion.
     allowed_client : str or None
-        Socket only: the PC address rendered into the program (``HE_PC_ADDRESS``; None: the station's).
-    register_map : str or None
-        Modbus only: register map YAML.
+        The PC address rendered into the program (``HE_PC_ADDRESS``; None: the station's).
+    server_options : dict
+        The protocol's mock server's own options by key (``MockServer.options``: ``register_map``,
+        ``generation`` ...); the options of another protocol's mock are left out.
     duration_s : float or None
         Stop after this long (None: until Ctrl-C).
     idle_timeout_s : float or None
@@ -63,20 +65,19 @@ class MockControllerOptions:
         station (0: a free port); None: no camera.
     """
 
-    protocol: str = "socket"
+    protocol: str = DEFAULT_PROTOCOL
     port: int | None = None
     host: str = "127.0.0.1"
     config: str | None = None
     time_scale: float = 1.0
     allowed_client: str | None = None
-    register_map: str | None = None
+    server_options: dict = field(default_factory=dict)
     duration_s: float | None = None
     idle_timeout_s: float | None = None
     write_key: str | None = field(default=None, repr=False)
     station: RapidStation | None = None
     program: str | None = None
     camera_port: int | None = None
-    rws_generation: int = 1
 
 
 def is_loopback(host: str) -> bool:
@@ -90,30 +91,11 @@ def is_loopback(host: str) -> bool:
 
 
 def _banner(server, options: MockControllerOptions, postures: int, idle_timeout_s: float) -> str:
-    where = f"{server.host}:{server.port}"
     runs = f"RAPID from {options.program}" if options.program else f"the RAPID generated for {options.protocol}"
     head = f"mock {options.protocol} controller (simulated IRB 1400 running {runs}, {postures} approved postures)"
-    if server.has_write_key:
-        writes = "tool writes need the write key (KEY / tool_key)"
-    else:
-        writes = "tool writes refused: no write key (start it with --write-key KEY or --config STATION.yaml)"
-    link = f"  idle timeout {idle_timeout_s:g} s; {writes}"
-    if options.protocol == "rws":
-        gen = server.generation
-        auth = f"--user '{server.username}' --password {server.password}"
-        pin = f" --tls-fingerprint {server.tls_fingerprint}" if gen == 2 else ""
-        writes = "tool writes by symbol, authorised by the RWS user and mastership"
-        if gen == 2:
-            writes += ("\n  its self-signed certificate is made anew at every start: pin the fingerprint "
-                       "printed now, it changes the next time")
-        return (f"{head}: Robot Web Services {gen}.0 (RobotWare {server.robotware}, "
-                f"{'HTTPS, Basic' if gen == 2 else 'HTTP, Digest'}) listening on {where}; stop with Ctrl-C\n  {writes}\n"
-                f"  try: handeye robot joints --protocol rws --host {server.host} --port {server.port} {auth}{pin} --json")
-    if options.protocol == "serial":
-        return (f"{head}: serial line on pyserial URL {server.url}; stop with Ctrl-C\n{link}\n"
-                f"  try: handeye robot joints --protocol serial --url {server.url} --json")
-    return (f"{head} listening on {where}; stop with Ctrl-C\n{link}\n"
-            f"  try: handeye robot joints --protocol {options.protocol} --host {server.host} --port {server.port} --json")
+    # where it listens, its link and the flags that reach it are the server's own (its protocol's module)
+    return (f"{head}{server.listening()}; stop with Ctrl-C\n  {server.link_note(idle_timeout_s)}\n"
+            f"  try: handeye robot joints --protocol {options.protocol} {server.client_flags()} --json")
 
 
 def _warn(text: str) -> None:
@@ -132,7 +114,8 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
         raise InvalidRequest(f"unknown protocol {options.protocol!r}; choose one of {', '.join(mock_protocols())}")
     if not options.time_scale > 0:
         raise InvalidRequest(f"--time-scale must be > 0; got {options.time_scale}")
-    station = options.station or (load_station(options.config) if options.config else default_station())
+    station = options.station or (load_station(options.config, links=RAPID_LINKS) if options.config
+                                  else default_station())
     idle = station.idle_timeout_s if options.idle_timeout_s is None else options.idle_timeout_s
     low, high = IDLE_TIMEOUT_RANGE
     if not low <= idle <= high:
@@ -147,9 +130,9 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
         server = start_mock_controller(options.protocol, host=options.host, port=port, postures=station.postures,
                                        robot=robot,
                                        time_scale=options.time_scale, ack_timeout_s=station.ack_timeout_s,
-                                       allowed_client=options.allowed_client, register_map=options.register_map,
+                                       allowed_client=options.allowed_client,
                                        idle_timeout_s=idle, write_key=key, station=station, program=options.program,
-                                       **({"generation": options.rws_generation} if options.protocol == "rws" else {}))
+                                       **options.server_options)
     except OSError as exc:
         raise InvalidRequest(f"cannot listen on {options.host}:{port} ({exc}); pick another --port "
                              "(0 = any free port)") from None

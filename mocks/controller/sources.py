@@ -12,10 +12,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from ...drivers.controller.backends import RAPID_LINKS
 from ...rapid.errors import RapidError
 from ...rapid.generate import render_key, render_program
 from ...rapid.interpreter import ModuleSource, parse_module
-from ...rapid.links import LINK_MODULES
 from ...rapid.station import RapidStation, default_station
 
 __all__ = ["ControllerProgram", "generated_program", "program_from_folder", "keep_system_modules", "MODULE_SUFFIXES",
@@ -37,7 +37,7 @@ class ControllerProgram:
     origin : str
         Where they come from, for messages (``generated for socket``, a folder).
     link : str or None
-        The protocol of the link module among them (``socket``, ``serial``, ``modbus``).
+        The protocol of the link module among them (a controller back end's name).
     tool_name : str or None
         The PERS tooldata holding the camera (None: the program's only PERS tooldata).
     """
@@ -49,7 +49,7 @@ class ControllerProgram:
 
 
 def _link_of(names, origin: str) -> str | None:
-    found = [protocol for protocol, module in LINK_MODULES.items() if module.lower() in names]
+    found = [protocol for protocol in RAPID_LINKS if RAPID_LINKS[protocol].module.lower() in names]
     if len(found) > 1:
         raise RapidError(f"{origin} holds the link modules of {' and '.join(found)}: load one")
     return found[0] if found else None
@@ -64,7 +64,7 @@ def generated_program(protocol: str, station: RapidStation | None = None, *, pos
     host); ``ack_timeout_s=None`` renders the longest acknowledgement timeout (never LATE in practice).
     """
     base = station or default_station()
-    changes = {"protocol": protocol, "controller_address": "auto", "write_key": write_key,
+    changes = {"protocol": protocol, "links": RAPID_LINKS, "controller_address": "auto", "write_key": write_key,
                "ack_timeout_s": NEVER_LATE_S if ack_timeout_s is None else ack_timeout_s}
     if postures is not None:
         changes["postures"] = tuple(tuple(float(v) for v in row) for row in postures)
@@ -102,8 +102,8 @@ def program_from_folder(folder, protocol: str | None = None) -> ControllerProgra
             raise RapidError(f"--program {path}: cannot read {file.name} ({exc.strerror})") from None
     link = _link_of({f.stem.lower() for f in files}, str(path))
     if protocol is not None and link is not None and link != protocol:
-        raise RapidError(f"--program {path} holds {LINK_MODULES[link]} ({link}), not the {protocol} link module "
-                         f"{LINK_MODULES[protocol]}: choose --protocol {link}")
+        raise RapidError(f"--program {path} holds {RAPID_LINKS[link].module} ({link}), not the {protocol} link module "
+                         f"{RAPID_LINKS[protocol].module}: choose --protocol {link}")
     return ControllerProgram(tuple(modules), str(path), link)
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["corners", "positive", "non_negative", "count", "whole_between", "port", "floats"]
+__all__ = ["corners", "positive", "non_negative", "count", "whole_between", "port", "floats", "setting_value"]
 
 
 def _number(text: str, kind=float, what: str = "a number"):
@@ -77,3 +77,21 @@ def floats(text: str) -> tuple:
         return tuple(float(v) for v in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected comma-separated numbers; got {text!r}") from None
+
+
+def setting_value(setting):
+    """A type for a back end's described setting (``drivers.controller.backends.LinkSetting``): its
+    type (text, whole number, number) within its ``low..high``."""
+    kinds = {int: (int, "a whole number"), float: (float, "a number")}
+
+    def convert(text: str):
+        if setting.type not in kinds:
+            return text
+        kind, what = kinds[setting.type]
+        value = _number(text, kind, what)
+        if not setting.low <= value <= setting.high:
+            raise argparse.ArgumentTypeError(f"must be between {setting.low:g} and {setting.high:g}; got {value}")
+        return value
+
+    convert.__name__ = setting.key  # argparse names the type in its messages
+    return convert

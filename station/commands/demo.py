@@ -26,14 +26,15 @@ Examples:
 
 
 def add_parser(sub):
+    from ...drivers.controller.backends import DEFAULT_PROTOCOL
     from ...mocks.backends import mock_protocols
 
     p = sub.add_parser("demo", help=HELP, description=HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' = stdout)")
     p.add_argument("--session", default="handeye_demo", metavar="DIR", help="demo folder (default ./handeye_demo)")
-    p.add_argument("--protocol", choices=mock_protocols(), default="socket",
-                   help="controller link of the mock robot (default socket)")
+    p.add_argument("--protocol", choices=mock_protocols(), default=DEFAULT_PROTOCOL,
+                   help=f"controller link of the mock robot (default {DEFAULT_PROTOCOL})")
     p.add_argument("--postures", type=int, default=30, help="postures to plan (default 30)")
     p.add_argument("--seed", type=int, default=7, help="mock station seed: arm errors and sensor noise (default 7)")
     p.add_argument("--no-report", action="store_true", help="skip the HTML report")

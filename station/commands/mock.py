@@ -54,6 +54,15 @@ def _protocols() -> tuple[str, str]:
     return names, "\n".join(lines)
 
 
+def _server_options(parser) -> None:
+    """One flag per mock server option (``MockServer.options`` of every mock protocol, described once)."""
+    from ...mocks.backends import mock_settings
+
+    for key, (setting, names) in mock_settings().items():
+        parser.add_argument(setting.option, dest=f"server_{key}", type=argtypes.setting_value(setting), default=None,
+                            metavar=setting.metavar or key.upper(), help=f"{', '.join(names)}: {setting.help}")
+
+
 def add_parser(sub):
     names, lines = _protocols()
     p = sub.add_parser("mock", help=HELP, description=HELP)
@@ -62,7 +71,9 @@ def add_parser(sub):
     c = targets.add_parser("controller", help=controller_help, description=controller_help,
                            epilog=CONTROLLER_EPILOG.format(protocols=lines),
                            formatter_class=argparse.RawDescriptionHelpFormatter)
-    c.add_argument("--protocol", choices=names, default="socket", help="default socket")
+    from ...drivers.controller.backends import DEFAULT_PROTOCOL
+
+    c.add_argument("--protocol", choices=names, default=DEFAULT_PROTOCOL, help=f"default {DEFAULT_PROTOCOL}")
     c.add_argument("--port", type=argtypes.port, default=None, help="TCP port (defaults above; 0 = any free port)")
     c.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     c.add_argument("--config", metavar="STATION.yaml",
@@ -72,11 +83,7 @@ def add_parser(sub):
     c.add_argument("--allow-client", metavar="IP",
                    help="socket: the PC address rendered into the generated program (HE_PC_ADDRESS; default: the "
                         "config's controller.pc_address, 127.0.0.1); --program modules carry their own")
-    c.add_argument("--register-map", metavar="MAP.yaml", help="modbus: register map (default: the built-in one)")
-    c.add_argument("--rws-generation", type=int, choices=(1, 2), default=1,
-                   help="rws: 1 = RobotWare 6 (HTTP, Digest; default), 2 = RobotWare 7 (HTTPS with a self-signed "
-                        "certificate, Basic; the banner prints its fingerprint, which is new at every start: "
-                        "a certificate is made for each run)")
+    _server_options(c)
     c.add_argument("--duration", type=argtypes.positive, metavar="S", help="stop after S seconds (default: run until Ctrl-C)")
     c.add_argument("--idle-timeout", type=argtypes.positive, metavar="S",
                    help="drop a silent PC (socket) / forget its session (serial) after S seconds, 0.1..10 "
@@ -108,17 +115,19 @@ def run(args) -> int:
 
     station = None
     if args.config:
+        from ...drivers.controller.backends import RAPID_LINKS
         from ...rapid.station import default_station, station_from_dict
         from ..config import load_config
 
         config = load_config(args.config)
         postures = config.postures if config.postures is not None else default_station().postures
-        station = station_from_dict(config.rapid_dict(postures), args.config)
+        station = station_from_dict(config.rapid_dict(postures), args.config, links=RAPID_LINKS)
+    server_options = {name[len("server_"):]: value for name, value in vars(args).items()
+                      if name.startswith("server_") and value is not None}
     options = MockControllerOptions(protocol=args.protocol, port=args.port, host=args.host, station=station,
                                     time_scale=args.time_scale, allowed_client=args.allow_client,
-                                    register_map=args.register_map, duration_s=args.duration,
+                                    server_options=server_options, duration_s=args.duration,
                                     idle_timeout_s=args.idle_timeout, write_key=args.write_key,
-                                    program=args.program, camera_port=args.camera_port,
-                                    rws_generation=args.rws_generation)
+                                    program=args.program, camera_port=args.camera_port)
     return run_mock_controller(options, announce=lambda text: print(text, flush=True),
                                warn=lambda text: print(text, file=sys.stderr, flush=True))

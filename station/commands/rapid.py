@@ -47,7 +47,7 @@ Example:
 
 
 def add_parser(sub):
-    from ...rapid.links import PROTOCOLS
+    from ...drivers.controller.backends import RAPID_LINKS
 
     p = sub.add_parser("rapid", help=HELP, description=HELP)
     what = p.add_subparsers(dest="rapid_command", metavar="COMMAND")
@@ -55,7 +55,7 @@ def add_parser(sub):
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     g.add_argument("--config", metavar="STATION.yaml", help="station config (default: the built-in mock station)")
     g.add_argument("-o", "--output", required=True, metavar="DIR", help="folder for the .mod files (created)")
-    g.add_argument("--protocol", choices=PROTOCOLS,
+    g.add_argument("--protocol", choices=tuple(RAPID_LINKS),
                    help="link module to write (default: controller.protocol of the config)")
     p.set_defaults(_rapid_parser=p)
     return p
@@ -65,23 +65,25 @@ def run(args) -> int:
     if getattr(args, "rapid_command", None) != "generate":
         args._rapid_parser.print_help()
         return 2
-    from ...rapid.generate import render_key, render_program, write_modules
+    from ...drivers.controller.backends import RAPID_LINKS
+    from ...rapid.generate import render_key, render_program, station_link, write_modules
     from ...rapid.station import default_station, station_from_dict
     from ..config import load_config
 
     if args.config:
         config = load_config(args.config)
         postures = config.postures if config.postures is not None else default_station().postures
-        station = station_from_dict(config.rapid_dict(postures), args.config)
+        station = station_from_dict(config.rapid_dict(postures), args.config, links=RAPID_LINKS)
     else:
-        station = default_station()
+        station = default_station().with_(links=RAPID_LINKS)
     paths = write_modules(render_program(station, protocol=args.protocol), args.output)
     for path in paths:
         print(path)
     names = ", ".join(p.name for p in paths)
-    if (args.protocol or station.protocol) == "rws":
-        print("rws: tool writes are authorised by the controller's users and mastership (no write key, no "
-              "HeKey.sys); handeye capture uploads, loads and starts these modules itself")
+    protocol = args.protocol or station.protocol
+    if not station_link(station, protocol).write_key:
+        print(f"{protocol}: tool writes are authorised by the controller itself (no write key, no HeKey.sys); "
+              "handeye capture uploads, loads and starts these modules itself")
     elif station.write_key is not None:
         (key_path,) = write_modules([render_key(station)], args.output)
         print(key_path)

@@ -22,17 +22,17 @@ def _epilog(backends) -> str:
 
 
 def _link_options(p, backends) -> None:
+    """``--protocol``, ``--host``, ``--port`` and one flag per back-end link setting (``link_settings()``)."""
+    from ...drivers.controller.backends import DEFAULT_PROTOCOL, link_settings
+
     ports = ", ".join(f"{name} {backends[name].default_port}" for name in backends if backends[name].default_port)
-    p.add_argument("--protocol", choices=tuple(backends), default="socket", help="default socket")
+    p.add_argument("--protocol", choices=tuple(backends), default=DEFAULT_PROTOCOL, help=f"default {DEFAULT_PROTOCOL}")
     p.add_argument("--host", default="127.0.0.1", help="controller or gateway address (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=None, help=f"TCP port (default: {ports})")
-    p.add_argument("--url", help="serial: device (/dev/ttyUSB0, COM3) or pyserial URL (socket://127.0.0.1:1026)")
-    p.add_argument("--baudrate", type=int, default=9600, help="serial: baud rate (default 9600)")
-    p.add_argument("--register-map", metavar="MAP.yaml", help="modbus: register map (default: the built-in one)")
-    p.add_argument("--user", default=None, help="rws: controller user (default: RobotWare's 'Default User')")
-    p.add_argument("--password", default=None, help="rws: that user's password (default: RobotWare's default)")
-    p.add_argument("--tls-fingerprint", metavar="SHA256", default=None,
-                   help="rws, RobotWare 7: SHA-256 of the controller's certificate (HTTPS, pinned; default port 443)")
+    for key, (setting, names) in link_settings().items():
+        p.add_argument(setting.option, dest=f"link_{key}", type=argtypes.setting_value(setting), default=None,
+                       metavar=setting.metavar or setting.key.upper(),
+                       help=f"{', '.join(names)}: {setting.help}")
     p.add_argument("--timeout", type=argtypes.positive, default=2.0, metavar="S", help="seconds per call (default 2)")
     p.add_argument("--idle-timeout", type=argtypes.positive, default=5.0, metavar="S",
                    help="the controller's idle timeout (controller.idle_timeout_s, default 5): connecting may wait "
@@ -62,9 +62,8 @@ def _options(args) -> dict:
     """``open_controller`` options: where the controller is, as the back end's registry entry builds them."""
     from ...drivers.controller.backends import CONTROLLERS, ControllerLink
 
-    link = ControllerLink(host=args.host, port=args.port, serial_url=args.url, modbus_map=args.register_map,
-                          baudrate=args.baudrate, username=args.user, password=args.password,
-                          tls_fingerprint=args.tls_fingerprint)
+    settings = {name[len("link_"):]: value for name, value in vars(args).items() if name.startswith("link_")}
+    link = ControllerLink(host=args.host, port=args.port, **settings)
     options = {"timeout": args.timeout, "retries": 1, "idle_timeout": args.idle_timeout}
     return {**CONTROLLERS[args.protocol].link_options(link), **options}
 

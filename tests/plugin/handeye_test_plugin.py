@@ -2,27 +2,58 @@
 line protocol over TCP on another default port) and a camera back end (``blank``, grey frames)
 through the entry points of its ``.dist-info``, with no change to handeye.
 
-The controller is declared by a ``ControllerBackend`` (name, class, default port, help); the camera
-by its class alone (the registry describes it with the defaults).
+The controller is declared by one ``ControllerBackend`` (name, class, default port, help), which
+also brings the RAPID module its controller runs (``HeLoop``, from this package's own template) and
+the mock that serves it (the socket mock's server, running HeLoop); the camera by its class alone
+(the registry describes it with the defaults).
 """
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from handeye.drivers.camera import Camera, StereoFrame
-from handeye.drivers.controller.backends import ControllerBackend
+from handeye.drivers.controller.backends import ControllerBackend, LinkSetting, MockServer
 from handeye.drivers.controller.socket_client import SocketController
+from handeye.rapid.links import RapidLink
 
 
 class LoopbackController(SocketController):
-    """The socket back end under another name: what a plug-in's own protocol would subclass."""
+    """The socket back end under another name: what a plug-in's own protocol would subclass. Its own
+    setting ``label`` (``controller.loop_label`` in a station config, ``--loop-label`` on the command
+    line) is only kept."""
 
     protocol = "loopback"
 
+    def __init__(self, host: str = "127.0.0.1", port: int = 11025, *, label: str = "", **options):
+        super().__init__(host, port, **options)
+        self.label = label
+
+
+#: The RAPID module of the loopback link: this package's template, filled with handeye's link fields.
+RAPID_LINK = RapidLink("HeLoop", Path(__file__).with_name("HeLoop.mod.tmpl"))
+
+
+def _mock_server(*args, note: str = "", **kwargs):
+    """The mock controller of the loopback link: the socket mock running HeLoop (imported when it
+    starts), with an option of its own (``note``, kept: ``--loop-note`` of ``handeye mock controller``)."""
+    from handeye.mocks.controller.line_server import SocketControllerServer
+
+    server = SocketControllerServer(*args, **kwargs)
+    server.note = note
+    return server
+
 
 CONTROLLER = ControllerBackend("loopback", f"{__name__}:LoopbackController", default_port=11025,
-                               help="the test plug-in's TCP link:   --host H --port P (default 11025)")
+                               help="the test plug-in's TCP link:   --host H --port P (default 11025)",
+                               link_settings=(LinkSetting("loop_label", str, "plain", "a label the link keeps",
+                                                          keyword="label", metavar="TEXT"),),
+                               rapid_link=RAPID_LINK,
+                               mock=MockServer(_mock_server, 11026, help="HeLoop executed: the line protocol over TCP",
+                                               options=(LinkSetting("note", str, None, "a note the mock keeps",
+                                                                    flag="--loop-note"),)))
 
 
 class BlankCamera(Camera):
