@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import os
 import subprocess
 import sys
 
@@ -70,7 +71,8 @@ def test_rapidchecker_is_not_vacuous(programs, tmp_path):
     path = tmp_path / "Broken.mod"
     path.write_text(broken)
     result = subprocess.run([sys.executable, "-m", "rapidchecker", str(path)], cwd=tmp_path,
-                            capture_output=True, text=True, timeout=120)
+                            capture_output=True, text=True, timeout=120,
+                            env={**os.environ, "COLUMNS": "1000"})  # its console wraps a long path otherwise
     assert result.returncode == 1 and "Broken.mod" in result.stdout
 
 
