@@ -66,7 +66,7 @@ def test_a_checkout_that_is_not_installed_stops_with_one_line():
             "sys.meta_path[:] = [f for f in sys.meta_path if 'editable' not in getattr(f, '__module__', '').lower()]\n"
             "sys.path[:] = [p for p in sys.path if 'editable' not in p]\n"
             "import pytest\n"
-            "sys.exit(pytest.main(['-q', '-p', 'no:cacheprovider', '--collect-only', 'tests/test_rotations.py']))")
+            "sys.exit(pytest.main(['-q', '-p', 'no:cacheprovider', '--collect-only', 'tests/calibration/test_rotations.py']))")
     done = subprocess.run([sys.executable, "-c", hide], capture_output=True, text=True, cwd=REPO)
     assert done.returncode == 4, done.stdout + done.stderr
     assert 'handeye is not importable' in done.stdout + done.stderr

@@ -284,7 +284,7 @@ def test_the_contract_tests_run_on_the_plugin_protocol():
     import subprocess
 
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(PLUGIN), os.environ.get("PYTHONPATH")]))}
-    contract = Path(__file__).parent / "controller" / "test_contract.py"
+    contract = Path(__file__).parent / "drivers" / "controller" / "test_contract.py"
     done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(contract), "-k", "loopback"],
                           env=env, capture_output=True, text=True, timeout=900)
     summary = done.stdout.strip().splitlines()[-1]

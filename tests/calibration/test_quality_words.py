@@ -35,7 +35,7 @@ from handeye.station.quality import verdict
 
 from helpers import problem as make_problem
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 
 def _hand(rotvecs_deg):

@@ -7,7 +7,7 @@ from handeye.calibration.triplets import relative_motions
 from helpers import flipped_board, problem
 
 
-# The robust pipeline was the default until the maximum-likelihood estimator (tests/test_ml_default.py);
+# The robust pipeline was the default until the maximum-likelihood estimator (tests/calibration/test_ml_default.py);
 # these tests pin its behaviour under its name.
 
 

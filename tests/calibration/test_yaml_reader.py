@@ -104,7 +104,7 @@ def test_a_json_log_with_a_duplicated_key_is_refused_with_both_lines():
 
 
 def test_the_shipped_yaml_files_have_no_duplicated_keys():
-    repo = Path(__file__).resolve().parents[1]
+    repo = Path(__file__).resolve().parents[2]
     files = [p for room in ("calibration", "drivers", "station", "rapid", "mocks") for p in (repo / room).rglob("*.yaml")]
     assert len(files) >= 5
     for path in files:
