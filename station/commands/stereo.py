@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 
+from ...calibration.station_board import STATION_CORNERS, STATION_SQUARE_MM
 from . import argtypes
 
 HELP = "calibrate the stereo head from checkerboard pairs, or read its factory (Triclops) calibration"
@@ -104,10 +105,10 @@ def add_parser(sub):
     src.add_argument("--left", metavar="'GLOB'", help="left images (quoted glob pattern)")
     src.add_argument("--right", metavar="'GLOB'", help="right images (quoted glob pattern)")
     src.add_argument("--camera", metavar="BACKEND", help="live capture from a camera back end (xb3, mock)")
-    c.add_argument("--board", metavar="NXxNY", type=argtypes.corners, default=(13, 8),
-                   help="inner corners, long side first (default 13x8)")
-    c.add_argument("--square-mm", metavar="MM", type=argtypes.positive, default=30.0,
-                   help="square size in mm (default 30): sets the scale of T")
+    c.add_argument("--board", metavar="NXxNY", type=argtypes.corners, default=STATION_CORNERS,
+                   help="inner corners, long side first (default {}x{})".format(*STATION_CORNERS))
+    c.add_argument("--square-mm", metavar="MM", type=argtypes.positive, default=STATION_SQUARE_MM,
+                   help=f"square size in mm (default {STATION_SQUARE_MM:g}): sets the scale of T")
     c.add_argument("-o", "--output", metavar="STEREO.yaml", required=True, help="stereo model to write")
     c.add_argument("--report", metavar="FILE.json", help="JSON report (default: STEREO.json beside the output)")
     c.add_argument("--coverage-map", metavar="FILE.png", help="coverage map (default: STEREO_coverage.png)")
