@@ -87,7 +87,7 @@ from .noise import (
 )
 from .invariants import bounded_pairs, posture_medians
 from .metrics import fixed_points
-from .problem import EYE_IN_HAND, HandEyeProblem
+from .problem import EYE_IN_HAND, MIN_POSTURES, HandEyeProblem
 from .rotations import quaternion_from_matrix
 from .transforms import invert_transforms
 
@@ -1088,7 +1088,7 @@ def _outlier_flags(problem: HandEyeProblem, obs: Observations, fit: MLFit, keep:
     flagged postures) and its angle gap is also three times what the fitted rotation noise explains:
     the median of |N(0, v_i + v_j)| is 0.674 sqrt(v_i + v_j).
     """
-    from .refine import RESIDUAL_FLOOR_MM, robust_outliers  # noqa: PLC0415
+    from .refine import RESIDUAL_FLOOR_MM, at_most_half, robust_outliers  # noqa: PLC0415
 
     n = problem.n
     residual_mm = _compact_residuals(problem, fit.x, fit.target)
@@ -1103,7 +1103,7 @@ def _outlier_flags(problem: HandEyeProblem, obs: Observations, fit: MLFit, keep:
         if nu > 0:
             flags[i] = (suspects[i] and d2 > 6.0 * f_dist.ppf(1.0 - OUTLIER_P / n, 6, nu)) or \
                        (breaking[i] and d2 > 6.0 * f_dist.ppf(1.0 - level, 6, nu))
-    return _flag(flags, fit.mahalanobis, n)
+    return at_most_half(flags, fit.mahalanobis)
 
 
 def deleted_mahalanobis(obs: Observations, fit: MLFit, keep: np.ndarray, i: int, kinematic: bool) -> tuple[float, int]:
@@ -1157,7 +1157,7 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
         Cross-validation folds (default ``crossval.DEFAULT_FOLDS``; 0 skips the cross-validation).
     """
     from .crossval import DEFAULT_FOLDS  # noqa: PLC0415
-    from .refine import ANGLE_GAP_FLOOR_DEG, RESIDUAL_FLOOR_MM, keep_majority, robust_outliers  # noqa: PLC0415
+    from .refine import ANGLE_GAP_FLOOR_DEG, RESIDUAL_FLOOR_MM, at_most_half, keep_majority, robust_outliers  # noqa: PLC0415
 
     folds = DEFAULT_FOLDS if folds is None else folds
     n = problem.n
@@ -1165,13 +1165,13 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
     total = 3 + folds
     obs = observations(problem)
     gaps = angle_gaps_deg(obs.hand, obs.board)
-    gap_flags = keep_majority(robust_outliers(gaps, ANGLE_GAP_FLOOR_DEG), MIN_POSTURES_KEPT)
+    gap_flags = keep_majority(robust_outliers(gaps, ANGLE_GAP_FLOOR_DEG), MIN_POSTURES)
     x, start = _start(problem, obs, gap_flags)
     report(1, total, f"start: {start['method']} on {start['postures']} postures")
     # gross outliers of the start: point residuals far out of the others' spread
     start_target = initial_board_pose(obs.subset(~gap_flags), x)
     start_res = _compact_residuals(problem, x, start_target)
-    flags = _flag(gap_flags | robust_outliers(start_res, RESIDUAL_FLOOR_MM), start_res, n)
+    flags = at_most_half(gap_flags | robust_outliers(start_res, RESIDUAL_FLOOR_MM), start_res)
     fit = None
     rounds = 0
     kinematic = False  # posture-independent robot errors until the test below says otherwise
@@ -1195,14 +1195,14 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
         x = fit.x
         new_flags = _outlier_flags(problem, obs, fit, keep, kinematic, gaps, gap_flags)
         report(1 + rounds, total + rounds, f"ML fit, round {rounds}: {int(new_flags.sum())} outlier postures")
-        if n - new_flags.sum() < MIN_POSTURES_KEPT or np.array_equal(new_flags, flags) or rounds > MAX_ROUNDS:
+        if n - new_flags.sum() < MIN_POSTURES or np.array_equal(new_flags, flags) or rounds > MAX_ROUNDS:
             break
         flags = new_flags
     keep = ~flags
     residual_mm = _compact_residuals(problem, fit.x, fit.target)
     uncertainty = _uncertainty(fit, kinematic)
     cv = cv_dict = None
-    if folds and keep.sum() >= max(2 * MIN_POSTURES_KEPT, folds):
+    if folds and keep.sum() >= max(2 * MIN_POSTURES, folds):
         cv = ml_cross_validation(obs, fit, keep, folds, kinematic)
         cv_dict = cv.to_dict(problem.posture_ids)
         if kinematic:
@@ -1261,13 +1261,3 @@ def _kinematic_report(obs: Observations, fit: MLFit, used: bool, lr) -> dict:
         out["note"] = ("the arm differs from its nominal kinematics; deviations that are the same at every posture "
                        "are estimated with the camera pose and their uncertainty is in the one-sigma values")
     return out
-#: Fewest postures the outlier loop keeps.
-MIN_POSTURES_KEPT = 3
-
-
-def _flag(flags: np.ndarray, score: np.ndarray, n: int) -> np.ndarray:
-    """Never more than half the postures: above that, the worse half by ``score``."""
-    flags = np.asarray(flags, bool).copy()
-    if flags.sum() > n // 2:
-        flags = score > np.sort(score)[n - n // 2 - 1]
-    return flags

@@ -36,6 +36,7 @@ __all__ = [
     "posture_residuals_to",
     "angle_gaps_deg",
     "robust_outliers",
+    "at_most_half",
     "keep_majority",
 ]
 
@@ -181,6 +182,24 @@ def robust_outliers(values: np.ndarray, floor: float = 0.0, z: float = OUTLIER_Z
     mad = 1.4826 * float(np.median(np.abs(values - median)))
     score = (values - median) / max(mad, 1e-12 * max(median, 1e-12))
     return (score > z) & (values > ratio * median) & (values > floor)
+
+
+def at_most_half(flags, score) -> np.ndarray:
+    """``flags``, or, when they hold more than half of the postures, the worse half by ``score`` (the
+    rule of every outlier loop: never more than half the postures are outliers).
+
+    Parameters
+    ----------
+    flags : array-like of bool, shape (n,)
+    score : array-like, shape (n,)
+        Higher is worse (a residual, a Mahalanobis distance).
+    """
+    flags = np.asarray(flags, bool).copy()
+    score = np.asarray(score, float)
+    n = flags.size
+    if flags.sum() > n // 2:
+        flags = score > np.sort(score)[n - n // 2 - 1]
+    return flags
 
 
 def keep_majority(flags, minimum: int = 3) -> np.ndarray:

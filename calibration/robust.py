@@ -16,6 +16,7 @@ from .refine import (
     ANGLE_GAP_FLOOR_DEG,
     RESIDUAL_FLOOR_MM,
     angle_gaps_deg,
+    at_most_half,
     keep_majority,
     posture_residuals_to,
     refine_point_consistency,
@@ -73,9 +74,7 @@ def solve_robust(problem: HandEyeProblem, progress=None) -> RobustSolution:
         refinement = refine_point_consistency(problem.hand[keep], problem.compact.points[keep], x)
         x = refinement.x
         residuals = posture_residuals_to(problem.hand, x, problem.compact.points, refinement.fixed_points)
-        new_flags = robust_outliers(residuals, RESIDUAL_FLOOR_MM) | gap_flags
-        if new_flags.sum() > n // 2:  # keep the better half at least
-            new_flags = residuals > np.sort(residuals)[n - n // 2 - 1]
+        new_flags = at_most_half(robust_outliers(residuals, RESIDUAL_FLOOR_MM) | gap_flags, residuals)
         if n - new_flags.sum() < MIN_POSTURES or np.array_equal(new_flags, flags):
             break
         flags = new_flags

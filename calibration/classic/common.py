@@ -37,6 +37,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..errors import CalibrationError
+from ..problem import MIN_POSTURES
 from ..invariants import relative_motions
 from ..quality_words import MIN_AXIS_DIVERGENCE_DEG, rotation_axis_divergence_deg
 from ..rotations import quaternion_from_matrix, skew
@@ -68,7 +69,6 @@ __all__ = [
     "constrained_null_combination",
 ]
 
-MIN_POSTURES = 3
 #: Pairs rotating less than this (deg) carry an axis made of noise: dropped for the rotation.
 MIN_PAIR_ANGLE_DEG = 2.0
 #: Pairs rotating more than this (deg) have a sign-ambiguous axis: dropped for the rotation.
