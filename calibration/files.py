@@ -397,13 +397,19 @@ def _write_temporary(path: Path, text: str, encoding: str) -> str:
             handle.write(text)
     except BaseException as exc:
         os.unlink(tmp)
-        if isinstance(exc, OSError):
-            raise write_failure(path, exc) from None
-        if isinstance(exc, UnicodeEncodeError):
-            raise OutputError(f"cannot write {path}: it would hold {exc.object[exc.start:exc.end]!r}, which "
-                              f"{encoding} cannot store; remove that character") from None
-        raise
+        _raise_write_error(path, exc, encoding)
     return tmp
+
+
+def _raise_write_error(path: Path, exc: BaseException, encoding: str) -> None:
+    """Re-raise what writing ``path`` raised: an ``OSError`` or a character ``encoding`` cannot store as
+    a one-line :class:`OutputError`, anything else (KeyboardInterrupt ...) as it is."""
+    if isinstance(exc, OSError):
+        raise write_failure(path, exc) from None
+    if isinstance(exc, UnicodeEncodeError):
+        raise OutputError(f"cannot write {path}: it would hold {exc.object[exc.start:exc.end]!r}, which "
+                          f"{encoding} cannot store; remove that character") from None
+    raise exc
 
 
 def _write_atomic(path, opener, content, encoding: str) -> Path:
@@ -430,12 +436,7 @@ def _write_atomic(path, opener, content, encoding: str) -> Path:
     except BaseException as exc:
         if os.path.exists(tmp):
             os.unlink(tmp)
-        if isinstance(exc, OSError):
-            raise write_failure(path, exc) from None
-        if isinstance(exc, UnicodeEncodeError):
-            raise OutputError(f"cannot write {path}: it would hold {exc.object[exc.start:exc.end]!r}, which "
-                              f"{encoding} cannot store; remove that character") from None
-        raise
+        _raise_write_error(path, exc, encoding)
     try:  # make the rename itself durable
         dir_fd = os.open(path.parent, os.O_RDONLY)
         try:
