@@ -73,7 +73,9 @@ def test_rapidchecker_is_not_vacuous(programs, tmp_path):
     broken = main.text.replace("    HeLinkOpen;\n", "    HeLinkOpen\n")  # missing ';'
     path = tmp_path / "Broken.mod"
     path.write_text(broken)
-    result = subprocess.run([sys.executable, "-m", "rapidchecker", str(path)], cwd=tmp_path,
+    # the name as given (relative): rapidchecker wraps its report at the terminal width, and a long
+    # temporary folder (a pytest-xdist worker's) would split an absolute path across lines
+    result = subprocess.run([sys.executable, "-m", "rapidchecker", path.name], cwd=tmp_path,
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 1 and "Broken.mod" in result.stdout
 
