@@ -10,6 +10,7 @@ HeKey.sys when there is a write key) or the ``*.mod``/``*.modx``/``*.sys`` files
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 from ...drivers.controller.backends import RAPID_LINKS
@@ -73,11 +74,26 @@ def generated_program(protocol: str, station: RapidStation | None = None, *, pos
     if pc_address is not None:
         changes["pc_address"] = pc_address
     station = base.with_(**changes)
+    try:
+        hash(station)
+    except TypeError:  # a station holding arrays cannot be a cache key: render it afresh
+        modules = _rendered.__wrapped__(station, protocol)
+    else:
+        modules = _rendered(station, protocol)
+    return ControllerProgram(modules, f"generated for {protocol}", protocol, station.tool_name)
+
+
+@lru_cache(maxsize=64)
+def _rendered(station: RapidStation, protocol: str) -> tuple:
+    """The checked modules of ``station`` for ``protocol``, as a tuple of ModuleSource.
+
+    Cached: rendering and its checks are pure functions of the (frozen) station, and one process may
+    start many mock controllers of the same station (a test run starts hundreds).
+    """
     modules = render_program(station, protocol=protocol)
     if station.write_key is not None:
         modules.append(render_key(station))
-    return ControllerProgram(tuple(ModuleSource(m.text, m.filename) for m in modules), f"generated for {protocol}",
-                             protocol, station.tool_name)
+    return tuple(ModuleSource(m.text, m.filename) for m in modules)
 
 
 def program_from_folder(folder, protocol: str | None = None) -> ControllerProgram:

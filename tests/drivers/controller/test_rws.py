@@ -23,6 +23,10 @@ def rws(request):
         yield srv
 
 
+#: The per-call timeout of the tests that load modules: the mock parses and links them in the request.
+LOAD_TIMEOUT = 5.0
+
+
 def _open(server, **changes):
     options = {**server.client_options(), "timeout": 1.0, "motion_timeout": 10.0, "backoff_s": 0.02, **changes}
     return open_controller("rws", **options)
@@ -152,7 +156,7 @@ def test_the_program_is_uploaded_loaded_and_started_and_pers_survive_a_restart(r
     station = default_station().with_(protocol="rws", postures=tuple(tuple(row) for row in rws.robot.postures[:5]),
                                       controller_address="auto")
     modules = [(m.filename, m.text) for m in render_program(station, protocol="rws")]
-    with _open(rws) as c:
+    with _open(rws, timeout=LOAD_TIMEOUT) as c:
         c.set_tool(TOOL)
         c.load_program([m for m in modules if not m[0].startswith("HeTool")])  # HeTool stays: its PERS value too
         assert "$HOME/handeye/HeMain.mod" in rws.files
@@ -201,7 +205,7 @@ def test_an_empty_task_is_reported_and_the_station_installs_the_program_over_rws
     (idle / "HeMain.mod").write_text("MODULE HeMain\n  PROC main()\n    WHILE TRUE DO\n      WaitTime 0.05;\n"
                                    "    ENDWHILE\n  ENDPROC\nENDMODULE\n")
     with start_mock_controller("rws", generation=2, time_scale=0.002, program=idle) as server:
-        with _open(server) as c:
+        with _open(server, timeout=LOAD_TIMEOUT) as c:
             assert c.info().postures == 0
             assert np.allclose(c.read_joints(), 0.0)  # reading needs no program
             with pytest.raises(ControllerRefused, match="no handeye program runs in T_ROB1"):
@@ -223,7 +227,7 @@ def test_an_empty_task_is_reported_and_the_station_installs_the_program_over_rws
 def test_a_program_that_cannot_start_is_reported_and_nothing_moves(rws):
     station = default_station().with_(protocol="rws")
     modules = [(m.filename, m.text) for m in render_program(station, protocol="rws") if m.name != "HeTool"]
-    with _open(rws) as c:
+    with _open(rws, timeout=LOAD_TIMEOUT) as c:
         rws.set_motors(False)
         with pytest.raises(ControllerRefused, match="motors are off"):
             c.load_program(modules)

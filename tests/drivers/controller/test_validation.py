@@ -8,8 +8,32 @@ import pytest
 
 from handeye.drivers.controller import InvalidRequest, ToolData, open_controller
 from handeye.drivers.controller.types import check_joints, check_tooldata
+from handeye.mocks.backends import mock_variants
+from handeye.mocks.controller import start_mock_controller
 
 GOOD_Q = (1.0, 0.0, 0.0, 0.0)
+PROTOCOLS = mock_variants()
+KEY = "validation-key_01"
+
+
+@pytest.fixture(scope="module", params=PROTOCOLS, ids=[getattr(p, "label", p) for p in PROTOCOLS])
+def protocol(request):
+    return request.param
+
+
+@pytest.fixture(scope="module")
+def server(protocol):
+    """One mock controller per back end for the whole module: its tests check that nothing reaches it,
+    so none changes its state (a test that moves the arm starts its own, ``own_server``)."""
+    with start_mock_controller(protocol, time_scale=0.002, ack_timeout_s=None, write_key=KEY) as srv:
+        yield srv
+
+
+@pytest.fixture
+def own_server(protocol):
+    with start_mock_controller(protocol, time_scale=0.002, ack_timeout_s=None, write_key=KEY) as srv:
+        yield srv
+
 
 BAD_TOOLS = {
     "nan position": ToolData((math.nan, 0.0, 50.0), GOOD_Q, 1.0),
@@ -36,11 +60,11 @@ def test_bad_tool_data_is_refused_before_sending(controller, server, case):
 
 @pytest.mark.parametrize("k", [0, -1, 13, 2.5, math.nan, True, "3", None])
 def test_bad_posture_index_is_refused_before_sending(controller, server, k):
-    before = server.requests
+    before, moves = server.requests, server.robot.moves
     with pytest.raises(InvalidRequest):
         controller.goto_posture(k)
     assert server.requests == before
-    assert server.robot.moves == 0
+    assert server.robot.moves == moves
 
 
 @pytest.mark.parametrize("joints", [
@@ -50,11 +74,11 @@ def test_bad_posture_index_is_refused_before_sending(controller, server, k):
     [0, 0, 0, 0, 0],               # five axes
 ])
 def test_expected_posture_outside_the_limits_is_refused(controller, server, joints):
-    before = server.requests
+    before, moves = server.requests, server.robot.moves
     with pytest.raises(InvalidRequest):
         controller.goto_posture(1, expected_joints=joints)
     assert server.requests == before
-    assert server.robot.moves == 0
+    assert server.robot.moves == moves
 
 
 def test_plan_with_a_posture_outside_the_limits_is_refused_at_construction(server):
@@ -66,13 +90,13 @@ def test_plan_with_a_posture_outside_the_limits_is_refused_at_construction(serve
     assert server.requests == before
 
 
-def test_plan_limits_the_postures_that_can_be_requested(server, connect_to):
-    plan = server.robot.postures[:3]
-    with connect_to(server, postures=plan) as c:
-        before = server.requests
+def test_plan_limits_the_postures_that_can_be_requested(own_server, connect_to):
+    plan = own_server.robot.postures[:3]
+    with connect_to(own_server, postures=plan) as c:
+        before = own_server.requests
         with pytest.raises(InvalidRequest, match="not in the plan"):
             c.goto_posture(4)
-        assert server.requests == before
+        assert own_server.requests == before
         assert c.goto_posture(3).posture == 3
 
 
