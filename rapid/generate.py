@@ -26,6 +26,7 @@ joint limits are refused.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import string
 import tempfile
@@ -41,7 +42,6 @@ from .errors import RapidError
 from .literals import format_num, jointtarget_literal, speeddata_literal, tooldata_literal
 from .links import LINK_MODULES, RapidLink, read_template
 from .station import RapidStation, check_postures, default_station, load_station
-from .write_key import write_key_code
 
 __all__ = [
     "RAPID_PROTOCOL_VERSION",
@@ -207,6 +207,15 @@ def render_tool(station: RapidStation, cam2tool0=None, comments=()) -> RapidModu
     text = _template("HeTool.mod.tmpl").substitute(header=_header(station, *notes), tool=station.tool_name,
                                                    literal=literal)
     return RapidModule("HeTool", text)
+
+
+def write_key_code(key: str) -> int:
+    """The 32-bit code of a write key (Modbus ``tool_key``): the first 4 bytes of SHA-256, big-endian; 0 -> 1.
+
+    ``drivers.controller.types.write_key_code`` computes the same (a test checks they agree).
+    """
+    code = int.from_bytes(hashlib.sha256(key.encode("ascii")).digest()[:4], "big")
+    return code or 1
 
 
 def render_key(station: RapidStation) -> RapidModule:

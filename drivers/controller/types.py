@@ -7,6 +7,7 @@ raises :class:`InvalidRequest` naming the offending value.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import numbers
 import re
@@ -15,7 +16,6 @@ from functools import lru_cache
 
 import numpy as np
 
-from ...rapid.write_key import write_key_code
 from .errors import InvalidRequest
 
 __all__ = [
@@ -333,3 +333,13 @@ def check_fingerprint(value, name: str = "controller.tls_fingerprint") -> str:
         raise InvalidRequest(f"{name} must be the SHA-256 of the controller's certificate: 64 hex digits (colons "
                              f"allowed); got {len(text)} characters")
     return text
+
+
+def write_key_code(key: str) -> int:
+    """The 32-bit code of a write key for the Modbus ``tool_key`` register.
+
+    The first 4 bytes of SHA-256 of the key (ASCII) as an unsigned big-endian integer; 0 becomes 1
+    so that a cleared register never matches. ``rapid.generate`` computes the same code for HeKey.
+    """
+    code = int.from_bytes(hashlib.sha256(key.encode("ascii")).digest()[:4], "big")
+    return code or 1
