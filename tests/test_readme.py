@@ -46,7 +46,7 @@ def test_the_demo_time_is_stated_once_and_the_same_everywhere():
 
     stated = {
         "set-up": re.findall(r"station on the embedded mock robot and camera \(about (\d+) s\)", README),
-        "figures": re.findall(r"read-back identical, (\d+) s \| `handeye demo`", README),
+        "figures": re.findall(r"read-back identical, (\d+) s on a quiet machine \| `handeye demo`", README),
         "demo --help": re.findall(r"What happens \(about (\d+) s", demo.EPILOG),
     }
     assert all(len(found) == 1 for found in stated.values()), stated

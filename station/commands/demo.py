@@ -7,7 +7,7 @@ import argparse
 HELP = "run the whole station job on the embedded mock robot and camera, and check it against the truth"
 
 EPILOG = """\
-What happens (about 25 s on 2 cores):
+What happens (about 15 s on 2 cores):
   1. a simulated IRB 1400 (with small kinematic errors, like a real arm) starts behind a real
      controller server on 127.0.0.1, with a simulated Bumblebee XB3 on its flange at a hidden mount;
   2. the board is measured from the start posture, 30 postures are planned and scored, and the
