@@ -148,7 +148,10 @@ def test_serial_idle_reset_forgets_staged_tool_data(quick):
         assert peer.ask("3 TOOLROT 1 0 0 0") == "3 OK"
         assert peer.ask("4 TOOLLOAD 1 0 0 0") == "4 OK"
         assert peer.ask("5 POSE").startswith("5 OK ")
+        resets = quick.idle_resets
         time.sleep(IDLE + 0.4)
+        # the program forgets the session when its idle check runs, later on a loaded machine: wait for it
+        assert _wait_for(lambda: quick.idle_resets > resets, 10.0)
         assert peer.ask("6 QUAT").startswith("6 ERR 7")  # the POSE snapshot is gone
         assert peer.ask("7 TOOLSAVE").startswith("7 ERR 9")  # so is the authorisation
         assert peer.ask(f"8 KEY {TEST_KEY}") == "8 OK"
@@ -162,8 +165,10 @@ def test_serial_idle_reset_forgets_staged_tool_data(quick):
 def test_serial_idle_reset_discards_an_unfinished_line(quick):
     peer = LinePeer(quick)
     try:
+        resets = quick.idle_resets
         peer.sock.sendall(b"12 JOI")  # a PC that died mid-line
         time.sleep(IDLE + 0.4)
+        assert _wait_for(lambda: quick.idle_resets > resets, 10.0)  # the idle check has run
         assert peer.ask("1 PING") == "1 OK"  # not glued to "12 JOI"
     finally:
         peer.close()
