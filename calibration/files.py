@@ -26,7 +26,6 @@ import stat
 import tempfile
 from pathlib import Path
 
-
 from .errors import OutputError, SessionError
 from .yaml_text import parse_yaml
 
@@ -347,9 +346,10 @@ def write_texts_atomic(files, encoding: str = "utf-8") -> list:
         As :func:`write_text_atomic`, naming the first file that cannot be written.
     """
     written = []  # (temporary, target)
+    opener = lambda fd: os.fdopen(fd, "w", encoding=encoding)  # noqa: E731
     try:
         for path, text in files:
-            written.append((_write_temporary(Path(path), text, encoding), Path(path)))
+            written.append((_write_temporary(Path(path), opener, text, encoding, sync=False), Path(path)))
         if hasattr(os, "sync"):
             os.sync()
         else:  # pragma: no cover - platforms without sync(2)
@@ -380,8 +380,12 @@ def _fsync_path(path, flags: int) -> None:
         os.close(fd)
 
 
-def _write_temporary(path: Path, text: str, encoding: str) -> str:
-    """``text`` in a new temporary file beside ``path`` (not yet synced): its name."""
+def _write_temporary(path: Path, opener, content, encoding: str, sync: bool) -> str:
+    """``content`` in a new temporary file beside ``path``, with the permissions a new file gets,
+    flushed to disk when ``sync``: its name. Nothing is left behind when it cannot be written.
+
+    ``opener(fd)`` opens the descriptor for writing (text in ``encoding``, or bytes).
+    """
     if path.is_dir():
         raise OutputError(f"cannot write {path}: it is a folder; give a file name")
     try:
@@ -390,11 +394,14 @@ def _write_temporary(path: Path, text: str, encoding: str) -> str:
     except OSError as exc:
         raise write_failure(path, exc) from None
     try:
-        with os.fdopen(fd, "w", encoding=encoding) as handle:
+        with opener(fd) as handle:
             umask = os.umask(0)
             os.umask(umask)
             os.fchmod(handle.fileno(), 0o666 & ~umask)
-            handle.write(text)
+            handle.write(content)
+            if sync:
+                handle.flush()
+                os.fsync(handle.fileno())
     except BaseException as exc:
         os.unlink(tmp)
         _raise_write_error(path, exc, encoding)
@@ -414,35 +421,15 @@ def _raise_write_error(path: Path, exc: BaseException, encoding: str) -> None:
 
 def _write_atomic(path, opener, content, encoding: str) -> Path:
     path = Path(path)
-    if path.is_dir():
-        raise OutputError(f"cannot write {path}: it is a folder; give a file name")
+    tmp = _write_temporary(path, opener, content, encoding, sync=True)
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise write_failure(path, exc) from None
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=_temporary_prefix(path), suffix=".tmp", dir=path.parent)
-    except OSError as exc:
-        raise write_failure(path, exc) from None
-    try:
-        with opener(fd) as handle:
-            umask = os.umask(0)
-            os.umask(umask)
-            os.fchmod(handle.fileno(), 0o666 & ~umask)
-            handle.write(content)
-            handle.flush()
-            os.fsync(handle.fileno())
         os.replace(tmp, path)
     except BaseException as exc:
         if os.path.exists(tmp):
             os.unlink(tmp)
         _raise_write_error(path, exc, encoding)
     try:  # make the rename itself durable
-        dir_fd = os.open(path.parent, os.O_RDONLY)
-        try:
-            os.fsync(dir_fd)
-        finally:
-            os.close(dir_fd)
+        _fsync_path(path.parent, os.O_RDONLY)
     except OSError:
         pass
     return path
