@@ -164,12 +164,6 @@ def posture_angle_gaps(gaps) -> np.ndarray:
     return np.nanmedian(np.asarray(gaps, dtype=float), axis=1)
 
 
-def _pairs(n: int) -> np.ndarray:
-    """The pairs the checks use: every pair of a small session, a bounded sample of a large one
-    (``invariants.bounded_pairs``), so that the checks cost time and memory linear in ``n``."""
-    return bounded_pairs(n)
-
-
 def pair_angle_gaps(tool0_in_base, target_in_camera, pairs) -> np.ndarray:
     """``|angle(A_ij) - angle(B_ij)|`` in degrees for the given pairs (as :func:`relative_angle_gaps`).
 
@@ -216,7 +210,7 @@ def screw_pitch_scale(tool0_in_base, target_in_camera, limits: DiagnosticLimits 
     a, b = _check_poses(tool0_in_base, target_in_camera)
     if len(a) < 2:
         return None
-    pairs = _pairs(len(a))
+    pairs = bounded_pairs(len(a))
     rel_a, rel_b = relative_motions(a, b, pairs)  # eye-in-hand form; the pitch is set-up free
     va = Rotation.from_matrix(rel_a[:, :3, :3]).as_rotvec()
     vb = Rotation.from_matrix(rel_b[:, :3, :3]).as_rotvec()
@@ -250,7 +244,7 @@ def setup_rotation_residuals(tool0_in_base, target_in_camera,
     """
     a, b = _check_poses(tool0_in_base, target_in_camera)
     out = {}
-    pairs = _pairs(len(a))
+    pairs = bounded_pairs(len(a))
     for setup in SETUPS:
         if len(pairs) < 2:
             out[setup] = float("nan")
@@ -285,7 +279,7 @@ def hand_eye_fit(tool0_in_base, target_in_camera, setup: str,
     """
     a, b = _check_poses(tool0_in_base, target_in_camera)
     nan = {"rotation_deg": float("nan"), "translation_mm": float("nan"), "motion_mm": float("nan"), "pairs": 0}
-    pairs = _pairs(len(a))
+    pairs = bounded_pairs(len(a))
     if len(pairs) < 2:
         return nan
     rel_a, rel_b = relative_motions(hand_poses(a, setup), b, pairs)
@@ -482,7 +476,7 @@ def find_inconsistent_postures(tool0_in_base, target_in_camera, ids=None,
     ids = _ids(ids, len(a))
     if len(a) < 4:
         return []
-    pairs = _pairs(len(a))  # every pair of a small session (the gap matrix's rows), a sample of a large one
+    pairs = bounded_pairs(len(a))  # every pair of a small session, neighbours and a sample of a large one
     per_posture = posture_median_gaps(pair_angle_gaps(a, b, pairs), pairs, len(a))
     typical = float(np.median(per_posture))
     if typical > limits.convention_gap_deg:

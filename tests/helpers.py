@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 from functools import lru_cache
 from pathlib import Path
 
@@ -82,3 +83,14 @@ def assessed(problem, result, session_path="s", origin=None, **options):
     from handeye.station.calibrate import CalibrationOutcome
 
     return assess(CalibrationOutcome(session_path, result, problem=problem, origin=origin), **options)
+
+
+def docstring_nodes(tree) -> set:
+    """``id()`` of the string constants of ``tree`` that are docstrings (prose may name anything)."""
+    nodes = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and node.body:
+            first = node.body[0]
+            if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant) and isinstance(first.value.value, str):
+                nodes.add(id(first.value))
+    return nodes

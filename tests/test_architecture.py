@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from helpers import docstring_nodes
 
 REPO = Path(__file__).resolve().parents[1]
 ROOMS = ("calibration", "drivers", "station", "rapid", "mocks")
@@ -61,17 +62,6 @@ def test_calibration_needs_only_numpy_scipy_yaml():
     assert not bad, bad
 
 
-def _docstring_nodes(tree) -> set:
-    """The string constants that are docstrings (prose may name any room)."""
-    nodes = set()
-    for node in ast.walk(tree):
-        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and node.body:
-            first = node.body[0]
-            if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant) and isinstance(first.value.value, str):
-                nodes.add(id(first.value))
-    return nodes
-
-
 #: A module path into the mocks inside a string: "handeye.mocks.camera:MockCamera", f"{root}.mocks.camera".
 MOCKS_IN_A_STRING = re.compile(r"(^|[.\s'\"/])mocks([.:/]|$)")
 
@@ -81,7 +71,7 @@ def test_drivers_name_no_mocks_in_strings():
     bad = []
     for file in _files("drivers"):
         tree = ast.parse(file.read_text())
-        docstrings = _docstring_nodes(tree)
+        docstrings = docstring_nodes(tree)
         for node in ast.walk(tree):
             if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docstrings:
                 if MOCKS_IN_A_STRING.search(node.value):

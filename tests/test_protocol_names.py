@@ -13,6 +13,7 @@ import re
 from pathlib import Path
 
 from handeye.drivers.controller.backends import CONTROLLERS
+from helpers import docstring_nodes
 
 REPO = Path(__file__).resolve().parents[1]
 ROOMS = ("calibration", "drivers", "rapid", "mocks", "station")
@@ -41,20 +42,10 @@ OTHER_MEANING = {
 }
 
 
-def _docstrings(tree) -> set:
-    nodes = set()
-    for node in ast.walk(tree):
-        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and node.body:
-            first = node.body[0]
-            if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant) and isinstance(first.value.value, str):
-                nodes.add(id(first.value))
-    return nodes
-
-
 def protocol_constants(source: str, names=BUILT_IN) -> list[tuple[int, str]]:
     """``(line, value)`` of every string constant in code (docstrings aside) that is a protocol's name."""
     tree = ast.parse(source)
-    docs = _docstrings(tree)
+    docs = docstring_nodes(tree)
     return [(node.lineno, node.value) for node in ast.walk(tree)
             if isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docs
             and node.value.lower() in names]
