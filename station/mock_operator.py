@@ -113,10 +113,10 @@ class MockOperator:
                 if self.stop.is_set():
                     return
                 self._taken.clear()
-                self.progress(f"operator (simulated): jogging to posture {k} of {n}")
+                self.progress(f"operator (simulated): jogging to rest point {k} of {n} (the capture numbers what it takes)")
                 move_s = self.arm.start_move(joints)
                 if not self._wait_for_capture(move_s + self.config.guided.still_s + PATIENCE_S) and not self.stop.is_set():
-                    self.progress(f"operator (simulated): nothing captured at posture {k}; jogging on")
+                    self.progress(f"operator (simulated): nothing captured at rest point {k}; jogging on")
             self.progress(f"operator (simulated): all {n} postures visited; ending the run as Ctrl-C would")
         except (HandEyeError, ValueError) as exc:
             self.progress(f"operator (simulated) stopped: {exc}")

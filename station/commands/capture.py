@@ -158,8 +158,9 @@ def _run_guided(config, args, say) -> int:
     from ..mock_operator import guided_refusal, mock_operator
     from ..runtime import open_station
 
-    if guided_refusal(config):
-        raise HandEyeError(guided_refusal(config))
+    refusal = guided_refusal(config)
+    if refusal:
+        raise HandEyeError(refusal)
     stop = threading.Event()  # the embedded mock's simulated operator sets it when done
     with open_station(config) as link, mock_operator(config, link, stop, say) as operator:
         def on_posture(report):

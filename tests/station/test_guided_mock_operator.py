@@ -33,7 +33,7 @@ def test_the_mock_guided_capture_drives_itself_and_ends(tmp_path, capsys):
     lines = out.splitlines()
     assert any(line.startswith("MOCK the embedded mock station has no pendant: a simulated operator plans 4 postures")
                for line in lines)
-    assert "MOCK operator (simulated): jogging to posture 1 of 4" in lines
+    assert "MOCK operator (simulated): jogging to rest point 1 of 4 (the capture numbers what it takes)" in lines
     assert "MOCK operator (simulated): all 4 postures visited; ending the run as Ctrl-C would" in lines
     assert all(line.startswith("MOCK") for line in lines if line.strip())  # one message a line, each tagged
     session = read_session(tmp_path / "g")
