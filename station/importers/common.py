@@ -123,6 +123,20 @@ def rigid_transform(value) -> np.ndarray:
     return m
 
 
+def quaternion_pose_problems(values: np.ndarray, order: str) -> list:
+    """Per row of ``(n, 7)`` values (position, then a quaternion in ``order``): why it is not a pose, or
+    ``""``. The one check of :func:`transform_from_quaternion`, for many rows at once (a stream).
+    """
+    values = np.asarray(values, dtype=float)
+    with np.errstate(invalid="ignore", over="ignore"):
+        finite = np.all(np.isfinite(values), axis=1)
+        norm = np.linalg.norm(values[:, 3:7], axis=1)
+    out = [""] * len(values)
+    for k in np.flatnonzero(~finite | (np.abs(norm - 1.0) > ROTATION_TOLERANCE)):
+        out[k] = "holds NaN or inf" if not finite[k] else f"quaternion ({order}) has norm {norm[k]:.6g}, not 1"
+    return out
+
+
 def transform_from_quaternion(position, quaternion, order: str) -> np.ndarray:
     """4x4 transform from a position and a quaternion given in ``order`` (``wxyz`` or ``xyzw``).
 
@@ -138,13 +152,11 @@ def transform_from_quaternion(position, quaternion, order: str) -> np.ndarray:
         raise ValueError("needs a position (3 numbers) and a quaternion (4 numbers)") from None
     if p.shape != (3,) or q.shape != (4,):
         raise ValueError("needs a position (3 numbers) and a quaternion (4 numbers)")
-    if not (np.all(np.isfinite(p)) and np.all(np.isfinite(q))):
-        raise ValueError("holds NaN or inf")
-    norm = float(np.linalg.norm(q))
-    if abs(norm - 1.0) > ROTATION_TOLERANCE:
-        raise ValueError(f"quaternion ({order}) has norm {norm:.6g}, not 1")
+    problem = quaternion_pose_problems(np.r_[p, q][None], order)[0]
+    if problem:
+        raise ValueError(problem)
     m = np.eye(4)
-    m[:3, :3] = Rotation.from_quat(q / norm, scalar_first=(order == "wxyz")).as_matrix()
+    m[:3, :3] = Rotation.from_quat(q / np.linalg.norm(q), scalar_first=(order == "wxyz")).as_matrix()
     m[:3, 3] = p
     return m
 

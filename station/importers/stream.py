@@ -28,13 +28,13 @@ from scipy.spatial.transform import Rotation
 from ...calibration.errors import SessionError, brief
 from ...calibration.session import Session
 from .common import (
-    ROTATION_TOLERANCE,
     Dropped,
     EntryErrors,
     build_session,
     check_quaternion_order,
     check_units,
     detect_unit,
+    quaternion_pose_problems,
     read_text,
 )
 
@@ -156,20 +156,11 @@ def _stream_rows(text: str, order: str) -> tuple[list, list, list]:
 
 
 def _pose_problems(values: np.ndarray, order: str) -> list:
-    """Per row of ``(n, 8)`` stream values: why it is not a pose (as ``transform_from_quaternion``
-    says it, then an infinite stamp), or ``""``."""
-    with np.errstate(invalid="ignore", over="ignore"):
-        finite = np.all(np.isfinite(values[:, 1:8]), axis=1)
-        norm = np.linalg.norm(values[:, 4:8], axis=1)
-    stamp = np.isfinite(values[:, 0])
-    out = [""] * len(values)
-    for k in np.flatnonzero(~finite | (np.abs(norm - 1.0) > ROTATION_TOLERANCE) | ~stamp):
-        if not finite[k]:
-            out[k] = "holds NaN or inf"
-        elif abs(norm[k] - 1.0) > ROTATION_TOLERANCE:
-            out[k] = f"quaternion ({order}) has norm {norm[k]:.6g}, not 1"
-        else:
-            out[k] = "the stamp is not finite"
+    """Per row of ``(n, 8)`` stream values: why it is not a pose (``common.quaternion_pose_problems``,
+    then an infinite stamp), or ``""``."""
+    out = quaternion_pose_problems(values[:, 1:8], order)
+    for k in np.flatnonzero(~np.isfinite(values[:, 0])):
+        out[k] = out[k] or "the stamp is not finite"
     return out
 
 
