@@ -26,7 +26,6 @@ joint limits are refused.
 
 from __future__ import annotations
 
-import hashlib
 import os
 import string
 import tempfile
@@ -36,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from ..calibration.session import write_text_atomic
+from ..calibration.write_key import write_key_code
 from .cell import CELL_MODULE, ZONE_TOOL, needs_cell_module, render_cell_text
 from .checks import check_program
 from .errors import RapidError
@@ -56,7 +56,6 @@ __all__ = [
     "render_cell",
     "render_key",
     "render_program",
-    "write_key_code",
     "KEY_ROUTINES",
     "KEY_TRIES",
     "write_modules",
@@ -207,15 +206,6 @@ def render_tool(station: RapidStation, cam2tool0=None, comments=()) -> RapidModu
     text = _template("HeTool.mod.tmpl").substitute(header=_header(station, *notes), tool=station.tool_name,
                                                    literal=literal)
     return RapidModule("HeTool", text)
-
-
-def write_key_code(key: str) -> int:
-    """The 32-bit code of a write key (Modbus ``tool_key``): the first 4 bytes of SHA-256, big-endian; 0 -> 1.
-
-    ``drivers.controller.types.write_key_code`` computes the same (a test checks they agree).
-    """
-    code = int.from_bytes(hashlib.sha256(key.encode("ascii")).digest()[:4], "big")
-    return code or 1
 
 
 def render_key(station: RapidStation) -> RapidModule:

@@ -49,6 +49,7 @@ import numpy as np
 
 from ..calibration.files import parse_yaml, read_text_file
 from ..calibration.kinematics import load_robot
+from ..calibration.write_key import WRITE_KEY_PATTERN
 from .cell import check_world_zones
 from .errors import ConfigError
 from .links import BUILT_IN_LINKS, PROTOCOLS
@@ -58,8 +59,6 @@ __all__ = ["PROTOCOLS", "RapidStation", "default_station", "load_station", "stat
 
 DEFAULT_STATION_FILE = Path(__file__).with_name("default_station.yaml")
 RAPID_IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
-#: The station's write key: one protocol word and a RAPID string (drivers/controller/types.py keeps the same).
-WRITE_KEY_PATTERN = re.compile(r"[A-Za-z0-9_-]{8,32}")
 #: Allowed range of controller.idle_timeout_s (seconds).
 IDLE_TIMEOUT_RANGE = (0.1, 10.0)
 

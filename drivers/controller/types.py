@@ -7,7 +7,6 @@ raises :class:`InvalidRequest` naming the offending value.
 
 from __future__ import annotations
 
-import hashlib
 import math
 import numbers
 import re
@@ -16,6 +15,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from ...calibration.write_key import WRITE_KEY_PATTERN, write_key_code  # one definition for drivers and rapid
 from .errors import InvalidRequest
 
 __all__ = [
@@ -47,9 +47,6 @@ __all__ = [
 #: States of the RAPID program as the PC sees them (STATUS reply, Modbus ``state`` register).
 READY, MOVING, AT, LATE, ACKED, ERROR = "READY", "MOVING", "AT", "LATE", "ACKED", "ERROR"
 STATES = (READY, MOVING, AT, LATE, ACKED, ERROR)
-
-#: The station's write key (``controller.write_key``): one protocol word and a RAPID string.
-WRITE_KEY_PATTERN = re.compile(r"[A-Za-z0-9_-]{8,32}")
 
 #: A tool frame farther than this from the flange is refused (a camera sits within centimetres).
 MAX_TOOL_TRANSLATION_MM = 1000.0
@@ -335,11 +332,3 @@ def check_fingerprint(value, name: str = "controller.tls_fingerprint") -> str:
     return text
 
 
-def write_key_code(key: str) -> int:
-    """The 32-bit code of a write key for the Modbus ``tool_key`` register.
-
-    The first 4 bytes of SHA-256 of the key (ASCII) as an unsigned big-endian integer; 0 becomes 1
-    so that a cleared register never matches. ``rapid.generate`` computes the same code for HeKey.
-    """
-    code = int.from_bytes(hashlib.sha256(key.encode("ascii")).digest()[:4], "big")
-    return code or 1

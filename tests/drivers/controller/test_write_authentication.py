@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import time
 
 import pytest
@@ -194,15 +193,6 @@ def test_modbus_key_code_and_lockout_until_the_program_restarts():
         with open_controller("modbus", **_options(server, write_key=KEY)) as c:
             assert c.set_tool(TOOL).close_to(TOOL)
             assert server.register("tool_key") == [0]  # the PC cleared the code after the command
-
-
-def test_key_code_parity_with_the_rapid_generator():
-    from handeye.rapid.generate import write_key_code as rapid_code
-
-    for key in (KEY, WRONG, "a" * 32, "________"):
-        assert write_key_code(key) == rapid_code(key)
-        assert 0 < write_key_code(key) < 2**32
-    assert write_key_code("right-key_42") == int.from_bytes(hashlib.sha256(b"right-key_42").digest()[:4], "big")
 
 
 def test_key_request_codec_never_echoes_the_key():
