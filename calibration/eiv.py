@@ -9,7 +9,7 @@ is fixed in (eq. 13 for all board points at once),
 where both measured sides are noisy: ``A_i = A_i^true ⊕ ξ_i`` (robot) and ``B_i = B_i^true ⊕ η_i``
 (camera; ``⊕`` and twists as in ``noise.py``). The unknowns are ``X``, ``T`` and per posture the
 robot correction ``ξ_i`` (and the board correction ``η_i``), with Gaussian priors
-``ξ_i ~ N(0, C_A,i)``, ``η_i ~ N(0, C_B,i)``. To first order the posture residual
+``ξ_i ~ N(0, C_A,i)``, ``η_i ~ N(0, C_B,i)``. To first order the pose residual of posture i
 
     r_i = twist(T^-1 A_i X B_i) = Ad_{(X B_i)^-1} ξ_i + η_i
 
@@ -923,8 +923,9 @@ class EivSolution:
     x : ndarray, shape (4, 4)
     outliers : ndarray of bool, shape (n,)
     residuals_mm : ndarray, shape (n,)
-        Per posture: mean distance of its three compact board points, carried into the fixed frame,
-        from the fitted board ``T`` (all postures, outliers too).
+        The fit residual the outliers are judged on, per posture: mean distance of its three compact
+        board points, carried into the fixed frame, from the fitted board ``T`` (all postures, outliers
+        too). Not reported as the posture residual (``quality_words.posture_residuals``).
     fit : MLFit
         Over the inliers.
     observations : Observations

@@ -19,9 +19,9 @@ Kinds (how ``calibrate`` calls the row's ``solver``)
     No solver: all postures at once, no selection (``mc``).
 ``estimator``
     A whole pipeline on the problem: ``solver(problem, progress=None)`` returns an object with
-    ``x`` (4, 4), ``outliers`` (n,) bool, ``residuals_mm`` (n,) (per posture, on the three compact
-    board points), ``uncertainty`` (dict or None), ``details`` (dict) and ``cross_validation`` (dict
-    or None). ``ml``, the recommended default (maximum likelihood with errors in variables,
+    ``x`` (4, 4), ``outliers`` (n,) bool, ``uncertainty`` (dict or None), ``details`` (dict) and
+    ``cross_validation`` (dict or None). (The result's posture residuals are computed from ``x`` and
+    ``outliers`` the same way for every kind: ``quality_words.posture_residuals``.) ``ml``, the recommended default (maximum likelihood with errors in variables,
     ``eiv``), and ``robust``, the default before it (``robust``).
 ``classic``
     An ``AX = XB`` solver, ``solver(hand, target2cam, pairs=None) -> X (4, 4)``; the published ones

@@ -149,10 +149,25 @@ def d_back(fixed, pairs=None) -> float:
     return total / (len(pairs) * fixed.shape[1])
 
 
-def posture_residuals(fixed) -> np.ndarray:
-    """Per posture: mean distance of its points from the mean points (eq. 21-22 per posture), mm."""
+def posture_residuals(fixed, kept=None) -> np.ndarray:
+    """Per posture: mean distance of its points from the mean points (eq. 21-22 per posture), mm.
+
+    Parameters
+    ----------
+    fixed : array-like, shape (n, m, 3)
+        Board points in the fixed frame (:func:`fixed_points`).
+    kept : array-like of bool, shape (n,), optional
+        The postures whose mean points are the reference (all by default, or when none is kept); every
+        posture's distance from it is returned.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
     fixed = np.asarray(fixed, float)
-    return np.linalg.norm(fixed - fixed.mean(axis=0), axis=-1).mean(axis=1)
+    kept = None if kept is None or not np.any(kept) else np.asarray(kept, bool)
+    reference = fixed.mean(axis=0) if kept is None else fixed[kept].mean(axis=0)  # eq. 21
+    return np.linalg.norm(fixed - reference, axis=-1).mean(axis=1)
 
 
 def errors_against_truth(x, x_true) -> dict:

@@ -50,6 +50,17 @@ d_org (mm)
     corners, or the three compact points when the session holds board poses only); the same postures
     and points for every method compared (:func:`result_d_org`). Over every posture, outliers
     included, it is :data:`D_ORG_ALL_NAME`.
+posture residual (mm)
+    Posture ``i``'s term of d_org, the same for every method (:func:`posture_residuals`): the mean
+    distance of its board points, carried into the fixed frame through ``X`` (``A_i X p_ik``, eq. 13),
+    from their mean positions over the postures the result kept (eq. 21-22). The points are d_org's:
+    the board corners, or the three compact points when the session holds board poses only
+    (:data:`RESIDUAL_POINTS`); an outlier's residual is its distance from the same mean, so it shows
+    how far off it is. The mean of the kept postures' residuals is d_org. The verdict judges the
+    largest kept one (``max_posture_residual_mm``); :func:`posture_residual_meaning` is the one text
+    of it that the text summary, the HTML report and the JSON print. (The estimators judge outliers
+    on figures of their own fit, e.g. the compact points against the fitted board: those are not
+    this word and are not reported as it.)
 """
 
 from __future__ import annotations
@@ -61,6 +72,7 @@ import numpy as np
 
 from .invariants import bounded_pairs
 from .metrics import d_org, fixed_points
+from .metrics import posture_residuals as metrics_posture_residuals
 from .problem import EYE_IN_HAND, HandEyeProblem
 from .rotations import canonical_quaternions, quaternion_conjugate, quaternion_from_matrix, quaternion_multiply
 
@@ -69,6 +81,11 @@ __all__ = [
     "MEDIAN_ANGLE_NAME",
     "D_ORG_ALL_NAME",
     "METRIC_MEANINGS",
+    "POSTURE_RESIDUAL_NAME",
+    "RESIDUAL_POINTS",
+    "posture_residuals",
+    "posture_residual_meaning",
+    "residual_points",
     "IMAGE_CELL_NAMES",
     "board_distances_mm",
     "distance_spread_mm",
@@ -98,8 +115,12 @@ MAX_AXIS_SPREAD_DEG = math.degrees(math.asin(math.sqrt(1.0 / 3.0)))
 MIN_AXIS_DIVERGENCE_DEG = 2.0
 #: The name of d_org over every posture, outliers included.
 D_ORG_ALL_NAME = "d_org incl. outliers"
+#: The name of a posture's term of d_org (see the module's words), for every method alike.
+POSTURE_RESIDUAL_NAME = "posture residual"
 #: What each figure of a solution means, in the words both presenters (text summary, HTML report) print.
 METRIC_MEANINGS = {
+    POSTURE_RESIDUAL_NAME: "mean distance of a posture's board points, carried into the fixed frame through X, from "
+                           "their mean positions over the kept postures (its term of d_org, eq. 22)",
     "d_org": "mean distance of a board point from its mean position in the fixed frame (eq. 22)",
     D_ORG_ALL_NAME: "d_org over every posture, the outliers included",
     "d_back": "mean distance between the same board point seen from two postures (eq. 23)",
@@ -410,3 +431,45 @@ def result_d_org(problem: HandEyeProblem, result, x=None) -> DOrg:
     left_out = problem.n - n_kept
     return DOrg(value, d_org(fixed) if left_out else None, n_kept, left_out, int(problem.points_cam.shape[1]),
                 bool(problem.points_cam.shape[1] > 3))
+
+
+# ------------------------------------------------------------------------------- posture residual
+#: The points a posture residual (and d_org) is measured on, by ``CalibrationResult.residuals_on``.
+RESIDUAL_POINTS = {
+    "corners": "the board corners",
+    "compact": "the three compact points (board centre and one point along each board axis, from the board poses)",
+}
+
+
+def residual_points(problem: HandEyeProblem) -> str:
+    """The key of :data:`RESIDUAL_POINTS` of a problem's points: ``corners`` when it holds the measured
+    board corners, ``compact`` when it holds board poses only (three points per posture)."""
+    return "corners" if problem.points_cam.shape[1] > 3 else "compact"
+
+
+def posture_residuals(problem: HandEyeProblem, x, kept=None) -> np.ndarray:
+    """THE posture residual of every posture, for any method's ``X`` (see the module's words).
+
+    Parameters
+    ----------
+    problem : HandEyeProblem
+    x : array-like, shape (4, 4)
+        The solution.
+    kept : array-like of bool, shape (n,), optional
+        The postures the result kept (:func:`kept_postures`); all by default. Their mean board points
+        are the reference for every posture, outliers included.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        mm; its mean over ``kept`` is :func:`result_d_org`'s ``mm``.
+    """
+    fixed = fixed_points(problem.hand, np.asarray(x, float), problem.points_cam)  # eq. 13, (n, m, 3)
+    return metrics_posture_residuals(fixed, kept)  # eq. 21-22 per posture
+
+
+def posture_residual_meaning(points: str) -> str:
+    """The one text of what a result's posture residuals are: ``points`` a key of :data:`RESIDUAL_POINTS`
+    (``CalibrationResult.residuals_on``)."""
+    return (f"{POSTURE_RESIDUAL_NAME}: {METRIC_MEANINGS[POSTURE_RESIDUAL_NAME]}, on "
+            f"{RESIDUAL_POINTS.get(points, points)}")

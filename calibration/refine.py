@@ -10,8 +10,8 @@ over ``X`` (6 parameters) and ``g`` (3 per point) with a robust loss ``rho`` (sc
 scaled to the residual spread). This is the error the paper selects by (d_org, d_back) made
 continuous, so the answer is no longer limited to one triplet's solution.
 
-Outliers. A posture is an outlier when its residual (mean distance of its board points from the
-fitted ones) stands far out of the others' spread (robust z-score from the median and the MAD), or
+Outliers. A posture is an outlier when its fit residual (mean distance of its board points from the
+fitted ones; not the posture residual the result reports, ``quality_words``) stands far out of the others' spread (robust z-score from the median and the MAD), or
 when it breaks the X-free invariant that ``A_ij`` and ``B_ij`` rotate by the same angle (eq. 30:
 ``S_A = S_B``): its median angle gap to the other postures stands out in the same way.
 

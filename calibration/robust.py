@@ -39,8 +39,9 @@ class RobustSolution:
     x : ndarray, shape (4, 4)
     outliers : ndarray of bool, shape (n,)
     residuals_mm : ndarray, shape (n,)
-        Per posture: mean distance of its three compact board points, carried into the fixed frame,
-        from their mean over the inliers (all postures, outliers too).
+        The fit residual the outliers are judged on, per posture: mean distance of its three compact
+        board points, carried into the fixed frame, from the refined fixed points (all postures,
+        outliers too). Not reported as the posture residual (``quality_words.posture_residuals``).
     uncertainty : dict
         One-sigma ``translation_mm`` and ``rotation_deg`` of X.
     details : dict

@@ -16,18 +16,20 @@ from .errors import CalibrationError
 from .invariants import bounded_pairs
 from .kinematics import load_robot
 from .methods import DEFAULT_METHOD, METHODS, Method, get_method, method_names
-from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points, posture_residuals
+from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points
 from .paper import solve_paper, truth_board_points
 from .plausibility import check_plausible
 from .problem import EYE_IN_HAND, MIN_POSTURES, HandEyeProblem, hand_poses
 from .quality_words import (
     MIN_AXIS_ANGLE_DEG,
     MIN_AXIS_DIVERGENCE_DEG,
+    posture_residual_meaning,
+    posture_residuals,
     relative_rotation_angles_deg,
+    residual_points,
     rotation_axis_divergence_deg,
     usable_axes,
 )
-from .refine import posture_residuals_to
 from .session import Session
 from .transforms import pose_from_transform, transform_from_pose
 from .triplets import relative_motions
@@ -80,7 +82,9 @@ class CalibrationResult:
         ``d_org_mm``, ``d_back_mm`` (eq. 22-23, on the full point set), ``delta_r`` and
         ``delta_t_mm`` (eq. 16, RMS over all posture pairs), and which points were used.
     residuals_mm : dict
-        Per posture index: mean distance of its points from the mean points (eq. 21-22).
+        Per posture index (outliers too): its posture residual, the same word for every method
+        (``quality_words.posture_residuals``: its board points carried into the fixed frame through X,
+        from their mean over the kept postures; eq. 21-22).
     outliers : list of int
         Posture indices judged inconsistent (empty for methods that do not judge).
     runtime_s : float
@@ -98,9 +102,9 @@ class CalibrationResult:
         ``{posture index: reason}`` of gross postures left out before solving (``problem.excluded``);
         they are among ``outliers`` too.
     residuals_on : str
-        What ``residuals_mm`` measure: ``"compact"``, the three compact board points (methods that
-        judge postures: the estimators), or ``"points"``, the problem's points (the board corners, or
-        the compact points of a session of board poses).
+        The points ``residuals_mm`` (and d_org) are measured on, a key of
+        ``quality_words.RESIDUAL_POINTS``: ``"corners"`` (the board corners) or ``"compact"`` (the three
+        compact points of a session of board poses); the same for every method on one session.
     """
 
     method: str
@@ -115,11 +119,16 @@ class CalibrationResult:
     uncertainty: dict | None = None
     cross_validation: dict | None = None
     excluded: dict = field(default_factory=dict)
-    residuals_on: str = "points"
+    residuals_on: str = "corners"
 
     @property
     def parent(self) -> str:
         return "tool0" if self.setup == EYE_IN_HAND else "base"
+
+    @property
+    def residuals_meaning(self) -> str:
+        """The one text of what ``residuals_mm`` are (``quality_words.posture_residual_meaning``)."""
+        return posture_residual_meaning(self.residuals_on)
 
     def to_json(self) -> dict:
         """The JSON of ``handeye calibrate --json`` (conventions.md)."""
@@ -131,6 +140,7 @@ class CalibrationResult:
             "outliers": [int(i) for i in self.outliers],
             "runtime_s": self.runtime_s,
             "posture_residuals_mm": {str(k): v for k, v in self.residuals_mm.items()},
+            "posture_residuals_meaning": self.residuals_meaning,
             "details": self.details,
         }
         if self.uncertainty is not None:
@@ -295,7 +305,8 @@ def truth_from_dict(truth: dict | None) -> dict | None:
     return {"x": x, "target2fixed": target}
 
 
-def _summarise(problem: HandEyeProblem, x: np.ndarray) -> tuple[dict, dict]:
+def _summarise(problem: HandEyeProblem, x: np.ndarray) -> dict:
+    """The metrics of ``x`` on (the kept postures of) a problem: eq. 22, 23 and 16."""
     fixed = fixed_points(problem.hand, x, problem.points_cam)
     motions_pairs = bounded_pairs(problem.n)  # every pair up to 200 postures, else a bounded sample
     delta_r, delta_t = axxb_residuals(problem.hand, problem.target2cam, x, motions_pairs)
@@ -304,12 +315,11 @@ def _summarise(problem: HandEyeProblem, x: np.ndarray) -> tuple[dict, dict]:
         "d_back_mm": d_back(fixed, motions_pairs),
         "delta_r": float(np.sqrt(np.mean(delta_r**2))),
         "delta_t_mm": float(np.sqrt(np.mean(delta_t**2))),
-        "points": "corners" if problem.points_cam.shape[1] > 3 else "compact",
+        "points": residual_points(problem),
         "postures": problem.n,
         "posture_pairs": int(len(motions_pairs)),
     }
-    residuals = {int(i): float(r) for i, r in zip(problem.posture_ids, posture_residuals(fixed))}
-    return metrics, residuals
+    return metrics
 
 
 _WARM = False
@@ -375,17 +385,14 @@ def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict |
     start = time.perf_counter()
     solved = _BY_KIND[row.kind](row, solver, problem, truth, progress)
     runtime = time.perf_counter() - start
-    x, outliers = solved.x, []
-    if solved.outliers is None:  # no judgement of postures: every posture's residual on the problem's points
-        metrics, residuals = _summarise(problem, x)
-    else:
-        flags = np.asarray(solved.outliers, bool)
-        metrics, _ = _summarise(problem.subset(~flags), x)
-        residuals = {int(i): float(r) for i, r in zip(problem.posture_ids, solved.residuals_mm)}
-        outliers = [int(i) for i in problem.posture_ids[flags]]
+    x = solved.x
+    flags = np.zeros(problem.n, bool) if solved.outliers is None else np.asarray(solved.outliers, bool)
+    metrics = _summarise(problem if solved.outliers is None else problem.subset(~flags), x)
+    residuals = _residuals_by_posture(problem, x, ~flags)
+    outliers = [int(i) for i in problem.posture_ids[flags]]
     result = CalibrationResult(row.name, problem.setup, x, metrics, residuals, outliers, runtime, solved.details,
                                uncertainty=solved.uncertainty, cross_validation=solved.cross_validation,
-                               residuals_on="compact" if solved.outliers is not None else "points")
+                               residuals_on=residual_points(problem))
     if truth is not None:
         result.truth_errors = errors_against_truth(x, truth["x"])
     return result
@@ -422,7 +429,6 @@ class _Solved:
     x: np.ndarray
     details: dict
     outliers: None = None
-    residuals_mm: None = None
     uncertainty: None = None
     cross_validation: None = None
 
@@ -446,18 +452,18 @@ def _by_axxb(row: Method, solver, problem: HandEyeProblem, truth, progress) -> _
 _BY_KIND = {"estimator": _by_estimator, "paper": _by_selection, "classic": _by_axxb}
 
 
+def _residuals_by_posture(problem: HandEyeProblem, x: np.ndarray, kept: np.ndarray) -> dict:
+    """``{posture index: posture residual}`` of every posture (``quality_words.posture_residuals``)."""
+    return {int(i): float(r) for i, r in zip(problem.posture_ids, posture_residuals(problem, x, kept))}
+
+
 def _with_excluded(problem: HandEyeProblem, result: CalibrationResult) -> CalibrationResult:
     """``result`` (solved without ``problem.excluded``) on the whole ``problem``: the excluded postures
-    join the outliers, with their residual against the kept postures' mean board points (eq. 21-22)."""
-    excluded = problem.excluded_mask
+    join the outliers, with their posture residual against the kept postures' mean board points."""
     outliers = {int(i) for i in result.outliers} | set(problem.excluded)
     kept = np.array([int(i) not in outliers for i in problem.posture_ids])
-    mean = fixed_points(problem.hand[kept], result.x, problem.points_cam[kept]).mean(axis=0)
-    gross = posture_residuals_to(problem.hand[excluded], result.x, problem.points_cam[excluded], mean)
-    gross_residuals = dict(zip((int(i) for i in problem.posture_ids[excluded]), (float(r) for r in gross)))
-    residuals = {int(i): result.residuals_mm.get(int(i), gross_residuals.get(int(i))) for i in problem.posture_ids}
-    return replace(result, residuals_mm=residuals, excluded=dict(problem.excluded),
-                   outliers=[int(i) for i in problem.posture_ids if int(i) in outliers])
+    return replace(result, residuals_mm=_residuals_by_posture(problem, result.x, kept),
+                   excluded=dict(problem.excluded), outliers=[int(i) for i in problem.posture_ids if int(i) in outliers])
 
 
 def calibrate_session(session: Session, method: str | None = None, truth: dict | None = None,

@@ -40,6 +40,7 @@ from ..calibration.quality_words import (
     AXIS_SPREAD_NAME,
     MAX_AXIS_SPREAD_DEG,
     MEDIAN_ANGLE_NAME,
+    POSTURE_RESIDUAL_NAME,
     AxisCoverage,
     DOrg,
     kept_postures,
@@ -84,8 +85,9 @@ class QualityThresholds:
         error. Default 1.0 mm: above it something systematic is wrong (stereo model, robot not at rest,
         tool0 poses from the wrong frame).
     max_posture_residual_mm : float
-        Largest residual of a single posture kept in the solution (mean distance of its board points
-        from their mean positions). Default 2.0 mm: a posture above it is most likely a misdetected or
+        Largest posture residual of the postures kept in the solution (``quality_words``: the mean
+        distance of its board points in the fixed frame from their mean positions over the kept
+        postures, the same for every method). Default 2.0 mm: a posture above it is most likely a misdetected or
         partly hidden board, or a robot pose read while the arm was still moving.
     max_sigma_translation_mm : float
         Largest one-sigma uncertainty of the camera position along x, y or z. Default 0.2 mm, so that
@@ -248,7 +250,7 @@ class Check(NamedTuple):
 #: key -> (what is checked, unit, format of values)
 CHECK_LABELS = {
     "max_d_org_mm": ("board points scatter in the fixed frame, d_org (eq. 22)", "mm", "{:.3f}"),
-    "max_posture_residual_mm": ("largest residual of a posture kept in the solution", "mm", "{:.3f}"),
+    "max_posture_residual_mm": (f"largest {POSTURE_RESIDUAL_NAME} of a posture kept in the solution", "mm", "{:.3f}"),
     "max_sigma_translation_mm": ("camera position uncertainty, largest one-sigma axis", "mm", "{:.3f}"),
     "max_sigma_rotation_deg": ("camera rotation uncertainty, largest one-sigma axis", "deg", "{:.4f}"),
     "min_inlier_postures": ("consistent postures (not outliers)", "", "{:.0f}"),

@@ -566,16 +566,14 @@ def _checks_section(verdict: Verdict) -> str:
 def _residuals_section(a: Assessment, fixed_frame: str) -> str:
     result = a.result
     limit = a.verdict.thresholds.max_posture_residual_mm if a.verdict is not None else None
-    points_text = ("three board points (the fitted board's centre and one point along each board axis)"
-                   if result.residuals_on == "compact" else "board points")
     outliers = [int(i) for i in result.outliers]
     residual_note = ("Outliers (left out of the solution): "
                      + ", ".join(f"posture {i}: {result.residuals_mm.get(i, float('nan')):.2f} mm" for i in outliers)
                      if outliers else "No posture was left out as an outlier.")
     return (
         "<h2>1. Per-posture residuals</h2><section>"
-        f'<p class="how">Each bar: the mean distance of that posture\'s {points_text}, carried into {fixed_frame} '
-        f"with the solved camera pose, from their mean positions. Bars should be about equal; a bar well above "
+        f'<p class="how">Each bar: the {_e(result.residuals_meaning)}; the fixed frame is {fixed_frame}. '
+        f"Bars should be about equal; a bar well above "
         f"the others is a posture to check (board partly hidden or misdetected, robot not at rest)."
         + (f" Dashed line: the limit max_posture_residual_mm = {limit:g} mm." if limit is not None else "") + "</p>"
         + _img(plot_residuals(result, a.problem, limit), "per-posture residuals")

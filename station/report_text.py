@@ -18,12 +18,14 @@ __all__ = ["calibration_summary"]
 _BAR = 30
 
 
-def _residual_table(residuals: dict, outliers: list) -> list[str]:
+def _residual_table(result) -> list[str]:
+    """The posture residual of every posture as a bar (``quality_words.posture_residuals``)."""
+    residuals, outliers = result.residuals_mm, result.outliers
     if not residuals:
         return []
     worst = max(residuals.values()) or 1.0
     median = float(np.median(list(residuals.values())))
-    lines = ["Per-posture residual (mean distance of its board points from their mean, mm):"]
+    lines = [f"Per-posture residual, mm ({result.residuals_meaning}):"]
     for index, value in residuals.items():
         bar = "#" * max(1, int(round(_BAR * value / worst)))
         flag = "  <- outlier" if index in outliers else ("  <- high" if value > 3 * median else "")
@@ -80,7 +82,7 @@ def _closing_lines(r) -> list[str]:
         lines += ["", f"Outlier postures (excluded from the solution): {', '.join(map(str, r.outliers))}",
                   "  check them: board partly hidden or misdetected, robot not at rest, wrong pose pairing"]
         lines += [f"  posture {i}: left out before solving: {reason}" for i, reason in r.excluded.items()]
-    lines += [""] + _residual_table(r.residuals_mm, r.outliers)
+    lines += [""] + _residual_table(r)
     d = r.details
     extra = ""
     start = d.get("start", d)

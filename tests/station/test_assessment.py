@@ -3,6 +3,7 @@ presenters (text, JSON, HTML) only format it."""
 
 from __future__ import annotations
 
+import html
 import json
 
 import pytest
@@ -66,6 +67,10 @@ def test_presenters_only_format_the_assessment(session_path, tmp_path, monkeypat
     assert f'data-d-org="header">{header}' in page and f"d_org   {header}" in text
     assert data["verdict"] == assessed.verdict.to_json() and data["station"] == "simulated"
     assert f"rotation-axis spread {assessed.coverage.spread_deg:.1f} deg" in page
+    # the posture residual: one text (quality_words) in every presenter, naming the points it is measured on
+    meaning = quality_words.posture_residual_meaning("corners")
+    assert assessed.result.residuals_meaning == meaning and "the board corners" in meaning
+    assert meaning in text and html.escape(meaning) in page and data["posture_residuals_meaning"] == meaning
 
 
 def _count(monkeypatch, module, name, calls):
