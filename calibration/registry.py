@@ -135,6 +135,11 @@ class Registry(Mapping, Generic[E]):
         """The names, in order; only those whose entry satisfies ``where`` when given."""
         return tuple(name for name in self if where is None or where(self[name]))
 
+    def names_in_code(self) -> tuple[str, ...]:
+        """The names registered in code (the package's own, then :meth:`register`'s), entry points left out:
+        what the package's shipped documents describe, whatever plug-ins this machine has installed."""
+        return tuple(self._registered)
+
     def unknown(self, name, names=None) -> str:
         """The one-line message for a name that is not registered."""
         return f"unknown {self.kind} {name!r}; choose one of {', '.join(self.names() if names is None else names)}"

@@ -57,12 +57,16 @@ class RapidLink:
     write_key : bool
         Tool writes over this link carry the station's write key (``HeKey.sys`` is generated with a
         keyed station); False: the controller authorises them itself (Robot Web Services).
+    help : str
+        What the module does, one line (``handeye rapid generate --help`` lists every link's; empty:
+        its back end's help).
     """
 
     module: str
     template: object = None
     render: Callable | None = None
     write_key: bool = True
+    help: str = ""
 
     def text(self, station, fields: Mapping) -> str:
         """The module's text for ``station``, from the common ``fields``."""
@@ -77,12 +81,13 @@ class RapidLink:
                              f"known: {', '.join(sorted(fields))}") from None
 
 
-HE_SOCKET = RapidLink("HeSocket", "HeSocket.mod.tmpl")
-HE_SERIAL = RapidLink("HeSerial", "HeSerial.mod.tmpl")
-HE_IO = RapidLink("HeIo", "HeIo.mod.tmpl")
+HE_SOCKET = RapidLink("HeSocket", "HeSocket.mod.tmpl", help="line-protocol server over TCP, accepting only the PC's address")
+HE_SERIAL = RapidLink("HeSerial", "HeSerial.mod.tmpl", help="the same protocol on a serial channel")
+HE_IO = RapidLink("HeIo", "HeIo.mod.tmpl", help="I/O handshake for a Modbus TCP gateway (SetGO/SetDO/WaitDI)")
 # Robot Web Services: the PC writes the tool data by symbol, authorised by the controller's own users
 # and mastership, so HeRws has no tool path and needs no key.
-HE_RWS = RapidLink("HeRws", "HeRws.mod.tmpl", write_key=False)
+HE_RWS = RapidLink("HeRws", "HeRws.mod.tmpl", write_key=False,
+                   help="posture handshake in PERS data the PC reads and writes over Robot Web Services (RobotWare 6/7)")
 
 #: The package's own back ends' links (what ``rapid`` uses standing alone; the drivers' registry
 #: names the same objects, a test checks it).

@@ -23,7 +23,6 @@ verdict's thresholds, see ``station.quality``), ``output``, ``mock`` (the embedd
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields, replace
 from typing import ClassVar
@@ -37,6 +36,7 @@ from ..calibration.files import read_text_file
 from ..calibration.kinematics import load_robot
 from ..calibration.session import parse_yaml
 from ..calibration.transforms import pose_from_transform, transform_from_pose
+from ..calibration.write_key import WRITE_KEY_PATTERN
 from ..drivers.controller.backends import DEFAULT_PROTOCOL
 from .cell_settings import CellSettings, GuidedSettings
 from .schema import (
@@ -99,7 +99,7 @@ def _write_key(value, key: str, context) -> str | None:
     if not isinstance(value, str):
         raise ConfigError(f"{key} must be a text of 8 to 32 letters, digits, '_' or '-' (quote it in YAML); "
                           f"got a {type(value).__name__}")
-    if not re.fullmatch(r"[A-Za-z0-9_-]{8,32}", value):
+    if not WRITE_KEY_PATTERN.fullmatch(value):
         raise ConfigError(f"{key} must be 8 to 32 letters, digits, '_' or '-'; got another value of {len(value)} "
                           "characters (the key itself is never printed)")
     return value

@@ -6,7 +6,9 @@ key, type, default, help, flag; the station config's keys, the flags of ``handey
 :class:`ControllerLink` and the class's keywords all come from them), the RAPID link module the controller
 runs for it (a ``rapid.links.RapidLink``: a template or a renderer), the mock that serves it (the
 package's own are filled in by ``handeye.mocks``; the drivers never name the mocks) and one line of
-help. Another package adds one with :func:`register_backend` or an entry point in the
+help: what it talks to (its options are written from its settings, :meth:`ControllerBackend.usage`;
+``handeye robot --help``, ``rapid generate --help`` and ``station/example_station.yaml`` read them all
+here). Another package adds one with :func:`register_backend` or an entry point in the
 ``handeye.controllers`` group, bringing its own RAPID link and mock in the same entry.
 
 Nothing here imports a hardware library: the class is imported when the back end is opened.
@@ -54,6 +56,8 @@ class LinkSetting:
         ``check(value, name) -> value``: a check of its own, raising :class:`InvalidRequest` naming ``name``.
     required : str
         Not empty: the link cannot open without it; what it is, for the message (``a device or pyserial URL``).
+    note : str
+        More about it for the documented example (``station/example_station.yaml``), beyond ``help``.
     """
 
     key: str
@@ -68,11 +72,18 @@ class LinkSetting:
     secret: bool = False
     check: Callable | None = None
     required: str = ""
+    note: str = ""
 
     @property
     def option(self) -> str:
         """The command-line flag."""
         return self.flag or "--" + self.key.replace("_", "-")
+
+    @property
+    def usage(self) -> str:
+        """The flag with its value (``--url DEVICE_OR_URL``), in brackets when it may be left out."""
+        text = f"{self.option} {self.metavar or self.key.upper()}"
+        return text if self.required else f"[{text}]"
 
 
 def link_settings() -> dict[str, tuple[LinkSetting, tuple[str, ...]]]:
@@ -98,20 +109,35 @@ class ControllerLink:
     port : int or None
         None: the back end's default port.
     **settings
-        Values of link settings by key (None: not set). A key no back end declares reads as None.
+        Values of link settings by key (None: not set); read back as ``link.serial_url`` or
+        ``link.get("serial_url")``.
+
+    Raises
+    ------
+    TypeError
+        A key no registered back end declares (a misspelt setting is refused, never read as unset);
+        reading one raises ``AttributeError`` (``link.key``) or ``KeyError`` (``link.get``) the same way.
     """
 
     def __init__(self, host: str = "127.0.0.1", port: int | None = None, **settings):
+        unknown = sorted(set(settings) - set(link_settings()))
+        if unknown:
+            raise TypeError(_unknown_setting(unknown[0]))
         self.host, self.port = host, port
         self.settings = {key: value for key, value in settings.items() if value is not None}
 
     def get(self, key: str, default=None):
-        """The value of a link setting (``default`` when not set)."""
+        """The value of a link setting (``default`` when not set); a key no back end declares raises ``KeyError``."""
+        if key not in self.settings and key not in link_settings():
+            raise KeyError(_unknown_setting(key))
         return self.settings.get(key, default)
 
     def __getattr__(self, name: str):
+        """A link setting by key (None when not set); a key no back end declares raises ``AttributeError``."""
         if name.startswith("_") or name == "settings":
             raise AttributeError(name)
+        if name not in link_settings():
+            raise AttributeError(_unknown_setting(name))
         return self.settings.get(name)
 
     def __eq__(self, other) -> bool:
@@ -128,6 +154,12 @@ class ControllerLink:
         keys = link_settings()
         return cls(getattr(section, "host", "127.0.0.1"), getattr(section, "port", None),
                    **{key: getattr(section, key, None) for key in keys})
+
+
+def _unknown_setting(name: str) -> str:
+    """The one line for a link setting no registered back end declares, naming those they do."""
+    known = ", ".join(["host", "port", *link_settings()])
+    return f"no controller link setting {name!r}; the registered back ends declare: {known}"
 
 
 def _secret_keys() -> set:
@@ -205,6 +237,9 @@ class ControllerBackend(Backend):
 
     Attributes
     ----------
+    help : str
+        What it talks to, one line without its options (``TCP to the RAPID program's server``): the
+        help texts add the RAPID module and :meth:`usage`.
     default_port : int or None
         The port its controller side listens on by default (None: not a TCP back end).
     link_settings : tuple of LinkSetting
@@ -231,6 +266,12 @@ class ControllerBackend(Backend):
         """The class's keyword options for ``link`` (a :class:`ControllerLink` or a config section)."""
         return self.options(link if isinstance(link, ControllerLink) else ControllerLink.of(link), self)
 
+    def usage(self) -> str:
+        """Its command-line link options, from its declarations: ``--host H [--port P, default 502]`` for a
+        TCP back end (one with a default port), then each link setting's :attr:`LinkSetting.usage`."""
+        words = [] if self.default_port is None else ["--host H", f"[--port P, default {self.default_port}]"]
+        return " ".join(words + [setting.usage for setting in self.link_settings]) or "no options"
+
 
 def _rws_options(link: ControllerLink, backend: ControllerBackend) -> dict:
     # no port named: 443 with a certificate fingerprint (RWS 2.0, HTTPS), else 80 (RWS 1.0, HTTP)
@@ -253,10 +294,16 @@ _SERIAL = (
 _MODBUS = (LinkSetting("modbus_map", str, None, "register map YAML (default: the built-in one)", flag="--register-map",
                        keyword="register_map", metavar="MAP.yaml"),)
 _RWS = (
-    LinkSetting("username", str, "Default User", "the controller user (give the station its own)", flag="--user"),
-    LinkSetting("password", str, None, "that user's password (default: RobotWare's default account's)", secret=True),
+    LinkSetting("username", str, "Default User", "the controller user (give the station its own)", flag="--user",
+                note="Robot Web Services authorises tool writes by the controller's own users, not by "
+                "write_key: create one for the station with only the rights it needs"),
+    LinkSetting("password", str, None, "that user's password (default: RobotWare's default account's)", secret=True,
+                note="SECRET: never printed"),
     LinkSetting("tls_fingerprint", str, None, "RobotWare 7: SHA-256 of the controller's certificate (HTTPS, pinned; "
-                "port 443); none: RobotWare 6 over HTTP", metavar="SHA256", check=_fingerprint),
+                "port 443); none: RobotWare 6 over HTTP", metavar="SHA256", check=_fingerprint,
+                note="64 hex digits (colons allowed); RobotWare 6 uses Digest authentication. Read it from the "
+                     "FlexPendant, or: openssl s_client -connect HOST:443 </dev/null | openssl x509 -noout "
+                     "-fingerprint -sha256"),
 )
 
 
@@ -270,20 +317,19 @@ _HERE = __package__
 _LINKS = f"{__package__.rsplit('.', 2)[0]}.rapid.links"  # handeye.rapid.links: the RAPID side of each
 CONTROLLERS.register(ControllerBackend(
     "socket", f"{_HERE}.socket_client:SocketController", default_port=1025, rapid_link=f"{_LINKS}:HE_SOCKET",
-    help="TCP to the HeSocket RAPID module:   --host H --port P (default 1025)"))
+    help="TCP to the RAPID program's server (PC Interface option)"))
 CONTROLLERS.register(ControllerBackend(
     "serial", f"{_HERE}.serial_client:SerialController", link_settings=_SERIAL, options=setting_options,
     rapid_link=f"{_LINKS}:HE_SERIAL",
-    help="serial channel (HeSerial module):   --url DEVICE_OR_URL [--baudrate B]"))
+    help="a serial channel, the same line protocol"))
 CONTROLLERS.register(ControllerBackend(
     "modbus", f"{_HERE}.modbus_client:ModbusController", default_port=502, link_settings=_MODBUS,
     rapid_link=f"{_LINKS}:HE_IO",
-    help="Modbus TCP gateway (HeIo module):   --host H --port P (default 502) [--register-map MAP]"))
+    help="a Modbus TCP gateway to the controller's I/O"))
 CONTROLLERS.register(ControllerBackend(
     "rws", f"{_HERE}.rws_client:RwsController", default_port=80, link_settings=_RWS, options=_rws_options,
     rapid_link=f"{_LINKS}:HE_RWS",
-    help="Robot Web Services (RobotWare 6/7, HeRws module): --host H [--port P] [--user U --password W] "
-         "[--tls-fingerprint SHA256 for RobotWare 7]"))
+    help="Robot Web Services, RobotWare 6 (HTTP) or 7 (HTTPS, port 443 with a tls_fingerprint)"))
 
 
 class _RapidLinks(Mapping):

@@ -12,11 +12,8 @@ GENERATE_EPILOG = """\
 Writes three modules to load together into the robot task:
   HeMain.mod     main routine; the approved postures as CONST jointtargets (the robot goes only
                  there, MoveAbsJ ... fine, at the configured speed); waits for the PC's ACK at each
-  HeSocket.mod   line-protocol server over TCP, accepting only the PC's address  (protocol socket)
-  HeSerial.mod   the same protocol on a serial channel                              (protocol serial)
-  HeIo.mod       I/O handshake for a Modbus TCP gateway (SetGO/SetDO/WaitDI)       (protocol modbus)
-  HeRws.mod      posture handshake in PERS data the PC reads and writes over Robot
-                 Web Services (RobotWare 6/7)                                       (protocol rws)
+one link module, by protocol (every registered controller back end's):
+{link_modules}
   HeTool.mod     PERS tooldata of the camera (identity frame until calibrated)
   HeCell.mod     only with motion.speed_override_pct < 100 or cell.world_zones: true: VelSet, and
                  the cell's keep-out volumes as world zones (World Zones option 608-1) on the
@@ -51,7 +48,10 @@ def add_parser(sub):
 
     p = sub.add_parser("rapid", help=HELP, description=HELP)
     what = p.add_subparsers(dest="rapid_command", metavar="COMMAND")
-    g = what.add_parser("generate", help=GENERATE_HELP, description=GENERATE_HELP, epilog=GENERATE_EPILOG,
+    from ..backend_help import link_module_lines
+
+    epilog = GENERATE_EPILOG.replace("{link_modules}", "\n".join(link_module_lines()))
+    g = what.add_parser("generate", help=GENERATE_HELP, description=GENERATE_HELP, epilog=epilog,
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     g.add_argument("--config", metavar="STATION.yaml", help="station config (default: the built-in mock station)")
     g.add_argument("-o", "--output", required=True, metavar="DIR", help="folder for the .mod files (created)")

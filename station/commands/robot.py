@@ -15,10 +15,11 @@ prints {"joints_deg": [...], "tool0_in_base": {"position_mm": [...], "quaternion
 """
 
 
-def _epilog(backends) -> str:
-    """Link options of every registered back end, then the example."""
-    lines = [f"  --protocol {name:<8} {backends[name].help}" for name in backends]
-    return "Link options (the same for every sub-command):\n" + "\n".join(lines) + "\n\n" + EXAMPLE
+def _epilog() -> str:
+    """Link options of every registered back end (``station.backend_help``, from the registry), then the example."""
+    from ..backend_help import protocol_lines
+
+    return "Link options (the same for every sub-command):\n" + "\n".join(protocol_lines()) + "\n\n" + EXAMPLE
 
 
 def _link_options(p, backends) -> None:
@@ -42,7 +43,7 @@ def _link_options(p, backends) -> None:
 def add_parser(sub):
     from ...drivers.controller.backends import CONTROLLERS
 
-    epilog = _epilog(CONTROLLERS)
+    epilog = _epilog()
     p = sub.add_parser("robot", help=HELP, description=HELP, epilog=epilog,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     what = p.add_subparsers(dest="robot_command", metavar="COMMAND")

@@ -47,7 +47,7 @@ def _mock_server(*args, note: str = "", **kwargs):
 
 
 CONTROLLER = ControllerBackend("loopback", f"{__name__}:LoopbackController", default_port=11025,
-                               help="the test plug-in's TCP link:   --host H --port P (default 11025)",
+                               help="the test plug-in's TCP link",
                                link_settings=(LinkSetting("loop_label", str, "plain", "a label the link keeps",
                                                           keyword="label", metavar="TEXT"),),
                                rapid_link=RAPID_LINK,
