@@ -25,7 +25,7 @@ def _residual_table(result) -> list[str]:
         return []
     worst = max(residuals.values()) or 1.0
     median = float(np.median(list(residuals.values())))
-    lines = [f"Per-posture residual, mm ({result.residuals_meaning}):"]
+    lines = ["Per-posture residual (mm):", f"  ({result.residuals_meaning})"]
     for index, value in residuals.items():
         bar = "#" * max(1, int(round(_BAR * value / worst)))
         flag = "  <- outlier" if index in outliers else ("  <- high" if value > 3 * median else "")
