@@ -113,6 +113,8 @@ MIN_AXIS_ANGLE_DEG = 2.0
 MAX_AXIS_SPREAD_DEG = math.degrees(math.asin(math.sqrt(1.0 / 3.0)))
 #: Below this rotation-axis divergence the axes count as parallel and ``X`` as undetermined.
 MIN_AXIS_DIVERGENCE_DEG = 2.0
+#: What the compact points of a session of board poses are.
+_COMPACT_POINTS = "board centre and one point along each board axis, from the board poses"
 #: The name of d_org over every posture, outliers included.
 D_ORG_ALL_NAME = "d_org incl. outliers"
 #: The name of a posture's term of d_org (see the module's words), for every method alike.
@@ -402,8 +404,7 @@ class DOrg:
                     f"{'s' if self.outliers != 1 else ''} left out)" if self.outliers else
                     f"over all {self.postures} postures (no outliers)")
         points = (f"{self.points_per_posture} board corners per posture" if self.corners else
-                  f"{self.points_per_posture} compact points per posture (board centre and one point along each "
-                  f"board axis, from the board poses)")
+                  f"{self.points_per_posture} compact points per posture ({_COMPACT_POINTS})")
         return f"{postures}, {points}"
 
 
@@ -430,15 +431,12 @@ def result_d_org(problem: HandEyeProblem, result, x=None) -> DOrg:
     value = d_org(fixed[kept]) if n_kept >= 1 else float("nan")  # eq. 22
     left_out = problem.n - n_kept
     return DOrg(value, d_org(fixed) if left_out else None, n_kept, left_out, int(problem.points_cam.shape[1]),
-                bool(problem.points_cam.shape[1] > 3))
+                residual_points(problem) == "corners")
 
 
 # ------------------------------------------------------------------------------- posture residual
 #: The points a posture residual (and d_org) is measured on, by ``CalibrationResult.residuals_on``.
-RESIDUAL_POINTS = {
-    "corners": "the board corners",
-    "compact": "the three compact points (board centre and one point along each board axis, from the board poses)",
-}
+RESIDUAL_POINTS = {"corners": "the board corners", "compact": f"the three compact points ({_COMPACT_POINTS})"}
 
 
 def residual_points(problem: HandEyeProblem) -> str:
