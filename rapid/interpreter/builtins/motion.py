@@ -9,6 +9,7 @@ pose. A world zone instruction hands the zone to the motion binding, which super
 
 from __future__ import annotations
 
+from ..configuration import confdata
 from ..errors import RapidFatalError
 from ..values import PREDEFINED, TYPES, Record, to_num
 from . import builtin
@@ -69,10 +70,10 @@ def _tcp(task, tool, wobj) -> tuple:
     return pose_mult(*pose_inv(*user), p, q)
 
 
-def _confdata(joints) -> Record:
-    quadrant = [int((joints[i] // 90)) for i in (0, 3, 5)]
-    return Record(TYPES["confdata"], {"cf1": float(quadrant[0]), "cf4": float(quadrant[1]),
-                                      "cf6": float(quadrant[2]), "cfx": 0.0})
+def _confdata(task, joints) -> Record:
+    """The configuration of ``joints`` (:func:`~handeye.rapid.interpreter.configuration.confdata`)."""
+    values = confdata(_arm(task).model(), joints)
+    return Record(TYPES["confdata"], {k: float(v) for k, v in zip(("cf1", "cf4", "cf6", "cfx"), values)})
 
 
 @builtin("CRobT", "\\TaskRef:num, \\TaskName:string, \\Tool:tooldata, \\WObj:wobjdata", returns="robtarget")
@@ -81,7 +82,7 @@ def _crobt(task, a):
     return Record(TYPES["robtarget"], {
         "trans": Record(TYPES["pos"], dict(zip("xyz", (to_num(v) for v in p)))),
         "rot": Record(TYPES["orient"], dict(zip(("q1", "q2", "q3", "q4"), (to_num(v) for v in q)))),
-        "robconf": _confdata(_arm(task).joints()),
+        "robconf": _confdata(task, _arm(task).joints()),
         "extax": Record(TYPES["extjoint"], dict(_EXTAX)),
     })
 
