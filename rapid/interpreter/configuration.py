@@ -53,7 +53,7 @@ def confdata(model: RobotModel, joints) -> tuple:
     lower_arm, to_wrist = elbow - shoulder, wrist - shoulder
     reach = np.array([lower_arm @ heading, lower_arm[2]]), np.array([to_wrist @ heading, to_wrist[2]])
     behind_lower_arm = float(reach[0][0] * reach[1][1] - reach[0][1] * reach[1][0]) > 0.0
-    quadrant = [int(math.floor(q[i] / 90.0)) for i in (0, 3, 5)]
+    quadrant = [int(math.floor(round(q[i], 6) / 90.0)) for i in (0, 3, 5)]  # 0 deg within 1e-6 is quadrant 0
     return (*quadrant, 4 * behind_axis1 + 2 * behind_lower_arm + int(q[4] < 0.0))
 
 
