@@ -44,7 +44,7 @@ With --config, the moves are checked against the config's cell as a controller's
 would: a MoveJ/MoveAbsJ along its joint path, a MoveL along its TCP line (sampled every 5 mm, each
 sample through the inverse kinematics); a move that would enter a volume stops the program at that
 line, naming the volume. The robtargets' configuration (cf1, cf4, cf6, cfx) is respected (ConfJ/ConfL
-\Off: the nearest solution). The cell's I/O signals are diCellDoor and diCellReady (inputs, 1 at
+\\Off: the nearest solution). The cell's I/O signals are diCellDoor and diCellReady (inputs, 1 at
 start) and doCellLamp and doCellBusy (outputs); --signal NAME:TYPE=VALUE adds one, and a test or the
 pendant sets an input over the camera port ({{"cmd": "signal", "name": "diCellDoor", "value": 0}}).
 What the interpreter cannot run is refused at start with module:line and its name (rapid/PROTOCOL.md
