@@ -251,13 +251,8 @@ def _check_module(module, tokens, global_data, routines, external, approved, mod
 
     while i < n:
         t = tokens[i]
-        if t.kind == "str":
-            length = string_length(t.text)
-            if length > MAX_STRING:
-                out.append(Finding(module, t.line, f"string literal of {length} characters (RAPID holds {MAX_STRING})"))
-            i += 1
-            continue
         if t.kind != "id":
+            out += _literal_findings(module, t)
             i += 1
             continue
         if len(t.text) > MAX_IDENTIFIER:
@@ -314,6 +309,14 @@ def _check_module(module, tokens, global_data, routines, external, approved, mod
     for key, (name, line, values) in jointtargets.items():
         out += _check_jointtarget(module, name, line, values, approved, model)
     return out
+
+
+def _literal_findings(module, t: Token) -> list[Finding]:
+    """A string literal longer than RAPID holds."""
+    length = string_length(t.text) if t.kind == "str" else 0
+    if length > MAX_STRING:
+        return [Finding(module, t.line, f"string literal of {length} characters (RAPID holds {MAX_STRING})")]
+    return []
 
 
 def _not_over_and(module, tokens, i: int) -> list[Finding]:

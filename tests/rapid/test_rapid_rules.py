@@ -103,3 +103,14 @@ def test_undo_runs_when_an_error_leaves_the_routine_not_on_a_normal_end():
     assert program.datum("trace", "T").box[0] == "iUVEm"
     clean = run("    Outer;", "  VAR string trace;", _UNDO.format(action="trace := trace + \"-\";"))
     assert value(clean, "trace") == "i-xo"
+
+
+def test_protocol_md_lists_every_instruction_and_function_the_interpreter_runs():
+    from pathlib import Path
+
+    from handeye.rapid.interpreter import supported_builtins
+
+    text = (Path(__file__).resolve().parents[2] / "rapid" / "PROTOCOL.md").read_text()
+    listed = text.split("**Every instruction and function**:")[1].split("- **Refused at load**")[0]
+    names = {n.strip(" .\n") for n in listed.replace("\n", " ").split(",")}
+    assert set(supported_builtins()) <= names, sorted(set(supported_builtins()) - names)

@@ -7,21 +7,19 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 import socket
-import subprocess
-import sys
 import threading
 
-import numpy as np
 import pytest
 import yaml
+from helpers import start_standalone_mock, stop_standalone_mock
 
 from handeye.calibration.kinematics import load_robot
+from handeye.calibration.rotations import quaternion_from_matrix
 from handeye.mocks.station import DEFAULT_START
 from handeye.rapid.interpreter.configuration import confdata
 from handeye.station.cli import main
-
-from handeye.calibration.rotations import quaternion_from_matrix
 
 BOX = {"type": "box", "name": "tool rack", "min_mm": [300, -600, 800], "max_mm": [460, -450, 1150]}
 
@@ -69,27 +67,12 @@ def _edit(text: str, crossing: bool) -> str:
 
 
 def _mock(program, config, port: int, camera_port: int):
-    proc = subprocess.Popen([sys.executable, "-m", "handeye.station", "mock", "controller", "--protocol", "socket",
-                             "--port", str(port), "--camera-port", str(camera_port), "--time-scale", "0.01",
-                             "--duration", "600", "--config", str(config)] + (["--program", str(program)] if program else []),
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    banner = []
-    while not any("camera.mock_arm:" in line for line in banner):
-        line = proc.stdout.readline()
-        if not line:
-            raise AssertionError("the mock did not start: " + "".join(banner) + proc.stderr.read())
-        banner.append(line)
-    return proc
+    return start_standalone_mock("--protocol", "socket", "--port", str(port), "--camera-port", str(camera_port),
+                                 "--time-scale", "0.01", "--duration", "600", "--config", str(config),
+                                 *(["--program", str(program)] if program else []))[0]
 
 
-def _stop(proc) -> str:
-    if proc.poll() is None:
-        proc.terminate()
-    try:
-        return proc.communicate(timeout=30)[1]
-    except subprocess.TimeoutExpired:  # pragma: no cover - a wedged mock
-        proc.kill()
-        return proc.communicate()[1]
+_stop = stop_standalone_mock
 
 
 def _cell(camera_port: int, request: dict) -> dict:
@@ -121,8 +104,6 @@ def planned(tmp_path_factory):
 
 
 def _edited_session(tmp_path, planned, crossing: bool):
-    import shutil
-
     config, plan, port, camera_port = planned
     session = tmp_path / "s"
     shutil.copytree(plan, session)
