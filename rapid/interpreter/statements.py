@@ -11,8 +11,8 @@ A routine's ``UNDO`` handler runs when the routine is left without finishing (RA
 "Basic Characteristics": "UNDO handlers"): an ``EXIT``, an error that leaves it (raised on by its
 ``ERROR`` handler, or with none), or the task stopped from outside (another program loaded).
 Routines further up the call chain run theirs after it, innermost first. A ``RETURN`` ends the
-handler; ``RETRY``, ``TRYNEXT`` and a ``RAISE`` without a number are refused there at load; an error inside it stops the
-program with that error. A normal end or ``RETURN`` of the routine runs no UNDO.
+handler; ``RETRY``, ``TRYNEXT`` and a ``RAISE`` without a number are refused there at load; an error
+inside it stops the program with that error. A normal end or ``RETURN`` of the routine runs no UNDO.
 """
 
 from __future__ import annotations
