@@ -1,5 +1,5 @@
-"""The moves a station engineer adds: MoveJ, MoveL, ConfJ, ConfL, SingArea, and the target functions
-Offs and RelTool.
+"""The moves a station engineer adds: MoveJ, MoveL, ConfJ, ConfL, SingArea, VelSet, and the target
+functions Offs and RelTool.
 
 A robtarget is the TCP of the move's tool in its work object (``wobjdata``: ``uframe * oframe``) with
 a configuration (``robconf``). Its joints come from :mod:`~handeye.rapid.interpreter.configuration`
@@ -46,7 +46,8 @@ _SPEED = ("v_tcp", "v_ori", "v_leax", "v_reax")
 
 def motion_settings(task) -> dict:
     """The task's ConfJ, ConfL and SingArea state (both checks on, no wrist interpolation at start)."""
-    return task.__dict__.setdefault("motion_settings", {"confj": True, "confl": True, "wrist": False})
+    return task.__dict__.setdefault("motion_settings", {"confj": True, "confl": True, "wrist": False,
+                                                        "override": 100.0, "max_tcp": 5000.0})
 
 
 def _arm(task):
@@ -173,6 +174,16 @@ def _follow_line(model, path: list, current, tool, wobj, wrist: bool) -> np.ndar
         out.append(joints)
         previous = joints
     return np.array(out)
+
+
+@builtin("VelSet", "Override:num, Max:num")
+def _velset(task, a):
+    """The speed override (percent) and the highest TCP speed (mm/s) of the moves that follow: checked and
+    kept (:func:`motion_settings`); the mock arm moves at its own speed."""
+    override, highest = a
+    if not 0 < override <= 100 or highest <= 0:
+        raise RapidFatalError(f"VelSet {override:g}, {highest:g}: the override must be 0 < % <= 100 and Max > 0 mm/s")
+    motion_settings(task).update(override=float(override), max_tcp=float(highest))
 
 
 @builtin("ConfJ", "\\On, \\Off")
