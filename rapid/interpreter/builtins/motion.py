@@ -13,7 +13,8 @@ from ..configuration import confdata
 from ..errors import RapidFatalError
 from ..values import PREDEFINED, TYPES, Record, to_num
 from . import builtin
-from .geometry import pose_inv, pose_mult, quat, xyz
+from .geometry import xyz
+from .moves import tcp_in
 
 _EXTAX = {f"eax_{c}": 9e9 for c in "abcdef"}
 
@@ -54,20 +55,10 @@ def _cjointt(task, a):
     return _jointtarget(_arm(task).joints())
 
 
-def _frame(pose_record: Record) -> tuple:
-    return xyz(pose_record.fields["trans"]), quat(pose_record.fields["rot"])
-
-
 def _tcp(task, tool, wobj) -> tuple:
     """Position and orientation of ``tool``'s TCP in ``wobj`` (flange pose from the arm)."""
     tool = tool if tool is not None else getattr(task, "current_tool", None) or PREDEFINED["tool0"][1]
-    wobj = wobj if wobj is not None else PREDEFINED["wobj0"][1]
-    if not tool.fields["robhold"] or wobj.fields["robhold"]:
-        raise RapidFatalError("CRobT: only tools on the robot and fixed work objects are supported")
-    p, q = _arm(task).flange()
-    p, q = pose_mult(tuple(p), tuple(q), *_frame(tool.fields["tframe"]))
-    user = pose_mult(*_frame(wobj.fields["uframe"]), *_frame(wobj.fields["oframe"]))
-    return pose_mult(*pose_inv(*user), p, q)
+    return tcp_in(_arm(task), tool, wobj, "CRobT")
 
 
 def _confdata(task, joints) -> Record:

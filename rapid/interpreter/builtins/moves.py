@@ -32,7 +32,7 @@ from ..values import PREDEFINED, TYPES, Record, copy_value, to_num
 from . import builtin
 from .geometry import pose_inv, pose_mult, qmul, qrot, quat, xyz
 
-__all__ = ["LINE_STEP_MM", "LINE_STEP_DEG", "line_samples", "flange_of", "motion_settings"]
+__all__ = ["LINE_STEP_MM", "LINE_STEP_DEG", "line_samples", "flange_of", "motion_settings", "tcp_in"]
 
 #: Largest distance between two samples of a linear move, mm, and of its orientation, deg.
 LINE_STEP_MM, LINE_STEP_DEG = 5.0, 2.0
@@ -117,8 +117,7 @@ def _movel(task, a):
     arm = _arm(task)
     settings = motion_settings(task)
     model = arm.model()
-    start = _tcp_now(arm, model, tool, wobj)
-    path = line_samples(start, _target_pose(target))
+    path = line_samples(tcp_in(arm, tool, wobj, "MoveL"), _target_pose(target))
     joints = _follow_line(model, path, arm.joints(), tool, wobj, settings["wrist"])
     end = confdata(model, joints[-1])
     wanted = tuple(int(round(c)) for c in _conf(target))
@@ -129,13 +128,11 @@ def _movel(task, a):
     arm.move_path(task, joints, _speed(speed, v, t, "MoveL"), _zone(zone), tool, "MoveL")
 
 
-def _tcp_now(arm, model, tool, wobj) -> tuple:
-    """Where the TCP of ``tool`` is in ``wobj`` now (the start of a linear move)."""
-    tframe, user = _user_frame(tool, wobj, "MoveL")
-    flange = model.forward_transform(np.asarray(arm.joints(), float))
-    q0 = tuple(Rotation.from_matrix(flange[:3, :3]).as_quat(scalar_first=True))
-    tcp = pose_mult(tuple(flange[:3, 3]), q0, *tframe)
-    return pose_mult(*pose_inv(*user), *tcp)
+def tcp_in(arm, tool, wobj, what: str) -> tuple:
+    """Where the TCP of ``tool`` is in ``wobj`` now, ``(position, quaternion)`` (from the arm's flange pose)."""
+    tframe, user = _user_frame(tool, wobj, what)
+    p, q = arm.flange()
+    return pose_mult(*pose_inv(*user), *pose_mult(tuple(p), tuple(q), *tframe))
 
 
 def line_samples(start: tuple, end: tuple) -> list:
