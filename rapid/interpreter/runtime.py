@@ -245,6 +245,8 @@ class Task:
         when a socket became readable, False when the time ran out.
         """
         self._waiting.set()
+        if self._stop.is_set() and self.undoing:  # a stopped task's UNDO handler does not wait (nor move)
+            raise TaskStopped()
         end = math.inf if seconds is None else self.clock() + max(0.0, seconds)
         while True:
             self.service()

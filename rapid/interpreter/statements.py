@@ -9,7 +9,8 @@ the task stops with the error and where it happened.
 
 A routine's ``UNDO`` handler runs when the routine is left without finishing (RAPID reference,
 "Basic Characteristics": "UNDO handlers"): an ``EXIT``, an error that leaves it (raised on by its
-``ERROR`` handler, or with none), or the task stopped from outside (another program loaded).
+``ERROR`` handler, or with none), or the task stopped from outside (another program loaded: its
+UNDO statements run, a wait or a move among them ends the handler).
 Routines further up the call chain run theirs after it, innermost first. A ``RETURN`` ends the
 handler; ``RETRY``, ``TRYNEXT`` and a ``RAISE`` without a number are refused there at load; an error
 inside it stops the program with that error. A normal end or ``RETURN`` of the routine runs no UNDO.

@@ -114,3 +114,15 @@ def test_protocol_md_lists_every_instruction_and_function_the_interpreter_runs()
     listed = text.split("**Every instruction and function**:")[1].split("- **Refused at load**")[0]
     names = {n.strip(" .\n") for n in listed.replace("\n", " ").split(",")}
     assert set(supported_builtins()) <= names, sorted(set(supported_builtins()) - names)
+
+
+def test_undo_runs_when_the_task_is_stopped_from_outside_and_does_not_wait():
+    text = ("MODULE T\n  VAR string trace;\n  PROC main()\n    Outer;\n  ENDPROC\n"
+            + _UNDO.format(action="WaitTime 30;").replace('trace := trace + "V";', 'trace := trace + "V";\n    WaitTime 30;')
+            + "\nENDMODULE\n")
+    program = load_program([(text, "T.mod")])
+    task = Task(program, Bindings(motion=FixedArm())).start()
+    assert task.wait_idle(10)  # in Inner's WaitTime
+    task.stop()
+    assert task.finished.wait(10) and task.state == "stopped"
+    assert program.datum("trace", "T").box[0] == "iUV"  # both handlers ran; the wait in Outer's ended it
