@@ -14,6 +14,8 @@ The side port speaks JSON lines (one request, one reply)::
     {"cmd": "frame"}                     -> {"ok": true, "width": w, "height": h, "bytes": n, ...} + n bytes
     {"cmd": "load", "modules": [{"source": "HeMain.mod", "text": "..."}, ...]}
                                          -> {"ok": true, "postures": n} | {"ok": false, "error": "..."}
+    {"cmd": "signal", "name": "diCellDoor", "value": 0}
+                                         -> {"ok": true, ...} (a cell input of the controller set)
 
 ``load`` plays the operator who loads a capture's ``SESSION/rapid`` into the controller's task (the
 modules are linked and executed by the mock's interpreter; HeKey.sys stays loaded).
@@ -131,6 +133,8 @@ class CellService:
             return self.frame()
         if command == "load":
             return self.load(request["modules"]), b""
+        if command == "signal":
+            return self.signal(str(request["name"]), float(request["value"])), b""
         return {"ok": False, "error": f"unknown command {command!r}"}, b""
 
     def info(self) -> dict:
@@ -150,6 +154,14 @@ class CellService:
         data = np.ascontiguousarray(packed, np.uint8).tobytes()
         return {"ok": True, "width": w, "height": h, "colour": self.camera.renderer.options.colour,
                 "serial": self.camera.serial, "timestamp": time.time(), "bytes": len(data)}, data
+
+    def signal(self, name: str, value: float) -> dict:
+        """Set a cell input of the controller (the door switch ...), as a test or the pendant does."""
+        try:
+            self.controller.cell_signals.set(name, value)
+        except ValueError as exc:
+            return {"ok": False, "error": str(exc)}
+        return {"ok": True, "name": name, "value": value}
 
     def load(self, modules: list) -> dict:
         program = ControllerProgram(tuple(ModuleSource(str(m["text"]), str(m["source"])) for m in modules),

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import threading
 import time
+from dataclasses import replace
 from typing import Callable
 
 import numpy as np
@@ -108,8 +109,8 @@ class SimulatedRobot:
         if self.model.limit_violations(start):
             raise ValueError(f"start configuration outside limits: {self.model.limit_violations(start)}")
         self._lock = threading.RLock()
-        self._from = start.copy()
-        self._to = start.copy()
+        self._path = start[None].copy()  # the waypoints of the current move (the start first) and their times
+        self._times = np.zeros(1)
         self._t0 = self._clock()
         self._duration = 0.0
         self._target_posture = 0
@@ -156,33 +157,57 @@ class SimulatedRobot:
         ZoneViolation
             If the path enters a volume of the cell (``guard``); the arm stays where it is.
         """
-        target = np.asarray(target_deg, dtype=float)
-        problems = self.model.limit_violations(target)
-        if problems:
-            raise ValueError(f"target outside the joint limits: {'; '.join(problems)}")
+        return self.start_path(np.asarray(target_deg, dtype=float)[None], posture)
+
+    def start_path(self, configurations, posture: int = 0) -> float:
+        """Start a move through the joint configurations ``(n, dof)`` in turn (each step synchronised and
+        joint-interpolated; a ``MoveL`` gives the configurations of its samples along the TCP line);
+        returns its wall-clock duration in seconds.
+
+        Raises
+        ------
+        ValueError
+            A configuration outside the joint limits.
+        ZoneViolation
+            The path from where the arm stands through every configuration enters a volume of the cell
+            (:meth:`path_violation`); the arm stays where it is.
+        """
+        waypoints = np.asarray(configurations, dtype=float).reshape(-1, self.model.dof)
+        for row in waypoints:
+            problems = self.model.limit_violations(row)
+            if problems:
+                raise ValueError(f"target outside the joint limits: {'; '.join(problems)}")
         with self._lock:
             self._settle()
             now = self._clock()
-            start = self._joints_at(now)
-            self._check_path(start, target, posture)
-            delta = np.abs(target - start)
-            self._duration = float(np.max(delta / (self.speed_fraction * self.model.max_speed_deg_s))) * self.time_scale
-            self._from, self._to, self._t0 = start, target.copy(), now
+            path = np.vstack([self._joints_at(now)[None], waypoints])
+            violation = self.path_violation(path)
+            if violation is not None:
+                refusal = ZoneViolation(violation, waypoints[-1], posture)
+                self.refusals.append(refusal)
+                raise refusal
+            steps = np.max(np.abs(np.diff(path, axis=0)) / (self.speed_fraction * self.model.max_speed_deg_s), axis=1)
+            self._path, self._times = path, np.concatenate([[0.0], np.cumsum(steps * self.time_scale)])
+            self._duration, self._t0 = float(self._times[-1]), now
             self._target_posture = int(posture)
             self._arrived_posture = 0
             self._arrival_reported = False
             self.moves += 1
             return self._duration
 
-    def _check_path(self, start: np.ndarray, target: np.ndarray, posture: int) -> None:
-        """Refuse (ZoneViolation) a move whose joint-interpolated path enters a volume of the cell."""
+    def path_violation(self, configurations):
+        """The cell check of a path: the first place where the arm, moving joint-interpolated from each
+        configuration of ``configurations`` ``(n, dof)`` to the next, comes closer to a volume of the cell
+        (``guard``) than its margin; a :class:`~handeye.calibration.clearance.Violation` whose ``at`` is
+        the fraction of the whole path, or None (clear, or no cell)."""
+        path = np.asarray(configurations, dtype=float).reshape(-1, self.model.dof)
         if self.guard is None:
-            return
-        violation = self.guard.path_violation(start, target)
-        if violation is not None:
-            refusal = ZoneViolation(violation, target, posture)
-            self.refusals.append(refusal)
-            raise refusal
+            return None
+        steps = list(zip(path[:-1], path[1:])) or [(path[0], path[0])]
+        for i, violation in enumerate(self.guard.moves_violations(steps)):
+            if violation is not None:
+                return replace(violation, at=(i + violation.at) / len(steps))
+        return None
 
     def start_posture(self, k: int) -> float:
         """Start the move to approved posture ``k`` (1-based); returns the wall-clock duration."""
@@ -192,9 +217,9 @@ class SimulatedRobot:
 
     def _joints_at(self, now: float) -> np.ndarray:
         if self._duration <= 0:
-            return self._to.copy()
-        s = min(max((now - self._t0) / self._duration, 0.0), 1.0)
-        return self._from + s * (self._to - self._from)
+            return self._path[-1].copy()
+        t = min(max(now - self._t0, 0.0), self._duration)
+        return np.array([np.interp(t, self._times, axis) for axis in self._path.T])
 
     def _settle(self) -> None:
         """Report the arrival of a finished move once (runs the hooks)."""
@@ -203,7 +228,7 @@ class SimulatedRobot:
         self._arrival_reported = True
         self._arrived_posture = self._target_posture
         if self._target_posture:
-            joints = self._to.copy()
+            joints = self._path[-1].copy()
             for hook in list(self.arrival_hooks):
                 hook(self._target_posture, joints)
 

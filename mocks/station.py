@@ -38,7 +38,7 @@ from .controller import start_mock_controller
 from .robot import SimulatedRobot
 from .world import PrintedBoard
 
-__all__ = ["DEFAULT_BOARD", "DEFAULT_MOUNT", "DEFAULT_START", "MockStation", "MockStationSpec", "perturbed_robot",
+__all__ = ["DEFAULT_BOARD", "DEFAULT_MOUNT", "DEFAULT_START", "MockStation", "MockStationSpec", "perturbed_robot", "cell_guard",
            "flange_camera"]
 
 
@@ -151,14 +151,7 @@ class MockStation:
         self.true_robot = self.truth["true_robot"]
 
     def _cell_guard(self, spec: MockStationSpec) -> CellGuard | None:
-        """The physical cell: entering a volume (margin 0) is refused, moves sampled every 5 mm."""
-        if spec.cell is None:
-            return None
-        zones = None
-        if spec.zone_tcp_mm is not None:
-            zones = (spec.zone_tcp_mm, spec.cell.world_zone_volumes(spec.board2base, spec.board))
-        return CellGuard(self.nominal, spec.cell.volumes(spec.board2base, spec.board), spec.cell.carried, margin_mm=0.0,
-                         step_mm=5.0, tcp_zones=zones)
+        return cell_guard(spec, self.nominal)
 
     def start(self) -> MockStation:
         if self.server is None:
@@ -191,6 +184,18 @@ class MockStation:
         """Load a generated program (a folder of modules, e.g. ``SESSION/rapid``) into the controller and
         run it; HeKey.sys stays loaded."""
         self.server.load_program(program)
+
+
+def cell_guard(spec: MockStationSpec, robot: RobotModel | None = None) -> CellGuard | None:
+    """The physical cell of ``spec`` (its stand around the true board): entering a volume (margin 0) is
+    refused, moves sampled every 5 mm; None without a cell."""
+    if spec.cell is None:
+        return None
+    zones = None
+    if spec.zone_tcp_mm is not None:
+        zones = (spec.zone_tcp_mm, spec.cell.world_zone_volumes(spec.board2base, spec.board))
+    return CellGuard(robot or load_robot(spec.robot), spec.cell.volumes(spec.board2base, spec.board), spec.cell.carried,
+                     margin_mm=0.0, step_mm=5.0, tcp_zones=zones)
 
 
 def flange_camera(spec: MockStationSpec, arm: SimulatedRobot) -> tuple[MockCamera, dict]:

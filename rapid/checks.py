@@ -6,14 +6,17 @@
 - every name is declared before it is used: data of a module before the routines that use it and
   locals at the top of their routine; routines and global data of the other modules in any order;
   what RAPID itself provides (instructions, functions, data types, ``tool0`` ...) is listed in
-  :data:`RAPID_BUILTINS`, I/O signals from the I/O configuration are passed in as ``external``;
+  :data:`RAPID_BUILTINS` (the interpreter's own tables), I/O signals from the I/O configuration are
+  passed in as ``external``;
+- a warning where ``NOT`` reaches over an ``AND`` (``NOT a AND b`` is ``NOT (a AND b)``: NOT has the
+  lowest priority in RAPID, and the line reads easily as ``(NOT a) AND b``);
 - motion: the only move instruction is ``MoveAbsJ``, always to a ``CONST jointtarget`` whose value
   is one of the approved postures (and inside the joint limits), with zone ``fine`` and ``tool0``
   (or a tool named in ``move_tools``: with world zones, the camera's nominal tool of ``HeCell``,
   whose TCP the zones watch; a jointtarget move goes to the same joints whatever the tool).
 
-The tokenizer understands what the generated modules use (comments, strings with ``""`` and
-``\\hh`` escapes, numbers like ``9E9``); it is not a full RAPID parser.
+The tokens come from the interpreter's lexer (the package's one RAPID lexer); the checks walk them
+and are not a full RAPID parser.
 """
 
 from __future__ import annotations
@@ -24,6 +27,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..calibration.kinematics import load_robot
+from .interpreter.errors import RapidLoadError
+from .interpreter.lexer import KEYWORDS
+from .interpreter.lexer import tokenize as rapid_tokens
+from .interpreter.names import data_types, predefined_names
 
 __all__ = ["Finding", "RAPID_KEYWORDS", "RAPID_BUILTINS", "MODULE_ATTRIBUTES", "MOVE_INSTRUCTIONS", "check_program",
            "for_rapidchecker", "string_length", "tokenize"]
@@ -31,39 +38,12 @@ __all__ = ["Finding", "RAPID_KEYWORDS", "RAPID_BUILTINS", "MODULE_ATTRIBUTES", "
 MAX_STRING = 80
 MAX_IDENTIFIER = 32
 
-RAPID_KEYWORDS = {
-    "MODULE", "ENDMODULE", "VAR", "PERS", "CONST", "LOCAL", "TASK", "PROC", "ENDPROC", "FUNC", "ENDFUNC",
-    "TRAP", "ENDTRAP", "IF", "THEN", "ELSEIF", "ELSE", "ENDIF", "WHILE", "DO", "ENDWHILE", "FOR", "FROM", "TO",
-    "STEP", "ENDFOR", "TEST", "CASE", "DEFAULT", "ENDTEST", "RETURN", "ERROR", "UNDO", "BACKWARD", "RAISE",
-    "RETRY", "TRYNEXT", "EXIT", "CONNECT", "WITH", "AND", "OR", "XOR", "NOT", "DIV", "MOD", "TRUE", "FALSE",
-    "INOUT", "RECORD", "ENDRECORD", "GOTO",
-}
-_DATA_TYPES = {"num", "dnum", "bool", "string", "jointtarget", "robtarget", "tooldata", "wobjdata", "speeddata",
-               "zonedata", "socketdev", "iodev", "intnum", "clock", "pos", "orient", "pose", "loaddata", "robjoint",
-               "extjoint", "byte", "signaldi", "signaldo", "signalgi", "signalgo", "signalai", "signalao",
-               "shapedata", "wztemporary", "wzstationary"}
-#: Names RAPID provides (RobotWare 5/6 instructions, functions, predefined data) used by the modules.
-RAPID_BUILTINS = _DATA_TYPES | {
-    # motion and positions
-    "MoveAbsJ", "CJointT", "CRobT", "tool0", "wobj0", "fine", "NOrient", "VectMagn", "VelSet",
-    # world zones (option 608-1)
-    "WZBoxDef", "WZCylDef", "WZLimSup",
-    # program flow and operator messages
-    "TPWrite", "Stop", "WaitUntil", "WaitDI", "WaitTime",
-    # strings and numbers
-    "StrFind", "StrPart", "StrLen", "StrMatch", "StrToVal", "NumToStr", "Round", "Sqrt", "Abs", "STR_DIGIT",
-    # sockets (PC Interface / Socket Messaging)
-    "SocketCreate", "SocketBind", "SocketListen", "SocketAccept", "SocketReceive", "SocketSend", "SocketClose",
-    "GetSysInfo", "WAIT_MAX",
-    # serial channels
-    "Open", "Close", "ReadStr", "WriteStrBin", "ClearIOBuff",
-    # I/O and interrupts
-    "SetGO", "SetDO", "SetAO", "GInput", "GInputDnum", "DInput", "AInput", "IDelete", "ITimer",
-    # clocks
-    "ClkReset", "ClkStart", "ClkRead",
-    # error handling
-    "ERRNO", "ERR_SOCK_TIMEOUT", "ERR_SOCK_CLOSED", "ERR_DEV_MAXTIME",
-}
+#: RAPID's reserved words: the lexer's one list.
+RAPID_KEYWORDS = KEYWORDS
+_DATA_TYPES = data_types()
+#: Names RAPID provides (instructions, functions, data types, predefined data, error numbers), read from
+#: the interpreter's tables (lower case): what the interpreter runs is what the checks accept.
+RAPID_BUILTINS = predefined_names()
 #: Module attributes RAPID knows (RobotWare manual; rapidchecker 0.1.x's grammar lacks NOVIEW).
 MODULE_ATTRIBUTES = {"SYSMODULE", "NOVIEW", "NOSTEPIN", "VIEWONLY", "READONLY"}
 #: Instructions that move the robot; only MoveAbsJ may appear, and only to approved targets.
@@ -72,51 +52,41 @@ MOVE_INSTRUCTIONS = {"MoveAbsJ", "MoveJ", "MoveL", "MoveC", "MoveExtJ", "MoveAbs
                      "TriggJ", "TriggL", "TriggC", "MToolRotCalib", "MoveJAO", "MoveLAO"}
 _MOVE_LOWER = {name.lower() for name in MOVE_INSTRUCTIONS}
 _KEYWORDS_UPPER = {k.upper() for k in RAPID_KEYWORDS}
-_BUILTINS_LOWER = {b.lower() for b in RAPID_BUILTINS}
+_BUILTINS_LOWER = RAPID_BUILTINS
+#: What ends the operand of a NOT (at its parenthesis depth) for the priority warning.
+_NOT_ENDS = {"OR", "XOR", "THEN", "DO", "TO", "FROM", "STEP", ";", ",", ":=", ":"}
 
 
 @dataclass(frozen=True)
 class Finding:
+    """One finding; ``severity`` is ``error`` (the module must change) or ``warning`` (it reads one way and
+    runs another)."""
+
     module: str
     line: int
     message: str
+    severity: str = "error"
 
     def __str__(self) -> str:
-        return f"{self.module}:{self.line}: {self.message}"
+        return f"{self.module}:{self.line}: {'warning: ' if self.severity == 'warning' else ''}{self.message}"
 
 
 @dataclass(frozen=True)
 class Token:
-    kind: str  # "id", "num", "str", "op"
+    kind: str  # "id" (keywords included), "num", "str", "op"
     text: str
     line: int
 
 
-_TOKEN = re.compile(r"""
-    (?P<ws>[ \t\r]+)
-  | (?P<comment>![^\n]*)
-  | (?P<nl>\n)
-  | (?P<str>"(?:[^"\n]|"")*")
-  | (?P<num>\d+(?:\.\d*)?(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)
-  | (?P<id>[A-Za-z_][A-Za-z0-9_]*)
-  | (?P<op>:=|<>|<=|>=|[-+*/=<>(){}\[\],;:.\\%])
-""", re.VERBOSE)
-
-
 def tokenize(text: str) -> list[Token]:
-    """Tokens of RAPID text (comments and blanks dropped). ValueError on a character it cannot read."""
-    tokens, line, pos = [], 1, 0
-    while pos < len(text):
-        m = _TOKEN.match(text, pos)
-        if m is None:
-            raise ValueError(f"line {line}: cannot read {text[pos:pos + 20]!r}")
-        kind = m.lastgroup
-        if kind == "nl":
-            line += 1
-        elif kind in ("str", "num", "id", "op"):
-            tokens.append(Token(kind, m.group(), line))
-        pos = m.end()
-    return tokens
+    """Tokens of RAPID text (comments, blanks, a byte order mark and a ``%%%`` header dropped), read by the
+    interpreter's lexer (:func:`handeye.rapid.interpreter.lexer.tokenize`); keywords come as ``id``
+    tokens. ValueError on what RAPID cannot read (a character, a bad string escape), naming the line."""
+    try:
+        tokens = rapid_tokens(text)
+    except RapidLoadError as exc:
+        raise ValueError(f"line {exc.line}: {exc.detail}") from None
+    return [Token("id" if t.kind == "kw" else t.kind, t.text, t.line) for t in tokens if t.kind != "eof"]
 
 
 def for_rapidchecker(text: str) -> str:
@@ -281,13 +251,8 @@ def _check_module(module, tokens, global_data, routines, external, approved, mod
 
     while i < n:
         t = tokens[i]
-        if t.kind == "str":
-            length = string_length(t.text)
-            if length > MAX_STRING:
-                out.append(Finding(module, t.line, f"string literal of {length} characters (RAPID holds {MAX_STRING})"))
-            i += 1
-            continue
         if t.kind != "id":
+            out += _literal_findings(module, t)
             i += 1
             continue
         if len(t.text) > MAX_IDENTIFIER:
@@ -328,6 +293,8 @@ def _check_module(module, tokens, global_data, routines, external, approved, mod
             local_scope.add(tokens[i + 1].text.lower())
             i += 2
             continue
+        if upper == "NOT":
+            out += _not_over_and(module, tokens, i)
         if upper in _KEYWORDS_UPPER:
             i += 1
             continue
@@ -342,6 +309,34 @@ def _check_module(module, tokens, global_data, routines, external, approved, mod
     for key, (name, line, values) in jointtargets.items():
         out += _check_jointtarget(module, name, line, values, approved, model)
     return out
+
+
+def _literal_findings(module, t: Token) -> list[Finding]:
+    """A string literal longer than RAPID holds."""
+    length = string_length(t.text) if t.kind == "str" else 0
+    if length > MAX_STRING:
+        return [Finding(module, t.line, f"string literal of {length} characters (RAPID holds {MAX_STRING})")]
+    return []
+
+
+def _not_over_and(module, tokens, i: int) -> list[Finding]:
+    """A warning when the operand of the ``NOT`` at ``tokens[i]`` holds an ``AND`` outside parentheses."""
+    depth = 0
+    for tok in tokens[i + 1:]:
+        word = tok.text.upper() if tok.kind in ("id", "op") else ""
+        if word in ("(", "[", "{"):
+            depth += 1
+        elif word in (")", "]", "}"):
+            depth -= 1
+            if depth < 0:
+                return []
+        elif depth == 0 and word in _NOT_ENDS:
+            return []
+        elif depth == 0 and word == "AND":
+            return [Finding(module, tokens[i].line, "NOT ... AND: RAPID gives NOT the lowest priority, so this is "
+                                                    "NOT (... AND ...); write the parentheses you mean",
+                            severity="warning")]
+    return []
 
 
 def _check_move(module, tokens, i, jointtargets, move_tools=("tool0",)) -> list[Finding]:

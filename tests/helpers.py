@@ -94,3 +94,33 @@ def docstring_nodes(tree) -> set:
             if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant) and isinstance(first.value.value, str):
                 nodes.add(id(first.value))
     return nodes
+
+
+def start_standalone_mock(*args: str):
+    """``handeye mock controller ARGS --camera-port ...`` in its own process, once its banner is out;
+    returns ``(process, banner text)``."""
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen([sys.executable, "-m", "handeye.station", "mock", "controller", *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    banner = []
+    while not any("camera.mock_arm:" in line for line in banner):
+        line = proc.stdout.readline()
+        if not line:
+            raise AssertionError("the mock did not start: " + "".join(banner) + proc.stderr.read())
+        banner.append(line)
+    return proc, "".join(banner)
+
+
+def stop_standalone_mock(proc) -> str:
+    """Stop a mock of :func:`start_standalone_mock` (if it still runs); its stderr."""
+    import subprocess
+
+    if proc.poll() is None:
+        proc.terminate()
+    try:
+        return proc.communicate(timeout=30)[1]
+    except subprocess.TimeoutExpired:  # pragma: no cover - a wedged mock
+        proc.kill()
+        return proc.communicate()[1]

@@ -30,6 +30,7 @@ from .modbus_server import ModbusControllerServer
 from .rws_server import RwsControllerServer
 from .runner import RapidRunner
 from .server import DEFAULT_IDLE_TIMEOUT_S, RapidControllerServer
+from .signals import CELL_SIGNALS, CellSignals
 from .sources import ControllerProgram, generated_program, program_from_folder
 
 __all__ = [
@@ -47,6 +48,8 @@ __all__ = [
     "SerialControllerServer",
     "ModbusControllerServer",
     "RwsControllerServer",
+    "CellSignals",
+    "CELL_SIGNALS",
 ]
 
 
@@ -64,7 +67,7 @@ def start_mock_controller(protocol: str = DEFAULT_PROTOCOL, *, host: str = "127.
                           ack_timeout_s: float | None = 30.0, allowed_client: str | None = None,
                           faults: Faults | None = None,
                           idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None,
-                          program=None, station=None, start: bool = True, **server_options):
+                          program=None, station=None, start: bool = True, signals=(), **server_options):
     """A started mock controller of ``protocol`` running its RAPID program.
 
     Parameters
@@ -95,6 +98,8 @@ def start_mock_controller(protocol: str = DEFAULT_PROTOCOL, *, host: str = "127.
         The station the modules are generated for (default: the built-in one).
     start : bool
         Start the server (default); else call ``server.start()`` or use ``with``.
+    signals : iterable of (name, type, value)
+        Cell I/O signals besides :data:`~handeye.mocks.controller.signals.CELL_SIGNALS` (``server.cell_signals``).
     **server_options
         The mock server's own options (``MockServer.options`` of the protocol: the Modbus mock's
         ``register_map``, path or RegisterMap; the RWS mock's ``generation``, 1 or 2 ...); None or
@@ -113,4 +118,5 @@ def start_mock_controller(protocol: str = DEFAULT_PROTOCOL, *, host: str = "127.
     server = mock.load()(source, robot, host, port, faults=faults, idle_timeout_s=idle_timeout_s, write_key=write_key,
                          **{name: offered[name] for name in taken if name in offered})
     server.protocol = str(protocol).lower()
+    server.cell_signals = CellSignals(extra=signals)
     return server.start() if start else server

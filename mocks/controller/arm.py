@@ -1,11 +1,14 @@
-"""The simulated arm as the RAPID program sees it: joints, the flange pose, MoveAbsJ, world zones.
+"""The simulated arm as the RAPID program sees it: joints, the flange pose, MoveAbsJ, MoveJ, MoveL, world zones.
 
 :class:`ArmBinding` is the interpreter's motion binding over a :class:`~handeye.mocks.robot.SimulatedRobot`:
 ``MoveAbsJ`` starts a synchronised move and waits (in simulated time, ``time_scale``) until the arm
 stands still; the approved posture a target is (its index in the program's CONST jointtargets) goes
 to the arrival hooks. World zones the program defines (``WZLimSup``) are checked along the move
 (the tool's TCP, sampled along the joint path); a move into a forbidden zone is not started and the
-program stops with the zone named, as motion supervision stops a controller.
+program stops with the zone named, as motion supervision stops a controller. ``MoveJ`` and ``MoveL``
+arrive as a sequence of joint configurations (a ``MoveL``: its samples along the TCP line), which
+the arm checks against the cell in one call (:meth:`SimulatedRobot.start_path
+<handeye.mocks.robot.SimulatedRobot.start_path>`) before it moves.
 """
 
 from __future__ import annotations
@@ -76,30 +79,40 @@ class ArmBinding(MotionBinding):
         q = [frame["rot"].fields[c] for c in ("q1", "q2", "q3", "q4")]
         return (flange @ transform_from_pose(t, q))[:3, 3]
 
-    def _check_zones(self, target, tool) -> None:
+    def model(self):
+        return self.robot.model
+
+    def _check_zones(self, path, tool, what: str) -> None:
+        """World zones along the path: a single joint move sampled :data:`PATH_SAMPLES` times, a
+        linear move at its samples (the TCP of ``tool``)."""
         zones = [(n, z) for n, z in sorted(self.robot.world_zones.items()) if z["kind"] == "limit" and z["active"]]
         if not zones:
             return
-        start = np.asarray(self.robot.current_joints, float)
-        for s in np.linspace(0.0, 1.0, PATH_SAMPLES + 1)[1:]:
-            joints = start + s * (target - start)
+        target = path[-1]
+        if len(path) == 1:
+            start = np.asarray(self.robot.current_joints, float)
+            path = start + np.linspace(0.0, 1.0, PATH_SAMPLES + 1)[1:, None] * (target - start)
+        for i, joints in enumerate(path):
             tcp = self._tcp(joints, tool)
             for number, zone in zones:
                 if zone_violation(zone, joints, tcp):
                     raise RapidFatalError(
-                        f"MoveAbsJ to {np.round(target, 4).tolist()}: world zone {number} "
+                        f"{what} to {np.round(target, 4).tolist()}: world zone {number} "
                         f"({zone['shape']['type']}, {zone['shape']['side']}) would be violated "
-                        f"{'at the target' if s == 1.0 else 'on the way'}; the robot did not move")
+                        f"{'at the target' if i == len(path) - 1 else 'on the way'}; the robot did not move")
 
     def move_joints(self, task, joints, speed, zone, tool) -> None:
-        target = np.asarray(joints, float)
-        self._check_zones(target, tool)
+        self.move_path(task, [joints], speed, zone, tool, "MoveAbsJ")
+
+    def move_path(self, task, configurations, speed, zone, tool, what: str) -> None:
+        path = np.asarray(configurations, float).reshape(-1, self.robot.model.dof)
+        self._check_zones(path, tool, what)
         try:
-            self.robot.start_move(target, posture=self._posture(target))
+            self.robot.start_path(path, posture=self._posture(path[-1]))
         except (ValueError, ZoneViolation) as exc:
             # outside the joint limits, or the path would enter a volume of the simulated cell: the
             # controller's motion supervision stops the program (with the reason) before the arm moves
-            raise RapidFatalError(f"MoveAbsJ: {exc}") from None
+            raise RapidFatalError(f"{what}: {exc}") from None
         while self.robot.is_moving:
             task.idle(max(min(self.robot.time_to_arrival(), 0.05), 0.0005))
         self.robot.update()

@@ -16,6 +16,7 @@ from ...rapid.interpreter import Bindings
 from .arm import ArmBinding
 from .faults import Faults
 from .runner import RapidRunner
+from .signals import CellSignals
 from .sources import ControllerProgram, keep_system_modules, program_from_folder
 
 __all__ = ["RapidControllerServer", "DEFAULT_IDLE_TIMEOUT_S"]
@@ -56,6 +57,8 @@ class RapidControllerServer:
         self._write_key = check_write_key(write_key)
         self.runner: RapidRunner | None = None
         self.protocol = self.kind
+        #: The cell's I/O signals beside the link's (a test or the pendant sets an input: ``cell_signals.set``).
+        self.cell_signals = CellSignals()
 
     # ------------------------------------------------------------------ what each link adds
     def _open_endpoint(self) -> Bindings:
@@ -82,6 +85,7 @@ class RapidControllerServer:
         if self.runner is not None:
             return self
         bindings = self._open_endpoint()
+        bindings.io = self.cell_signals.over(bindings.io)
         bindings.motion = ArmBinding(self.robot)
         bindings.pendant = self._pendant
         self.runner = RapidRunner(self.robot, bindings, f"mock {self.kind} controller")

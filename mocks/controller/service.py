@@ -63,6 +63,11 @@ class MockControllerOptions:
     camera_port : int or None
         Also serve the simulated XB3 on the flange (rendered frames) on this port for a rehearsal
         station (0: a free port); None: no camera.
+    cell : CellModel or None
+        The cell around the arm (``cell`` of the station config): a move whose path (a ``MoveL``'s
+        along its TCP line) enters one of its volumes stops the program at that line, naming the volume.
+    signals : tuple of (name, type, value)
+        Cell I/O signals besides the mock's own (``--signal NAME:TYPE=VALUE``).
     """
 
     protocol: str = DEFAULT_PROTOCOL
@@ -78,6 +83,8 @@ class MockControllerOptions:
     station: RapidStation | None = None
     program: str | None = None
     camera_port: int | None = None
+    cell: object = None
+    signals: tuple = ()
 
 
 def is_loopback(host: str) -> bool:
@@ -125,21 +132,22 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
     if not is_loopback(options.host):
         warn(f"warning: the mock controller listens on {options.host}, not a loopback address: anyone on that network "
              "can move the robot's mock and write its tool data; it is for testing only")
-    robot = _rehearsal_arm(station, options) if options.camera_port is not None else None
+    spec = _cell_spec(options)
+    robot = _rehearsal_arm(station, options, spec) if options.camera_port is not None or options.cell else None
     try:
         server = start_mock_controller(options.protocol, host=options.host, port=port, postures=station.postures,
                                        robot=robot,
                                        time_scale=options.time_scale, ack_timeout_s=station.ack_timeout_s,
                                        allowed_client=options.allowed_client,
                                        idle_timeout_s=idle, write_key=key, station=station, program=options.program,
-                                       **options.server_options)
+                                       signals=options.signals, **options.server_options)
     except OSError as exc:
         raise InvalidRequest(f"cannot listen on {options.host}:{port} ({exc}); pick another --port "
                              "(0 = any free port)") from None
     cell = None
     try:
         if options.camera_port is not None:
-            cell = _start_cell(server, options)
+            cell = _start_cell(server, options, spec)
         announce(_banner(server, options, len(server.robot.postures), idle)
                  + (f"\n{cell.banner()}" if cell is not None else ""))
         failure = _serve(server, options.duration_s, warn)
@@ -204,17 +212,25 @@ class _ProgramWatch:
             self.warn(line)
 
 
-def _rehearsal_arm(station: RapidStation, options: MockControllerOptions):
-    """The arm of a mock with a camera: standing where the camera sees the board, as an operator leaves it."""
+def _cell_spec(options: MockControllerOptions):
+    """The mock cell around the arm: the demo's board and camera, the config's keep-out volumes."""
+    from ..station import MockStationSpec
+
+    return MockStationSpec(protocol=options.protocol, cell=options.cell)
+
+
+def _rehearsal_arm(station: RapidStation, options: MockControllerOptions, spec):
+    """The arm of a mock with a camera or a cell: standing where the camera sees the board, as an operator
+    leaves it; the cell's volumes (if any) guard its moves."""
     from ..robot import SimulatedRobot
-    from ..station import DEFAULT_START
+    from ..station import DEFAULT_START, cell_guard
 
     return SimulatedRobot(station.postures, model=station.robot, time_scale=options.time_scale,
-                          start_joints=DEFAULT_START)
+                          start_joints=DEFAULT_START, guard=cell_guard(spec))
 
 
-def _start_cell(server, options: MockControllerOptions):
+def _start_cell(server, options: MockControllerOptions, spec):
     """The simulated XB3 on the arm's flange, served for a rehearsal station (``mocks.cell``)."""
     from ..cell import CellService
 
-    return CellService(server, host=options.host, port=options.camera_port).start()
+    return CellService(server, host=options.host, port=options.camera_port, spec=spec).start()

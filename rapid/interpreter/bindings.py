@@ -111,6 +111,18 @@ class MotionBinding:
         """Move all axes to ``joints`` and return when the arm stands still there (``task.idle`` meanwhile)."""
         raise NotImplementedError
 
+    def move_path(self, task, configurations, speed: dict, zone: dict, tool, what: str) -> None:
+        """Move through the joint configurations ``(n, 6)`` in turn (``MoveJ``: one; ``MoveL``: its samples
+        along the TCP line) and return when the arm stands still at the last; the whole path is checked
+        first (``RapidFatalError`` naming ``what`` and what it would violate; the arm does not move)."""
+        raise NotImplementedError
+
+    def model(self):
+        """The arm's kinematics (:class:`~handeye.calibration.kinematics.RobotModel`)."""
+        from ...calibration.kinematics import load_robot
+
+        return load_robot("IRB1400")
+
     def world_zone(self, number: int, zone: dict | None) -> None:
         """A world zone supervised from now on (``zone``), or no longer (``None``)."""
 
@@ -172,6 +184,7 @@ class FixedArm(MotionBinding):
         self._joints = list(joints)
         self._flange = flange
         self.moves: list = []
+        self.paths: list = []  # the configurations of every move_path
         self.zones: dict = {}
 
     def joints(self) -> list:
@@ -183,6 +196,10 @@ class FixedArm(MotionBinding):
     def move_joints(self, task, joints, speed, zone, tool) -> None:
         self.moves.append(list(joints))
         self._joints = list(joints)
+
+    def move_path(self, task, configurations, speed, zone, tool, what: str) -> None:
+        self.paths.append([list(map(float, c)) for c in configurations])
+        self.move_joints(task, self.paths[-1][-1], speed, zone, tool)
 
     def world_zone(self, number: int, zone) -> None:
         if zone is None:

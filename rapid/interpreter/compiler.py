@@ -344,8 +344,11 @@ class Compiler:
             slot = symbol.slot
             if symbol.mode in ("INOUT", "VAR", "PERS"):
                 return (lambda f: f.slots[slot]), static
-            if symbol.storage == "PARAM" and writing:
-                self.fail(node.line, f"{symbol.name} is an input parameter: declare it INOUT to write it")
+            if symbol.storage == "PARAM" and writing and self.scope.routine.kind == "FUNC":
+                # RAPID reference, Basic Characteristics 3.2: a FUNC sees an IN parameter as a constant; a
+                # PROC's is a routine variable (a copy: the caller's argument does not change)
+                self.fail(node.line, f"{symbol.name} is an input parameter of function {self.scope.routine.name}, "
+                                     "a constant there: copy it into a local VAR to change it")
             t, dims = symbol.type, symbol.dims
             return (lambda f: Ref(f.slots, slot, t, dims, symbol.name)), static
         if isinstance(symbol, DataSymbol):

@@ -4,6 +4,14 @@ Keywords and identifiers are case-insensitive in RAPID: a keyword token carries 
 in ``value``; an identifier keeps its spelling in ``text`` (names are compared lower-cased).
 String literals are decoded: ``""`` is one quote, ``\\\\`` one backslash, ``\\hh`` the character of
 hexadecimal code ``hh``. ``!`` starts a comment to the end of the line.
+
+What RobotStudio writes before ``MODULE`` is accepted: a UTF-8 byte order mark (as the character
+U+FEFF, or as its three bytes read as Latin-1) and the file header ``%%%`` / ``VERSION:1`` /
+``LANGUAGE:ENGLISH`` / ``%%%``; the header's lines count for the line numbers of messages.
+
+This is the one RAPID lexer of the package: the interpreter's parser and the static checks of
+:mod:`handeye.rapid.checks` read source through :func:`tokenize`, and :data:`KEYWORDS` is the one
+list of RAPID's reserved words.
 """
 
 from __future__ import annotations
@@ -13,7 +21,7 @@ from dataclasses import dataclass
 
 from .errors import RapidLoadError
 
-__all__ = ["Token", "KEYWORDS", "tokenize", "decode_string"]
+__all__ = ["Token", "KEYWORDS", "tokenize", "decode_string", "strip_preamble"]
 
 #: Reserved words of RAPID (Technical reference manual, RAPID kernel).
 KEYWORDS = frozenset("""
@@ -79,15 +87,41 @@ def decode_string(body: str, module: str | None = None, line: int | None = None)
     return "".join(out)
 
 
+_BOMS = ("\ufeff", "\xef\xbb\xbf")
+_HEADER_LINE = re.compile(r"[ \t]*(?:VERSION[ \t]*:[ \t]*[0-9.]+|LANGUAGE[ \t]*:[ \t]*[A-Za-z]+)?[ \t]*\r?")
+
+
+def strip_preamble(text: str, module: str | None = None) -> tuple[int, int]:
+    """``(position, line)`` where the module text starts after a byte order mark and a ``%%%`` header.
+
+    Raises
+    ------
+    RapidLoadError
+        A header that is not closed by ``%%%`` or holds other lines than ``VERSION:n`` / ``LANGUAGE:word``.
+    """
+    pos = next((len(b) for b in _BOMS if text.startswith(b)), 0)
+    if not text.startswith("%%%", pos):
+        return pos, 1
+    lines = text[pos:].split("\n")
+    for i, body in enumerate(lines[1:], 1):
+        if body.strip() == "%%%":
+            return pos + sum(len(x) + 1 for x in lines[:i + 1]), i + 2
+        if not _HEADER_LINE.fullmatch(body):
+            raise RapidLoadError(module, i + 1, f"file header (%%%): expected VERSION:n, LANGUAGE:name or %%%; "
+                                                f"got {body.strip()[:30]!r}")
+    raise RapidLoadError(module, 1, "file header: the %%% line is never closed by another %%%")
+
+
 def tokenize(text: str, module: str | None = None) -> list[Token]:
-    """The tokens of ``text`` ending with an ``eof`` token.
+    """The tokens of ``text`` ending with an ``eof`` token (a byte order mark and a ``%%%`` header skipped).
 
     Raises
     ------
     RapidLoadError
         A character RAPID does not know, or a bad string literal; names the module and line.
     """
-    tokens, line, pos, size = [], 1, 0, len(text)
+    tokens, size = [], len(text)
+    pos, line = strip_preamble(text, module)
     while pos < size:
         m = _SCAN.match(text, pos)
         if m is None:

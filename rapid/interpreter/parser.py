@@ -6,7 +6,7 @@ The grammar (RAPID kernel; ``[]`` optional, ``{}`` repeated)::
     record    = RECORD id {type id ";"} ENDRECORD
     data      = [LOCAL | TASK] (VAR | PERS | CONST) type id ["{" expr {"," expr} "}"] [":=" expr] ";"
     routine   = [LOCAL] (PROC id "(" params ")" | FUNC type id "(" params ")" | TRAP id)
-                {data} {stmt} [ERROR ["(" expr {"," expr} ")"] {stmt}] ENDPROC | ENDFUNC | ENDTRAP
+                {data} {stmt} [ERROR ["(" expr {"," expr} ")"] {stmt}] [UNDO {stmt}] ENDPROC | ENDFUNC | ENDTRAP
     params    = [param {("," | "|") param}]      param = ["\\"] [INOUT | VAR | PERS] type id ["{" "*" {"," "*"} "}"]
     stmt      = lvalue ":=" expr ";" | id [args] ";"
               | IF expr THEN {stmt} {ELSEIF expr THEN {stmt}} [ELSE {stmt}] ENDIF | IF expr simple-stmt
@@ -15,20 +15,22 @@ The grammar (RAPID kernel; ``[]`` optional, ``{}`` repeated)::
               | RETURN [expr] ";" | RAISE [expr] ";" | RETRY ";" | TRYNEXT ";" | EXIT ";"
               | CONNECT lvalue WITH id ";"
     args      = arg {"," arg | "\\" id [":=" expr]}      arg = ["\\"] [id ":="] expr | "\\" id
-    expr      = and {(OR | XOR) and}        and = rel {AND rel}        rel = sum [relop sum]
+    expr      = and {(OR | XOR) and}        and = rel {AND rel}        rel = NOT and | sum [relop sum]
     sum       = term {("+" | "-") term}     term = unary {("*" | "/" | DIV | MOD) unary}
-    unary     = ("-" | "+") unary | NOT rel | primary
+    unary     = ("-" | "+") unary | primary
     primary   = num | string | TRUE | FALSE | "(" expr ")" | "[" expr {"," expr} "]"
               | id "(" [args] ")" | lvalue
     lvalue    = id {"{" expr {"," expr} "}" | "." id}
 
-Operator priority is RAPID's: ``* / DIV MOD`` over ``+ -`` over the comparisons over ``AND`` over
-``OR XOR``. ``NOT`` applies to one comparison; a ``NOT`` expression followed by ``AND``/``OR``/``XOR``
-is refused with a request for parentheses (the manuals rank ``NOT`` with ``OR``: ``NOT a AND b`` is
-read differently by different readers, so the interpreter does not guess).
+Operator priority is RAPID's (RAPID reference, "Basic Characteristics", section 7.7): ``* / DIV MOD``
+over ``+ -`` over the comparisons over ``AND`` over ``OR XOR NOT``. ``NOT`` has the lowest priority,
+so its operand runs over every ``AND`` that follows: ``NOT a AND b`` is ``NOT (a AND b)``; an ``OR`` or
+``XOR`` ends it (same priority, left to right: ``NOT a OR b`` is ``(NOT a) OR b``), and so does a
+closing parenthesis. ``a AND NOT b`` is ``a AND (NOT b)``. The static checks
+(:mod:`handeye.rapid.checks`) warn where a ``NOT`` reaches over an ``AND``, which reads easily the other way.
 
 What RAPID has and this parser refuses, each with the line: ``GOTO`` and labels, late binding
-(``%"name"%``), ``ALIAS``, conditional arguments (``\\A?b``), ``UNDO`` and ``BACKWARD`` handlers.
+(``%"name"%``), ``ALIAS``, conditional arguments (``\\A?b``), ``BACKWARD`` handlers.
 """
 
 from __future__ import annotations
@@ -182,11 +184,13 @@ class _Parser:
                 self.next()
                 numbers = tuple(self.comma_list(self.expr, ")"))
             error = tuple(self.block())
+        undo = None
         if self.tok.is_kw("UNDO"):
-            self.fail("UNDO handlers are not supported by the interpreter")
+            self.next()
+            undo = tuple(self.block())
         end = self.kw("END" + kind)
         return S.Routine(kind, name, tuple(params), tuple(decls), tuple(body), head.line, rtype, local, error,
-                         numbers, end_line=end.line)
+                         numbers, undo, end_line=end.line)
 
     def params(self) -> list[S.Param]:
         params, group = [], 0
@@ -397,13 +401,9 @@ class _Parser:
         return left
 
     def relation(self):
-        if self.tok.is_kw("NOT"):
+        if self.tok.is_kw("NOT"):  # the lowest priority: its operand takes every AND that follows
             tok = self.next()
-            node = S.Unary("NOT", self.relation(), tok.line)
-            if self.tok.is_kw("AND", "OR", "XOR"):
-                self.fail(f"NOT ... {self.tok.value}: write the parentheses (NOT (a) {self.tok.value} b, or "
-                          f"NOT (a {self.tok.value} b)); RAPID's NOT priority is not guessed")
-            return node
+            return S.Unary("NOT", self.conjunction(), tok.line)
         left = self.sum()
         if self.tok.kind == "op" and self.tok.value in _RELATIONS:
             tok = self.next()

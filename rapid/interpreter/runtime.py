@@ -72,6 +72,7 @@ class Task:
     def __init__(self, program, bindings, name: str = "T_ROB1"):
         self.program, self.bindings, self.name = program, bindings, name
         self.errno = 0
+        self.undoing = 0  # UNDO handlers running: a stop request waits for them
         self.attention = False
         self.next_due = math.inf
         self.state, self.error, self.ended = "ready", None, None
@@ -183,8 +184,10 @@ class Task:
 
     # ------------------------------------------------------------------ between statements
     def service(self) -> None:
-        """Stop, hold, and the TRAP routines of interrupts that came due."""
+        """Stop, hold, and the TRAP routines of interrupts that came due (a stop waits for UNDO handlers)."""
         if self._stop.is_set():
+            if self.undoing:
+                return
             raise TaskStopped()
         while self._held.is_set():
             self._held_wait()
@@ -242,6 +245,8 @@ class Task:
         when a socket became readable, False when the time ran out.
         """
         self._waiting.set()
+        if self._stop.is_set() and self.undoing:  # a stopped task's UNDO handler does not wait (nor move)
+            raise TaskStopped()
         end = math.inf if seconds is None else self.clock() + max(0.0, seconds)
         while True:
             self.service()

@@ -6,6 +6,14 @@ recoverable error to the routine's ``ERROR`` handler: ``RETRY`` runs the failing
 ``TRYNEXT`` continues after it, ``RETURN`` leaves the routine, ``RAISE`` (or the end of the
 handler) passes the error to the caller. A routine without a handler passes it on too; at the top
 the task stops with the error and where it happened.
+
+A routine's ``UNDO`` handler runs when the routine is left without finishing (RAPID reference,
+"Basic Characteristics": "UNDO handlers"): an ``EXIT``, an error that leaves it (raised on by its
+``ERROR`` handler, or with none), or the task stopped from outside (another program loaded: its
+UNDO statements run, a wait or a move among them ends the handler).
+Routines further up the call chain run theirs after it, innermost first. A ``RETURN`` ends the
+handler; ``RETRY``, ``TRYNEXT`` and a ``RAISE`` without a number are refused there at load; an error
+inside it stops the program with that error. A normal end or ``RETURN`` of the routine runs no UNDO.
 """
 
 from __future__ import annotations
@@ -15,7 +23,7 @@ from time import monotonic
 from .builtins import lookup as lookup_builtin
 from .compiler import ArrayType, Compiler
 from .errors import RapidFatalError, RapidRuntimeError
-from .frames import RETRY, ExitSignal, ReturnSignal, RetrySignal, TryNextSignal
+from .frames import RETRY, ExitSignal, ReturnSignal, RetrySignal, TaskStopped, TryNextSignal
 from .operators import equal
 from .scope import RoutineScope, RoutineSymbol
 from .values import TYPES, default_value, to_num
@@ -38,6 +46,7 @@ class CompiledRoutine:
         self.body: list = []
         self.handler = None
         self.error_numbers = None
+        self.undo = None
 
     def run(self, frame):
         for init in self.inits:
@@ -47,6 +56,10 @@ class CompiledRoutine:
                 statement(frame)
         except ReturnSignal as done:
             return done.value
+        except _UNDO_CAUSES:
+            if self.undo is not None:
+                self.undo(frame)
+            raise
         if self.kind == "FUNC":
             err = RapidFatalError(f"function {self.name} ended without RETURN")
             err.locate(self.source, self.end_line)
@@ -55,6 +68,26 @@ class CompiledRoutine:
 
     def __repr__(self) -> str:
         return f"<{self.kind} {self.name}>"
+
+
+#: What leaves a routine unfinished, so that its UNDO handler runs.
+_UNDO_CAUSES = (ExitSignal, TaskStopped, RapidRuntimeError, RapidFatalError)
+
+
+def _undo_runner(statements):
+    """The UNDO handler: its statements with errors going straight up, stop requests held off."""
+    def run_undo(f):
+        task = f.task
+        f.in_handler = True
+        task.undoing += 1
+        try:
+            for statement in statements:
+                statement(f)
+        except ReturnSignal:
+            pass
+        finally:
+            task.undoing -= 1
+    return run_undo
 
 
 def _guard(core, line: int, source: str):
@@ -285,6 +318,8 @@ def compile_routine(program, module_scope, symbol: RoutineSymbol) -> CompiledRou
         compiled.handler = run_handler
         if node.error_numbers is not None:
             compiled.error_numbers = frozenset(int(program.constant(compiler, n, _NUM)) for n in node.error_numbers)
+    if node.undo is not None:
+        compiled.undo = _undo_runner(compiler.block(node.undo))
     compiled.size = scope.size
     symbol.compiled = compiled
     return compiled

@@ -33,6 +33,23 @@ generated and loaded with it); without one they are refused. The mock listens on
 another --host lets the machines of that network reach it (a warning says so); it is for testing
 only.
 
+Rehearse an edited program: a station engineer's additions to the generated modules (a MoveJ to a
+safe via point before the first posture, a MoveL retreat with Offs/RelTool, a WaitDI on the cell
+door, an UNDO handler) run here as they would on the controller:
+  handeye capture --config station.yaml --session S --plan-only     (writes S/rapid)
+  (edit S/rapid/HeMain.mod)
+  handeye mock controller --program S/rapid --config station.yaml --camera-port 5021 &
+  handeye capture --config station.yaml --session S --yes
+With --config, the moves are checked against the config's cell as a controller's motion supervision
+would: a MoveJ/MoveAbsJ along its joint path, a MoveL along its TCP line (sampled every 5 mm, each
+sample through the inverse kinematics); a move that would enter a volume stops the program at that
+line, naming the volume. The robtargets' configuration (cf1, cf4, cf6, cfx) is respected (ConfJ/ConfL
+\\Off: the nearest solution). The cell's I/O signals are diCellDoor and diCellReady (inputs, 1 at
+start) and doCellLamp and doCellBusy (outputs); --signal NAME:TYPE=VALUE adds one, and a test or the
+pendant sets an input over the camera port ({{"cmd": "signal", "name": "diCellDoor", "value": 0}}).
+What the interpreter cannot run is refused at start with module:line and its name (rapid/PROTOCOL.md
+lists what it runs).
+
 --camera-port PORT also serves the simulated XB3 on the arm's flange (frames rendered from where the
 arm really is, a hidden camera mount, a printed board) for a rehearsal station: a station config
 with camera.backend: mock and camera.mock_arm: HOST:PORT runs capture, calibrate and writeback
@@ -90,6 +107,9 @@ def add_parser(sub):
                         "(default: the config's, else 5)")
     c.add_argument("--program", metavar="DIR",
                    help="run the RAPID modules (.mod/.modx/.sys) of DIR instead of the generated ones")
+    c.add_argument("--signal", action="append", default=[], metavar="NAME:TYPE=VALUE",
+                   help="a cell I/O signal besides diCellDoor, diCellReady, doCellLamp, doCellBusy "
+                        "(diFence:signaldi=1); repeatable")
     c.add_argument("--camera-port", type=argtypes.port, metavar="PORT",
                    help="also serve the simulated XB3 on the flange for a rehearsal station (0 = any free port)")
     c.add_argument("--write-key", metavar="KEY",
@@ -113,7 +133,13 @@ def run(args) -> int:
     if args.idle_timeout is not None and not low <= args.idle_timeout <= high:
         raise UsageError(f"--idle-timeout must be {low:g} to {high:g} s; got {args.idle_timeout:g}")
 
-    station = None
+    from ...mocks.controller.signals import parse_signal
+
+    try:
+        signals = tuple(parse_signal(text) for text in args.signal)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    station = cell = None
     if args.config:
         from ...drivers.controller.backends import RAPID_LINKS
         from ...rapid.station import default_station, station_from_dict
@@ -122,12 +148,13 @@ def run(args) -> int:
         config = load_config(args.config)
         postures = config.postures if config.postures is not None else default_station().postures
         station = station_from_dict(config.rapid_dict(postures), args.config, links=RAPID_LINKS)
+        cell = config.cell.model()
     server_options = {name[len("server_"):]: value for name, value in vars(args).items()
                       if name.startswith("server_") and value is not None}
     options = MockControllerOptions(protocol=args.protocol, port=args.port, host=args.host, station=station,
                                     time_scale=args.time_scale, allowed_client=args.allow_client,
                                     server_options=server_options, duration_s=args.duration,
                                     idle_timeout_s=args.idle_timeout, write_key=args.write_key,
-                                    program=args.program, camera_port=args.camera_port)
+                                    program=args.program, camera_port=args.camera_port, cell=cell, signals=signals)
     return run_mock_controller(options, announce=lambda text: print(text, flush=True),
                                warn=lambda text: print(text, file=sys.stderr, flush=True))

@@ -213,14 +213,13 @@ def test_waituntil_accepts_the_manuals_lowest_poll_rate_and_refuses_less():
 
 # ---------------------------------------------------------------------------------------- load-time checks
 @pytest.mark.parametrize("body, data, message", [
-    ("    MoveL p, v100, fine, tool0;", "", "T.mod:5: unknown instruction MoveL"),
+    ("    MoveC p, p, v100, fine, tool0;", "", "T.mod:5: unknown instruction MoveC"),
     ("    x := Frobnicate(1);", "  VAR num x;", "Frobnicate() is not a function"),
     ("    x := y;", "  VAR num x;", "'y' is not declared"),
     ('    x := "a";', "  VAR num x;", "expected num, got string"),
     ("    c := 2;", "  CONST num c := 1;", "c is a CONST"),
     ("    TPWrite;", "", "missing argument(s) String"),
     ("    TPWrite \"a\" \\Numm:=1;", "", "no optional argument \\Numm"),
-    ("    IF NOT a AND b THEN\n    ENDIF", "  VAR bool a;\n  VAR bool b;", "write the parentheses"),
     ("    GOTO here;", "", "GOTO is not supported"),
     ("    RETRY;", "", "RETRY is for error handlers"),
     ("    x := 1", "  VAR num x;", "expected ';'"),

@@ -73,3 +73,33 @@ def test_tokenizer_skips_comments_and_keeps_strings():
     tokens = tokenize('x := "a ! not a comment"; ! comment "quoted"\ny := 9E9;')
     assert [t.text for t in tokens] == ["x", ":=", '"a ! not a comment"', ";", "y", ":=", "9E9", ";"]
     assert tokens[-1].line == 2
+
+
+def test_one_lexer_and_one_list_of_names_for_the_checks_and_the_interpreter():
+    from handeye.rapid.checks import RAPID_BUILTINS, RAPID_KEYWORDS
+    from handeye.rapid.interpreter import supported_builtins
+    from handeye.rapid.interpreter.lexer import KEYWORDS
+
+    assert RAPID_KEYWORDS is KEYWORDS
+    assert {name.lower() for name in supported_builtins()} <= RAPID_BUILTINS  # every instruction the interpreter runs
+    # a name the interpreter does not know is not accepted by the checks either
+    modules = [("M", "MODULE M\n  PROC main()\n    MoveC p1, p2, v100, fine, tool0;\n    Frobnicate;\n  ENDPROC\n"
+                     "ENDMODULE\n")]
+    assert any("'Frobnicate' is used before" in f for f in _check(modules))
+    # RobotStudio's byte order mark and header are read by both
+    assert _check([("M", "\ufeff%%%\n  VERSION:1\n  LANGUAGE:ENGLISH\n%%%\nMODULE M\nENDMODULE\n")]) == []
+
+
+@pytest.mark.parametrize("condition, warned", [
+    ("NOT a AND b", True), ("NOT (a AND b)", False), ("(NOT a) AND b", False), ("NOT a OR b", False),
+    ("a AND NOT b", False), ("NOT a AND b OR c", True), ("b OR NOT (a) AND c", True), ("NOT Fn(a, b AND c)", False),
+])
+def test_the_checks_warn_where_not_reaches_over_an_and(condition, warned):
+    text = (f"MODULE M\n  VAR bool a;\n  VAR bool b;\n  VAR bool c;\n  FUNC bool Fn(bool x, bool y)\n    RETURN x;\n"
+            f"  ENDFUNC\n  PROC main()\n    IF {condition} THEN\n      a := TRUE;\n    ENDIF\n  ENDPROC\nENDMODULE\n")
+    findings = check_program([("M", text)])
+    warnings = [f for f in findings if f.severity == "warning"]
+    assert [f for f in findings if f.severity != "warning"] == []
+    assert len(warnings) == int(warned)
+    if warned:
+        assert str(warnings[0]).startswith("M:9: warning: NOT ... AND: RAPID gives NOT the lowest priority")

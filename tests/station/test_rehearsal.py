@@ -6,11 +6,10 @@ real controller stays refused."""
 from __future__ import annotations
 
 import re
-import subprocess
-import sys
 
 import pytest
 import yaml
+from helpers import start_standalone_mock, stop_standalone_mock
 
 from handeye.calibration.errors import ConfigError
 from handeye.calibration.session import read_session
@@ -46,16 +45,8 @@ def test_silent_mixing_stays_refused(controller, camera, message):
 # ---------------------------------------------------------------------------------------- the rehearsal
 def _start_mock(protocol: str):
     """`handeye mock controller` with a camera, in its own process; returns (process, link section, mock_arm)."""
-    proc = subprocess.Popen([sys.executable, "-m", "handeye.station", "mock", "controller", "--protocol", protocol,
-                             "--port", "0", "--camera-port", "0", "--write-key", KEY, "--time-scale", "0.01",
-                             "--duration", "600"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    banner = []
-    while not any("camera.mock_arm:" in line for line in banner):
-        line = proc.stdout.readline()
-        if not line:
-            raise AssertionError("the mock did not start: " + "".join(banner) + proc.stderr.read())
-        banner.append(line)
-    text = "".join(banner)
+    proc, text = start_standalone_mock("--protocol", protocol, "--port", "0", "--camera-port", "0", "--write-key", KEY,
+                                       "--time-scale", "0.01", "--duration", "600")
     mock_arm = re.search(r"camera\.mock_arm: ([\d.]+:\d+)", text).group(1)
     if protocol == "serial":
         link = {"serial_url": re.search(r"(socket://[\d.]+:\d+)", text).group(1)}
@@ -75,12 +66,7 @@ def _config(tmp_path, protocol: str, link: dict, mock_arm: str, postures: int):
 
 
 def _stop(proc) -> None:
-    proc.terminate()
-    try:
-        proc.communicate(timeout=30)
-    except subprocess.TimeoutExpired:  # pragma: no cover - a wedged mock
-        proc.kill()
-        proc.communicate()
+    stop_standalone_mock(proc)
 
 
 @pytest.mark.parametrize("protocol", ["socket", "modbus", "rws"])

@@ -9,10 +9,12 @@ pose. A world zone instruction hands the zone to the motion binding, which super
 
 from __future__ import annotations
 
+from ..configuration import confdata
 from ..errors import RapidFatalError
 from ..values import PREDEFINED, TYPES, Record, to_num
 from . import builtin
-from .geometry import pose_inv, pose_mult, quat, xyz
+from .geometry import xyz
+from .moves import tcp_in
 
 _EXTAX = {f"eax_{c}": 9e9 for c in "abcdef"}
 
@@ -53,26 +55,16 @@ def _cjointt(task, a):
     return _jointtarget(_arm(task).joints())
 
 
-def _frame(pose_record: Record) -> tuple:
-    return xyz(pose_record.fields["trans"]), quat(pose_record.fields["rot"])
-
-
 def _tcp(task, tool, wobj) -> tuple:
     """Position and orientation of ``tool``'s TCP in ``wobj`` (flange pose from the arm)."""
     tool = tool if tool is not None else getattr(task, "current_tool", None) or PREDEFINED["tool0"][1]
-    wobj = wobj if wobj is not None else PREDEFINED["wobj0"][1]
-    if not tool.fields["robhold"] or wobj.fields["robhold"]:
-        raise RapidFatalError("CRobT: only tools on the robot and fixed work objects are supported")
-    p, q = _arm(task).flange()
-    p, q = pose_mult(tuple(p), tuple(q), *_frame(tool.fields["tframe"]))
-    user = pose_mult(*_frame(wobj.fields["uframe"]), *_frame(wobj.fields["oframe"]))
-    return pose_mult(*pose_inv(*user), p, q)
+    return tcp_in(_arm(task), tool, wobj, "CRobT")
 
 
-def _confdata(joints) -> Record:
-    quadrant = [int((joints[i] // 90)) for i in (0, 3, 5)]
-    return Record(TYPES["confdata"], {"cf1": float(quadrant[0]), "cf4": float(quadrant[1]),
-                                      "cf6": float(quadrant[2]), "cfx": 0.0})
+def _confdata(task, joints) -> Record:
+    """The configuration of ``joints`` (:func:`~handeye.rapid.interpreter.configuration.confdata`)."""
+    values = confdata(_arm(task).model(), joints)
+    return Record(TYPES["confdata"], {k: float(v) for k, v in zip(("cf1", "cf4", "cf6", "cfx"), values)})
 
 
 @builtin("CRobT", "\\TaskRef:num, \\TaskName:string, \\Tool:tooldata, \\WObj:wobjdata", returns="robtarget")
@@ -81,7 +73,7 @@ def _crobt(task, a):
     return Record(TYPES["robtarget"], {
         "trans": Record(TYPES["pos"], dict(zip("xyz", (to_num(v) for v in p)))),
         "rot": Record(TYPES["orient"], dict(zip(("q1", "q2", "q3", "q4"), (to_num(v) for v in q)))),
-        "robconf": _confdata(_arm(task).joints()),
+        "robconf": _confdata(task, _arm(task).joints()),
         "extax": Record(TYPES["extjoint"], dict(_EXTAX)),
     })
 

@@ -74,9 +74,9 @@ def test_a_broken_template_fails_the_contract_test(case):
 
 def test_a_program_the_interpreter_cannot_run_is_refused_at_start_with_module_and_line():
     good = generated_program("socket")
-    modules = tuple(ModuleSource(m.text.replace("    HeLinkOpen;\n", "    HeLinkOpen;\n    MoveL p, v100, z10, tool0;\n"),
+    modules = tuple(ModuleSource(m.text.replace("    HeLinkOpen;\n", "    HeLinkOpen;\n    MoveC p, p, v100, z10, tool0;\n"),
                                  m.source) for m in good.modules)
-    with pytest.raises(RapidError, match=r"HeMain.mod:\d+: unknown instruction MoveL"):
+    with pytest.raises(RapidError, match=r"HeMain.mod:\d+: unknown instruction MoveC"):
         start_mock_controller("socket", program=ControllerProgram(modules, "broken", "socket"))
 
 
