@@ -121,6 +121,8 @@ class SimulatedRobot:
         self.tool_source: Callable[[], ToolData] | None = None
         #: Number of moves started (for tests).
         self.moves = 0
+        #: Simulated seconds of motion so far (what the moves take at full time scale).
+        self.motion_s = 0.0
         self.guard = guard
         self.refusals: list[ZoneViolation] = []
 
@@ -166,7 +168,9 @@ class SimulatedRobot:
             start = self._joints_at(now)
             self._check_path(start, target, posture)
             delta = np.abs(target - start)
-            self._duration = float(np.max(delta / (self.speed_fraction * self.model.max_speed_deg_s))) * self.time_scale
+            simulated = float(np.max(delta / (self.speed_fraction * self.model.max_speed_deg_s)))
+            self.motion_s += simulated
+            self._duration = simulated * self.time_scale
             self._from, self._to, self._t0 = start, target.copy(), now
             self._target_posture = int(posture)
             self._arrived_posture = 0
