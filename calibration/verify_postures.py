@@ -16,8 +16,12 @@ from .verification import Baseline, discrepancy, hypothesis_jacobians
 __all__ = ["informative_postures"]
 
 
-def informative_postures(baseline: Baseline, obs, joints_deg, robot, count: int, allowed=None) -> np.ndarray:
+def informative_postures(baseline: Baseline, obs, joints_deg, robot, count: int, allowed=None, path_time=None,
+                         budget: float = np.inf) -> np.ndarray:
     """Indices (into ``obs``) of ``count`` postures chosen for diagnostic power, in the order chosen.
+
+    With ``path_time(indices) -> seconds`` only postures that keep the path within ``budget`` seconds
+    are taken at each step (the one adding least time when none does): a short check.
 
     Parameters
     ----------
@@ -42,8 +46,12 @@ def informative_postures(baseline: Baseline, obs, joints_deg, robot, count: int,
     total = 1e-6 * np.eye(p)
     chosen = []
     for _ in range(min(count, int(free.sum()))):
+        candidates = np.flatnonzero(free)
+        if path_time is not None:
+            times = np.array([path_time(chosen + [int(j)]) for j in candidates])
+            candidates = candidates[times <= budget] if np.any(times <= budget) else candidates[[int(np.argmin(times))]]
         gains = np.full(n, -np.inf)
-        for j in np.flatnonzero(free):
+        for j in candidates:
             gains[j] = np.linalg.slogdet(total + info[j])[1]
         best = int(np.argmax(gains))
         chosen.append(best)

@@ -31,7 +31,8 @@ from .capture import CaptureRun, confirm_motion, install_program, release_waitin
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
 from .runtime import StationLink
-from .verify_plan import VerifyError, cell_guard, create_verify_session, order_postures, verify_folder
+from .verify_plan import (TIME_BUDGET, VerifyError, cell_guard, create_verify_session, order_postures, path_time,
+                          path_time_along, verify_folder)
 
 __all__ = ["OK", "DRIFT", "INCONCLUSIVE", "EXIT_CODES", "VerifyOutcome", "SessionBaseline", "check_request",
            "session_baseline", "verify"]
@@ -161,7 +162,11 @@ def _chosen(config, session, base: SessionBaseline, robot, here, count: int):
     problem, sol = base.problem, base.solution
     ids = np.array([int(i) for i in problem.posture_ids])
     allowed = ~np.asarray(sol.outliers, bool) & (ids < len(plan))
-    picked = informative_postures(base.baseline, sol.observations, problem.joints_deg, robot, count, allowed)
+    start = np.asarray(record.get("start_joints_deg") or plan[0], float)
+    budget = TIME_BUDGET * path_time_along(robot, start, plan)  # a check: a fifth of the capture's robot time at most
+    targets = plan[np.minimum(ids, len(plan) - 1)]
+    picked = informative_postures(base.baseline, sol.observations, problem.joints_deg, robot, count, allowed,
+                                  path_time=lambda chosen: path_time(robot, here, targets[chosen]), budget=budget)
     order = order_postures(robot, here, plan[ids[picked]], cell_guard(config, robot, record))
     numbers = [int(ids[picked[i]]) for i in order]
     return numbers, plan[numbers]
@@ -193,8 +198,9 @@ def _revisit(config, link: StationLink, folder: Path, session, numbers, joints, 
 
 def verify(config: StationConfig, session_dir, link: StationLink, postures: int = 5, level: float = DEFAULT_LEVEL,
            progress: Callable[[str], None] = lambda m: None, confirm=None,
-           on_posture=lambda report: None) -> VerifyOutcome:
-    """Check SESSION's calibration on the connected station (see the module docstring).
+           on_posture=lambda report: None, base: SessionBaseline | None = None) -> VerifyOutcome:
+    """Check SESSION's calibration on the connected station (see the module docstring); ``base``:
+    SESSION solved already (:func:`session_baseline`; the benchmark checks one session many times).
 
     Raises
     ------
@@ -204,7 +210,7 @@ def verify(config: StationConfig, session_dir, link: StationLink, postures: int 
     session_dir = Path(session_dir)
     session = check_request(config, session_dir, postures)
     session.path = session_dir
-    base = session_baseline(config, session, session_dir)
+    base = base if base is not None else session_baseline(config, session, session_dir)
     robot = load_robot(config.robot)
     tool = _tool_finding(config, link, base)
     motion0 = link.mock.arm.motion_s if link.is_mock else None

@@ -22,7 +22,7 @@ from ..calibration.transforms import transform_from_pose
 from .cell_plan import cell_check
 from .config import StationConfig
 
-__all__ = ["VerifyError", "order_postures", "verify_folder", "create_verify_session"]
+__all__ = ["TIME_BUDGET", "VerifyError", "cell_guard", "create_verify_session", "order_postures", "path_time", "path_time_along", "verify_folder"]
 
 
 class VerifyError(HandEyeError):
@@ -48,14 +48,37 @@ def order_postures(robot, start_joints, joints: np.ndarray, guard=None) -> list[
         return guard is None or guard.path_violation(np.asarray(a, float), np.asarray(b, float)) is None
 
     orders = itertools.permutations(range(n)) if n <= 7 else [_nearest_next(robot, start_joints, joints)]
-    costed = sorted(orders, key=lambda o: sum(_motion_s(robot, a, b) for a, b in
-                                              zip([start_joints] + [joints[i] for i in o[:-1]], [joints[i] for i in o])))
+    costed = sorted(orders, key=lambda o: _path_s(robot, start_joints, joints, o))
     for order in costed[:200]:
         stops = [start_joints] + [joints[i] for i in order]
         if all(clear(a, b) for a, b in zip(stops[:-1], stops[1:])):
             return list(order)
     raise VerifyError("no order of the chosen postures keeps every move clear of the cell: check the cell section "
                       "of the station config, or choose other postures (--postures)")
+
+
+def _path_s(robot, start, joints, order) -> float:
+    stops = [start] + [joints[i] for i in order]
+    return sum(_motion_s(robot, a, b) for a, b in zip(stops[:-1], stops[1:]))
+
+
+def path_time(robot, start, joints) -> float:
+    """Motion time (s, full axis speed) of the shortest order through ``joints`` from ``start``
+    (every order for up to 6 postures, nearest-next beyond)."""
+    joints = np.asarray(joints, float)
+    if len(joints) <= 6:
+        return min(_path_s(robot, start, joints, o) for o in itertools.permutations(range(len(joints))))
+    return _path_s(robot, start, joints, _nearest_next(robot, start, joints))
+
+
+def path_time_along(robot, start, joints) -> float:
+    """Motion time (s, full axis speed) from ``start`` through ``joints`` in their order (a capture's plan)."""
+    joints = np.asarray(joints, float)
+    return _path_s(robot, start, joints, range(len(joints)))
+
+
+#: A check may take this fraction of the full capture's robot time (the plan's path, at full axis speed).
+TIME_BUDGET = 0.15
 
 
 def _nearest_next(robot, start, joints) -> tuple:

@@ -63,6 +63,9 @@ class MockControllerOptions:
     camera_port : int or None
         Also serve the simulated XB3 on the flange (rendered frames) on this port for a rehearsal
         station (0: a free port); None: no camera.
+    faults : StationFaults or None
+        What changed at the station since its calibration (``mock.faults`` of the config): the camera
+        renders the changed world (``mocks.drift``).
     """
 
     protocol: str = DEFAULT_PROTOCOL
@@ -78,6 +81,7 @@ class MockControllerOptions:
     station: RapidStation | None = None
     program: str | None = None
     camera_port: int | None = None
+    faults: object = None
 
 
 def is_loopback(host: str) -> bool:
@@ -136,6 +140,7 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
     except OSError as exc:
         raise InvalidRequest(f"cannot listen on {options.host}:{port} ({exc}); pick another --port "
                              "(0 = any free port)") from None
+    server.keep_tool = True  # a controller's PERS tool data outlives the programs loaded after a write-back
     cell = None
     try:
         if options.camera_port is not None:
@@ -216,5 +221,8 @@ def _rehearsal_arm(station: RapidStation, options: MockControllerOptions):
 def _start_cell(server, options: MockControllerOptions):
     """The simulated XB3 on the arm's flange, served for a rehearsal station (``mocks.cell``)."""
     from ..cell import CellService
+    from ..station import MockStationSpec
 
-    return CellService(server, host=options.host, port=options.camera_port).start()
+    spec = MockStationSpec(protocol=server.protocol) if options.faults is None else \
+        MockStationSpec(protocol=server.protocol, faults=options.faults)
+    return CellService(server, host=options.host, port=options.camera_port, spec=spec).start()

@@ -113,7 +113,7 @@ def run(args) -> int:
     if args.idle_timeout is not None and not low <= args.idle_timeout <= high:
         raise UsageError(f"--idle-timeout must be {low:g} to {high:g} s; got {args.idle_timeout:g}")
 
-    station = None
+    station = faults = None
     if args.config:
         from ...drivers.controller.backends import RAPID_LINKS
         from ...rapid.station import default_station, station_from_dict
@@ -122,12 +122,13 @@ def run(args) -> int:
         config = load_config(args.config)
         postures = config.postures if config.postures is not None else default_station().postures
         station = station_from_dict(config.rapid_dict(postures), args.config, links=RAPID_LINKS)
+        faults = config.mock.faults.model()  # mock.faults: what its camera sees changed
     server_options = {name[len("server_"):]: value for name, value in vars(args).items()
                       if name.startswith("server_") and value is not None}
     options = MockControllerOptions(protocol=args.protocol, port=args.port, host=args.host, station=station,
                                     time_scale=args.time_scale, allowed_client=args.allow_client,
                                     server_options=server_options, duration_s=args.duration,
                                     idle_timeout_s=args.idle_timeout, write_key=args.write_key,
-                                    program=args.program, camera_port=args.camera_port)
+                                    program=args.program, camera_port=args.camera_port, faults=faults)
     return run_mock_controller(options, announce=lambda text: print(text, flush=True),
                                warn=lambda text: print(text, file=sys.stderr, flush=True))
