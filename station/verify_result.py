@@ -32,7 +32,7 @@ def diagnosis(outcome) -> dict:
     ranked = [e for e in outcome.explanations if e.cause != "none"]
     out = {"cause": "none", "joint": None, "translation_mm": 0.0, "rotation_deg": 0.0, "alternatives": [],
            "indistinguishable": [], "likelihood_ratio": None}
-    if outcome.verdict == DRIFT and ranked:
+    if outcome.test is not None and outcome.test.drift and ranked:
         best = ranked[0]
         out.update(_explanation(best))
         out["alternatives"] = [_explanation(e, best) for e in ranked[1:]]
@@ -71,7 +71,7 @@ def advice(outcome, diag: dict, session: str, config_arg: str) -> list[str]:
                      "unless a later calibration was written on purpose")
         diag = diag["board_check"]
         cause = diag["cause"]
-    if outcome.verdict != DRIFT or cause == "none":
+    if outcome.test is None or not outcome.test.drift or cause == "none":
         return lines or ["ok: the calibration still predicts the board within its noise; nothing to do"]
     also = f" (these data cannot tell it from: {', '.join(diag['indistinguishable'])})" if diag["indistinguishable"] else ""
     size = f"{diag['translation_mm']:.3f} mm, {diag['rotation_deg']:.4f} deg"
@@ -131,7 +131,7 @@ def outcome_lines(data: dict, advice_lines: list[str]) -> list[str]:
     """The text summary."""
     d = data["diagnosis"]
     lines = [f"verdict: {data['verdict'].upper()} ({data['reason']})"]
-    if data["verdict"] == DRIFT:
+    if data["verdict"] == DRIFT and d["cause"] != "none":
         lr = d.get("likelihood_ratio")
         lines.append(f"most likely: {d['cause']}" + (f" {d['joint']}" if d.get("joint") else "")
                      + f", {d['translation_mm']:.3f} mm / {d['rotation_deg']:.4f} deg"
