@@ -58,7 +58,7 @@ def _arm(banner: list) -> str:
 
 def _check(folder: Path, config: str, session: Path, name: str) -> tuple[int, dict]:
     out = folder / f"{name}.json"
-    code = main(["verify", "--config", config, "--against", str(session), "--json", str(out)])
+    code = main(["verify", "--config", config, "--against", str(session), "--json", str(out), "--yes"])
     return code, json.loads(out.read_text()) if out.is_file() else {}
 
 

@@ -69,7 +69,9 @@ def _history(args, config) -> int:
 def run(args) -> int:
     from pathlib import Path
 
-    from ...calibration.errors import UsageError
+    import sys
+
+    from ...calibration.errors import HandEyeError, UsageError
     from ..config import default_config, load_config
     from ..runtime import MOCK_BANNER, open_station, rehearsal_banner
 
@@ -85,6 +87,9 @@ def run(args) -> int:
     from ..verify import EXIT_CODES, check_request
 
     check_request(config, Path(args.against), args.postures)  # refusals before anything opens or moves
+    if not config.is_mock and not args.yes and not sys.stdin.isatty():
+        raise HandEyeError("the check moves the robot and needs the operator's yes: run it at a terminal, or give "
+                           "--yes (scripts); nothing moved")
     tag = "MOCK " if config.is_mock or config.is_rehearsal else ""
     if config.is_mock:
         print(MOCK_BANNER, flush=True)
