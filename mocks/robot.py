@@ -122,6 +122,8 @@ class SimulatedRobot:
         self.tool_source: Callable[[], ToolData] | None = None
         #: Number of moves started (for tests).
         self.moves = 0
+        #: Simulated seconds of motion so far (what the moves take at full time scale).
+        self.motion_s = 0.0
         self.guard = guard
         self.refusals: list[ZoneViolation] = []
 
@@ -187,6 +189,7 @@ class SimulatedRobot:
                 self.refusals.append(refusal)
                 raise refusal
             steps = np.max(np.abs(np.diff(path, axis=0)) / (self.speed_fraction * self.model.max_speed_deg_s), axis=1)
+            self.motion_s += float(np.sum(steps))
             self._path, self._times = path, np.concatenate([[0.0], np.cumsum(steps * self.time_scale)])
             self._duration, self._t0 = float(self._times[-1]), now
             self._target_posture = int(posture)

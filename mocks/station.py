@@ -33,8 +33,10 @@ from ..calibration.kinematics import RobotModel, load_robot
 from ..calibration.transforms import transform_from_rotation_translation
 from ..drivers.camera.stereo import StereoModel, nominal_xb3_model
 from ..drivers.controller.backends import DEFAULT_PROTOCOL
+from ..drivers.controller.types import ToolData
 from .camera import MockCamera, RenderOptions
 from .controller import start_mock_controller
+from .drift import StationFaults
 from .robot import SimulatedRobot
 from .world import PrintedBoard
 
@@ -105,6 +107,12 @@ class MockStationSpec:
     zone_tcp_mm : tuple of float, shape (3,), optional
         With world zones: the TCP (tool0) the controller's zones watch; moves taking it into a zone
         (as the controller sees the volumes) are refused too.
+    faults : StationFaults
+        What changed since the calibration (``mock.faults``): the camera renders the changed world;
+        ``cam2tool0`` and ``board2base`` are the station as it was.
+    state_file : str or None
+        Where the controller keeps its PERS tool data between runs (a file beside the sessions); None:
+        a fresh controller each run.
     """
 
     protocol: str = DEFAULT_PROTOCOL
@@ -124,6 +132,8 @@ class MockStationSpec:
     write_key: str | None = field(default=None, repr=False)
     cell: CellModel | None = None
     zone_tcp_mm: tuple | None = None
+    faults: StationFaults = field(default_factory=StationFaults)
+    state_file: str | None = None
 
 
 class MockStation:
@@ -147,7 +157,8 @@ class MockStation:
         self.server = None
         # The station's key, or one made for this run: the server and the PC's options share it.
         self._write_key = spec.write_key if spec.write_key is not None else secrets.token_hex(16)
-        self.camera, self.truth = flange_camera(spec, self.arm)
+        self.state = read_state(spec.state_file)
+        self.camera, self.truth = flange_camera(spec, self.arm, self.state["runs"])
         self.true_robot = self.truth["true_robot"]
 
     def _cell_guard(self, spec: MockStationSpec) -> CellGuard | None:
@@ -155,12 +166,17 @@ class MockStation:
 
     def start(self) -> MockStation:
         if self.server is None:
-            self.server = start_mock_controller(self.spec.protocol, robot=self.arm, idle_timeout_s=self.spec.idle_timeout_s,
-                                                write_key=self._write_key)
+            server = start_mock_controller(self.spec.protocol, robot=self.arm, idle_timeout_s=self.spec.idle_timeout_s,
+                                           write_key=self._write_key, start=False)
+            if self.spec.state_file is not None:  # the controller keeps its PERS tool data between runs
+                server.keep_tool, server.kept_tool = True, self.state["tool"]
+            self.server = server.start()
         return self
 
     def stop(self) -> None:
         if self.server is not None:
+            if self.spec.state_file is not None:
+                write_state(self.spec.state_file, self.arm.tool, self.state["runs"] + 1)
             self.server.stop()
             self.server = None
         self.camera.close()
@@ -198,8 +214,40 @@ def cell_guard(spec: MockStationSpec, robot: RobotModel | None = None) -> CellGu
                      margin_mm=0.0, step_mm=5.0, tcp_zones=zones)
 
 
-def flange_camera(spec: MockStationSpec, arm: SimulatedRobot) -> tuple[MockCamera, dict]:
-    """The simulated XB3 on ``arm``'s flange, and the hidden truth it is rendered from.
+def read_state(path) -> dict:
+    """What the embedded controller kept from its earlier runs (``state_file``): ``runs`` and ``tool``
+    (its PERS tool data, a ToolData, or None); a missing or unreadable file is a fresh controller."""
+    import json
+    from pathlib import Path
+
+    fresh = {"runs": 0, "tool": None}
+    if path is None or not Path(path).is_file():
+        return fresh
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        tool = data.get("tool")
+        return {"runs": int(data.get("runs", 0)),
+                "tool": None if tool is None else ToolData(tuple(tool["position_mm"]), tuple(tool["quaternion_wxyz"]),
+                                                           float(tool["mass_kg"]), tuple(tool["cog_mm"]))}
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return fresh
+
+
+def write_state(path, tool: ToolData, runs: int) -> None:
+    """Keep the controller's PERS tool data and its run count in ``path`` (written atomically)."""
+    import json
+
+    from ..calibration.files import write_text_atomic
+
+    value = {"position_mm": list(tool.position_mm), "quaternion_wxyz": list(tool.quaternion_wxyz),
+             "mass_kg": tool.mass_kg, "cog_mm": list(tool.cog_mm)}
+    write_text_atomic(path, json.dumps({"format": "handeye-mock-controller/1", "runs": int(runs), "tool": value},
+                                       indent=1) + "\n")
+
+
+def flange_camera(spec: MockStationSpec, arm: SimulatedRobot, run: int = 0) -> tuple[MockCamera, dict]:
+    """The simulated XB3 on ``arm``'s flange, and the hidden truth it is rendered from (its sensor
+    noise seeded by ``spec.seed`` and ``run``, the station's run count: fresh noise in each run).
 
     The camera sees the board from the TRUE flange pose: the arm's joints through the perturbed
     kinematics (the controller reports the nominal one), times the hidden mount ``spec.cam2tool0``.
@@ -211,12 +259,14 @@ def flange_camera(spec: MockStationSpec, arm: SimulatedRobot) -> tuple[MockCamer
         ``cam2tool0``, ``board2base`` and ``true_robot``.
     """
     true_robot = perturbed_robot(load_robot(spec.robot), spec.kinematic_error_mm, spec.kinematic_error_deg, spec.seed)
-    mount = np.asarray(spec.cam2tool0, float)
+    faults = spec.faults
+    mount = faults.mount(spec.cam2tool0)
+    board2base = faults.board(spec.board2base)
 
     def cam2base():
-        return true_robot.forward_transform(arm.current_joints) @ mount
+        return true_robot.forward_transform(faults.axes(arm.current_joints)) @ mount
 
     model = spec.stereo if spec.stereo is not None else nominal_xb3_model()
-    camera = MockCamera(model=model, board=PrintedBoard(spec.board), target2base=spec.board2base,
-                        cam2base=cam2base, options=spec.render, seed=spec.seed)
-    return camera, {"cam2tool0": mount, "board2base": np.asarray(spec.board2base, float), "true_robot": true_robot}
+    camera = MockCamera(model=model, board=PrintedBoard(spec.board), target2base=board2base,
+                        cam2base=cam2base, options=spec.render, seed=spec.seed if not run else [spec.seed, run])
+    return camera, {"cam2tool0": mount, "board2base": board2base, "true_robot": true_robot}

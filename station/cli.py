@@ -16,7 +16,7 @@ from ..calibration.errors import HandEyeError, UsageError
 
 #: Sub-commands in the order ``handeye --help`` lists them: a module name, or ``(command, module)``
 #: when the command's name cannot be a module's (``import`` is a Python keyword).
-COMMANDS = ("demo", "capture", "calibrate", "writeback", "simulate", ("import", "import_"), "triangulate", "benchmark", "robot",
+COMMANDS = ("demo", "capture", "calibrate", "writeback", "verify", "simulate", ("import", "import_"), "triangulate", "benchmark", "robot",
             "rapid", "mock", "stereo")
 
 DESCRIPTION = """\

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, fields, is_dataclass, replace
 from typing import ClassVar
 from pathlib import Path
 
@@ -341,6 +341,28 @@ class CaptureSettings:
 
 
 @dataclass(frozen=True)
+class FaultSettings:
+    """``mock.faults``: what changed at the mock station since its calibration (``handeye verify``
+    finds it); all zero: nothing."""
+
+    camera_shift_mm: tuple = setting((0.0, 0.0, 0.0), Numbers(3, -100, 100), "the camera moved on the flange "
+                                     "(tool0 axes)", "mm")
+    camera_turn_deg: tuple = setting((0.0, 0.0, 0.0), Numbers(3, -30, 30), "the camera turned about its origin "
+                                     "(rotation vector, tool0 axes)", "deg")
+    board_shift_mm: tuple = setting((0.0, 0.0, 0.0), Numbers(3, -100, 100), "the board moved (base axes)", "mm")
+    board_turn_deg: tuple = setting((0.0, 0.0, 0.0), Numbers(3, -30, 30), "the board turned about its first inner "
+                                    "corner (rotation vector, base axes)", "deg")
+    joint_zero_deg: tuple = setting((0.0,) * 6, Numbers(6, -10, 10), "each axis stands this much further than "
+                                    "its controller angle (a zero moved)", "deg")
+
+    def model(self):
+        """The mock's :class:`~handeye.mocks.drift.StationFaults`."""
+        from ..mocks.drift import StationFaults
+
+        return StationFaults(**{f.name: tuple(float(v) for v in getattr(self, f.name)) for f in fields(self)})
+
+
+@dataclass(frozen=True)
 class MockSettings:
     """``mock``: the embedded mock station (``--mock``, mock back ends, the demo)."""
 
@@ -349,6 +371,7 @@ class MockSettings:
     kinematic_error_mm: float = setting(0.05, Number(0, 10), "the simulated arm's DH length errors", "mm")
     kinematic_error_deg: float = setting(0.002, Number(0, 10), "the simulated arm's DH angle errors", "deg")
     time_scale: float = setting(0.02, Number(1e-4, 10), "wall-clock seconds per simulated second of motion")
+    faults: FaultSettings = section(FaultSettings, "what changed since the calibration (handeye verify)")
 
 
 def _target(value, key: str, context) -> BoardGeometry:
@@ -450,6 +473,8 @@ class StationConfig:
 
 
 def _plain(value):
+    if is_dataclass(value):
+        return {f.name: _plain(getattr(value, f.name)) for f in fields(value)}
     if isinstance(value, dict):
         return {k: _plain(v) for k, v in value.items()}
     if isinstance(value, (tuple, list, np.ndarray)):

@@ -79,8 +79,19 @@ def _camera_options(config: StationConfig) -> dict:
     return CAMERAS[config.camera.backend].options(config.camera)
 
 
-def mock_spec(config: StationConfig):
-    """The embedded mock station described by the configuration's ``mock`` section."""
+#: The embedded mock controller's memory (its PERS tool data), in the folder of the sessions.
+MOCK_STATE_FILE = "mock_controller_state.json"
+
+
+def mock_state_file(session_dir) -> Path | None:
+    """Where the embedded mock station keeps its controller's PERS values for the sessions beside
+    ``session_dir`` (None: no session folder, a fresh controller)."""
+    return None if session_dir is None else Path(session_dir).resolve().parent / MOCK_STATE_FILE
+
+
+def mock_spec(config: StationConfig, state_file=None):
+    """The embedded mock station described by the configuration's ``mock`` section (``state_file``: where its
+    controller keeps its PERS tool data between runs, :func:`mock_state_file`)."""
     from ..mocks.station import MockStationSpec
 
     m = config.mock
@@ -88,7 +99,8 @@ def mock_spec(config: StationConfig):
     return MockStationSpec(protocol=m.protocol, board=config.target, kinematic_error_mm=m.kinematic_error_mm,
                            kinematic_error_deg=m.kinematic_error_deg, time_scale=m.time_scale, seed=m.seed,
                            idle_timeout_s=config.controller.idle_timeout_s, write_key=config.controller.write_key,
-                           cell=config.cell.model(), zone_tcp_mm=zone_tcp)
+                           cell=config.cell.model(), zone_tcp_mm=zone_tcp, faults=m.faults.model(),
+                           state_file=None if state_file is None else str(state_file))
 
 
 #: What every output says when the embedded mock station is in use.
@@ -149,11 +161,11 @@ def check_rehearsal(config: StationConfig) -> dict:
 
 
 @contextmanager
-def _mock_station(config: StationConfig):
+def _mock_station(config: StationConfig, session_dir=None):
     from ..drivers.controller import open_controller
     from ..mocks.station import MockStation
 
-    with MockStation(mock_spec(config)) as station:
+    with MockStation(mock_spec(config, mock_state_file(session_dir))) as station:
         options = {**station.controller_options(), "timeout": config.controller.timeout_s,
                    "motion_timeout": config.controller.motion_timeout_s, "robot": config.robot}
         with open_controller(station.spec.protocol, **options) as controller:
@@ -161,10 +173,11 @@ def _mock_station(config: StationConfig):
 
 
 @contextmanager
-def open_station(config: StationConfig, mock: bool = False):
+def open_station(config: StationConfig, mock: bool = False, session_dir=None):
     """Yield a :class:`StationLink` with the controller and the camera of ``config`` (real, or the
     embedded mock when ``config.is_mock`` or ``mock``); everything is closed (and the mock stopped)
-    on exit.
+    on exit. The embedded mock keeps its controller's PERS tool data beside ``session_dir``
+    (:func:`mock_state_file`), as a controller keeps it between runs.
 
     The controller is opened first, so a controller that is not there fails within its link timeout
     before the camera is touched.
@@ -172,7 +185,7 @@ def open_station(config: StationConfig, mock: bool = False):
     if mock:
         config = config.as_mock()
     if config.is_mock:
-        with _mock_station(config) as (station, controller), station.camera as camera:
+        with _mock_station(config, session_dir) as (station, controller), station.camera as camera:
             yield StationLink(controller, camera, camera.model, lambda _postures, rapid_dir: station.load_program(rapid_dir),
                               station)
         return
@@ -219,14 +232,14 @@ def _program_loader(controller):
 
 
 @contextmanager
-def open_controller_link(config: StationConfig, mock: bool = False):
+def open_controller_link(config: StationConfig, mock: bool = False, session_dir=None):
     """Yield a :class:`StationLink` holding only the controller of ``config`` (real, or the embedded
-    mock station's when ``config.is_mock`` or ``mock``): what write-back needs, so it works without
-    the camera."""
+    mock station's when ``config.is_mock`` or ``mock``, its PERS values kept beside ``session_dir``):
+    what write-back needs, so it works without the camera."""
     if mock:
         config = config.as_mock()
     if config.is_mock:
-        with _mock_station(config) as (station, controller):
+        with _mock_station(config, session_dir) as (station, controller):
             yield StationLink(controller, mock=station)
         return
     from ..drivers.controller import open_controller

@@ -95,6 +95,23 @@ class RapidRunner:
         """The camera's tool data: the program's PERS tooldata now."""
         return tooldata_of(self._tool_symbol.box[0])
 
+    @property
+    def has_tool(self) -> bool:
+        return self._tool_symbol is not None
+
+    def set_tool(self, tool: ToolData) -> None:
+        """Put ``tool`` into the program's PERS tooldata (a value the controller kept from before)."""
+        record = self._tool_symbol.box[0]
+        frame, load = record.fields["tframe"].fields, record.fields["tload"].fields
+        trans, rot, cog = frame["trans"].fields, frame["rot"].fields, load["cog"].fields
+        for name, value in zip("xyz", tool.position_mm):
+            trans[name] = float(value)
+        for name, value in zip(("q1", "q2", "q3", "q4"), tool.quaternion_wxyz):
+            rot[name] = float(value)
+        load["mass"] = float(tool.mass_kg)
+        for name, value in zip("xyz", tool.cog_mm):
+            cog[name] = float(value)
+
     # ------------------------------------------------------------------ running
     def start(self, timeout: float = START_TIMEOUT_S) -> None:
         """Run ``main`` until it first waits for the PC (or stops: then raise with the reason)."""

@@ -59,6 +59,11 @@ class RapidControllerServer:
         self.protocol = self.kind
         #: The cell's I/O signals beside the link's (a test or the pendant sets an input: ``cell_signals.set``).
         self.cell_signals = CellSignals()
+        #: With ``keep_tool`` the PERS tool data is kept across program loads (a controller's persistent
+        #: value): ``kept_tool`` is put into each program loaded (None: the module's own value, until a
+        #: program is replaced). Without it each program starts with the value its module declares.
+        self.keep_tool = False
+        self.kept_tool = None
 
     # ------------------------------------------------------------------ what each link adds
     def _open_endpoint(self) -> Bindings:
@@ -77,6 +82,8 @@ class RapidControllerServer:
     def _run(self, program) -> None:
         self._arming()
         self.runner.load(program)
+        if self.keep_tool and self.kept_tool is not None and self.runner.has_tool:
+            self.runner.set_tool(self.kept_tool)  # a PERS keeps its value when modules are loaded again
         self.runner.start()
         self._wait_ready()
 
@@ -122,6 +129,8 @@ class RapidControllerServer:
         if sorted((m.source, m.text) for m in program.modules) == sorted((m.source, m.text) for m in self.source.modules):
             return  # the same modules are loaded already: the program keeps running (a resumed capture)
         self.runner.stop()
+        if self.keep_tool and self.runner.has_tool:
+            self.kept_tool = self.runner.tool()
         self.source = program
         self._run(program)
 

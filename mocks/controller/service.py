@@ -68,6 +68,9 @@ class MockControllerOptions:
         along its TCP line) enters one of its volumes stops the program at that line, naming the volume.
     signals : tuple of (name, type, value)
         Cell I/O signals besides the mock's own (``--signal NAME:TYPE=VALUE``).
+    faults : StationFaults or None
+        What changed at the station since its calibration (``mock.faults`` of the config): the camera
+        renders the changed world (``mocks.drift``).
     """
 
     protocol: str = DEFAULT_PROTOCOL
@@ -85,6 +88,7 @@ class MockControllerOptions:
     camera_port: int | None = None
     cell: object = None
     signals: tuple = ()
+    faults: object = None
 
 
 def is_loopback(host: str) -> bool:
@@ -144,6 +148,7 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
     except OSError as exc:
         raise InvalidRequest(f"cannot listen on {options.host}:{port} ({exc}); pick another --port "
                              "(0 = any free port)") from None
+    server.keep_tool = True  # a controller's PERS tool data outlives the programs loaded after a write-back
     cell = None
     try:
         if options.camera_port is not None:
@@ -216,7 +221,8 @@ def _cell_spec(options: MockControllerOptions):
     """The mock cell around the arm: the demo's board and camera, the config's keep-out volumes."""
     from ..station import MockStationSpec
 
-    return MockStationSpec(protocol=options.protocol, cell=options.cell)
+    extra = {} if options.faults is None else {"faults": options.faults}
+    return MockStationSpec(protocol=options.protocol, cell=options.cell, **extra)
 
 
 def _rehearsal_arm(station: RapidStation, options: MockControllerOptions, spec):

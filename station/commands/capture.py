@@ -130,7 +130,7 @@ def run(args) -> int:
         print(rehearsal_banner(config), flush=True)
     if args.guided:
         return _run_guided(config, args, say)
-    with open_station(config) as link, progress_bar("capture") as update:
+    with open_station(config, session_dir=args.session) as link, progress_bar("capture") as update:
         def on_posture(report):
             say(("  ok    " if report.ok else "  SKIP  ") + report.message + f"  ({report.elapsed_s:.1f} s)")
             update(report.done, report.total, f"posture {report.index}")
@@ -162,7 +162,7 @@ def _run_guided(config, args, say) -> int:
     if refusal:
         raise HandEyeError(refusal)
     stop = threading.Event()  # the embedded mock's simulated operator sets it when done
-    with open_station(config) as link, mock_operator(config, link, stop, say) as operator:
+    with open_station(config, session_dir=args.session) as link, mock_operator(config, link, stop, say) as operator:
         def on_posture(report):
             say("  ok    " + report.message)
             if operator is not None:

@@ -139,7 +139,7 @@ def run(args) -> int:
         signals = tuple(parse_signal(text) for text in args.signal)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    station = cell = None
+    station = cell = faults = None
     if args.config:
         from ...drivers.controller.backends import RAPID_LINKS
         from ...rapid.station import default_station, station_from_dict
@@ -149,12 +149,14 @@ def run(args) -> int:
         postures = config.postures if config.postures is not None else default_station().postures
         station = station_from_dict(config.rapid_dict(postures), args.config, links=RAPID_LINKS)
         cell = config.cell.model()
+        faults = config.mock.faults.model()  # mock.faults: what its camera sees changed
     server_options = {name[len("server_"):]: value for name, value in vars(args).items()
                       if name.startswith("server_") and value is not None}
     options = MockControllerOptions(protocol=args.protocol, port=args.port, host=args.host, station=station,
                                     time_scale=args.time_scale, allowed_client=args.allow_client,
                                     server_options=server_options, duration_s=args.duration,
                                     idle_timeout_s=args.idle_timeout, write_key=args.write_key,
-                                    program=args.program, camera_port=args.camera_port, cell=cell, signals=signals)
+                                    program=args.program, camera_port=args.camera_port, cell=cell, signals=signals,
+                                     faults=faults)
     return run_mock_controller(options, announce=lambda text: print(text, flush=True),
                                warn=lambda text: print(text, file=sys.stderr, flush=True))

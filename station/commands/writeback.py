@@ -16,6 +16,11 @@ controller's current tool data is saved in the session (a new tooldata_backup_*.
 never overwritten), the new one is written, read back and compared to the last digit the
 controller keeps (0.001 mm, 1e-6).
 
+SESSION may also be the folder of a check (handeye verify, SESSION-verify-<time>) whose camera
+moved: its quick update is written like a calibration, refused when its uncertainty is above the
+quality thresholds (max_sigma_translation_mm, max_sigma_rotation_deg) unless --force; the write is
+recorded in the history beside the sessions.
+
 Only the controller is opened (the camera may be unplugged or on another PC). --config writes to
 the real controller it names and fails with the reason when it cannot be reached; --mock writes to
 the embedded mock station's controller, and the output says MOCK; so does a rehearsal config (its
@@ -53,6 +58,7 @@ def run(args) -> int:
     from ..origin import origin_line, session_origin
     from ..quality import config_thresholds
     from ..runtime import MOCK_BANNER, check_rehearsal, open_controller_link, rehearsal_banner
+    from ..verify_update import record_update_written, verify_check
     from ..writeback import check_session_origin, side_by_side, writeback
 
     if not args.dry_run and not args.config and not args.mock:
@@ -71,10 +77,15 @@ def run(args) -> int:
         check_session_origin(origin, mock_controller)
     if origin_line(origin):
         print(origin_line(origin))
-    assessment = assess(solve_session(session, args.session, args.method, origin=origin), config_thresholds(config))
-    result, verdict = assessment.result, assessment.verdict
-    print(f"calibration ({result.method}): {verdict.line()}")
-    common = dict(verdict_passed=verdict.passed, verdict_reason=verdict.line(), force=args.force, origin=origin,
+    check = verify_check(args.session)
+    if check is not None:  # a check's folder: its quick update is the result, judged by its uncertainty
+        result, passed, reason = check
+        print(f"quick update of handeye verify: {reason}")
+    else:
+        assessment = assess(solve_session(session, args.session, args.method, origin=origin), config_thresholds(config))
+        result, passed, reason = assessment.result, assessment.verdict.passed, assessment.verdict.line()
+        print(f"calibration ({result.method}): {reason}")
+    common = dict(verdict_passed=passed, verdict_reason=reason, force=args.force, origin=origin,
                   progress=lambda m: print(m, flush=True))
     if args.dry_run:
         outcome = writeback(args.session, config, result, None, dry_run=True, **common)
@@ -84,8 +95,10 @@ def run(args) -> int:
         print(MOCK_BANNER, flush=True)
     elif config.is_rehearsal:
         print(rehearsal_banner(config), flush=True)
-    with open_controller_link(config) as link:
+    with open_controller_link(config, session_dir=args.session) as link:
         outcome = writeback(args.session, config, result, link.controller, mock_controller=mock_controller, **common)
+    if check is not None:
+        record_update_written(args.session, outcome)
     tag = "MOCK " if outcome.mock else ""
     print(side_by_side(outcome.old, outcome.new))
     print(outcome.literal)

@@ -22,14 +22,14 @@ from handeye.station.schema import Number, check_section, declared_fields, rule_
 REAL = {"controller": {"protocol": "socket"}, "camera": {"backend": "xb3"}}
 
 
-def _documented_keys(data: dict) -> set[str]:
-    """Key paths of a station YAML: top-level keys, and one level down in the sections."""
+def _documented_keys(data: dict, prefix: str = "") -> set[str]:
+    """Key paths of a station YAML: top-level keys, and down in the sections (``mock.faults.*``)."""
     keys = set()
     for name, value in data.items():
-        if isinstance(value, dict) and name != "quality":
-            keys |= {f"{name}.{key}" for key in value}
+        if isinstance(value, dict) and name != "quality" and (not prefix or name == "faults"):
+            keys |= _documented_keys(value, f"{prefix}{name}.")
         else:
-            keys.add(name)
+            keys.add(prefix + name)
     return keys
 
 

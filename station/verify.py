@@ -1,0 +1,253 @@
+"""``handeye verify``: is SESSION's calibration still right, and if not, what changed?
+
+1. SESSION is checked (a capture of this robot and board, calibrated with a passing verdict) and its
+   maximum-likelihood fit is made again (``calibration.eiv``: X, the board, the noise, covariances);
+2. the controller's camera tooldata is read and compared with SESSION's result (a mismatch is a
+   finding of its own: ``tooldata``);
+3. K of SESSION's postures are chosen for diagnostic power and a short path clear of the cell
+   (``station.verify_plan``), and revisited with the same RAPID program and links as ``capture``
+   (``station.capture``: install, confirm, visit): the measurements are a session beside SESSION;
+4. the discrepancies against the fit's prediction are tested at the stated false-alarm rate
+   (``calibration.verification``), and a drift explained (``calibration.drift_causes``); when the
+   camera moved, the quick update gives a new X with its uncertainty, which ``handeye writeback``
+   accepts like a calibration;
+5. one record goes into the history beside the sessions (``station.verify_history``).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..calibration.errors import HandEyeError
+from ..calibration.kinematics import load_robot
+from ..calibration.session import read_session
+from ..calibration.verification import DEFAULT_LEVEL, MIN_VERIFY_POSTURES
+from .capture import CaptureRun, confirm_motion, install_program, release_waiting_posture, visit_postures
+from .config import StationConfig
+from .origin import MOCK, REAL, session_origin
+from .runtime import StationLink
+from .verify_plan import (TIME_BUDGET, VerifyError, cell_guard, create_verify_session, order_postures, path_time,
+                          path_time_along, verify_folder)
+
+__all__ = ["OK", "DRIFT", "INCONCLUSIVE", "EXIT_CODES", "VerifyOutcome", "SessionBaseline", "check_request",
+           "session_baseline", "verify"]
+
+OK, DRIFT, INCONCLUSIVE = "ok", "drift", "inconclusive"
+#: Exit status of ``handeye verify`` per verdict (errors exit 1).
+EXIT_CODES = {OK: 0, DRIFT: 3, INCONCLUSIVE: 4}
+
+
+@dataclass
+class VerifyOutcome:
+    """What a check found (``station.verify_result`` turns it into the text, the JSON and the record).
+
+    Attributes
+    ----------
+    verdict : str
+        ``ok``, ``drift`` or ``inconclusive``.
+    reason : str
+        One line: why (the test's numbers, or what made it inconclusive).
+    folder : Path or None
+        The check's own session (its measurements).
+    postures : list of int
+        SESSION's posture numbers revisited, in the order visited.
+    measured : int
+    test : DriftTest or None
+    explanations : list of Explanation
+        Best first (empty when inconclusive).
+    tool_finding : dict or None
+        ``{"held": ToolData, "session": ToolData}`` when the controller holds another tooldata.
+    update : QuickUpdate or None
+    motion_s : float or None
+        Simulated robot time of the check (mock station).
+    """
+
+    verdict: str
+    reason: str
+    folder: Path | None = None
+    postures: list = field(default_factory=list)
+    measured: int = 0
+    test: object = None
+    explanations: list = field(default_factory=list)
+    tool_finding: dict | None = None
+    update: object = None
+    motion_s: float | None = None
+    baseline: object = None
+
+
+def check_request(config: StationConfig, session_dir: Path, postures: int):
+    """SESSION as ``verify`` needs it, or a one-line refusal (VerifyError): a capture of this robot and
+    board with its plan on record, and K at least :data:`MIN_VERIFY_POSTURES`."""
+    if postures < MIN_VERIFY_POSTURES:
+        raise VerifyError(f"--postures {postures} is too few: the test and its diagnosis need at least "
+                          f"{MIN_VERIFY_POSTURES} revisited postures")
+    session = read_session(session_dir)
+    record = session.extra.get("capture")
+    if session_origin(session, session_dir) not in (MOCK, REAL) or not isinstance(record, dict) \
+            or "plan_joints_deg" not in record:
+        raise VerifyError(f"{session_dir} was not captured by handeye capture (simulated or imported): verify revisits "
+                          "the recorded postures of a capture on this station; capture one (handeye capture) and "
+                          "calibrate it")
+    if (session.robot or "").lower() != config.robot.lower():
+        raise VerifyError(f"{session_dir} was captured with robot {session.robot}, the config names {config.robot}: "
+                          "verify a session of this robot")
+    if session.target is None or tuple(session.target.corners) != tuple(config.target.corners) \
+            or abs(session.target.square_mm - config.target.square_mm) > 1e-6:
+        raise VerifyError(f"{session_dir} was captured with another board than the config's "
+                          f"{config.target.corners[0]}x{config.target.corners[1]}, {config.target.square_mm:g} mm: "
+                          "verify with the board of the session")
+    usable = [p for p in session.postures if p.joints_deg is not None and p.index < len(record["plan_joints_deg"])]
+    if len(usable) < postures:
+        raise VerifyError(f"{session_dir} holds {len(usable)} postures with joint angles; --postures {postures} asks "
+                          "for more")
+    return session
+
+
+@dataclass(frozen=True)
+class SessionBaseline:
+    """SESSION solved again: its assessment, the ML solution, the baseline of the check and its problem."""
+
+    assessment: object
+    solution: object
+    baseline: object
+    problem: object
+
+
+def session_baseline(config: StationConfig, session, session_dir: Path) -> SessionBaseline:
+    """Solve SESSION with the default estimator and judge it; refuse one without a passing result."""
+    from ..calibration.eiv import solve_eiv
+    from ..calibration.verification import baseline_from_solution
+    from .assessment import assess
+    from .calibrate import solve_session
+    from .quality import config_thresholds
+
+    try:
+        outcome = solve_session(session, session_dir)
+    except HandEyeError as exc:
+        raise VerifyError(f"{session_dir} has no calibration result ({exc}): capture more postures and calibrate it "
+                          "before verifying") from None
+    assessment = assess(outcome, config_thresholds(config))
+    if not assessment.verdict.passed:
+        raise VerifyError(f"{session_dir}'s calibration failed its quality verdict ({assessment.verdict.line()}): "
+                          "there is no good calibration to verify; recalibrate (handeye capture, calibrate)")
+    problem = outcome.problem
+    if problem.excluded:
+        problem = problem.subset(~problem.excluded_mask)
+    solution = solve_eiv(problem, folds=0)
+    return SessionBaseline(assessment, solution, baseline_from_solution(solution), problem)
+
+
+def _tool_finding(config: StationConfig, link: StationLink, base: SessionBaseline) -> dict | None:
+    """The controller's camera tooldata against SESSION's result: None when they agree to the last digit."""
+    from .writeback import _same_to_last_digit, tooldata_from_result
+
+    held = link.controller.read_tool()
+    expected = tooldata_from_result(base.assessment.result, config)
+    if _same_to_last_digit(held, expected):
+        return None
+    return {"held": held, "session": expected}
+
+
+def _chosen(config, session, base: SessionBaseline, robot, here, count: int):
+    """SESSION's posture numbers to revisit (informative, then ordered) and their jointtargets."""
+    from ..calibration.verify_postures import informative_postures
+
+    record = session.extra["capture"]
+    plan = np.array(record["plan_joints_deg"], float)
+    problem, sol = base.problem, base.solution
+    ids = np.array([int(i) for i in problem.posture_ids])
+    allowed = ~np.asarray(sol.outliers, bool) & (ids < len(plan))
+    start = np.asarray(record.get("start_joints_deg") or plan[0], float)
+    budget = TIME_BUDGET * path_time_along(robot, start, plan)  # a check: a fifth of the capture's robot time at most
+    targets = plan[np.minimum(ids, len(plan) - 1)]
+    picked = informative_postures(base.baseline, sol.observations, problem.joints_deg, robot, count, allowed,
+                                  path_time=lambda chosen: path_time(robot, here, targets[chosen]), budget=budget)
+    order = order_postures(robot, here, plan[ids[picked]], cell_guard(config, robot, record))
+    numbers = [int(ids[picked[i]]) for i in order]
+    return numbers, plan[numbers]
+
+
+def _revisit(config, link: StationLink, folder: Path, session, numbers, joints, progress, confirm, on_posture):
+    """Visit the chosen postures with the capture's program and loop; returns (measured, problem) or a
+    reason the link failed."""
+    from ..drivers.errors import StationError
+
+    station = MOCK if config.is_mock or config.is_rehearsal else REAL
+    created = create_verify_session(config, session, session_dir=Path(session.path), indices=numbers, joints=joints,
+                                    folder=folder, station=station)
+    created.path = folder
+    run = CaptureRun(created, np.round(joints, 4), created.extra["capture"]["plan_score"])
+    try:
+        install_program(config, folder, run.plan_joints, link, progress, run.board2base)
+        confirm_motion(config, folder, run, link, confirm, progress)
+        release_waiting_posture(link.controller, run.done, progress)
+        captured, skipped = visit_postures(config, folder, run, link, on_posture)
+        if link.stop_program is not None:
+            link.stop_program()
+    except StationError as exc:
+        return None, f"the link failed during the check ({exc})"
+    for index, why in skipped.items():
+        progress(f"posture {numbers[index]} of the session not measured: {why}")
+    return captured, None
+
+
+def verify(config: StationConfig, session_dir, link: StationLink, postures: int = 5, level: float = DEFAULT_LEVEL,
+           progress: Callable[[str], None] = lambda m: None, confirm=None,
+           on_posture=lambda report: None, base: SessionBaseline | None = None) -> VerifyOutcome:
+    """Check SESSION's calibration on the connected station (see the module docstring); ``base``:
+    SESSION solved already (:func:`session_baseline`; the benchmark checks one session many times).
+
+    Raises
+    ------
+    VerifyError
+        SESSION cannot be checked (refusals in one line); nothing is written then.
+    """
+    session_dir = Path(session_dir)
+    session = check_request(config, session_dir, postures)
+    session.path = session_dir
+    base = base if base is not None else session_baseline(config, session, session_dir)
+    robot = load_robot(config.robot)
+    tool = _tool_finding(config, link, base)
+    motion0 = link.mock.arm.motion_s if link.is_mock else None
+    numbers, joints = _chosen(config, session, base, robot, link.controller.read_joints(), postures)
+    progress(f"revisiting postures {', '.join(map(str, numbers))} of {session_dir.name}")
+    folder = verify_folder(session_dir)
+    captured, failure = _revisit(config, link, folder, session, numbers, joints, progress, confirm, on_posture)
+    motion = None if motion0 is None else link.mock.arm.motion_s - motion0
+    outcome = VerifyOutcome(INCONCLUSIVE, failure or "", folder, numbers, 0 if captured is None else len(captured),
+                            tool_finding=tool, motion_s=motion, baseline=base)
+    if failure is None:
+        judge(outcome, folder, base, robot, level, numbers)
+    if tool is not None and outcome.verdict != INCONCLUSIVE:
+        outcome.verdict = DRIFT
+    return outcome
+
+
+def judge(outcome: VerifyOutcome, folder: Path, base: SessionBaseline, robot, level: float, numbers) -> None:
+    """The test, the explanations and the quick update on the check's measurements (into ``outcome``)."""
+    from ..calibration.drift_causes import explain, quick_update
+    from ..calibration.eiv import observations
+    from ..calibration.solve import problem_from_session
+    from ..calibration.verification import discrepancy, drift_test
+
+    if outcome.measured < MIN_VERIFY_POSTURES:
+        outcome.reason = (f"{outcome.measured} of {len(numbers)} postures measured (the board was not seen at the "
+                          f"others); the test needs {MIN_VERIFY_POSTURES}: check the view and run verify again")
+        return
+    problem = problem_from_session(read_session(folder), check_consistency=False)
+    obs = observations(problem)
+    disc = discrepancy(base.baseline, obs, problem.joints_deg)
+    outcome.test = drift_test(disc, base.baseline, level)
+    outcome.explanations = explain(disc, base.baseline, robot)
+    outcome.verdict = DRIFT if outcome.test.drift else OK
+    t = outcome.test
+    outcome.reason = (f"discrepancy chi2 {t.statistic:.1f} on {t.degrees} degrees of freedom, p = {t.p_value:.3g} "
+                      f"({'below' if t.drift else 'above'} the level {t.level:g})")
+    best = next((e for e in outcome.explanations if e.cause != "none"), None) if t.drift else None
+    if best is not None and best.cause == "camera":
+        outcome.update = quick_update(base.baseline, obs, problem.joints_deg)

@@ -1,0 +1,157 @@
+"""``handeye verify`` on the embedded mock station (a real TCP controller server and rendered XB3
+frames), with faults of known size injected through ``mock.faults``: each cause must be named with
+its size; exit codes, JSON keys, refusals, the history and the write-back of a quick update.
+
+One baseline session (captured, calibrated, written back) is shared by the module; each check is a
+few postures. The rates over many seeds are the benchmark's (benchmarks/verify)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from handeye.calibration.transforms import rotation_error_deg
+from handeye.mocks.station import DEFAULT_MOUNT, read_state, write_state
+from handeye.station.cli import main
+from handeye.station.config import FaultSettings
+from handeye.station.runtime import mock_state_file
+
+BASE_YAML = "controller: {protocol: mock}\ncamera: {backend: mock}\nplan: {postures: 14}\n"
+
+def _config(folder, name: str, faults: str = "") -> str:
+    path = folder / f"{name}.yaml"
+    path.write_text(BASE_YAML + (f"mock:\n  faults: {{{faults}}}\n" if faults else ""))
+    return str(path)
+
+@pytest.fixture(scope="module")
+def station(tmp_path_factory):
+    """A calibrated baseline on the mock station, its tool data written back (kept in the state file)."""
+    root = tmp_path_factory.mktemp("verify")
+    config = _config(root, "mock")
+    session = root / "base"
+    assert main(["capture", "--config", config, "--session", str(session), "--yes"]) == 0
+    assert main(["writeback", str(session), "--config", config]) == 0
+    return root, session, config
+
+def _verify(station, name: str, faults: str, *extra):
+    root, session, _ = station
+    out = root / f"{name}.json"
+    code = main(["verify", "--config", _config(root, name, faults), "--against", str(session), "--json", str(out),
+                 *extra])
+    return code, json.loads(out.read_text()) if out.is_file() else None
+
+def test_nothing_changed_is_ok_with_the_json_keys(station, capsys):
+    code, data = _verify(station, "none", "")
+    assert code == 0
+    assert data["verdict"] == "ok" and data["postures"] == 5 and data["measured"] == 5
+    diag = data["diagnosis"]
+    assert diag["cause"] == "none" and diag["joint"] is None
+    assert {"alternatives", "translation_mm", "rotation_deg"} <= set(diag)
+    assert 0.01 < data["test"]["p_value"] <= 1.0 and data["test"]["degrees_of_freedom"] == 30
+    assert "nothing to do" in capsys.readouterr().out
+
+def test_camera_move_is_named_with_its_size_and_the_quick_update_is_written(station, capsys):
+    root, session, config = station
+    shift = np.array([0.9, -0.8, 0.6])  # 1.34 mm
+    code, data = _verify(station, "camera", f"camera_shift_mm: {shift.tolist()}, camera_turn_deg: [0.05, -0.08, 0.1]")
+    assert code == 3 and data["verdict"] == "drift"
+    diag = data["diagnosis"]
+    assert diag["cause"] == "camera"
+    assert diag["translation_mm"] == pytest.approx(np.linalg.norm(shift), rel=0.3)
+    assert diag["rotation_deg"] == pytest.approx(np.linalg.norm([0.05, -0.08, 0.1]), rel=0.3)
+    assert diag["likelihood_ratio"] > 100
+    update = data["quick_update"]
+    truth = FaultSettings(camera_shift_mm=tuple(shift), camera_turn_deg=(0.05, -0.08, 0.1)).model().mount(DEFAULT_MOUNT)
+    new = np.array(update["camera_pose"]["position_mm"])
+    sigma = np.array(update["uncertainty"]["translation_mm"])
+    assert np.all(np.abs(new - truth[:3, 3]) <= 3 * sigma + 1e-3)
+    folder = data["check_session"]
+    assert "quick update" in capsys.readouterr().out
+    assert main(["writeback", folder, "--config", config]) == 0
+    assert "read back: identical" in capsys.readouterr().out
+    held = read_state(mock_state_file(session))["tool"]
+    assert np.allclose(held.position_mm, new, atol=2e-3)
+    history = [json.loads(line) for line in (root / "history.jsonl").read_text().splitlines()]
+    assert history[-1]["kind"] == "writeback" and history[-1]["session"] == folder
+    assert main(["writeback", str(session), "--config", config]) == 0  # SESSION's tool data back for the next tests
+
+@pytest.mark.parametrize("name, faults, cause, joint", [
+    ("board", "board_turn_deg: [0.1, -0.1, 0.05], board_shift_mm: [0.5, 0.0, 0.5]", "board", None),
+    ("joint3", "joint_zero_deg: [0, 0, 0.08, 0, 0, 0]", "joint", 3),
+])
+def test_each_cause_is_named(station, name, faults, cause, joint):
+    code, data = _verify(station, name, faults)
+    assert code == 3
+    assert data["diagnosis"]["cause"] == cause and data["diagnosis"]["joint"] == joint
+    if joint is not None:
+        assert data["diagnosis"]["rotation_deg"] == pytest.approx(0.08, rel=0.3)
+
+def test_joint6_is_named_with_the_camera_turn_it_cannot_be_told_from(station, capsys):
+    code, data = _verify(station, "joint6", "joint_zero_deg: [0, 0, 0, 0, 0, 0.08]")
+    assert code == 3
+    diag = data["diagnosis"]
+    named = [diag["cause"] + (f" {diag['joint']}" if diag["joint"] else "")] + diag["indistinguishable"]
+    assert "joint 6" in named and "camera" in named
+    assert "cannot tell it from" in capsys.readouterr().out
+
+def test_another_tooldata_on_the_controller_is_found(station, capsys):
+    root, session, _ = station
+    path = mock_state_file(session)
+    state = read_state(path)
+    tool = state["tool"]
+    write_state(path, type(tool)((tool.position_mm[0] + 0.3,) + tuple(tool.position_mm[1:]), tool.quaternion_wxyz,
+                                 tool.mass_kg, tool.cog_mm), state["runs"])
+    try:
+        code, data = _verify(station, "tool", "")
+    finally:
+        write_state(path, tool, read_state(path)["runs"])
+    assert code == 3 and data["diagnosis"]["cause"] == "tooldata"
+    assert data["diagnosis"]["board_check"]["cause"] == "none"
+    assert "holds a different tHeCamera" in capsys.readouterr().out
+
+def test_board_out_of_view_is_inconclusive(station):
+    code, data = _verify(station, "blind", "camera_turn_deg: [28, 28, 0], board_shift_mm: [0, 100, 0]")
+    assert code == 4 and data["verdict"] == "inconclusive"
+    assert data["measured"] < 3
+
+def test_history_lists_every_check(station, capsys):
+    root, session, config = station
+    before = (root / "history.jsonl").read_text().splitlines()
+    assert main(["verify", "--config", config, "--against", str(session), "--history", "--report",
+                 str(root / "trend.html")]) == 0
+    out = capsys.readouterr().out
+    assert len([line for line in out.splitlines() if line.startswith("  20")]) == len(before)
+    assert (root / "trend.html").read_text().count("data:image/png;base64,") == 1
+    assert (root / "history.jsonl").read_text().splitlines() == before  # printing never rewrites it
+
+@pytest.mark.parametrize("argv, says", [
+    (["--postures", "2"], "at least 3"),
+    (["--postures", "99"], "asks for more"),
+])
+def test_bad_requests_are_one_line_and_write_nothing(station, capsys, argv, says):
+    root, session, config = station
+    listing = sorted(p.name for p in root.iterdir())
+    assert main(["verify", "--config", config, "--against", str(session), *argv]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and says in err and "Traceback" not in err
+    assert sorted(p.name for p in root.iterdir()) == listing
+
+def test_sessions_verify_cannot_check_are_refused(tmp_path, station, capsys):
+    root, session, config = station
+    simulated = tmp_path / "sim"
+    assert main(["simulate", "-o", str(simulated)]) == 0
+    other = tmp_path / "other.yaml"
+    other.write_text(BASE_YAML + "target: {corners: [9, 6], square_mm: 25}\n")
+    capsys.readouterr()
+    assert main(["verify", "--config", config, "--against", str(simulated)]) == 1
+    assert "simulated or imported" in capsys.readouterr().err
+    assert main(["verify", "--config", str(other), "--against", str(session)]) == 1
+    assert "another board" in capsys.readouterr().err
+
+def test_exit_codes_are_in_the_help(capsys):
+    with pytest.raises(SystemExit):
+        main(["verify", "--help"])
+    out = capsys.readouterr().out
+    assert "0 ok, 3 drift, 4 inconclusive" in out and "1 errors" in out
