@@ -138,7 +138,7 @@ for _row in (
            "camera corners weighted by their stereo covariance, robot poses corrected with a prior from the joint "
            "noise (and the arm's kinematic deviations when a likelihood-ratio test finds them), noise levels "
            "estimated from the data, outlier postures excluded, a one-sigma uncertainty and a 5-fold "
-           "cross-validation of the held-out board points (calibration/eiv.py)", f"{_HERE}.eiv:solve_eiv", _PAPER),
+           "cross-validation of the held-out board points (calibration/eiv/)", f"{_HERE}.eiv:solve_eiv", _PAPER),
     Method("robust", "estimator", "handeye, after Deniz & Cakir (2018)", "mcb, then outlier postures detected and "
            "excluded, a robust refinement of the point consistency over the inliers, and a one-sigma uncertainty "
            "(the default before ml)", f"{_HERE}.robust:solve_robust", _PAPER, in_comparison=True),

@@ -1,4 +1,4 @@
-"""Measurement noise of a hand-eye session: what the maximum-likelihood estimator (``eiv.py``) weighs by.
+"""Measurement noise of a hand-eye session: what the maximum-likelihood estimator (``eiv/``) weighs by.
 
 Rigid-motion perturbations. A pose ``P = (R, t)`` perturbed by a twist ``ξ = (ρ, φ)`` (mm, rad)
 expressed in its own (local) frame is
@@ -24,7 +24,7 @@ the robot cannot influence: ``n (3m - 6)`` degrees of freedom for ``n`` postures
 
 The board pose of each posture is fitted to its corners by weighted least squares; the inverse of
 its normal matrix is the covariance of the pose (a local twist of ``target2cam``). When a session
-holds board poses only, their covariance is estimated with the robot's (``eiv.py``).
+holds board poses only, their covariance is estimated with the robot's (``eiv/``).
 
 Robot. A joint-angle error ``δq`` (controller angles, degrees) moves the flange by the local twist
 ``J_q δq`` (the flange Jacobian below, from the kinematics of eq. 11-12), so joint noise of

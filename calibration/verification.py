@@ -82,13 +82,15 @@ def baseline_from_solution(solution) -> Baseline:
     The covariance is the inverse of the mixed-model normal matrix over the inliers with the kinematic
     deviations kept (the fit's own ``covariance`` marginalises them); a revisited posture sees them.
     """
-    from . import eiv  # noqa: PLC0415 (the fit's internals: the normal matrix)
+    from dataclasses import replace  # noqa: PLC0415
+
+    from .eiv import fit as eiv  # noqa: PLC0415 (the fit's internals: the normal matrix)
 
     fit, obs = solution.fit, solution.observations
     keep = ~np.asarray(solution.outliers, bool)
     kinematic = len(fit.kinematic) > 0
     if not kinematic and obs.kinematic is not None:
-        obs = eiv.replace(obs, kinematic=None, kinematic_kinds=None)
+        obs = replace(obs, kinematic=None, kinematic_kinds=None)
     sub = obs.subset(keep)
     g = eiv._structures(sub, fit.x)
     w = np.linalg.inv(eiv._posture_cov(sub, g, fit.theta))
@@ -151,7 +153,7 @@ def discrepancy(baseline: Baseline, obs, joints_deg=None) -> Discrepancy:
     ValueError
         The observations do not have the baseline's noise components (another kind of session).
     """
-    from . import eiv  # noqa: PLC0415
+    from .eiv import fit as eiv  # noqa: PLC0415 (the fit's internals: the posture covariance, the Jacobians)
 
     names = tuple(c.name for c in obs.components)
     if names != baseline.components:

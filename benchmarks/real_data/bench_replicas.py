@@ -131,7 +131,7 @@ def run_set(name: str, replicas: int, methods: dict, seed: int) -> None:
 
 def run_subsets(name: str, replicas: int, size: int, methods: dict, seed: int) -> None:
     """RMS errors to the truth on random ``size``-posture subsets of the replicas of one set."""
-    from handeye.calibration import eiv  # noqa: PLC0415
+    from handeye.calibration.eiv import pipeline  # noqa: PLC0415 (solve_eiv looks its outlier test up here)
 
     file, options = SETS[name]
     problem = problem_from_session(read_any(DATASETS / name / file if file else DATASETS / name, **options))
@@ -141,7 +141,7 @@ def run_subsets(name: str, replicas: int, size: int, methods: dict, seed: int) -
     rng = np.random.default_rng(seed)
     errors = {m: [] for m in ["default without outlier test", *methods]}
     excluded = 0
-    keep_all = eiv._outlier_flags
+    keep_all = pipeline._outlier_flags
     for _ in range(replicas):
         rep = replica(problem, x, target, cov, rng)
         sub = rep.subset(np.sort(rng.choice(rep.n, size, replace=False)))
@@ -156,11 +156,11 @@ def run_subsets(name: str, replicas: int, size: int, methods: dict, seed: int) -
         default = solve_eiv(sub, folds=0)
         errors[DEFAULT_METHOD].append(truth_errors(default.x, x))
         excluded += bool(default.outliers.any())
-        eiv._outlier_flags = lambda problem, *args: np.zeros(problem.n, bool)
+        pipeline._outlier_flags = lambda problem, *args: np.zeros(problem.n, bool)
         try:
             xe = solve_eiv(sub, folds=0).x
         finally:
-            eiv._outlier_flags = keep_all
+            pipeline._outlier_flags = keep_all
         errors["default without outlier test"].append(truth_errors(xe, x))
     print(f"\n### {name}: random subsets of {size} of its {problem.n} postures, {replicas} replicas\n")
     print(f"The default excluded a posture in {excluded} of {replicas} subsets.\n")

@@ -132,7 +132,7 @@ def small_clean_sets():
 
 
 def test_the_outlier_test_never_measures_against_a_zero_noise_level(small_clean_sets):
-    from handeye.calibration.eiv import BOUNDARY_PRIOR, fit_ml
+    from handeye.calibration.eiv.fit import BOUNDARY_PRIOR, fit_ml
 
     # every component of OpenCV's model is positive, yet from five postures the plain restricted
     # likelihood puts one at the variance floor in some sets; the deleted test's fits, with the
@@ -429,7 +429,7 @@ def test_board_rotation_noise_about_a_centre_is_found_and_beats_the_origin_model
     """Known truth: a monocular board pose errs by tilting about the middle of the board. The
     likelihood-ratio test finds it, the centre is recovered, and X is nearer the truth than with the
     rotation noise about the board origin (the test switched off); the one-sigma stays honest."""
-    from handeye.calibration import eiv
+    from handeye.calibration.eiv import centre as eiv_centre  # solve_eiv reads CENTRE_LR there
 
     centre = np.array([200.0, 300.0, 0.0])
     found, errors, z = [], {"centre": [], "origin": []}, []
@@ -437,13 +437,13 @@ def test_board_rotation_noise_about_a_centre_is_found_and_beats_the_origin_model
         prob, truth = _tilted_about(seed, 40, centre)
         sol = solve_eiv(prob, folds=0)
         report = sol.details["camera_centre"]
-        assert report["modelled"] and report["likelihood_ratio"] > eiv.CENTRE_LR
+        assert report["modelled"] and report["likelihood_ratio"] > eiv_centre.CENTRE_LR
         found.append(report["centre_mm"])
         assert sol.details["noise"]["camera"]["rotation_centre_mm"] == report["centre_mm"]
         errors["centre"].append(_truth_errors(sol.x, truth["x"]))
         z.append(_z(calibrate(prob, None, truth), truth["x"]))
         with monkeypatch.context() as m:
-            m.setattr(eiv, "CENTRE_LR", np.inf)
+            m.setattr(eiv_centre, "CENTRE_LR", np.inf)
             errors["origin"].append(_truth_errors(solve_eiv(prob, folds=0).x, truth["x"]))
     assert np.max(np.linalg.norm(np.array(found) - centre, axis=1)) < 60.0
     med = {k: np.median(v, axis=0) for k, v in errors.items()}
@@ -468,15 +468,15 @@ def test_corner_sessions_leave_the_centre_alone():
 
 
 def test_the_centre_likelihood_gradient_matches_finite_differences():
-    from handeye.calibration import eiv
+    from handeye.calibration.eiv import centre, fit as eiv_fit
 
     prob, _ = _tilted_about(1, 15, np.array([150.0, 100.0, 0.0]))
     obs = observations(prob)
-    fit = eiv.fit_ml(obs, solve_eiv(prob, folds=0).x)
-    rotation = np.array([c.side == "board" and c.name in eiv._ROTATION_BASES for c in obs.components])
-    args = (fit.residuals, eiv._jacobians(obs), eiv._structures(obs, fit.x), rotation)
+    fit = eiv_fit.fit_ml(obs, solve_eiv(prob, folds=0).x)
+    rotation = np.array([c.side == "board" and c.name in centre._ROTATION_BASES for c in obs.components])
+    args = (fit.residuals, eiv_fit._jacobians(obs), eiv_fit._structures(obs, fit.x), rotation)
     params = np.concatenate([[120.0, 80.0, -5.0], np.log(np.maximum(fit.theta, 1e-8))])
-    _, grad = eiv._centre_nll(params, *args)
+    _, grad = centre._centre_nll(params, *args)
     step = 1e-5 * np.eye(len(params))
-    numeric = [(eiv._centre_nll(params + h, *args)[0] - eiv._centre_nll(params - h, *args)[0]) / 2e-5 for h in step]
+    numeric = [(centre._centre_nll(params + h, *args)[0] - centre._centre_nll(params - h, *args)[0]) / 2e-5 for h in step]
     np.testing.assert_allclose(grad, numeric, rtol=1e-4, atol=1e-6)
