@@ -81,27 +81,27 @@ def trend_png(records: list[dict], limit_mm: float, limit_deg: float) -> bytes:
     session, or a written quick update) as vertical lines."""
     from datetime import datetime
 
-    from .report import _BLUE, _GREY, _RED, _figure, _png, _style
+    from .report_figures import BLUE, GREY, RED, new_figure, style_axes, to_png
 
-    fig = _figure(8.0, 4.2, "constrained")
+    fig = new_figure(8.0, 4.2, "constrained")
     axes = fig.subplots(2, 1, sharex=True)
     checks = [r for r in records if r.get("kind", "verify") == "verify"]
     when = [datetime.fromisoformat(r["time"]) for r in checks]
-    colour = {"ok": _BLUE, "drift": _RED, "inconclusive": _GREY}
+    colour = {"ok": BLUE, "drift": RED, "inconclusive": GREY}
     for ax, key, limit, unit in ((axes[0], "translation_mm", limit_mm, "mm"), (axes[1], "rotation_deg", limit_deg, "deg")):
-        ax.plot(when, [float(r.get(key) or 0.0) for r in checks], color=_GREY, linewidth=0.8)
+        ax.plot(when, [float(r.get(key) or 0.0) for r in checks], color=GREY, linewidth=0.8)
         for t, r in zip(when, checks):
-            ax.plot([t], [float(r.get(key) or 0.0)], marker="o", color=colour.get(r.get("verdict"), _GREY))
-        ax.axhline(limit, color=_RED, linestyle="--", linewidth=1.0, label=f"threshold {limit:g} {unit}")
+            ax.plot([t], [float(r.get(key) or 0.0)], marker="o", color=colour.get(r.get("verdict"), GREY))
+        ax.axhline(limit, color=RED, linestyle="--", linewidth=1.0, label=f"threshold {limit:g} {unit}")
         ax.set_ylabel(f"change ({unit})")
-        _style(ax)
+        style_axes(ax)
     sessions = None
     for r in records:
         new_session = sessions is not None and r.get("session") != sessions
         if r.get("kind") == "writeback" or new_session:
             for ax in axes:
-                ax.axvline(datetime.fromisoformat(r["time"]), color=_GREY, linestyle=":", linewidth=1.2)
+                ax.axvline(datetime.fromisoformat(r["time"]), color=GREY, linestyle=":", linewidth=1.2)
         sessions = r.get("session", sessions)
     axes[0].legend(loc="upper left", fontsize=8)
     axes[0].set_title("checks: dot colour = verdict (blue ok, red drift, grey inconclusive); dotted = recalibration")
-    return _png(fig)
+    return to_png(fig)

@@ -1,4 +1,4 @@
-"""The calibration report (station/report.py), the quality verdict (station/quality.py) and
+"""The calibration report (station/report*.py), the quality verdict (station/quality.py) and
 ``handeye calibrate --report``."""
 
 from __future__ import annotations
@@ -345,11 +345,11 @@ def test_d_org_is_one_figure_in_header_table_chart_verdict_text_and_json(tmp_pat
     """A session with outliers: the header's d_org is the chosen method's d_org in the comparison table
     and chart, the verdict's max_d_org_mm value, the JSON metrics and the text summary (on main the
     header showed the result's own metric and the table another definition under the same name)."""
-    import handeye.station.report as report_module
+    import handeye.station.report_figures as report_figures
 
     figures = []
-    original = report_module._png
-    monkeypatch.setattr(report_module, "_png", lambda fig: (figures.append(fig), original(fig))[1])
+    original = report_figures.to_png
+    monkeypatch.setattr(report_figures, "to_png", lambda fig: (figures.append(fig), original(fig))[1])
     path = _outlier_session(tmp_path)
     out = tmp_path / "r.json"
     assert main(["calibrate", str(path), "--report", "--json", str(out)]) == 0

@@ -9,7 +9,7 @@ import itertools
 import numpy as np
 import pytest
 
-import handeye.station.report as report
+import handeye.station.report_figures as report_figures
 from handeye.calibration.solve import calibrate, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, sample_session
 from handeye.station.assessment import COMPARISON_METHODS, comparison_results, method_comparison
@@ -65,15 +65,15 @@ def overlapping_texts(fig, gap_px: float = 2.0) -> list:
 
 @pytest.fixture
 def figures(monkeypatch):
-    """The figures ``write_report`` renders, in order (``report._png`` still writes the PNG)."""
+    """The figures ``write_report`` renders, in order (``report_figures.to_png`` still writes the PNG)."""
     captured = []
-    original = report._png
+    original = report_figures.to_png
 
     def capture(fig):
         captured.append(fig)
         return original(fig)
 
-    monkeypatch.setattr(report, "_png", capture)
+    monkeypatch.setattr(report_figures, "to_png", capture)
     return captured
 
 
@@ -110,7 +110,7 @@ def test_method_comparison_rotation_ticks_do_not_run_into_each_other(figures):
     rows = method_comparison(problem, result, comparison_results(problem, known={"robust": result}))
     for r, d in zip(rows, (0.0, 0.0021, 0.0104, 0.0104, 0.0111, 0.0094)):  # the demo's values
         r["d_rotation_deg"] = d
-    report.plot_method_comparison(rows)
+    report_figures.plot_method_comparison(rows)
     fig = figures[-1]
     assert overlapping_texts(fig) == []
     rotation = next(ax for ax in fig.axes if ax.get_title().startswith("rotation difference"))
