@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from handeye.drivers.controller import ControllerConnectionError, ControllerRefused, ControllerTimeout, ProtocolError, ToolData, open_controller
-from handeye.drivers.controller.rws_client import parse_rapid_value, rapid_literal
+from handeye.drivers.controller.rws_codec import parse_rapid_value, rapid_literal
 from handeye.drivers.controller.types import AT, READY
 from handeye.mocks.controller import start_mock_controller
 from handeye.rapid.generate import render_program
@@ -244,7 +244,7 @@ def test_a_program_that_cannot_start_is_reported_and_nothing_moves(rws):
 
 
 def test_the_rate_limiter_keeps_the_average_below_the_ceiling(monkeypatch):
-    from handeye.drivers.controller import rws_client
+    from handeye.drivers.controller import rws_transport
 
     clock = {"now": 100.0, "slept": 0.0}
 
@@ -252,9 +252,9 @@ def test_the_rate_limiter_keeps_the_average_below_the_ceiling(monkeypatch):
         clock["now"] += seconds
         clock["slept"] += seconds
 
-    monkeypatch.setattr(rws_client.time, "monotonic", lambda: clock["now"])
-    monkeypatch.setattr(rws_client.time, "sleep", sleep)
-    limiter = rws_client.RateLimiter(20.0, burst=10)
+    monkeypatch.setattr(rws_transport.time, "monotonic", lambda: clock["now"])
+    monkeypatch.setattr(rws_transport.time, "sleep", sleep)
+    limiter = rws_transport.RateLimiter(20.0, burst=10)
     for _ in range(10):
         limiter.wait()
     assert clock["slept"] == 0.0  # a burst passes at once
