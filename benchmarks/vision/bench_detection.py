@@ -38,8 +38,9 @@ import cv2
 import numpy as np
 
 from handeye.calibration.compact_points import board_corners
-from handeye.drivers.camera.checkerboard import DETECT_FLAGS, SB_FLAGS, detect_board
+from handeye.drivers.camera.checkerboard import detect_board
 from handeye.drivers.camera.errors import BoardNotFound
+from handeye.drivers.camera.grid_search import DETECT_FLAGS, SB_FLAGS
 from handeye.drivers.camera.stereo import nominal_xb3_model
 from handeye.mocks.camera import RenderOptions, StereoRenderer, hard_options
 from handeye.mocks.world import PrintedBoard, sample_board_views

@@ -43,7 +43,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from handeye.calibration.compact_points import BoardGeometry, board_corners
-from handeye.drivers.camera.checkerboard import canonical_orderings, observe_board, pattern_score
+from handeye.drivers.camera.board_pattern import canonical_orderings, pattern_score
+from handeye.drivers.camera.checkerboard import observe_board
 from handeye.drivers.camera.stereo import StereoModel, load_stereo_model
 from handeye.drivers.camera.stereo_calibration import calibrate_stereo
 from handeye.mocks.camera import StereoRenderer, hard_options

@@ -39,18 +39,22 @@ flagged ``ambiguous`` (the right image then follows the left through the rectifi
 A detection is refused (:class:`BoardNotFound`, one line) when the grid is not found, when the
 pattern contrast is too low to read the orientation, or when the squares just outside the detected
 grid continue the checker pattern (the board has more corners than asked for).
+
+Modules: ``grid_search`` (the stages of :func:`find_grid`), ``board_pattern`` (orderings, the
+printed pattern, its contrast); this one detects, refines, checks and triangulates.
 """
 
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
 from ...calibration.compact_points import BoardGeometry, board_corners
+from .board_pattern import MAX_OUTER_ALTERNATION, MIN_CONTRAST, canonical_orderings, outer_alternation, pattern_score
 from .errors import BoardNotFound, CameraError, FrameError, StereoMismatch
+from .grid_search import SEARCH_STAGES, GridSearch, board_region, find_grid, refuse_missing_grid
 from .pnp import pnp_pose
 from .stereo import StereoModel
 
@@ -72,26 +76,11 @@ __all__ = [
     "plane_fit",
 ]
 
-DETECT_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
-#: OpenCV's default flags of ``findChessboardCorners`` (stage ``full``).
-OPENCV_DEFAULT_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
-#: Stage ``roi``: adaptive threshold without the global equalisation.
-ROI_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH
-SB_FLAGS = cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_EXHAUSTIVE
-#: The searches of :func:`find_grid`, in the order they are tried.
-SEARCH_STAGES = ("roi", "fast", "full", "sb")
-#: Images at least this wide are searched at half size in stages ``fast`` and ``sb``.
-HALF_SIZE_FROM_WIDTH = 1000
-#: The board region is located on a copy about this wide.
-REGION_WIDTH = 320
+
 SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-4)
 #: Refinement half-window as a fraction of the smallest corner spacing, and its bounds (px).
 WINDOW_FRACTION = 0.4
 WINDOW_MIN, WINDOW_MAX = 2, 15
-#: Smallest black/white difference (grey levels) at which the printed pattern is trusted.
-MIN_CONTRAST = 12.0
-#: Alternation (as a fraction of the contrast) beyond the grid above which the board is larger than asked.
-MAX_OUTER_ALTERNATION = 0.5
 #: A corner further than this from the smooth grid through the others is off the grid (px, and as a
 #: fraction of the corner spacing): glare or a shadow edge moved it.
 OFF_GRID_PX, OFF_GRID_FRACTION = 1.5, 0.06
@@ -197,205 +186,6 @@ def _gray_u8(image: np.ndarray, what: str = "image") -> np.ndarray:
     return np.ascontiguousarray(image)
 
 
-def _half(gray: np.ndarray) -> np.ndarray:
-    h, w = gray.shape
-    return cv2.resize(gray, (w // 2, h // 2), interpolation=cv2.INTER_AREA)
-
-
-def _opencv_grid(image: np.ndarray, pattern, flags: int) -> np.ndarray | None:
-    found, corners = cv2.findChessboardCorners(image, pattern, flags=flags)
-    return corners.reshape(-1, 2).astype(np.float64) if found else None
-
-
-def board_region(gray: np.ndarray) -> tuple[int, int, int, int] | None:
-    """Bounding box ``(x0, y0, x1, y1)`` (full-size pixels, ``x1``/``y1`` exclusive) of where the board
-    probably is, or ``None``.
-
-    On a copy about :data:`REGION_WIDTH` pixels wide, the corner energy ``min(blur|gx|, blur|gy|)``
-    (large where a square's vertical and horizontal edges meet, small along a single edge, a shadow's
-    border or in flat areas) is thresholded at a quarter of its maximum; the box holds every blob of
-    at least a fifth of the largest one's area (a shadow may cut the board in two), plus a margin of
-    10 % of its size and 8 px (OpenCV refuses corners within 8 px of the image's border).
-    """
-    h, w = gray.shape
-    scale = max(1, int(round(w / REGION_WIDTH)))
-    small = cv2.resize(gray, (max(1, w // scale), max(1, h // scale)), interpolation=cv2.INTER_AREA)
-    gx = np.abs(cv2.Sobel(small, cv2.CV_32F, 1, 0, ksize=3))
-    gy = np.abs(cv2.Sobel(small, cv2.CV_32F, 0, 1, ksize=3))
-    energy = cv2.blur(np.minimum(cv2.blur(gx, (5, 5)), cv2.blur(gy, (5, 5))), (9, 9))
-    peak = float(energy.max())
-    if peak < 4.0:  # flat image
-        return None
-    mask = (energy > 0.25 * peak).astype(np.uint8)
-    n, _, stats, _ = cv2.connectedComponentsWithStats(mask)
-    if n <= 1:
-        return None
-    areas = stats[1:, cv2.CC_STAT_AREA]
-    big = 1 + np.nonzero(areas >= 0.2 * areas.max())[0]
-    x0, y0 = stats[big, 0].min(), stats[big, 1].min()
-    x1 = (stats[big, 0] + stats[big, 2]).max()
-    y1 = (stats[big, 1] + stats[big, 3]).max()
-    margin = 0.1 * max(x1 - x0, y1 - y0) * scale + 8
-    box = (int(max(0, x0 * scale - margin)), int(max(0, y0 * scale - margin)),
-           int(min(w, x1 * scale + margin)), int(min(h, y1 * scale + margin)))
-    if box[2] - box[0] < 16 or box[3] - box[1] < 16:
-        return None
-    return box
-
-
-@dataclass(frozen=True)
-class GridSearch:
-    """What :func:`find_grid` found.
-
-    Attributes
-    ----------
-    corners : ndarray, shape (nx*ny, 2), or None
-        Detector corners at full-size pixel coordinates (not yet refined, in the detector's order).
-    stage : str
-        The stage of :data:`SEARCH_STAGES` that found them (``""`` when none did).
-    other_pattern : tuple of int or None
-        Inner corners ``(nx, ny)`` of a whole board found instead when the asked count was not (the
-        count given is wrong).
-    larger_seen : tuple of int or None
-        A grid of more inner corners than asked seen in the board's region (long side first): the
-        board is larger than the count given.
-    seconds : dict
-        Time spent per stage tried.
-    """
-
-    corners: np.ndarray | None
-    stage: str = ""
-    other_pattern: tuple | None = None
-    larger_seen: tuple | None = None
-    seconds: dict = field(default_factory=dict)
-
-
-def _neighbour_patterns(pattern) -> list[tuple[int, int]]:
-    """Counts one off the asked one (squares given for corners first), long side first, at least 3x3."""
-    nx, ny = pattern
-    out = []
-    for dx, dy in ((-1, -1), (1, 1), (-1, 0), (0, -1), (1, 0), (0, 1)):
-        a, b = nx + dx, ny + dy
-        if a >= b and b >= 3 and (a, b) not in out:
-            out.append((a, b))
-    return out
-
-
-def _whole_board(corners: np.ndarray, pattern, gray: np.ndarray) -> bool:
-    """Whether a grid found for ``pattern`` is a whole board of its own: its outer squares lie inside the
-    image (a board cut by the image's edge shows fewer corners than it has) and no checker pattern
-    continues beyond them."""
-    nx, ny = pattern
-    grid = corners.reshape(ny, nx, 2)
-    h, w = gray.shape
-    beyond = np.concatenate([2 * grid[:, 0] - grid[:, 1], 2 * grid[:, -1] - grid[:, -2],
-                             2 * grid[0] - grid[1], 2 * grid[-1] - grid[-2]])
-    if np.any(beyond < 2) or np.any(beyond[:, 0] > w - 3) or np.any(beyond[:, 1] > h - 3):
-        return False
-    candidates = canonical_orderings(grid)
-    if not candidates:
-        return False
-    contrast = max(abs(pattern_score(c, gray)) for c in candidates)
-    return bool(np.isfinite(contrast) and contrast >= MIN_CONTRAST
-                and _outer_alternation(candidates[0], gray, contrast) <= MAX_OUTER_ALTERNATION)
-
-
-def _another_count(crop, region, pattern, gray, lap) -> dict | None:
-    """In a region OpenCV says holds a checkerboard: ``{"other": (a, b)}`` for a whole board one corner
-    off (or of another count OpenCV confirms), ``{"larger": (a, b)}`` for a grid larger than asked, else
-    ``None``; ``lap("count")`` times the stage."""
-    for other in _neighbour_patterns(pattern):
-        found = _opencv_grid(crop, other, ROI_FLAGS)
-        if found is not None and _whole_board(found + region[:2], other, gray):
-            lap("count")
-            return {"other": other}
-    # A grid larger than asked (findChessboardCornersSB may return more corners than its pattern):
-    # whatever OpenCV's exhaustive search could find would be part of that larger board.
-    ok, seen, meta = cv2.findChessboardCornersSBWithMeta(crop, (3, 3), flags=cv2.CALIB_CB_LARGER | SB_FLAGS)
-    lap("count")
-    if ok and meta is not None and seen is not None and len(seen) == meta.shape[0] * meta.shape[1]:
-        rows, cols = (int(v) for v in meta.shape[:2])
-        a, b = max(rows, cols), min(rows, cols)
-        if (a, b) != tuple(pattern) and a >= 3 and b >= 3:  # a whole board of another count? OpenCV confirms
-            found = _opencv_grid(crop, (a, b), ROI_FLAGS)
-            lap("count")
-            if found is not None and _whole_board(found + region[:2], (a, b), gray):
-                return {"other": (a, b)}
-        if a > pattern[0] or b > pattern[1]:
-            return {"larger": (a, b)}
-    return None
-
-
-def find_grid(gray: np.ndarray, pattern: tuple[int, int], search: str = "full") -> GridSearch:
-    """Search the board with the stages of :data:`SEARCH_STAGES` in turn (see the module docstring).
-
-    Parameters
-    ----------
-    gray : ndarray, shape (h, w), uint8
-    pattern : (nx, ny)
-        Inner corners.
-    search : {"full", "fast"}
-        ``"full"`` tries every stage before giving up; ``"fast"`` only the first (``roi``).
-
-    Returns
-    -------
-    GridSearch
-        With ``search="full"``, when the cheap stages fail but a checkerboard is in view, boards one
-        corner off in either direction are looked for in its region (a wrong count makes OpenCV's
-        exhaustive search take up to tens of seconds); a whole board found that way ends the search
-        with ``other_pattern`` set, and so does a grid larger than asked (``findChessboardCornersSB``
-        with ``CALIB_CB_LARGER``), with ``larger_seen``.
-    """
-    if search not in ("full", "fast"):
-        raise ValueError(f"search must be 'full' or 'fast'; got {search!r}")
-    h, w = gray.shape
-    large = w >= HALF_SIZE_FROM_WIDTH
-    seconds = {}
-    clock = time.perf_counter()
-
-    def lap(stage):
-        nonlocal clock
-        now = time.perf_counter()
-        seconds[stage] = now - clock
-        clock = now
-
-    region = board_region(gray)
-    crop = None
-    if region is not None:
-        x0, y0, x1, y1 = region
-        crop = np.ascontiguousarray(gray[y0:y1, x0:x1])
-        corners = _opencv_grid(crop, pattern, ROI_FLAGS)
-        lap("roi")
-        if corners is not None:
-            return GridSearch(corners + (x0, y0), "roi", seconds=seconds)
-    if search == "fast":
-        return GridSearch(None, seconds=seconds)
-    half = _half(gray) if large else None
-    corners = _opencv_grid(half if large else gray, pattern, DETECT_FLAGS)
-    lap("fast")
-    if corners is not None:
-        return GridSearch(corners * 2.0 + 0.5 if large else corners, "fast", seconds=seconds)
-    if crop is not None and cv2.checkChessboard(crop, pattern):
-        other = _another_count(crop, region, pattern, gray, lap)
-        if other is not None:
-            return GridSearch(None, other_pattern=other.get("other"), larger_seen=other.get("larger"), seconds=seconds)
-    corners = _opencv_grid(gray, pattern, OPENCV_DEFAULT_FLAGS)
-    lap("full")
-    if corners is not None:
-        return GridSearch(corners, "full", seconds=seconds)
-    # SB costs grow with the area searched: the region when it is small, else the half-size image
-    if region is not None and (region[2] - region[0]) * (region[3] - region[1]) < 0.25 * w * h:
-        found, corners = cv2.findChessboardCornersSB(crop, pattern, flags=SB_FLAGS)
-        offset, scale = np.array(region[:2], float), 1.0
-    else:
-        found, corners = cv2.findChessboardCornersSB(half if large else gray, pattern, flags=SB_FLAGS)
-        offset, scale = (np.array([0.5, 0.5]) if large else np.zeros(2)), (2.0 if large else 1.0)
-    lap("sb")
-    if found:
-        return GridSearch(corners.reshape(-1, 2).astype(np.float64) * scale + offset, "sb", seconds=seconds)
-    return GridSearch(None, seconds=seconds)
-
-
 def _monomials(u: np.ndarray, v: np.ndarray, degree: int) -> np.ndarray:
     return np.column_stack([u**i * v**j for i in range(degree + 1) for j in range(degree + 1 - i)])
 
@@ -453,104 +243,6 @@ def _refine(gray: np.ndarray, grid: np.ndarray) -> np.ndarray:
     return refined.reshape(grid.shape).astype(np.float64)
 
 
-def _handedness(grid: np.ndarray) -> float:
-    """2-D cross product of the grid's mean x and y steps in the image (> 0: turns clockwise = z into the board)."""
-    ex = np.mean(grid[:, 1:] - grid[:, :-1], axis=(0, 1))
-    ey = np.mean(grid[1:, :] - grid[:-1, :], axis=(0, 1))
-    return float(ex[0] * ey[1] - ex[1] * ey[0])
-
-
-def canonical_orderings(grid: np.ndarray) -> list[np.ndarray]:
-    """The re-orderings of a detector grid ``(ny, nx, 2)`` whose axes turn clockwise in the image.
-
-    Two for a non-square grid (one and its 180-deg turn); four for a square one (transposes too).
-    """
-    ny, nx = grid.shape[:2]
-    candidates = [grid, grid[:, ::-1], grid[::-1, :], grid[::-1, ::-1]]
-    if nx == ny:
-        t = grid.transpose(1, 0, 2)
-        candidates += [t, t[:, ::-1], t[::-1, :], t[::-1, ::-1]]
-    return [np.ascontiguousarray(c) for c in candidates if _handedness(c) > 0]
-
-
-def _square_samples(grid: np.ndarray, a: np.ndarray, b: np.ndarray, image: np.ndarray) -> np.ndarray:
-    """Mean grey level near the centres of squares ``(a, b)`` (square ``(a, b)`` spans columns
-    ``a-1..a`` and rows ``b-1..b`` of the grid); NaN where the samples leave the image."""
-    ny, nx = grid.shape[:2]
-    src = np.stack(np.meshgrid(np.arange(nx), np.arange(ny)), axis=-1).reshape(-1, 2).astype(np.float64)
-    homography, _ = cv2.findHomography(src, grid.reshape(-1, 2), 0)
-    offsets = np.array([(dx, dy) for dx in (-0.2, 0.0, 0.2) for dy in (-0.2, 0.0, 0.2)])
-    centres = np.stack([a - 0.5, b - 0.5], axis=-1).astype(np.float64)
-    pts = (centres[:, None, :] + offsets[None, :, :]).reshape(-1, 1, 2)
-    img_pts = cv2.perspectiveTransform(pts, homography).reshape(len(centres), len(offsets), 2)
-    h, w = image.shape
-    xi = np.rint(img_pts[..., 0]).astype(int)
-    yi = np.rint(img_pts[..., 1]).astype(int)
-    inside = (xi >= 0) & (xi < w) & (yi >= 0) & (yi < h)
-    values = np.where(inside, image[np.clip(yi, 0, h - 1), np.clip(xi, 0, w - 1)], 0).astype(np.float64)
-    out = values.mean(axis=1)
-    out[~inside.all(axis=1)] = np.nan
-    return out
-
-
-def pattern_score(grid: np.ndarray, image: np.ndarray) -> float:
-    """Mean grey level of the inner squares that should be white minus those that should be black.
-
-    In the canonical ordering square ``(a, b)`` is black when ``a + b`` is even, so the score is
-    positive for the canonical ordering (and negative for its 180-deg turn on an even x odd board).
-    """
-    ny, nx = grid.shape[:2]
-    a, b = np.meshgrid(np.arange(1, nx), np.arange(1, ny))
-    a, b = a.ravel(), b.ravel()
-    values = _square_samples(grid, a, b, image)
-    even = (a + b) % 2 == 0
-    return float(np.nanmean(values[~even]) - np.nanmean(values[even]))
-
-
-def _outer_alternation(grid: np.ndarray, image: np.ndarray, contrast: float) -> float:
-    """Largest alternation of the checker pattern one square ring beyond the outer squares, per side,
-    as a fraction of the contrast (about 1 when the board continues, about 0 on the white margin)."""
-    ny, nx = grid.shape[:2]
-    sides = [
-        (np.full(ny + 1, -1), np.arange(0, ny + 1)),       # beyond the x-min edge
-        (np.full(ny + 1, nx + 1), np.arange(0, ny + 1)),   # beyond the x-max edge
-        (np.arange(0, nx + 1), np.full(nx + 1, -1)),       # beyond the y-min edge
-        (np.arange(0, nx + 1), np.full(nx + 1, ny + 1)),   # beyond the y-max edge
-    ]
-    worst = 0.0
-    for a, b in sides:
-        values = _square_samples(grid, a, b, image)
-        ok = np.isfinite(values)
-        if ok.sum() < 3:
-            continue
-        sign = np.where((a + b) % 2 == 0, -1.0, 1.0)[ok]  # +1 where a continued board would be white
-        v = values[ok] - values[ok].mean()
-        worst = max(worst, float(np.mean(v * sign)) / (0.5 * contrast))
-    return worst
-
-
-def _refuse_missing_grid(result: GridSearch, gray: np.ndarray, pattern: tuple, what: str) -> None:
-    """Raise :class:`BoardNotFound` saying why ``result`` holds no grid of ``pattern`` (another count,
-    a larger board, a board partly out of view, none at all); return when it holds one."""
-    nx, ny = pattern
-    if result.other_pattern is not None:
-        a, b = result.other_pattern
-        raise BoardNotFound(f"the board in the {what} has {a}x{b} inner corners, not {nx}x{ny}: give --board {a}x{b} "
-                            f"(inner corners, long side first)")
-    if result.larger_seen is not None:
-        a, b = result.larger_seen
-        raise BoardNotFound(f"the board in the {what} has more inner corners than {nx}x{ny} ({a}x{b} seen at least): "
-                            f"give its full inner-corner count (--board, long side first)")
-    if result.corners is None:
-        if cv2.checkChessboard(gray, (nx, ny)):
-            raise BoardNotFound(
-                f"a checkerboard is in the {what} but not all of its {nx}x{ny} inner corners were found: check that "
-                f"the whole board with its white margin is in view and that {nx}x{ny} is its inner-corner count "
-                f"(--board; e.g. 13x8 for 14x9 squares)"
-            )
-        raise BoardNotFound(f"no checkerboard in the {what}: check that the board is in view, lit evenly and in focus")
-
-
 def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside: bool = True,
                  search: str = "full", what: str = "image") -> Detection:
     """Find the board's inner corners in one image and put them in canonical order.
@@ -584,7 +276,7 @@ def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside
     gray = _gray_u8(image, what)
     nx, ny = board.corners
     result = find_grid(gray, (nx, ny), search)
-    _refuse_missing_grid(result, gray, (nx, ny), what)
+    refuse_missing_grid(result, gray, (nx, ny), what)
     stage = result.stage
     grid = result.corners.reshape(ny, nx, 2)
     if refine:
@@ -609,7 +301,7 @@ def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside
         ambiguous = True
     chosen = candidates[best]
     if check_outside:
-        alternation = _outer_alternation(chosen, gray, contrast)
+        alternation = outer_alternation(chosen, gray, contrast)
         if alternation > MAX_OUTER_ALTERNATION:
             raise BoardNotFound(
                 f"the {nx}x{ny} corners found in the {what} are part of a larger checkerboard: "
