@@ -37,7 +37,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from .errors import CalibrationError
-from .invariants import (MIN_MOTION_DEG, fit_hand_eye, pair_indices, posture_medians, relative_motions,
+from .invariants import (MIN_MOTION_DEG, fit_hand_eye, pair_indices, posture_medians, relative_transforms,
                          screw_pitches)
 from .refine import keep_majority, robust_outliers
 from .transforms import invert_transforms
@@ -212,7 +212,7 @@ def posture_gaps(hand, target2cam, pairs=None) -> tuple[np.ndarray, np.ndarray]:
     """
     h, b = np.asarray(hand, float), np.asarray(target2cam, float)
     pairs = pair_indices(len(h), _PAIRS) if pairs is None else np.asarray(pairs, int)
-    rel_a, rel_b = relative_motions(h, b, pairs)
+    rel_a, rel_b = relative_transforms(h, b, pairs)
     angle_a, pitch_a = screw_pitches(rel_a)
     angle_b, pitch_b = screw_pitches(rel_b)
     usable = np.all([angle_a > MIN_MOTION_DEG, angle_a < 180.0 - MIN_MOTION_DEG,

@@ -40,7 +40,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from .errors import brief
-from .invariants import bounded_pairs, posture_medians as posture_median_gaps, relative_motions
+from .invariants import bounded_pairs, posture_medians as posture_median_gaps, relative_transforms
 from .problem import EYE_IN_HAND, EYE_TO_HAND, SETUPS, hand_poses
 from .transforms import rotation_error_deg
 
@@ -211,7 +211,7 @@ def screw_pitch_scale(tool0_in_base, target_in_camera, limits: DiagnosticLimits 
     if len(a) < 2:
         return None
     pairs = bounded_pairs(len(a))
-    rel_a, rel_b = relative_motions(a, b, pairs)  # eye-in-hand form; the pitch is set-up free
+    rel_a, rel_b = relative_transforms(a, b, pairs)  # eye-in-hand form; the pitch is set-up free
     va = Rotation.from_matrix(rel_a[:, :3, :3]).as_rotvec()
     vb = Rotation.from_matrix(rel_b[:, :3, :3]).as_rotvec()
     ok = _usable(va, vb, limits)
@@ -249,7 +249,7 @@ def setup_rotation_residuals(tool0_in_base, target_in_camera,
         if len(pairs) < 2:
             out[setup] = float("nan")
             continue
-        rel_a, rel_b = relative_motions(hand_poses(a, setup), b, pairs)
+        rel_a, rel_b = relative_transforms(hand_poses(a, setup), b, pairs)
         va = Rotation.from_matrix(rel_a[:, :3, :3]).as_rotvec()
         vb = Rotation.from_matrix(rel_b[:, :3, :3]).as_rotvec()
         ok = _usable(va, vb, limits)
@@ -282,7 +282,7 @@ def hand_eye_fit(tool0_in_base, target_in_camera, setup: str,
     pairs = bounded_pairs(len(a))
     if len(pairs) < 2:
         return nan
-    rel_a, rel_b = relative_motions(hand_poses(a, setup), b, pairs)
+    rel_a, rel_b = relative_transforms(hand_poses(a, setup), b, pairs)
     va = Rotation.from_matrix(rel_a[:, :3, :3]).as_rotvec()
     vb = Rotation.from_matrix(rel_b[:, :3, :3]).as_rotvec()
     ok = _usable(va, vb, limits)

@@ -43,7 +43,7 @@ __all__ = [
     "posture_medians",
     "relative_angles_deg",
     "screw_pitches",
-    "relative_motions",
+    "relative_transforms",
     "fit_hand_eye",
     "angle_gap_deg",
 ]
@@ -186,8 +186,10 @@ def angle_gap_deg(angles_a, angles_b) -> float:
     return float(np.median(gaps)) if gaps.size else float("inf")
 
 
-def relative_motions(hand, target2cam, pairs) -> tuple[np.ndarray, np.ndarray]:
-    """``A_ij = H_i^-1 H_j`` and ``B_ij = B_i B_j^-1`` for each pair, shapes ``(m, 4, 4)``."""
+def relative_transforms(hand, target2cam, pairs) -> tuple[np.ndarray, np.ndarray]:
+    """``A_ij = H_i^-1 H_j`` and ``B_ij = B_i B_j^-1`` for each pair, shapes ``(m, 4, 4)``: the relative
+    motions as transforms of the poses (``triplets.relative_motions`` is Algorithm 1's step 2: hand
+    quaternions and the compact points' rotations, of a problem)."""
     h = np.asarray(hand, dtype=float)
     b = np.asarray(target2cam, dtype=float)
     pairs = np.asarray(pairs, dtype=int)
@@ -285,7 +287,7 @@ def fit_hand_eye(hand, target2cam, pairs=None, min_motion_deg: float = MIN_MOTIO
     pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
     if len(pairs) == 0 or not (np.all(np.isfinite(h)) and np.all(np.isfinite(b))):
         return _nan_fit()
-    rel_a, rel_b = relative_motions(h, b, pairs)
+    rel_a, rel_b = relative_transforms(h, b, pairs)
     va, vb = _rotvecs(rel_a), _rotvecs(rel_b)
     na, nb = np.linalg.norm(va, axis=1), np.linalg.norm(vb, axis=1)
     gap = float(np.median(np.degrees(np.abs(na - nb))))

@@ -34,7 +34,7 @@ __all__ = [
     "Refinement",
     "refine_point_consistency",
     "posture_residuals_to",
-    "angle_gaps_deg",
+    "compact_point_angle_gaps_deg",
     "robust_outliers",
     "at_most_half",
     "keep_majority",
@@ -168,8 +168,14 @@ def _uncertainty(fit, n: int, k: int) -> tuple[np.ndarray, np.ndarray]:
     return diag[3:6], np.degrees(diag[:3])
 
 
-def angle_gaps_deg(motions: RelativeMotions) -> np.ndarray:
-    """Per posture: median over the others of ``|angle(A_ij) - angle(B_ij)|`` in degrees (X-free)."""
+def compact_point_angle_gaps_deg(motions: RelativeMotions) -> np.ndarray:
+    """Per posture: median over the others of ``|angle(A_ij) - angle(B_ij)|`` in degrees (eq. 30, X-free),
+    with ``B_ij`` the rotation of the compact points from posture j to i (``absROT(P_j -> P_i)``, the
+    motions of Algorithm 1, step 2) over the pairs of ``motions``.
+
+    The same invariant as :func:`~handeye.calibration.eiv.start.board_pose_angle_gaps_deg`, measured
+    on other data: the compact points here, the board poses there.
+    """
     gap = np.abs(motions.angle_a_deg - motions.angle_b_deg)
     return posture_medians(gap, motions.pairs, motions.rot_hand.shape[0])
 

@@ -15,7 +15,7 @@ from .problem import MIN_POSTURES, HandEyeProblem
 from .refine import (
     ANGLE_GAP_FLOOR_DEG,
     RESIDUAL_FLOOR_MM,
-    angle_gaps_deg,
+    compact_point_angle_gaps_deg,
     at_most_half,
     keep_majority,
     posture_residuals_to,
@@ -62,7 +62,7 @@ def solve_robust(problem: HandEyeProblem, progress=None) -> RobustSolution:
     and outlier detection until the inlier set is stable; never drops more than half the postures.
     ``progress`` is accepted for the estimator signature and not called."""
     n = problem.n
-    gaps = angle_gaps_deg(relative_motions(problem))
+    gaps = compact_point_angle_gaps_deg(relative_motions(problem))
     gap_flags = keep_majority(robust_outliers(gaps, ANGLE_GAP_FLOOR_DEG), MIN_POSTURES)
     start_problem = problem.subset(~gap_flags)
     try:

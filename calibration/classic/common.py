@@ -38,7 +38,7 @@ from scipy.spatial.transform import Rotation
 
 from ..errors import CalibrationError
 from ..problem import MIN_POSTURES
-from ..invariants import relative_motions
+from ..invariants import relative_transforms
 from ..quality_words import MIN_AXIS_DIVERGENCE_DEG, rotation_axis_divergence_deg
 from ..rotations import quaternion_from_matrix, skew
 from ..transforms import transform_from_rotation_translation
@@ -55,7 +55,7 @@ __all__ = [
     "default_pairs",
     "consecutive_pairs",
     "check_pairs",
-    "relative_motions",
+    "relative_transforms",
     "rotation_angles_deg",
     "prepare_motions",
     "translation_least_squares",
@@ -247,7 +247,7 @@ def prepare_motions(hand, target2cam, pairs=None) -> Motions:
     """
     hand, target2cam = check_poses(hand, target2cam)
     pairs = check_pairs(pairs, len(hand))
-    a, b = relative_motions(hand, target2cam, pairs)
+    a, b = relative_transforms(hand, target2cam, pairs)
     # One length for both sides: the RMS relative translation (falls back to 1 without translation).
     lengths = np.concatenate([np.linalg.norm(a[:, :3, 3], axis=1), np.linalg.norm(b[:, :3, 3], axis=1)])
     scale = float(np.sqrt(np.mean(lengths**2)))

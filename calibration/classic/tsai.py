@@ -51,7 +51,7 @@ def solve_tsai(hand, target2cam, pairs=None) -> np.ndarray:
     ``θ_X`` of ~167 deg already costs it).
     """
     motions = prepare_motions(hand, target2cam, pairs)
-    # eq. 6-7: relative motions (common.relative_motions); P = 2 sin(θ/2) n = twice the quaternion's vector part.
+    # eq. 6-7: relative motions (common.relative_transforms); P = 2 sin(θ/2) n = twice the quaternion's vector part.
     p_a = 2.0 * quaternions(motions.rot_a)[:, 1:]
     p_b = 2.0 * quaternions(motions.rot_b)[:, 1:]
     # eq. 12: skew(P_A + P_B) P' = P_B - P_A, stacked over the pairs, least squares.

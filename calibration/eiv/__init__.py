@@ -73,7 +73,7 @@ from .fit import MLFit, fit_ml, initial_board_pose
 from .model import Component, Observations, observations
 from .outliers import deleted_mahalanobis
 from .pipeline import KINEMATIC_LR, EivSolution, solve_eiv
-from .start import START_POSTURES, angle_gaps_deg, varied_rotation_subset
+from .start import START_POSTURES, board_pose_angle_gaps_deg, varied_rotation_subset
 
 __all__ = [
     "START_POSTURES",
@@ -87,7 +87,7 @@ __all__ = [
     "solve_eiv",
     "ml_cross_validation",
     "deleted_mahalanobis",
-    "angle_gaps_deg",
+    "board_pose_angle_gaps_deg",
     "varied_rotation_subset",
     "initial_board_pose",
     "CENTRE_LR",

@@ -13,21 +13,19 @@ from .cross_validation import ml_cross_validation
 from .fit import MLFit, fit_ml, initial_board_pose
 from .model import Observations, observations
 from .outliers import _outlier_flags
-from .start import _compact_residuals, _start, angle_gaps_deg
+from .start import _compact_residuals, _start, board_pose_angle_gaps_deg
 
 
 @dataclass(frozen=True)
 class EivSolution:
     """What :func:`solve_eiv` returns: the answer and everything the result reports.
 
+    ``x``, ``outliers`` and ``residuals_mm`` as in :class:`~handeye.calibration.robust.RobustSolution`
+    (what every ``estimator`` method returns), the residuals measured against the fitted board ``T``
+    (:func:`~handeye.calibration.eiv.start._compact_residuals`).
+
     Attributes
     ----------
-    x : ndarray, shape (4, 4)
-    outliers : ndarray of bool, shape (n,)
-    residuals_mm : ndarray, shape (n,)
-        The fit residual the outliers are judged on, per posture: mean distance of its three compact
-        board points, carried into the fixed frame, from the fitted board ``T`` (all postures, outliers
-        too). Not reported as the posture residual (``quality_words.posture_residuals``).
     fit : MLFit
         Over the inliers.
     observations : Observations
@@ -135,7 +133,7 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
     report = progress or (lambda done, total, label: None)
     total = 3 + folds
     obs = observations(problem)
-    gaps = angle_gaps_deg(obs.hand, obs.board)
+    gaps = board_pose_angle_gaps_deg(obs.hand, obs.board)
     gap_flags = keep_majority(robust_outliers(gaps, ANGLE_GAP_FLOOR_DEG), MIN_POSTURES)
     x, start = _start(problem, obs, gap_flags)
     report(1, total, f"start: {start['method']} on {start['postures']} postures")

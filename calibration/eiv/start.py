@@ -17,8 +17,10 @@ from .model import Observations
 START_POSTURES = 20
 
 
-def angle_gaps_deg(hand: np.ndarray, board: np.ndarray) -> np.ndarray:
-    """Per posture: median over the others of ``|angle(A_ij) - angle(B_ij)|`` (eq. 30, X-free), degrees.
+def board_pose_angle_gaps_deg(hand: np.ndarray, board: np.ndarray) -> np.ndarray:
+    """Per posture: median over the others of ``|angle(A_ij) - angle(B_ij)|`` (eq. 30, X-free), degrees,
+    with ``B_ij`` from the board poses' rotations (``refine.compact_point_angle_gaps_deg``: the same
+    invariant on the compact points' relative rotations).
 
     ``A_ij = A_i^-1 A_j`` and ``B_ij = B_i B_j^-1`` rotate by the same angle for the true motion
     whatever ``X`` is; the angles come from quaternion dot products. Over every pair of a small set,

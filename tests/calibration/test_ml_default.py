@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from handeye.calibration.compact_points import board_corners
 from handeye.calibration.crossval import SYSTEMATIC_RATIO, CrossValidation, cross_validate
-from handeye.calibration.eiv import angle_gaps_deg, observations, solve_eiv, varied_rotation_subset
+from handeye.calibration.eiv import board_pose_angle_gaps_deg, observations, solve_eiv, varied_rotation_subset
 from handeye.calibration.kinematics import load_robot
 from handeye.calibration.noise import (
     CornerNoise,
@@ -109,7 +109,7 @@ def test_no_outliers_in_clean_data():
 def test_a_flipped_board_is_an_outlier():
     prob, _, _ = problem(12, sigma_cam=1.0, seed=2)
     flipped = flipped_board(prob, 6)
-    assert angle_gaps_deg(observations(flipped).hand, observations(flipped).board).argmax() == 6
+    assert board_pose_angle_gaps_deg(observations(flipped).hand, observations(flipped).board).argmax() == 6
     assert calibrate(flipped).outliers == [6]
 
 

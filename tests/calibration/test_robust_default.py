@@ -1,6 +1,6 @@
 import numpy as np
 
-from handeye.calibration.refine import angle_gaps_deg, refine_point_consistency, robust_outliers
+from handeye.calibration.refine import compact_point_angle_gaps_deg, refine_point_consistency, robust_outliers
 from handeye.calibration.solve import ROBUST_METHOD, calibrate
 from handeye.calibration.triplets import relative_motions
 
@@ -78,7 +78,7 @@ def test_angle_gap_invariant_flags_a_flipped_board():
     # flip posture 6's board by 180 deg about its normal: the X-free angle invariant breaks
     prob, _, _ = problem(12, sigma_cam=1.0, seed=2)
     flipped = flipped_board(prob, 6)
-    gaps = angle_gaps_deg(relative_motions(flipped))
+    gaps = compact_point_angle_gaps_deg(relative_motions(flipped))
     assert np.argmax(gaps) == 6 and robust_outliers(gaps)[6]
     assert calibrate(flipped, "robust").outliers == [6]
 

@@ -14,7 +14,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from handeye.calibration import diagnostics
-from handeye.calibration.eiv import angle_gaps_deg
+from handeye.calibration.eiv import board_pose_angle_gaps_deg
 from handeye.calibration.errors import SessionError
 from handeye.calibration.invariants import ALL_PAIRS_UP_TO, bounded_pairs, pair_indices
 from handeye.calibration.session import Posture, Session, write_posture, write_postures
@@ -88,7 +88,7 @@ def test_diagnose_memory_is_linear_and_duplicates_far_apart_are_still_found():
 
 def test_start_angle_gaps_do_not_build_an_n_by_n_table():
     a, b = station(3000)
-    gaps, peak = peak_mb(lambda: angle_gaps_deg(a, b))
+    gaps, peak = peak_mb(lambda: board_pose_angle_gaps_deg(a, b))
     assert gaps.shape == (3000,) and np.all(gaps < 1e-6)
     assert peak < 40  # one (3000, 3000) table of floats is 72 MB
 
