@@ -84,7 +84,7 @@ def baseline_from_solution(solution) -> Baseline:
     """
     from dataclasses import replace  # noqa: PLC0415
 
-    from .eiv import fit as eiv  # noqa: PLC0415 (the fit's internals: the normal matrix)
+    from .eiv import fit as ml_fit  # noqa: PLC0415 (the fit's internals: the normal matrix)
 
     fit, obs = solution.fit, solution.observations
     keep = ~np.asarray(solution.outliers, bool)
@@ -92,11 +92,11 @@ def baseline_from_solution(solution) -> Baseline:
     if not kinematic and obs.kinematic is not None:
         obs = replace(obs, kinematic=None, kinematic_kinds=None)
     sub = obs.subset(keep)
-    g = eiv._structures(sub, fit.x)
-    w = np.linalg.inv(eiv._posture_cov(sub, g, fit.theta))
-    ju = eiv._kinematic_jac(sub, fit.x)
-    prior = eiv._prior(sub, fit.kinematic_var)
-    cov = np.linalg.inv(eiv._normal(eiv._jacobians(sub, ju), w, prior))
+    g = ml_fit._structures(sub, fit.x)
+    w = np.linalg.inv(ml_fit._posture_cov(sub, g, fit.theta))
+    ju = ml_fit._kinematic_jac(sub, fit.x)
+    prior = ml_fit._prior(sub, fit.kinematic_var)
+    cov = np.linalg.inv(ml_fit._normal(ml_fit._jacobians(sub, ju), w, prior))
     return Baseline(fit.x, fit.target, np.asarray(fit.theta, float), tuple(c.name for c in obs.components),
                     np.asarray(fit.kinematic, float), 0.5 * (cov + cov.T),
                     int(6 * keep.sum() - 12 - len(fit.theta)))
@@ -153,7 +153,7 @@ def discrepancy(baseline: Baseline, obs, joints_deg=None) -> Discrepancy:
     ValueError
         The observations do not have the baseline's noise components (another kind of session).
     """
-    from .eiv import fit as eiv  # noqa: PLC0415 (the fit's internals: the posture covariance, the Jacobians)
+    from .eiv import fit as ml_fit  # noqa: PLC0415 (the fit's internals: the posture covariance, the Jacobians)
 
     names = tuple(c.name for c in obs.components)
     if names != baseline.components:
@@ -165,9 +165,9 @@ def discrepancy(baseline: Baseline, obs, joints_deg=None) -> Discrepancy:
         hand = retract(obs.hand, obs.kinematic @ baseline.kinematic)  # A_j ⊕ K_j u
     x, t = baseline.x, baseline.target
     d = twist_between(t, hand @ x @ obs.board).reshape(-1)
-    s = eiv._posture_cov(obs, eiv._structures(obs, x), baseline.theta)
+    s = ml_fit._posture_cov(obs, ml_fit._structures(obs, x), baseline.theta)
     jac = np.zeros((6 * obs.n, 12 + baseline.q))
-    est = eiv._jacobians(obs, eiv._kinematic_jac(obs, x) if baseline.q else None)
+    est = ml_fit._jacobians(obs, ml_fit._kinematic_jac(obs, x) if baseline.q else None)
     for j in range(obs.n):
         jac[6 * j:6 * j + 6] = est[j]
     noise = _block_diagonal(s)
