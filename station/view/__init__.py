@@ -63,6 +63,7 @@ def live_view(config, link, session_dir, host: str = "127.0.0.1", port: int = 0,
     server = ViewServer(hub, host, port, session_dir)
     if not isinstance(link.camera, SharedCamera):
         link.camera = SharedCamera(link.camera)
+    link.camera.on_grab, link.camera.on_frame = hub.capture_grabs, hub.capture_frame
     view = LiveView(hub.start(), server.start(), LiveFeed(hub, link.camera).start())
     if not loopback(host):
         progress(f"warning: the live view listens on {host}, not only on this machine: anyone who can reach it and "
@@ -71,4 +72,5 @@ def live_view(config, link, session_dir, host: str = "127.0.0.1", port: int = 0,
     try:
         yield view
     finally:
+        link.camera.on_grab = link.camera.on_frame = None
         view.close()

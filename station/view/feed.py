@@ -16,15 +16,25 @@ __all__ = ["LiveFeed", "SharedCamera"]
 
 
 class SharedCamera:
-    """A camera whose ``grab`` is serialised by a lock; everything else is the camera's."""
+    """A camera whose ``grab`` is serialised by a lock; everything else is the camera's.
 
-    def __init__(self, camera):
+    ``on_grab()`` and ``on_frame(frame)`` (settable) are called when the capture (:meth:`grab`) starts a
+    grab and when its frame came: the view shows it at once.
+    """
+
+    def __init__(self, camera, on_grab=None, on_frame=None):
         self._camera = camera
         self._lock = threading.Lock()
+        self.on_grab, self.on_frame = on_grab, on_frame
 
     def grab(self, timeout_s: float = 2.0):
+        if self.on_grab is not None:
+            self.on_grab()
         with self._lock:
-            return self._camera.grab(timeout_s)
+            frame = self._camera.grab(timeout_s)
+        if self.on_frame is not None:
+            self.on_frame(frame)
+        return frame
 
     def try_grab(self, timeout_s: float = 1.0):
         """A frame, or None when someone else is grabbing."""

@@ -19,11 +19,17 @@ from ..capture_events import Measured, Prompt, Verdict
 from .frames import encode_side, quick_corners
 from .state import ViewState
 
-__all__ = ["LIVE_AFTER_S", "ViewHub"]
+__all__ = ["GRAB", "LIVE", "LIVE_AFTER_S", "LIVE_PERIOD_S", "MEASURED", "ViewHub"]
 
-#: A live frame is grabbed for the page when the capture has waited for the robot this long (s) and
-#: grabbed nothing meanwhile (see ``station.view.feed``): a short planned move gets none.
+#: The kinds of frame on the page: a live frame (``feed``), the capture's grab as it came, the same
+#: grab with the corners the capture measured (and the predicted ones).
+LIVE, GRAB, MEASURED = "live", "grab", "measured"
+
+#: Live frames are grabbed for the page once the capture has waited for the robot this long (s), and
+#: until it grabs again (see ``station.view.feed``): a short planned move gets none.
 LIVE_AFTER_S = 0.25
+#: Meanwhile the next live grab starts this long (s) after the last frame came (the grab itself takes longer).
+LIVE_PERIOD_S = 0.05
 
 
 class ViewHub:
@@ -37,7 +43,7 @@ class ViewHub:
         Shortest time between two JPEG encodings.
     """
 
-    def __init__(self, config, stereo_model, frame_interval_s: float = 0.2):
+    def __init__(self, config, stereo_model, frame_interval_s: float = 0.15):
         self.state = ViewState(config, stereo_model)
         self.corners = tuple(config.target.corners)
         self.frame_interval_s = frame_interval_s
@@ -45,13 +51,14 @@ class ViewHub:
         self._changed = threading.Condition()
         self._wake = threading.Event()
         self._events: list = []
-        self._frame = None  # (Measured or live frame, live?)
+        self._frame = None  # (Measured event or StereoFrame, its kind): the latest, not yet encoded
         self._frame_at = self._waiting_since = time.monotonic()
         self.waiting = False  # the capture waits for the robot (a Prompt since the last grab)
         self.clients = 0
         self.state_json, self.state_version = "{}", 0
         self.frame_json, self.frame_version = "", 0
         self.encoded = 0
+        self._last_image = (None, 0)  # the camera frame last shown, and its number
         self.closed = False
         self._thread = threading.Thread(target=self._run, name="view-hub", daemon=True)
 
@@ -60,24 +67,40 @@ class ViewHub:
         """The capture's observer (``station.capture_events``): returns at once."""
         with self._lock:
             if isinstance(event, Measured):
-                self._frame, self._frame_at, self.waiting = (event, False), time.monotonic(), False
+                self._frame, self._frame_at = (event, MEASURED), time.monotonic()
             else:
                 self._events.append(event)
-                if isinstance(event, Prompt) or (isinstance(event, Verdict) and self.state.mode == "guided"):
-                    self.waiting, self._waiting_since = True, time.monotonic()  # (guided: the operator jogs on)
+                if isinstance(event, (Prompt, Verdict)):
+                    self.waiting, self._waiting_since = True, time.monotonic()
+        self._wake.set()
+
+    def capture_grabs(self) -> None:
+        """The capture starts a grab (``feed.SharedCamera``): it measures; a planned capture gets no live
+        frames until it waits for the robot again."""
+        with self._lock:
+            self.waiting = False
+
+    def capture_frame(self, frame) -> None:
+        """The capture's grab came (``feed.SharedCamera``): shown at once, its corners when measured."""
+        with self._lock:
+            self._frame, self._frame_at = (frame, GRAB), time.monotonic()
         self._wake.set()
 
     def wants_live_frame(self) -> bool:
-        """A page is open, the capture waits for the robot and has not grabbed for :data:`LIVE_AFTER_S`."""
+        """A page is open and the last frame is :data:`LIVE_PERIOD_S` old; a planned capture also waits
+        for the robot, since :data:`LIVE_AFTER_S`. (A guided capture waits for the operator, not the PC: a
+        live frame may come while it measures; the camera's lock keeps the grabs apart.)"""
         with self._lock:
-            return (self.clients > 0 and self.waiting and not self.closed
-                    and time.monotonic() - max(self._frame_at, self._waiting_since) >= LIVE_AFTER_S)
+            now = time.monotonic()
+            if self.clients <= 0 or self.closed or now - self._frame_at < LIVE_PERIOD_S:
+                return False
+            return self.state.mode == "guided" or (self.waiting and now - self._waiting_since >= LIVE_AFTER_S)
 
     def offer_live(self, frame) -> None:
-        """A frame grabbed for the page alone (``station.view.feed``)."""
+        """A frame grabbed for the page alone (``station.view.feed``); the capture's own frames go first."""
         with self._lock:
-            if self.waiting:
-                self._frame, self._frame_at = (frame, True), time.monotonic()
+            if self._frame is None or self._frame[1] == LIVE:
+                self._frame, self._frame_at = (frame, LIVE), time.monotonic()
         self._wake.set()
 
     # ------------------------------------------------------------------------------ hub thread
@@ -87,23 +110,32 @@ class ViewHub:
         return self
 
     def close(self) -> None:
+        """Stop, after publishing what the capture said last (the page shows the end of the run)."""
         self.closed = True
         self._wake.set()
         self._thread.join(timeout=5.0)
+        self._fold_events()
+        with self._lock:
+            frame, self._frame = self._frame, None
+        if frame is not None and frame[1] != LIVE:
+            self._publish_frame(*frame)
         with self._changed:
             self._changed.notify_all()
+
+    def _fold_events(self) -> None:
+        with self._lock:
+            events, self._events = self._events, []
+        for event in events:
+            self.state.apply(event)
+        if events:
+            self._publish_state()
 
     def _run(self) -> None:
         last_encode = 0.0
         while not self.closed:
             self._wake.wait(0.1)
             self._wake.clear()
-            with self._lock:
-                events, self._events = self._events, []
-            for event in events:
-                self.state.apply(event)
-            if events:
-                self._publish_state()
+            self._fold_events()
             if time.monotonic() - last_encode >= self.frame_interval_s:
                 with self._lock:
                     frame, self._frame = self._frame, None
@@ -120,18 +152,21 @@ class ViewHub:
             self.state_json, self.state_version = text, self.state_version + 1
             self._changed.notify_all()
 
-    def _publish_frame(self, item, live: bool) -> None:
-        if live:
-            frame, posture, found, predicted = item, None, [quick_corners(im, self.corners) for im in (item.left, item.right)], None
-        else:
-            frame, posture, result = item.frame, item.posture, item.result
-            found = [None, None] if result is None else [result.left_px, result.right_px]
+    def _publish_frame(self, item, kind: str) -> None:
+        posture = problem = predicted = None
+        if kind == MEASURED:
+            frame, posture, problem = item.frame, item.posture, item.problem
+            found = [None, None] if item.result is None else [item.result.left_px, item.result.right_px]
             predicted = self.state.predictor.predict_px(item.tool02base)
+        else:
+            frame, found = item, [quick_corners(im, self.corners) for im in (item.left, item.right)]
+        if frame is not self._last_image[0]:
+            self._last_image = (frame, self._last_image[1] + 1)
         images = [encode_side(im, self.corners, f, None if predicted is None else predicted[k])
                   for k, (im, f) in enumerate(zip((frame.left, frame.right), found))]
-        data = {"seq": self.frame_version + 1, "posture": posture, "live": live,
-                "found": [f is not None for f in found], "predicted": predicted is not None,
-                "problem": None if live else item.problem, "left": images[0], "right": images[1]}
+        data = {"seq": self.frame_version + 1, "image": self._last_image[1], "kind": kind, "live": kind == LIVE,
+                "posture": posture, "found": [f is not None for f in found], "predicted": predicted is not None,
+                "problem": problem, "left": images[0], "right": images[1]}
         text = json.dumps(data)
         with self._changed:
             self.frame_json, self.frame_version = text, self.frame_version + 1

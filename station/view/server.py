@@ -16,6 +16,7 @@ from __future__ import annotations
 import hmac
 import secrets
 import threading
+import time
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from importlib import resources
 from pathlib import Path
@@ -64,7 +65,8 @@ def _handler(server: "ViewServer"):
             hub.client(+1)
             seen_state = seen_frame = -1
             try:
-                while not hub.closed and not server.stopping.is_set():
+                while not server.stopping.is_set():
+                    closed = hub.closed
                     state_v, state, frame_v, frame = hub.wait(seen_state, seen_frame, _KEEPALIVE_S)
                     out = []
                     if state_v != seen_state:
@@ -74,6 +76,8 @@ def _handler(server: "ViewServer"):
                     seen_state, seen_frame = state_v, frame_v
                     self.wfile.write(("".join(out) or ": keep-alive\n\n").encode("utf-8"))
                     self.wfile.flush()
+                    if closed:  # what the hub published last has been sent
+                        break
             except (BrokenPipeError, ConnectionResetError, OSError):
                 pass
             finally:
@@ -123,7 +127,11 @@ class ViewServer:
         self._thread.start()
         return self
 
-    def close(self) -> None:
+    def close(self, linger_s: float = 0.5) -> None:
+        """Stop serving, after ``linger_s`` for the open pages to receive the last state (the hub closed first)."""
+        deadline = time.monotonic() + linger_s
+        while self.hub.clients > 0 and time.monotonic() < deadline:
+            time.sleep(0.02)
         self.stopping.set()
         self.httpd.shutdown()
         self.httpd.server_close()
