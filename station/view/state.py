@@ -55,7 +55,7 @@ class Predictor:
         from ...calibration.solve import calibrate, problem_from_session
 
         if len(postures) < MIN_POSTURES:
-            self.reason = f"a calibration needs {MIN_POSTURES} postures ({len(postures)} so far)"
+            self.cam2tool0, self.reason = None, f"a calibration needs {MIN_POSTURES} postures ({len(postures)} so far)"
             return
         session = Session(self.session.setup, self.session.robot, self.session.target, list(postures))
         try:
