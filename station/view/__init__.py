@@ -67,7 +67,8 @@ def live_view(config, link, session_dir, host: str = "127.0.0.1", port: int = 0,
     view = LiveView(hub.start(), server.start(), LiveFeed(hub, link.camera).start())
     if not loopback(host):
         progress(f"warning: the live view listens on {host}, not only on this machine: anyone who can reach it and "
-                 "has the URL (its token) sees the camera and the session")
+                 "has the URL (its token) sees the camera and the session"
+                 + ("; open it with this machine's address in place of the wildcard" if host in ("0.0.0.0", "::") else ""))
     progress(f"live view: {view.url}")
     try:
         yield view

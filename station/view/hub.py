@@ -59,7 +59,7 @@ class ViewHub:
         self.frame_json, self.frame_version = "", 0
         self.encoded = 0
         self._last_image = (None, 0)  # the camera frame last shown, and its number
-        self.closed = False
+        self.closed = self.finished = False
         self._thread = threading.Thread(target=self._run, name="view-hub", daemon=True)
 
     # ---------------------------------------------------------------------------- capture side
@@ -120,6 +120,7 @@ class ViewHub:
         if frame is not None and frame[1] != LIVE:
             self._publish_frame(*frame)
         with self._changed:
+            self.finished = True  # all published: the pages' streams may end once they have sent it
             self._changed.notify_all()
 
     def _fold_events(self) -> None:
@@ -176,11 +177,12 @@ class ViewHub:
     # ------------------------------------------------------------------------------ server side
     def wait(self, state_version: int, frame_version: int, timeout_s: float) -> tuple:
         """Wait until the state or the frame is newer than the versions given (or ``timeout_s``, or the
-        hub closes): ``(state_version, state_json, frame_version, frame_json)``."""
+        hub has published its last): ``(finished, state_version, state_json, frame_version, frame_json)``,
+        ``finished`` True when nothing will follow what it returns."""
         with self._changed:
-            self._changed.wait_for(lambda: self.closed or self.state_version != state_version
+            self._changed.wait_for(lambda: self.finished or self.state_version != state_version
                                    or self.frame_version != frame_version, timeout_s)
-            return self.state_version, self.state_json, self.frame_version, self.frame_json
+            return self.finished, self.state_version, self.state_json, self.frame_version, self.frame_json
 
     def client(self, delta: int) -> None:
         with self._lock:

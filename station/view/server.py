@@ -66,8 +66,7 @@ def _handler(server: "ViewServer"):
             seen_state = seen_frame = -1
             try:
                 while not server.stopping.is_set():
-                    closed = hub.closed
-                    state_v, state, frame_v, frame = hub.wait(seen_state, seen_frame, _KEEPALIVE_S)
+                    finished, state_v, state, frame_v, frame = hub.wait(seen_state, seen_frame, _KEEPALIVE_S)
                     out = []
                     if state_v != seen_state:
                         out.append(f"event: state\ndata: {state}\n\n")
@@ -76,7 +75,7 @@ def _handler(server: "ViewServer"):
                     seen_state, seen_frame = state_v, frame_v
                     self.wfile.write(("".join(out) or ": keep-alive\n\n").encode("utf-8"))
                     self.wfile.flush()
-                    if closed:  # what the hub published last has been sent
+                    if finished:  # what the hub published last has been sent
                         break
             except (BrokenPipeError, ConnectionResetError, OSError):
                 pass
