@@ -6,7 +6,7 @@ found automatically, so adding a module or a sub-package needs no change here.""
 from setuptools import find_packages, setup
 
 ROOMS = ("calibration", "drivers", "station", "rapid", "mocks")
-DATA = [f"**/*.{ext}" for ext in ("yaml", "yml", "json", "md", "txt", "mod", "modx", "sys", "tmpl", "j2", "png")]
+DATA = [f"**/*.{ext}" for ext in ("yaml", "yml", "json", "md", "txt", "mod", "modx", "sys", "tmpl", "j2", "png", "html")]
 
 packages, package_dir = ["handeye"], {"handeye": "top"}
 for room in ROOMS:

@@ -64,6 +64,7 @@ from ..calibration.transforms import pose_from_transform, rotation_error_deg, tr
 from ..calibration.views import PinholeView, ViewSampling
 from ..drivers.camera.errors import CameraError, SquareSizeMismatch
 from ..drivers.camera.triangulate import triangulate_images
+from .capture_events import CAPTURED, SKIPPED, CaptureStarted, Measured, Prompt, Verdict
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
 from .cell_plan import cell_check
@@ -81,6 +82,7 @@ __all__ = [
     "install_program",
     "measure_board",
     "measure_with_retries",
+    "grab_observer",
     "measurement_line",
     "read_flange",
     "store_posture",
@@ -182,8 +184,12 @@ def stereo_views(model) -> tuple[PinholeView, PinholeView]:
 def measure_board(camera, model, board: BoardGeometry, timeout_s: float = 2.0):
     """Grab one frame and triangulate the board: ``TriangulationResult`` (raises CameraError)."""
     frame = camera.grab(timeout_s)
+    return _triangulate(frame, model, board), frame
+
+
+def _triangulate(frame, model, board: BoardGeometry):
     return triangulate_images(frame.left, frame.right, board=f"{board.corners[0]}x{board.corners[1]}",
-                              square_mm=board.square_mm, model=model), frame
+                              square_mm=board.square_mm, model=model)
 
 
 def _quality_problem(result, config: StationConfig) -> str | None:
@@ -465,12 +471,14 @@ def release_waiting_posture(controller, done: set, progress) -> None:
 
 
 def visit_postures(config: StationConfig, session_dir: Path, run: CaptureRun, link: StationLink, on_posture,
-                   stop_after: int | None = None) -> tuple[list, dict]:
+                   stop_after: int | None = None, observer: Callable | None = None) -> tuple[list, dict]:
     """The posture loop: move, measure, write each posture not yet on disk, record skips, acknowledge.
 
     Returns the posture numbers (the files' ``NNN``) captured in this run and ``{number: reason}`` of those
-    skipped. The controller is asked for posture ``index + 1`` (its program counts from 1).
+    skipped. The controller is asked for posture ``index + 1`` (its program counts from 1). ``observer``
+    receives the ``station.capture_events`` of each posture (Prompt, Measured per grab, Verdict).
     """
+    observer = observer or (lambda event: None)
     controller, robot = link.controller, load_robot(config.robot)
     total, done = len(run.plan_joints), run.done
     record = run.session.extra["capture"]
@@ -483,8 +491,9 @@ def visit_postures(config: StationConfig, session_dir: Path, run: CaptureRun, li
         k = index + 1  # the controller's number of the posture
         status = controller.status()
         if not (status.awaiting_ack and status.posture == k):
+            observer(Prompt("move", f"moving to posture {index} ({len(done) + n + 1} of {total})", index))
             controller.goto_posture(k, expected_joints=run.plan_joints[index])
-        report = _capture_posture(config, session_dir, link, robot, index, total, run.plan_joints[index])
+        report = _capture_posture(config, session_dir, link, robot, index, total, run.plan_joints[index], observer)
         report.elapsed_s, report.done = time.monotonic() - t0, len(done) + n + 1
         if report.ok:
             captured.append(index)
@@ -508,6 +517,7 @@ def capture(
     stop_after: int | None = None,
     plan_only: bool = False,
     confirm: Callable[[str], bool] | None = None,
+    observer: Callable | None = None,
 ) -> CaptureSummary:
     """Run (or resume) a capture into ``session_dir``: plan (or resume), program, confirm, release a
     posture left waiting, visit the postures.
@@ -534,6 +544,9 @@ def capture(
         ``confirm(question) -> bool``, asked once before the first move of this run at a real station
         (the operator's yes). Without it a real station refuses to move; the embedded mock moves
         without asking and says so.
+    observer : callable, optional
+        Receives the ``station.capture_events`` from the capture thread (the live view): CaptureStarted
+        once the session is open, then per posture Prompt, Measured (each grab) and Verdict.
 
     Raises
     ------
@@ -552,8 +565,11 @@ def capture(
     install_program(config, session_dir, run.plan_joints, link, progress, run.board2base)
     confirm_motion(config, session_dir, run, link, confirm, progress)
     already = sorted(run.done)
+    if observer is not None:
+        observer(CaptureStarted("planned", str(session_dir), list(run.session.postures),
+                                dict(run.session.extra["capture"].get("skipped", {})), run.plan_joints))
     release_waiting_posture(link.controller, run.done, progress)
-    captured, skipped = visit_postures(config, session_dir, run, link, on_posture, stop_after)
+    captured, skipped = visit_postures(config, session_dir, run, link, on_posture, stop_after, observer)
     if link.stop_program is not None and stop_after is None:
         link.stop_program()  # the PC started it (RWS); a resumed capture loads and starts it again
         progress("RAPID program stopped: the capture went through the plan")
@@ -613,19 +629,26 @@ def read_flange(config: StationConfig, link: StationLink, robot, label: str) -> 
     return joints, tool02base
 
 
-def measure_with_retries(config: StationConfig, link: StationLink):
+def measure_with_retries(config: StationConfig, link: StationLink, on_grab: Callable | None = None):
     """Grab and triangulate until the quality holds (``capture.retries`` more tries): ``(result, frame,
-    problem, attempts)``, ``problem`` None when the measurement is good."""
+    problem, attempts)``, ``problem`` None when the measurement is good. ``on_grab(result, frame, problem)``,
+    when given, after every grab (``result`` None when the board was not measured)."""
     problem = "no frame"
     result = frame = None
     attempts = 0
     for attempts in range(1, config.capture.retries + 2):
+        grabbed = None
         try:
-            result, frame = measure_board(link.camera, link.stereo_model, config.target, config.camera.grab_timeout_s)
+            grabbed = link.camera.grab(config.camera.grab_timeout_s)
+            result, frame = _triangulate(grabbed, link.stereo_model, config.target), grabbed
         except CameraError as exc:
             problem = str(exc)
+            if on_grab is not None and grabbed is not None:
+                on_grab(None, grabbed, problem)
             continue
         problem = _quality_problem(result, config)
+        if on_grab is not None:
+            on_grab(result, frame, problem)
         if problem is None:
             break
     return result, frame, problem, attempts
@@ -655,16 +678,29 @@ def measurement_line(quality: dict) -> str:
             f"{quality['row_disagreement_max_px']:.2f} px, plane {quality['plane_rms_mm']:.2f} mm")
 
 
-def _capture_posture(config, session_dir, link: StationLink, robot, index, total, planned) -> PostureReport:
+def grab_observer(observer: Callable | None, index: int, tool02base) -> Callable | None:
+    """``on_grab`` of :func:`measure_with_retries` that hands each grab to ``observer`` as a ``Measured`` event."""
+    if observer is None:
+        return None
+    return lambda result, frame, problem: observer(Measured(index, frame, result, problem, tool02base))
+
+
+def _capture_posture(config, session_dir, link: StationLink, robot, index, total, planned,
+                     observer: Callable | None = None) -> PostureReport:
     """Steps 2-4 at posture ``index`` (the robot at rest there): check the pose, measure, write the posture file."""
+    observer = observer or (lambda event: None)
     joints, tool02base = read_flange(config, link, robot, f"posture {index}")
     if np.max(np.abs(joints - planned)) > 0.05:
         raise CaptureError(f"posture {index}: the robot stands at {np.round(joints, 3).tolist()}, not at the planned "
                            f"{np.round(planned, 3).tolist()}: is the right program loaded?")
-    result, frame, problem, attempts = measure_with_retries(config, link)
+    result, frame, problem, attempts = measure_with_retries(config, link, grab_observer(observer, index, tool02base))
     if problem is not None:
-        return PostureReport(index, total, False, f"posture {index} skipped after {attempts} attempt(s): {problem}",
-                             result.quality if result is not None else {}, attempts)
+        report = PostureReport(index, total, False, f"posture {index} skipped after {attempts} attempt(s): {problem}",
+                               result.quality if result is not None else {}, attempts)
+        observer(Verdict(index, SKIPPED, report.message, report.quality))
+        return report
     store_posture(config, session_dir, index, joints, tool02base, result, frame, controller_posture=index + 1)
-    return PostureReport(index, total, True, f"posture {index}: {measurement_line(result.quality)}", result.quality,
-                         attempts)
+    report = PostureReport(index, total, True, f"posture {index}: {measurement_line(result.quality)}", result.quality,
+                           attempts)
+    observer(Verdict(index, CAPTURED, report.message, result.quality, tool02base, result.points_mm))
+    return report

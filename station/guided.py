@@ -44,12 +44,14 @@ from ..calibration.transforms import rotation_error_deg
 from .capture import (
     CaptureError,
     PostureReport,
+    grab_observer,
     measure_with_retries,
     measurement_line,
     read_flange,
     stereo_views,
     store_posture,
 )
+from .capture_events import CAPTURED, NOT_CAPTURED, TOO_CLOSE, CaptureStarted, Prompt, Verdict
 from .cell_plan import cell_check
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
@@ -247,9 +249,11 @@ def _open_guided(config: StationConfig, session_dir: Path, progress) -> Session:
 class _GuidedRun:
     """One run of the guided loop on a connected station."""
 
-    def __init__(self, config: StationConfig, session_dir: Path, link: StationLink, progress, on_posture):
+    def __init__(self, config: StationConfig, session_dir: Path, link: StationLink, progress, on_posture,
+                 observer: Callable | None = None):
         self.config, self.session_dir, self.link = config, session_dir, link
         self.progress, self.on_posture = progress, on_posture
+        self.observer = observer or (lambda event: None)
         self.robot = load_robot(config.robot)
         self.thresholds = config_thresholds(config)
         self.view = stereo_views(link.stereo_model)[0]
@@ -260,6 +264,8 @@ class _GuidedRun:
         self.captured: list = []
         self._told = None
         self.guard = cell_check(config).guard(self.robot)  # the configured volumes (the stand needs a board pose)
+        self.observer(CaptureStarted("guided", str(session_dir), list(self.session.postures),
+                                     dict(self.session.extra["capture"].get("skipped", {}))))
 
     def missing(self) -> list:
         s = self.state
@@ -272,8 +278,10 @@ class _GuidedRun:
             self.progress(f"GOOD ENOUGH: {len(self.state.tool02base)} postures meet the verdict's thresholds and the "
                           "guided targets; add more or stop (Ctrl-C), then: handeye calibrate "
                           f"{self.session_dir} --report")
+            self.observer(Prompt("jog", "GOOD ENOUGH: add more or stop"))
             return
         self.progress("missing: " + "; ".join(m.line() for m in missing))
+        self.observer(Prompt("jog", missing[0].advice))
 
     def at_rest(self, joints) -> None:
         """The arm rests at ``joints``: capture there when it is somewhere new."""
@@ -281,8 +289,10 @@ class _GuidedRun:
         rot, dist, k = self.state.nearest(self.robot.forward_transform(joints))
         if rot < g.min_step_deg and dist < g.min_step_mm:
             if self._told != k:
-                self.progress(f"at rest {rot:.1f} deg and {dist:.0f} mm from a captured posture: move on (at least "
-                              f"{g.min_step_deg:g} deg or {g.min_step_mm:g} mm)")
+                line = (f"at rest {rot:.1f} deg and {dist:.0f} mm from a captured posture: move on (at least "
+                        f"{g.min_step_deg:g} deg or {g.min_step_mm:g} mm)")
+                self.progress(line)
+                self.observer(Verdict(self.state.next_index, TOO_CLOSE, line))
                 self._told = k
             return
         self._told = None
@@ -291,16 +301,20 @@ class _GuidedRun:
             self.progress(f"careful: {near.describe()} (cell.margin_mm {self.guard.margin_mm:g}): jog away from it")
         index = self.state.next_index
         joints, tool02base = read_flange(self.config, self.link, self.robot, f"posture {index}")
-        result, frame, problem, attempts = measure_with_retries(self.config, self.link)
+        result, frame, problem, attempts = measure_with_retries(self.config, self.link,
+                                                                grab_observer(self.observer, index, tool02base))
         if problem is not None:
-            self.progress(f"not captured after {attempts} attempt(s): {problem}; turn back towards the board")
+            line = f"not captured after {attempts} attempt(s): {problem}; turn back towards the board"
+            self.progress(line)
+            self.observer(Verdict(index, NOT_CAPTURED, line, result.quality if result is not None else {}))
             return
         store_posture(self.config, self.session_dir, index, joints, tool02base, result, frame, guided=True)
         self.state.add(index, tool02base, result.points_mm, self.view)
         self.captured.append(index)
         count = len(self.state.tool02base)
-        self.on_posture(PostureReport(index, count, True, f"posture {index}: {measurement_line(result.quality)}",
-                                      result.quality, attempts, done=count))
+        line = f"posture {index}: {measurement_line(result.quality)}"
+        self.observer(Verdict(index, CAPTURED, line, result.quality, tool02base, result.points_mm))
+        self.on_posture(PostureReport(index, count, True, line, result.quality, attempts, done=count))
         self.say_missing()
 
 
@@ -312,6 +326,7 @@ def guided_capture(
     on_posture: Callable[[PostureReport], None] = lambda report: None,
     stop: threading.Event | None = None,
     clock: Callable[[], float] = time.monotonic,
+    observer: Callable | None = None,
 ) -> GuidedSummary:
     """Run (or resume) an operator-guided capture into ``session_dir`` until ``stop`` is set, Ctrl-C, or
     ``guided.max_postures`` postures are on disk.
@@ -332,6 +347,9 @@ def guided_capture(
         Set to end the run (a test's scripted operator; the command ends on Ctrl-C).
     clock : callable
         Monotonic seconds (the still time is measured on it).
+    observer : callable, optional
+        Receives the ``station.capture_events`` from the capture thread (the live view): CaptureStarted,
+        a Prompt (``jog``) with the next hint after each change, Measured (each grab) and Verdict.
 
     Raises
     ------
@@ -340,7 +358,7 @@ def guided_capture(
     started = clock()
     session_dir = Path(session_dir)
     stop = stop or threading.Event()
-    run = _GuidedRun(config, session_dir, link, progress, on_posture)
+    run = _GuidedRun(config, session_dir, link, progress, on_posture, observer)
     already = len(run.state.tool02base)
     run.say_missing()
     watch = StillWatch(config.guided.still_s, config.guided.still_tolerance_deg)

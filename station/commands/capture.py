@@ -36,6 +36,16 @@ flow can be rehearsed end to end; a rehearsal config (camera.mock_arm) is refuse
 controller only answers joint and pose reads (its link module must run while you jog: on a real
 IRC5 that needs the link in a background task, see the README's known limits).
 
+--view: serve a live page while capturing (planned or guided) on 127.0.0.1, a free port, printed as
+"live view: http://127.0.0.1:PORT/?token=..." (the token is new each run; a request without it gets
+403). Open it in a browser at the station: the latest left and right images with the corners found
+(and, once the postures allow a calibration, red crosses where it predicts them), live frames while
+the robot moves, the board position in the 3x3 image grid, the rotation axes on a sphere with the
+next turn as an arrow, the distance spread, the posture list with each posture's quality or why it
+was skipped, what is still missing, the progress, GOOD ENOUGH, and for a planned capture the plan
+with the current posture and the time left. --view-host ADDRESS binds elsewhere (another machine
+may then watch; warned). The page loads nothing from the internet.
+
 Each posture is named by the number of its file (postures/NNN.yaml -> NNN, from 0) in these lines,
 the preview, the RAPID program's comments (the controller's jtHePost<k> is posture k - 1) and by
 calibrate and its report.
@@ -79,7 +89,38 @@ def add_parser(sub):
     mode.add_argument("--plan-only", action="store_true", help="plan, write the preview and the RAPID program; move nothing")
     mode.add_argument("--guided", action="store_true", help="the operator jogs; capture whenever the arm rests somewhere new")
     p.add_argument("--yes", action="store_true", help="move without asking (scripts; a real station asks otherwise)")
+    p.add_argument("--view", action="store_true", help="serve a live page of the capture (URL with a token printed)")
+    p.add_argument("--view-host", metavar="ADDRESS", help="with --view: listen on ADDRESS instead of 127.0.0.1 "
+                   "(other machines may then reach the page; warned)")
     return p
+
+
+def _view(config, args, link, say):
+    """The live view's context (``station.view.live_view``) with --view, else one that yields None."""
+    import contextlib
+
+    from ...calibration.errors import HandEyeError, UsageError
+
+    if not args.view:
+        if args.view_host:
+            raise UsageError("--view-host needs --view")
+        return contextlib.nullcontext()
+    from ..view import live_view
+
+    @contextlib.contextmanager
+    def opened():
+        try:
+            context = live_view(config, link, args.session, host=args.view_host or "127.0.0.1", progress=say)
+            view = context.__enter__()
+        except OSError as exc:
+            raise HandEyeError(f"the live view cannot listen on {args.view_host or '127.0.0.1'} ({exc.strerror or exc}): "
+                               "give --view-host an address of this machine, or leave --view out") from None
+        try:
+            yield view
+        finally:
+            context.__exit__(None, None, None)
+
+    return opened()
 
 
 def _ask(question: str) -> bool:
@@ -130,13 +171,14 @@ def run(args) -> int:
         print(rehearsal_banner(config), flush=True)
     if args.guided:
         return _run_guided(config, args, say)
-    with open_station(config, session_dir=args.session) as link, progress_bar("capture") as update:
+    with open_station(config, session_dir=args.session) as link, _view(config, args, link, say) as view, \
+            progress_bar("capture") as update:
         def on_posture(report):
             say(("  ok    " if report.ok else "  SKIP  ") + report.message + f"  ({report.elapsed_s:.1f} s)")
             update(report.done, report.total, f"posture {report.index}")
 
         summary = capture(config, args.session, link, progress=say, on_posture=on_posture, plan_only=args.plan_only,
-                          confirm=_confirmation(args))
+                          confirm=_confirmation(args), observer=None if view is None else view.observer)
     if args.plan_only:
         say((f"next: look at {summary.preview}, then " if summary.preview is not None else "next: ")
             + "the same command without --plan-only")
@@ -162,14 +204,16 @@ def _run_guided(config, args, say) -> int:
     if refusal:
         raise HandEyeError(refusal)
     stop = threading.Event()  # the embedded mock's simulated operator sets it when done
-    with open_station(config, session_dir=args.session) as link, mock_operator(config, link, stop, say) as operator:
+    with open_station(config, session_dir=args.session) as link, _view(config, args, link, say) as view, \
+            mock_operator(config, link, stop, say) as operator:
         def on_posture(report):
             say("  ok    " + report.message)
             if operator is not None:
                 operator.captured(report)
 
         try:
-            summary = guided_capture(config, args.session, link, progress=say, on_posture=on_posture, stop=stop)
+            summary = guided_capture(config, args.session, link, progress=say, on_posture=on_posture, stop=stop,
+                                     observer=None if view is None else view.observer)
         except KeyboardInterrupt:
             say(f"stopped; the postures on disk stay in {args.session}: run the same command to add more")
             return 0
