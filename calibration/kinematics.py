@@ -341,6 +341,10 @@ class InverseKinematicsResult:
     rotation_error_deg: float
 
 
+#: Relative forward-difference step of the inverse kinematics' Jacobian (scipy's default for '2-point').
+_FD_STEP = float(np.finfo(float).eps ** 0.5)
+
+
 def inverse_kinematics(
     robot: RobotModel,
     tool02base,
@@ -361,19 +365,30 @@ def inverse_kinematics(
     seed_deg : array-like, shape (k,)
     """
     target = np.asarray(tool02base, dtype=float)
-    target_rotation = Rotation.from_matrix(target[:3, :3])
+    target_inverse = Rotation.from_matrix(target[:3, :3]).inv()
     lever_mm = 500.0  # weights orientation like a position error at half a metre
 
-    def residual(joints):
+    def residuals(joints):
+        """Pose error ``(..., 6)`` of controller angles ``(..., k)``: mm, and lever x rotation vector."""
         p, q = robot.forward(joints)
-        rot_err = (target_rotation.inv() * Rotation.from_quat(q, scalar_first=True)).as_rotvec()
-        return np.concatenate([p - target[:3, 3], lever_mm * rot_err])
+        rot_err = (target_inverse * Rotation.from_quat(np.reshape(q, (-1, 4)), scalar_first=True)).as_rotvec()
+        return np.concatenate([p - target[:3, 3], lever_mm * rot_err.reshape(p.shape)], axis=-1)
 
     low = robot.joint_limits_deg[:, 0] + margin_deg
     high = robot.joint_limits_deg[:, 1] - margin_deg
+
+    def jacobian(joints):
+        # scipy's forward differences ('2-point': step sqrt(eps) * max(1, |x|), turned back at a
+        # bound), all k steps through one batched forward kinematics instead of k calls
+        step = _FD_STEP * np.maximum(1.0, np.abs(joints)) * np.where(joints >= 0, 1.0, -1.0)
+        step = np.where((joints + step > high) | (joints + step < low), -step, step)
+        moved = residuals(np.vstack([joints, joints + np.diag(step)]))
+        return ((moved[1:] - moved[0]) / step[:, None]).T
+
     seed = np.clip(np.asarray(seed_deg, dtype=float), low + 1e-9, high - 1e-9)
-    fit = least_squares(residual, seed, bounds=(low, high), x_scale=1.0, xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=100)
-    r = residual(fit.x)
+    fit = least_squares(residuals, seed, jac=jacobian, bounds=(low, high), x_scale=1.0, xtol=1e-12, ftol=1e-12,
+                        gtol=1e-12, max_nfev=100)
+    r = residuals(fit.x)
     pos_err = float(np.linalg.norm(r[:3]))
     rot_err = float(np.degrees(np.linalg.norm(r[3:]) / lever_mm))
     ok = pos_err <= tolerance_mm and rot_err <= tolerance_deg
