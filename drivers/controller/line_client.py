@@ -17,7 +17,7 @@ import numpy as np
 from . import protocol as P
 from .errors import ControllerRefused, ControllerTimeout, InvalidRequest
 from .interface import Controller, Deadline, LinkDown
-from .types import AT, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_posture_index
+from .types import AT, DONE, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_posture_index, check_timeout
 
 __all__ = ["LineTransport", "LineController"]
 
@@ -266,6 +266,18 @@ class LineController(Controller):
         if echo != k:
             raise self.protocol_error(f"controller acknowledged posture {echo} when told {k}")
         return self._status(deadline)
+
+    # ------------------------------------------------------------------ the guided program
+    def guide(self, verdict: int, hint: int, timeout=None) -> int:
+        ((offered,),) = self._run("send the verdict and hint", [("GUIDE", (verdict, hint))], timeout)
+        return offered
+
+    def wait_operator(self, timeout: float) -> ControllerStatus | None:
+        try:
+            status = self._status(Deadline(check_timeout("timeout", timeout)))
+        except ControllerTimeout:
+            return None  # the program prompts or is stopped: the STATUS reply comes later (skipped by its id)
+        return status if status.state in (AT, LATE, DONE) else None
 
     # ------------------------------------------------------------------ tool data
     def _write_tool(self, tool: ToolData, deadline: Deadline) -> None:

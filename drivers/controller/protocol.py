@@ -22,6 +22,7 @@ import math
 import re
 from dataclasses import dataclass
 
+from ...rapid.guided import HINT_CODES, VERDICTS
 from .errors import ProtocolError
 from .types import STATES, WRITE_KEY_PATTERN, write_key_code
 
@@ -50,6 +51,7 @@ __all__ = [
     "write_key_code",
     "E_AUTH",
     "KEY_TRIES",
+    "GUIDED_COMMANDS",
 ]
 
 PROTOCOL_VERSION = 1
@@ -193,6 +195,10 @@ VERSION = IntField("protocol version", 0, 999)
 STATE = WordField("state", STATES)
 PROGRAM = WordField("program name")
 KEY = KeyField()
+VERDICT = IntField("verdict", min(v.code for v in VERDICTS), max(v.code for v in VERDICTS))
+HINT = IntField("hint", min(HINT_CODES), max(HINT_CODES))
+#: Commands only the guided program (``rapid generate --guided``) serves.
+GUIDED_COMMANDS = ("GUIDE",)
 
 
 @dataclass(frozen=True)
@@ -226,6 +232,8 @@ SPECS = {spec.name: spec for spec in (
     CommandSpec("GETTOOLROT", (), (QUATERNION,) * 4, "tframe.rot of the PERS tooldata"),
     CommandSpec("GETTOOLLOAD", (), (MASS,) + (POSITION,) * 3, "tload.mass and tload.cog of the PERS tooldata"),
     CommandSpec("BYE", (), (), "end the session (the socket server closes the connection)"),
+    CommandSpec("GUIDE", (VERDICT, HINT), (POSTURE,),
+                "guided program: the verdict on the last posture and the next hint; replies the postures offered so far"),
 )}
 
 
