@@ -56,7 +56,49 @@ from .origin import MOCK, REAL, session_origin
 from .quality import QualityThresholds, config_thresholds, direction_name, motion_shortfalls
 from .runtime import StationLink
 
-__all__ = ["GuidedSummary", "Missing", "StillWatch", "guided_capture", "postures_needed", "what_is_missing"]
+__all__ = ["GuidedEvent", "GuidedSummary", "Missing", "StillWatch", "guided_capture", "postures_needed",
+           "what_is_missing"]
+
+
+@dataclass(frozen=True)
+class GuidedEvent:
+    """What happened in a guided capture, for an observer (``on_event``: a live view follows the loop).
+
+    Attributes
+    ----------
+    kind : str
+        ``prompt`` (the pendant shows a verdict and hint: the guided program), ``capture`` (a posture was
+        written), ``verdict`` (the PC's word on a posture offered or a rest: ``verdict`` names it) or
+        ``done`` (the operator ended the run).
+    message : str
+        The line the operator reads.
+    count : int
+        Postures on disk.
+    missing : tuple of Missing
+        What the set still lacks (empty: good enough).
+    index : int or None
+        ``capture``: the posture's file number.
+    verdict : str or None
+        A name of ``rapid.guided.VERDICTS`` (``CAPTURED``, ``TOO_CLOSE``, ``NOT_SEEN``, ``GOOD_ENOUGH``,
+        ``NEAR_VOLUME``; ``START`` for the first prompt).
+    hint : str or None
+        ``prompt``: the hint shown on the pendant.
+    joints_deg : tuple or None
+        ``capture``: the axis angles (deg).
+    """
+
+    kind: str
+    message: str
+    count: int
+    missing: tuple = ()
+    index: int | None = None
+    verdict: str | None = None
+    hint: str | None = None
+    joints_deg: tuple | None = None
+
+    @property
+    def good_enough(self) -> bool:
+        return self.count > 0 and not self.missing
 
 
 @dataclass(frozen=True)
@@ -247,9 +289,11 @@ def _open_guided(config: StationConfig, session_dir: Path, progress) -> Session:
 class _GuidedRun:
     """One run of the guided loop on a connected station."""
 
-    def __init__(self, config: StationConfig, session_dir: Path, link: StationLink, progress, on_posture):
+    def __init__(self, config: StationConfig, session_dir: Path, link: StationLink, progress, on_posture,
+                 on_event=None):
         self.config, self.session_dir, self.link = config, session_dir, link
         self.progress, self.on_posture = progress, on_posture
+        self.on_event = on_event or (lambda event: None)
         self.robot = load_robot(config.robot)
         self.thresholds = config_thresholds(config)
         self.view = stereo_views(link.stereo_model)[0]
@@ -260,6 +304,10 @@ class _GuidedRun:
         self.captured: list = []
         self._told = None
         self.guard = cell_check(config).guard(self.robot)  # the configured volumes (the stand needs a board pose)
+
+    def emit(self, kind: str, message: str, **fields) -> None:
+        """Tell the observer (``on_event``) what happened."""
+        self.on_event(GuidedEvent(kind, message, len(self.state.tool02base), tuple(self.missing()), **fields))
 
     def missing(self) -> list:
         s = self.state
@@ -283,6 +331,7 @@ class _GuidedRun:
             if self._told != k:
                 self.progress(f"at rest {rot:.1f} deg and {dist:.0f} mm from a captured posture: move on (at least "
                               f"{g.min_step_deg:g} deg or {g.min_step_mm:g} mm)")
+                self.emit("verdict", "too close to a captured posture", verdict="TOO_CLOSE")
                 self._told = k
             return
         self._told = None
@@ -294,14 +343,18 @@ class _GuidedRun:
         result, frame, problem, attempts = measure_with_retries(self.config, self.link)
         if problem is not None:
             self.progress(f"not captured after {attempts} attempt(s): {problem}; turn back towards the board")
+            self.emit("verdict", f"not captured: {problem}", verdict="NOT_SEEN")
             return
         store_posture(self.config, self.session_dir, index, joints, tool02base, result, frame, guided=True)
         self.state.add(index, tool02base, result.points_mm, self.view)
         self.captured.append(index)
         count = len(self.state.tool02base)
-        self.on_posture(PostureReport(index, count, True, f"posture {index}: {measurement_line(result.quality)}",
-                                      result.quality, attempts, done=count))
+        report = PostureReport(index, count, True, f"posture {index}: {measurement_line(result.quality)}",
+                               result.quality, attempts, done=count)
+        self.on_posture(report)
+        self.emit("capture", report.message, index=index, joints_deg=tuple(map(float, joints)))
         self.say_missing()
+        self.emit("verdict", "captured", verdict="GOOD_ENOUGH" if not self.missing() else "CAPTURED")
 
 
 def guided_capture(
@@ -312,6 +365,7 @@ def guided_capture(
     on_posture: Callable[[PostureReport], None] = lambda report: None,
     stop: threading.Event | None = None,
     clock: Callable[[], float] = time.monotonic,
+    on_event: Callable[[GuidedEvent], None] = lambda event: None,
 ) -> GuidedSummary:
     """Run (or resume) an operator-guided capture into ``session_dir`` until ``stop`` is set, Ctrl-C, or
     ``guided.max_postures`` postures are on disk.
@@ -332,6 +386,8 @@ def guided_capture(
         Set to end the run (a test's scripted operator; the command ends on Ctrl-C).
     clock : callable
         Monotonic seconds (the still time is measured on it).
+    on_event : callable
+        A :class:`GuidedEvent` after each capture and verdict (a live view follows the loop).
 
     Raises
     ------
@@ -340,7 +396,7 @@ def guided_capture(
     started = clock()
     session_dir = Path(session_dir)
     stop = stop or threading.Event()
-    run = _GuidedRun(config, session_dir, link, progress, on_posture)
+    run = _GuidedRun(config, session_dir, link, progress, on_posture, on_event)
     already = len(run.state.tool02base)
     run.say_missing()
     watch = StillWatch(config.guided.still_s, config.guided.still_tolerance_deg)

@@ -32,9 +32,12 @@ relative rotation angles, distance spread, where in the image the board has not 
 set is good enough for the verdict's thresholds. Stop with Ctrl-C; the same command resumes. With
 --mock nobody holds a pendant: a simulated operator jogs the embedded arm through --postures N
 postures around the board (lines "MOCK operator (simulated): ..."), then ends the run, so the guided
-flow can be rehearsed end to end; a rehearsal config (camera.mock_arm) is refused with --guided. The
-controller only answers joint and pose reads (its link module must run while you jog: on a real
-IRC5 that needs the link in a background task, see the README's known limits).
+flow can be rehearsed end to end. Over socket, serial and Modbus the capture writes and loads the
+guided RAPID program (SESSION/rapid, as rapid generate --guided): it prompts on the FlexPendant
+(guided.prompt: fk = TPReadFK, messagebox = UIMessageBox), stops for you to jog, and offers the
+posture when you press Start; Done on the pendant ends the run. A rehearsal (camera.mock_arm) plays
+the operator through the standalone mock's --pendant-port. Over Robot Web Services no program is
+needed: the PC reads the joints while you jog.
 
 Each posture is named by the number of its file (postures/NNN.yaml -> NNN, from 0) in these lines,
 the preview, the RAPID program's comments (the controller's jtHePost<k> is posture k - 1) and by
@@ -153,14 +156,11 @@ def run(args) -> int:
 def _run_guided(config, args, say) -> int:
     import threading
 
-    from ...calibration.errors import HandEyeError
     from ..guided import guided_capture
-    from ..mock_operator import guided_refusal, mock_operator
+    from ..guided_pendant import pendant_guided_capture, uses_guided_program
+    from ..mock_operator import mock_operator
     from ..runtime import open_station
 
-    refusal = guided_refusal(config)
-    if refusal:
-        raise HandEyeError(refusal)
     stop = threading.Event()  # the embedded mock's simulated operator sets it when done
     with open_station(config, session_dir=args.session) as link, mock_operator(config, link, stop, say) as operator:
         def on_posture(report):
@@ -169,7 +169,11 @@ def _run_guided(config, args, say) -> int:
                 operator.captured(report)
 
         try:
-            summary = guided_capture(config, args.session, link, progress=say, on_posture=on_posture, stop=stop)
+            if uses_guided_program(config, link):
+                summary = pendant_guided_capture(config, args.session, link, progress=say, on_posture=on_posture,
+                                                 stop=stop, on_event=lambda event: _say_event(say, event))
+            else:
+                summary = guided_capture(config, args.session, link, progress=say, on_posture=on_posture, stop=stop)
         except KeyboardInterrupt:
             say(f"stopped; the postures on disk stay in {args.session}: run the same command to add more")
             return 0
@@ -177,3 +181,9 @@ def _run_guided(config, args, say) -> int:
         + ("good enough" if summary.good_enough else "still missing: " + "; ".join(m.line() for m in summary.missing)))
     say(f"next: handeye calibrate {summary.session} --report")
     return 0
+
+
+def _say_event(say, event) -> None:
+    """The guided program's prompts, as the pendant shows them."""
+    if event.kind == "prompt":
+        say(event.message)
