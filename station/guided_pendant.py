@@ -1,4 +1,4 @@
-"""Guided capture with the guided RAPID program (``rapid/guided.py``): socket, serial and Modbus with no option.
+"""Guided capture with the guided RAPID program (``rapid/guided.py``): every link but RWS, no option.
 
 An IRC5 does not jog while a program runs in the motion task, so over these links the PC cannot watch
 the joints while the operator jogs (:mod:`handeye.station.guided` does, over Robot Web Services, or on
@@ -30,7 +30,7 @@ __all__ = ["pendant_guided_capture", "uses_guided_program", "hint_of", "install_
 
 
 def uses_guided_program(config: StationConfig, link: StationLink) -> bool:
-    """Whether ``capture --guided`` runs the guided RAPID program: over socket, serial and Modbus (the
+    """Whether ``capture --guided`` runs the guided RAPID program: over a line (socket or serial) and over Modbus (the
     links whose program the operator cannot jog beside); not over Robot Web Services (the PC reads the
     joints with no program) nor on the embedded mock (its simulated operator jogs beside the program)."""
     from ..rapid.generate import GUIDED_LINKS

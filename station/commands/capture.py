@@ -32,7 +32,7 @@ relative rotation angles, distance spread, where in the image the board has not 
 set is good enough for the verdict's thresholds. Stop with Ctrl-C; the same command resumes. With
 --mock nobody holds a pendant: a simulated operator jogs the embedded arm through --postures N
 postures around the board (lines "MOCK operator (simulated): ..."), then ends the run, so the guided
-flow can be rehearsed end to end. Over socket, serial and Modbus the capture writes and loads the
+flow can be rehearsed end to end. Over a line (socket or serial) and over Modbus the capture writes and loads the
 guided RAPID program (SESSION/rapid, as rapid generate --guided): it prompts on the FlexPendant
 (guided.prompt: fk = TPReadFK, messagebox = UIMessageBox), stops for you to jog, and offers the
 posture when you press Start; Done on the pendant ends the run. A rehearsal (camera.mock_arm) plays

@@ -38,7 +38,7 @@ shape the RAPID program; all are optional, missing ones come from the built-in s
 controller_address auto binds to GetSysInfo(\\LanIp); a virtual controller needs 127.0.0.1.
 (`handeye capture` plans the postures itself and writes its program into the session.)
 
---guided writes the guided capture's program instead of HeMain (socket, serial, modbus): HeGuide.mod
+--guided writes the guided capture's program instead of HeMain (every link but rws): HeGuide.mod
 (no jointtarget, never moves the robot) asks the PC what the posture set lacks, shows it on the
 FlexPendant (--prompt fk: TPReadFK, S4C+ and every RobotWare; messagebox: UIMessageBox, RobotWare
 6/7; default guided.prompt of the config), stops with Stop \\NoRegain for the operator to jog in

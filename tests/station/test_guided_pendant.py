@@ -158,3 +158,45 @@ def test_the_pendant_port_answers_in_one_line(cell):
         assert client.state().execution in ("running", "prompt")
     finally:
         client.close()
+
+
+def test_robot_web_services_guides_with_no_program(tmp_path):
+    """Over RWS the PC reads the joints while the operator jogs (the pendant port's JOG): no program loaded."""
+    from handeye.station.config import load_config
+    from handeye.station.guided import guided_capture
+    from handeye.station.runtime import open_station
+
+    base = {"controller": {"protocol": "rws"}, "camera": {"backend": "xb3"}, "plan": {"postures": 3},
+            "guided": {"still_s": 0.3, "poll_s": 0.05}}
+    (tmp_path / "mock.yaml").write_text(yaml.safe_dump(base))
+    proc, link, mock_arm, pendant = _start_mock("rws", tmp_path / "mock.yaml")
+    try:
+        path = tmp_path / "rehearsal.yaml"
+        path.write_text(yaml.safe_dump({**base, "controller": {"protocol": "rws", **link},
+                                        "camera": {"backend": "mock", "mock_arm": mock_arm}}))
+        assert main(["capture", "--config", str(path), "--session", str(tmp_path / "plan"), "--plan-only"]) == 0
+        joints = np.array(read_session(tmp_path / "plan").extra["capture"]["plan_joints_deg"], float)
+        config, stop, taken = load_config(path), threading.Event(), threading.Semaphore(0)
+
+        def operator():
+            client = PendantClient(pendant, 30)
+            try:
+                for target in joints:
+                    assert client.jog(target).startswith("OK")
+                    assert taken.acquire(timeout=30), "the posture was not captured"
+            finally:
+                client.close()
+                stop.set()
+
+        thread = threading.Thread(target=operator, daemon=True)
+        with open_station(config, session_dir=tmp_path / "g") as station_link:
+            thread.start()
+            summary = guided_capture(config, tmp_path / "g", station_link, on_posture=lambda report: taken.release(),
+                                     stop=stop)
+        thread.join(30)
+        assert summary.captured == [0, 1, 2]
+        assert not (tmp_path / "g" / "rapid").exists()  # no program: the PC only read the joints
+        for posture, target in zip(read_session(tmp_path / "g").postures, joints):
+            assert np.allclose(posture.joints_deg, target, atol=1e-3)
+    finally:
+        stop_standalone_mock(proc)
