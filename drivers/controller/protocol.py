@@ -22,7 +22,6 @@ import math
 import re
 from dataclasses import dataclass
 
-from ...rapid.guided import HINT_CODES, VERDICTS
 from .errors import ProtocolError
 from .types import STATES, WRITE_KEY_PATTERN, write_key_code
 
@@ -195,8 +194,10 @@ VERSION = IntField("protocol version", 0, 999)
 STATE = WordField("state", STATES)
 PROGRAM = WordField("program name")
 KEY = KeyField()
-VERDICT = IntField("verdict", min(v.code for v in VERDICTS), max(v.code for v in VERDICTS))
-HINT = IntField("hint", min(HINT_CODES), max(HINT_CODES))
+#: The guided program's verdict and hint codes (their names and pendant texts: ``rapid/guided.py``, which
+#: keeps the same ranges; a test checks they agree).
+VERDICT = IntField("verdict", 1, 6)
+HINT = IntField("hint", 0, 15)
 #: Commands only the guided program (``rapid generate --guided``) serves.
 GUIDED_COMMANDS = ("GUIDE",)
 

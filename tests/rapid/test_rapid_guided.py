@@ -55,7 +55,8 @@ def test_the_guided_dispatcher_serves_every_codec_command_and_the_planned_one_no
         assert all(cases[name] == len(spec.args) for name, spec in P.SPECS.items())
         planned = render_program(default_station(), protocol=protocol)[1].text
         assert '"GUIDE"' not in planned and "HeLinkWaitGuide" not in planned  # the planned program is as it was
-    assert P.VERDICT.high == max(v.code for v in VERDICTS) and P.HINT.high == max(HINT_CODES)
+    assert (P.VERDICT.low, P.VERDICT.high) == (min(v.code for v in VERDICTS), max(v.code for v in VERDICTS))
+    assert (P.HINT.low, P.HINT.high) == (min(HINT_CODES), max(HINT_CODES))
 
 
 def test_the_guided_io_module_uses_the_guide_registers_of_the_map(guided):
