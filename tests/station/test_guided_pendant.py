@@ -115,6 +115,28 @@ def test_a_jog_into_a_keep_out_volume_is_stopped_and_the_capture_says_so(cell, c
     assert [p.index for p in read_session(session).postures] == [0]  # the stopped jog's rest is not captured
 
 
+def test_a_link_cut_while_the_pendant_asks_recovers_within_the_run(cell, capsys, monkeypatch):
+    """The PC's connection dies while the program prompts: the PC connects again (its request waits until the
+    program serves) and goes on; every posture once."""
+    if cell["protocol"] != "socket":
+        pytest.skip("a connection to cut: the socket link")
+    from handeye.station import guided_pendant
+
+    session, first = cell["folder"] / "cut", 2
+    real, cut = guided_pendant._wait_for_operator, []
+
+    def cutting(run, stop, wait_s):
+        if len(run.state.tool02base) == first and not cut:
+            cut.append(run.link.controller.reconnects)
+            run.link.controller._drop()  # the socket closed under the PC
+        return real(run, stop, wait_s)
+
+    monkeypatch.setattr(guided_pendant, "_wait_for_operator", cutting)
+    rc, out = _guided(cell, session, PendantOperator(cell["pendant"], cell["postures"][:4]), capsys)
+    assert rc == 0 and cut, out
+    assert [p.index for p in read_session(session).postures] == [0, 1, 2, 3]
+
+
 def test_an_interrupted_guided_capture_keeps_its_postures_and_resumes(cell, capsys, monkeypatch):
     """Ctrl-C while the pendant asks: the postures stay, once each; the same command goes on from there."""
     if cell["protocol"] == "serial":
