@@ -137,7 +137,6 @@ _LINE_PROCS = '''
   PROC HeLinkState()
     ! Nothing to publish: STATUS replies heState (a line is not served while the pendant prompts or
     ! the program is stopped; the PC's request waits).
-    heTarget := 0;
   ENDPROC
 '''
 _IO_PROCS = '''  PROC HeLinkWaitGuide()

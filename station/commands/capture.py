@@ -25,19 +25,19 @@ the numbered postures; --plan-only writes the plan, the preview and the RAPID pr
 At a real station the first move waits for your yes (or --yes, for scripts); the mock says it moves
 without asking.
 
---guided: for cells that cannot run the automatic program. Jog the robot with the pendant; each time
-it rests (guided.still_s) somewhere new with the board in view, the posture is captured, and the
-command says what is still missing (postures, rotation-axis spread and which way to turn next,
-relative rotation angles, distance spread, where in the image the board has not been) and when the
-set is good enough for the verdict's thresholds. Stop with Ctrl-C; the same command resumes. With
---mock nobody holds a pendant: a simulated operator jogs the embedded arm through --postures N
-postures around the board (lines "MOCK operator (simulated): ..."), then ends the run, so the guided
-flow can be rehearsed end to end. Over a line (socket or serial) and over Modbus the capture writes and loads the
-guided RAPID program (SESSION/rapid, as rapid generate --guided): it prompts on the FlexPendant
-(guided.prompt: fk = TPReadFK, messagebox = UIMessageBox), stops for you to jog, and offers the
-posture when you press Start; Done on the pendant ends the run. A rehearsal (camera.mock_arm) plays
-the operator through the standalone mock's --pendant-port. Over Robot Web Services no program is
-needed: the PC reads the joints while you jog.
+--guided: for cells that calibrate by jogging. Over a line (socket or serial) and over Modbus the
+capture writes and loads the guided RAPID program (SESSION/rapid, as rapid generate --guided): the
+FlexPendant shows what the set still lacks (guided.prompt: fk = TPReadFK, messagebox = UIMessageBox);
+press Capture, jog to a new posture with the board in view, press Start: the posture is captured,
+or refused with the reason (too close to one captured, board not seen, within the margin of a
+keep-out volume), and the pendant says what to do next, then GOOD ENOUGH; Done ends the run. Over
+Robot Web Services no program is needed: the PC reads the joints and captures each time the arm
+rests (guided.still_s) somewhere new. Either way the command says what is still missing (postures,
+rotation-axis spread and which way to turn next, relative rotation angles, distance spread, where
+in the image the board has not been); stop with Ctrl-C, the same command resumes. With --mock
+nobody holds a pendant: a simulated operator jogs the embedded arm (joints read, as over RWS)
+through --postures N postures around the board (lines "MOCK operator (simulated): ..."), then ends
+the run. A rehearsal (camera.mock_arm) is played through the standalone mock's --pendant-port.
 
 Each posture is named by the number of its file (postures/NNN.yaml -> NNN, from 0) in these lines,
 the preview, the RAPID program's comments (the controller's jtHePost<k> is posture k - 1) and by
@@ -80,7 +80,8 @@ def add_parser(sub):
     p.add_argument("--postures", type=int, help="number of postures to plan (default: the config's, 30)")
     mode = p.add_mutually_exclusive_group()
     mode.add_argument("--plan-only", action="store_true", help="plan, write the preview and the RAPID program; move nothing")
-    mode.add_argument("--guided", action="store_true", help="the operator jogs; capture whenever the arm rests somewhere new")
+    mode.add_argument("--guided", action="store_true", help="the operator jogs: the guided RAPID program prompts on the pendant (over RWS and --mock: "
+                           "capture whenever the arm rests somewhere new)")
     p.add_argument("--yes", action="store_true", help="move without asking (scripts; a real station asks otherwise)")
     return p
 
