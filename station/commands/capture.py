@@ -80,7 +80,8 @@ def add_parser(sub):
     p.add_argument("--postures", type=int, help="number of postures to plan (default: the config's, 30)")
     mode = p.add_mutually_exclusive_group()
     mode.add_argument("--plan-only", action="store_true", help="plan, write the preview and the RAPID program; move nothing")
-    mode.add_argument("--guided", action="store_true", help="the operator jogs: the guided RAPID program prompts on the pendant (over RWS and --mock: "
+    mode.add_argument("--guided", action="store_true",
+                      help="the operator jogs: the guided RAPID program prompts on the pendant (over RWS and --mock: "
                            "capture whenever the arm rests somewhere new)")
     p.add_argument("--yes", action="store_true", help="move without asking (scripts; a real station asks otherwise)")
     return p
