@@ -48,6 +48,9 @@ def _start_mock(protocol: str, config):
     return proc, link, mock_arm, pendant
 
 
+_PLAN: dict = {}
+
+
 @pytest.fixture(scope="module", params=["socket", "serial", "modbus"])
 def cell(request, tmp_path_factory):
     """A standalone mock of the protocol, its rehearsal config and a planned capture's postures for the operator."""
@@ -62,8 +65,10 @@ def cell(request, tmp_path_factory):
     config.write_text(yaml.safe_dump({**base, "controller": {**base["controller"], **link},
                                       "camera": {"backend": "mock", "mock_arm": mock_arm}}))
     try:
-        assert main(["capture", "--config", str(config), "--session", str(folder / "plan"), "--plan-only"]) == 0
-        joints = np.array(read_session(folder / "plan").extra["capture"]["plan_joints_deg"], float)
+        if "joints" not in _PLAN:  # every mock process holds the same world: plan once
+            assert main(["capture", "--config", str(config), "--session", str(folder / "plan"), "--plan-only"]) == 0
+            _PLAN["joints"] = np.array(read_session(folder / "plan").extra["capture"]["plan_joints_deg"], float)
+        joints = _PLAN["joints"]
         yield {"protocol": protocol, "config": config, "pendant": pendant, "postures": joints, "folder": folder}
     finally:
         stop_standalone_mock(proc)
