@@ -198,6 +198,52 @@ class SimulatedRobot:
             self.moves += 1
             return self._duration
 
+    def jog(self, target_deg) -> tuple[float, object]:
+        """Jog towards ``target_deg`` (the operator's joystick, here axis-synchronised at the arm's speed);
+        returns ``(wall-clock duration, violation or None)``.
+
+        The cell check applies as to a program's moves, but a jog is not refused as a whole: motion
+        supervision stops the arm where its path first comes within the margin of a volume (the first
+        point the posture check itself finds there), and the violation says which and why.
+
+        Raises
+        ------
+        ValueError
+            The target is outside the joint limits.
+        """
+        target = np.asarray(target_deg, dtype=float).reshape(self.model.dof)
+        problems = self.model.limit_violations(target)
+        if problems:
+            raise ValueError(f"jog target outside the joint limits: {'; '.join(problems)}")
+        with self._lock:
+            self._settle()
+            start = self._joints_at(self._clock())
+            free = self._leaving_fraction(start, target)  # within the margin already: jogging out is allowed
+            if free is None:
+                return 0.0, self.guard.posture_violation(start)
+            clear_from = start + free * (target - start)
+            violation = self.path_violation(np.vstack([clear_from, target]))
+            if violation is None and free == 0.0:
+                return self.start_move(target), None
+            at = 1.0 if violation is None else free + violation.at * (1.0 - free)
+            while violation is not None and at < 1.0 and self.guard.posture_violation(start + at * (target - start)) is None:
+                at = min(1.0, at + 0.005)
+            guard, self.guard = self.guard, None  # where supervision stops the arm: the move up to there
+            try:
+                return self.start_move(start + at * (target - start)), violation
+            finally:
+                self.guard = guard
+
+    def _leaving_fraction(self, start, target) -> float | None:
+        """0 when ``start`` is clear of the cell; else the first fraction of the jog ``start -> target`` clear of
+        every volume's margin (the arm jogs out of it), None when the jog never leaves it."""
+        if self.guard is None or self.guard.posture_violation(start) is None:
+            return 0.0
+        for at in np.linspace(0.0, 1.0, 201)[1:]:
+            if self.guard.posture_violation(start + at * (target - start)) is None:
+                return float(at)
+        return None
+
     def path_violation(self, configurations):
         """The cell check of a path: the first place where the arm, moving joint-interpolated from each
         configuration of ``configurations`` ``(n, dof)`` to the next, comes closer to a volume of the cell

@@ -40,6 +40,8 @@ from .cell import CELL_MODULE, ZONE_TOOL, needs_cell_module, render_cell_text
 from .checks import check_program
 from .errors import RapidError
 from .literals import format_num, jointtarget_literal, speeddata_literal, tooldata_literal
+from .guided import GUIDE_MODULE, GUIDED_IO_SIGNALS, guide_fields
+from .guided import link_fields as guided_link_fields
 from .links import LINK_MODULES, RapidLink, read_template
 from .station import RapidStation, check_postures, default_station, load_station
 
@@ -50,6 +52,9 @@ __all__ = [
     "RapidModule",
     "render_main",
     "render_link",
+    "render_guide",
+    "render_guided_program",
+    "GUIDED_LINKS",
     "link_fields",
     "station_link",
     "render_tool",
@@ -73,6 +78,8 @@ IO_SIGNALS = (
     + [f"aoHeJ{i}" for i in range(1, 7)] + [f"aoHeQ{i}" for i in range(1, 5)]
     + [f"aoHeT{i}" for i in range(1, 12)] + [f"aiHeT{i}" for i in range(1, 12)]
 )
+#: The link modules that carry the guided program's requests.
+GUIDED_LINKS = ("HeSocket", "HeSerial", "HeIo")
 #: Publishing period of HeIo's timer interrupt (joints, pose, heartbeat), seconds.
 IO_PUBLISH_S = 0.1
 #: PollRate of HeRws' WaitUntil (s): how soon the program sees a PERS value the PC wrote over RWS.
@@ -151,10 +158,11 @@ def render_cell(station: RapidStation) -> RapidModule:
     return RapidModule(CELL_MODULE, render_cell_text(station, _header(station)))
 
 
-def link_fields(station: RapidStation) -> dict:
-    """The fields every link template is filled from (see :mod:`handeye.rapid.links`)."""
+def link_fields(station: RapidStation, guided: bool = False) -> dict:
+    """The fields every link template is filled from (see :mod:`handeye.rapid.links`); ``guided``: with the
+    guided program's requests (:mod:`handeye.rapid.guided`)."""
     keyed = station.write_key is not None  # the key itself goes into HeKey.sys only
-    fields = {"header": _header(station), "ack_timeout": format_num(station.ack_timeout_s, 3),
+    fields = {**guided_link_fields(guided), "header": _header(station), "ack_timeout": format_num(station.ack_timeout_s, 3),
               "tool": station.tool_name, "protocol_version": RAPID_PROTOCOL_VERSION, "key_tries": KEY_TRIES,
               "idle_timeout": format_num(station.idle_timeout_s, 3)}
     fields["session_data"] = _template("session_data.tmpl").substitute(fields).rstrip("\n")
@@ -187,11 +195,30 @@ def station_link(station: RapidStation, protocol: str | None = None) -> RapidLin
     return station.links[protocol]
 
 
-def render_link(station: RapidStation, protocol: str | None = None) -> RapidModule:
+def render_link(station: RapidStation, protocol: str | None = None, guided: bool = False) -> RapidModule:
     """The link module of ``protocol`` (default: the station's): its :class:`~handeye.rapid.links.RapidLink`
-    among ``station.links`` (HeSocket, HeSerial, HeIo, HeRws, or a plug-in's) filled from :func:`link_fields`."""
+    among ``station.links`` (HeSocket, HeSerial, HeIo, HeRws, or a plug-in's) filled from :func:`link_fields`
+    (``guided``: with the guided program's requests; only the built-in line and I/O links have them)."""
     link = station_link(station, protocol)
-    return RapidModule(link.module, link.text(station, link_fields(station)))
+    if guided and link.module not in GUIDED_LINKS:
+        raise RapidError(f"no guided program over {protocol or station.protocol}: it runs over "
+                         f"{', '.join(sorted(p for p, m in LINK_MODULES.items() if m in GUIDED_LINKS))} "
+                         "(Robot Web Services guides with no program: the PC reads the joints while the operator jogs)")
+    return RapidModule(link.module, link.text(station, link_fields(station, guided)))
+
+
+def render_guide(station: RapidStation, prompt: str = "fk") -> RapidModule:
+    """``HeGuide``: the guided program's main module (:mod:`handeye.rapid.guided`), prompting with
+    ``TPReadFK`` (``fk``) or ``UIMessageBox`` (``messagebox``, RobotWare 6/7)."""
+    try:
+        fields = guide_fields(prompt)
+    except ValueError as exc:
+        raise RapidError(str(exc)) from None
+    how = "TPReadFK (S4C+, RobotWare 5-7)" if prompt == "fk" else "UIMessageBox (RobotWare 6/7)"
+    text = _template("HeGuide.mod.tmpl").substitute(
+        header=_header(station, f"Guided capture, robot {station.robot}; the operator answers with {how}."),
+        **fields)
+    return RapidModule(GUIDE_MODULE, text)
 
 
 def render_tool(station: RapidStation, cam2tool0=None, comments=()) -> RapidModule:
@@ -257,6 +284,25 @@ def render_program(station: RapidStation | None = None, postures=None, protocol:
     return modules
 
 
+def render_guided_program(station: RapidStation | None = None, protocol: str | None = None, prompt: str = "fk",
+                          cam2tool0=None) -> list[RapidModule]:
+    """``[HeGuide, link module, HeTool]`` of the guided capture (``rapid generate --guided``), checked.
+
+    Raises
+    ------
+    RapidError
+        A link without the guided requests (Robot Web Services), an unknown prompt, or a failed check.
+    """
+    station = station or default_station()
+    modules = [render_guide(station, prompt), render_link(station, protocol, guided=True),
+               render_tool(station, cam2tool0)]
+    findings = check_program([(m.name, m.text) for m in modules], approved=np.zeros((0, 6)), robot=station.robot,
+                             external=IO_SIGNALS + list(GUIDED_IO_SIGNALS) + list(KEY_ROUTINES), move_tools=("tool0",))
+    if findings:
+        raise RapidError("generated guided RAPID failed its checks: " + "; ".join(map(str, findings[:5])))
+    return modules
+
+
 def write_modules(modules, directory) -> list[Path]:
     """Write each module to ``directory/<name>.mod`` (atomically); returns the paths."""
     folder = Path(directory)
@@ -289,14 +335,17 @@ def _write_secret(path: Path, text: str) -> Path:
     return path
 
 
-def generate_station_modules(output, config=None, protocol: str | None = None) -> list[Path]:
-    """Render the station's program (``config``: a station YAML path; None: the built-in station) into ``output``.
+def generate_station_modules(output, config=None, protocol: str | None = None, guided: bool = False,
+                             prompt: str = "fk") -> list[Path]:
+    """Render the station's program (``config``: a station YAML path; None: the built-in station) into ``output``;
+    ``guided``: the guided capture's (:func:`render_guided_program`, prompting with ``prompt``).
 
     With a write key in the station, ``HeKey.sys`` is written beside the program modules (not for a link
     whose controller authorises tool writes itself, ``RapidLink.write_key`` False: HeRws).
     """
     station = load_station(config) if config is not None else default_station()
-    modules = render_program(station, protocol=protocol)
+    modules = (render_guided_program(station, protocol, prompt) if guided
+               else render_program(station, protocol=protocol))
     if station.write_key is not None and station_link(station, protocol).write_key:
         modules.append(render_key(station))
     return write_modules(modules, output)

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 from ..calibration.cell import Box, CellModel, Cylinder, Floor, Sphere
 from ..calibration.errors import ConfigError, brief
-from .schema import Custom, Flag, Number, Optional, number, numbers, setting, text
+from ..rapid.guided import PROMPTS
+from .schema import Custom, Flag, Number, Optional, Text, number, numbers, setting, text
 
 __all__ = ["CellSettings", "GuidedSettings", "DEFAULT_CARRIED", "DEFAULT_KEEP_OUT"]
 
@@ -185,3 +186,7 @@ class GuidedSettings:
     min_image_cells: int = setting(7, Number(1, 9, integer=True), "of the 3x3 cells of the image, the board's "
                                    "corners should be seen in at least this many")
     max_postures: int = setting(60, Number(3, 255, integer=True), "stop after this many postures")
+    prompt: str = setting("fk", Text(lambda: PROMPTS), "how the guided RAPID program asks the operator: fk "
+                          "(TPReadFK, every RobotWare) or messagebox (UIMessageBox, RobotWare 6/7)")
+    operator_timeout_s: float = setting(1800.0, Number(10, 86400), "the guided program: how long the PC waits "
+                                        "for the operator's key or Start before it gives up", "s")

@@ -16,6 +16,9 @@ The session is the planned capture's format (``capture.mode: guided`` in its rec
 the same resume rules hold: run the same command again and the postures on disk stay, new ones are
 numbered after them; a session of the other station (mock / real) or of the planned capture is
 refused. The controller needs only to answer joints and pose reads: the PC never asks it to move.
+This loop watches the joints (Robot Web Services, the embedded mock); over a line or Modbus, where the
+controller does not jog beside a running program, :mod:`handeye.station.guided_pendant` runs the guided
+RAPID program instead, with the same session, words and events (``station.capture_events``).
 """
 
 from __future__ import annotations
@@ -58,7 +61,8 @@ from .origin import MOCK, REAL, session_origin
 from .quality import QualityThresholds, config_thresholds, direction_name, motion_shortfalls
 from .runtime import StationLink
 
-__all__ = ["GuidedSummary", "Missing", "StillWatch", "guided_capture", "postures_needed", "what_is_missing"]
+__all__ = ["GuidedSummary", "Missing", "StillWatch", "guided_capture", "postures_needed",
+           "what_is_missing"]
 
 
 @dataclass(frozen=True)

@@ -9,8 +9,8 @@ jogs the simulated arm to each in turn, rests there until the guided capture has
 ends the run (``stop``), as the operator's Ctrl-C would. The guided capture itself is the same code
 a real station runs: it sees nothing but the joints and the camera.
 
-A rehearsal config (``camera.mock_arm``: a standalone ``handeye mock controller``) has no way to
-jog its arm either; :func:`guided_refusal` says so before anything is opened.
+A rehearsal config (``camera.mock_arm``: a standalone ``handeye mock controller``) is played from
+outside through the mock's pendant port (``--pendant-port``).
 """
 
 from __future__ import annotations
@@ -39,13 +39,9 @@ PATIENCE_S = 15.0
 
 
 def guided_refusal(config: StationConfig) -> str | None:
-    """Why ``capture --guided`` cannot run on this station (a rehearsal: nobody can jog the standalone
-    mock's arm), or None."""
-    if not config.is_rehearsal:
-        return None
-    return (f"--guided needs someone to jog the arm, and the standalone mock controller of camera.mock_arm "
-            f"({config.camera.mock_arm}) has no pendant: rehearse the guided capture with --mock (a simulated "
-            "operator jogs the embedded arm), or rehearse the planned capture without --guided")
+    """Why ``capture --guided`` cannot run on this station, or None. A rehearsal (``camera.mock_arm``) runs:
+    the standalone mock's ``--pendant-port`` lets a person or a test play the operator (jogs, Start, keys)."""
+    return None
 
 
 def operator_postures(config: StationConfig, link: StationLink) -> np.ndarray:

@@ -361,6 +361,30 @@ class Controller(ABC):
     def read_tool(self, timeout: float | None = None) -> ToolData:
         """The program's camera tool data."""
 
+    # ------------------------------------------------------------------ the guided program
+    def guide(self, verdict: int, hint: int, timeout: float | None = None) -> int:
+        """Guided program (``rapid/guided.py``): the PC's verdict on the posture offered last and the next
+        hint (codes of ``rapid.guided``); the pendant then prompts the operator. Returns the number of
+        postures the operator offered so far.
+
+        Raises
+        ------
+        ControllerRefused
+            The link has no guided program (this base class: Robot Web Services guides with no program), or
+            the program is not waiting for a verdict.
+        """
+        raise self.refused_error(f"the {self.name} link has no guided program: capture --guided reads the "
+                                 "joints while the operator jogs")
+
+    def wait_operator(self, timeout: float) -> ControllerStatus | None:
+        """Guided program: wait up to ``timeout`` s for the operator: ``AT k`` (Start pressed after jogging to
+        the k-th posture offered) or ``DONE``; None when the operator is still at the pendant.
+
+        Over a line the program answers nothing while it prompts or is stopped (a single-task program):
+        the request waits, and a reply arriving after ``timeout`` is skipped by its id later.
+        """
+        raise self.refused_error(f"the {self.name} link has no guided program")
+
 
 def open_controller(name: str, *, connect: bool = True, **options) -> Controller:
     """A controller back end by name (any registered one: :data:`~.backends.CONTROLLERS`), connected

@@ -17,7 +17,7 @@ import numpy as np
 from . import protocol as P
 from .errors import ControllerRefused, ControllerTimeout, InvalidRequest
 from .interface import Controller, Deadline, LinkDown
-from .types import AT, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_posture_index
+from .types import AT, DONE, LATE, MOVING, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_posture_index, check_timeout
 
 __all__ = ["LineTransport", "LineController"]
 
@@ -95,6 +95,8 @@ class LineController(Controller):
         self.stale_replies = 0
         #: Replies dropped while flushing a shared (serial) line at connect.
         self.flushed_replies = 0
+        #: The id of a STATUS still waiting for its reply (``wait_operator``).
+        self._pending_status: int | None = None
 
     # ------------------------------------------------------------------ link
     @abstractmethod
@@ -143,6 +145,7 @@ class LineController(Controller):
             log.debug("dropping %r left on the line before our PING", raw)
 
     def _drop(self) -> None:
+        self._pending_status = None
         if self._transport is not None:
             transport, self._transport = self._transport, None
             transport.close()
@@ -158,6 +161,7 @@ class LineController(Controller):
 
     def _exchange(self, steps, deadline: Deadline) -> list[tuple]:
         """Send each ``(command, args)`` in turn and return the typed values of each OK reply."""
+        self._pending_status = None  # its reply, if it comes, is skipped as late
         results = []
         for command, args in steps:
             request_id = self._next_id()
@@ -266,6 +270,34 @@ class LineController(Controller):
         if echo != k:
             raise self.protocol_error(f"controller acknowledged posture {echo} when told {k}")
         return self._status(deadline)
+
+    # ------------------------------------------------------------------ the guided program
+    def guide(self, verdict: int, hint: int, timeout=None) -> int:
+        ((offered,),) = self._run("send the verdict and hint", [("GUIDE", (verdict, hint))], timeout)
+        return offered
+
+    def wait_operator(self, timeout: float) -> ControllerStatus | None:
+        # One STATUS waits for the program to serve again (it prompts, or is stopped): a later call reads on
+        # for the same reply rather than queueing more requests on the line.
+        def wait(deadline: Deadline) -> tuple:
+            if self._pending_status is None:
+                request_id = self._next_id()
+                self._transport.write(P.encode_request(request_id, "STATUS"), deadline)
+                self._pending_status = request_id
+            reply = self._read_reply(self._pending_status, "STATUS", deadline)
+            self._pending_status = None
+            if not reply.ok:
+                raise self.refused_error(f"controller at {self.address} refused STATUS: {reply.message}", reply.code)
+            try:
+                return P.decode_values("STATUS", reply)
+            except P.ProtocolError as exc:
+                raise self.protocol_error(f"bad STATUS reply from {self.address}: {exc.detail}") from None
+
+        try:
+            state, posture = self._call("wait for the operator", wait, deadline=Deadline(check_timeout("timeout", timeout)))
+        except ControllerTimeout:
+            return None  # the program prompts or is stopped: its reply comes later
+        return ControllerStatus(state, posture) if state in (AT, LATE, DONE) else None
 
     # ------------------------------------------------------------------ tool data
     def _write_tool(self, tool: ToolData, deadline: Deadline) -> None:

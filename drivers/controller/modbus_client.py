@@ -21,10 +21,10 @@ import numpy as np
 
 from .errors import InvalidRequest, ProtocolError, StationError
 from .interface import Controller, Deadline, LinkDown
-from .modbus_map import STATE_NAMES, load_register_map
+from .modbus_map import GUIDED_REGISTERS, STATE_NAMES, load_register_map
 from .polled import PolledHandshake
-from .protocol import E_AUTH, E_BUSY, E_TOOL, ERROR_CODES, KEY_TRIES, PROTOCOL_VERSION, write_key_code
-from .types import ACKED, AT, ERROR, LATE, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_timeout
+from .protocol import E_AUTH, E_BUSY, E_STATE, E_TOOL, HINT, VERDICT, ERROR_CODES, KEY_TRIES, PROTOCOL_VERSION, write_key_code
+from .types import ACKED, AT, DONE, ERROR, LATE, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_timeout
 
 __all__ = [
     "ModbusController",
@@ -274,6 +274,50 @@ class ModbusController(PolledHandshake, Controller):
             self._wait_for("wait for ACKED", lambda r: r["state"] in (ACKED, READY), deadline)
         if raw["state"] != READY:
             self._clear_request(deadline)
+
+    # ------------------------------------------------------------------ the guided program
+    def _guide_registers(self) -> None:
+        missing = [n for n in GUIDED_REGISTERS if n not in self.map.registers]
+        if missing:
+            raise self.refused_error(f"the register map {self.map.source} has no {', '.join(missing)}: the guided "
+                                     "program needs them (see drivers/controller/modbus_map.yaml)", E_STATE)
+
+    def guide(self, verdict: int, hint: int, timeout=None) -> int:
+        """Write ``guide_hint`` then ``guide_verdict`` in READY/DONE, wait until the program took them (it
+        leaves READY/DONE), clear ``guide_verdict``; returns the ``posture`` register (postures offered)."""
+        self._guide_registers()
+        VERDICT.format(verdict), HINT.format(hint)  # the codec's ranges
+        deadline = self._budget(timeout)
+        raw = self._call("read status", self._raw_status, deadline=deadline)
+        if raw["state"] not in (READY, DONE):
+            raise self.refused_error(f"the guided program at {self.address} is {raw['state']}, not waiting for a "
+                                     "verdict", E_STATE)
+        self._call("send the hint", lambda d: self._write_named(d, {"guide_hint": hint}), deadline=deadline)
+        self._call("send the verdict", lambda d: self._write_named(d, {"guide_verdict": verdict}), deadline=deadline)
+        raw = self._poll_state("wait for the program to take the verdict", lambda r: r["state"] not in (READY, DONE),
+                               deadline)
+        self._call("clear the verdict", lambda d: self._write_named(d, {"guide_verdict": 0}), deadline=deadline)
+        if raw is None:
+            raise self.timeout_error(f"the guided program at {self.address} did not take the verdict within "
+                                     f"{deadline.seconds:g} s")
+        return raw["posture"]
+
+    def _poll_state(self, what: str, done, deadline: Deadline) -> dict | None:
+        """Poll the status until ``done(raw)`` (the raw status) or the deadline (None). No heartbeat watch: the
+        guided program is stopped while the operator jogs."""
+        while True:
+            raw = self._call(what, self._raw_status)  # each read its own link timeout
+            if done(raw):
+                return raw
+            if deadline.remaining() <= self.poll_s:
+                return None
+            time.sleep(self.poll_s)
+
+    def wait_operator(self, timeout: float) -> ControllerStatus | None:
+        self._guide_registers()
+        deadline = Deadline(check_timeout("timeout", timeout))
+        raw = self._poll_state("wait for the operator", lambda r: r["state"] in (AT, LATE, DONE), deadline)
+        return None if raw is None else ControllerStatus(raw["state"], raw["posture"])
 
     # ------------------------------------------------------------------ tool data
     def _write_tool(self, tool: ToolData, deadline: Deadline) -> None:

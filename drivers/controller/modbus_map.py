@@ -17,13 +17,15 @@ from ...calibration.errors import brief
 from ...calibration.files import parse_yaml, read_text_file
 from .errors import ConfigError
 
-__all__ = ["Register", "RegisterMap", "load_register_map", "DEFAULT_MAP", "STATE_CODES", "STATE_NAMES",
+__all__ = ["Register", "RegisterMap", "load_register_map", "DEFAULT_MAP", "STATE_CODES", "STATE_NAMES", "GUIDED_REGISTERS",
            "floats_to_registers", "registers_to_floats", "REQUIRED"]
 
 DEFAULT_MAP = Path(__file__).with_name("modbus_map.yaml")
 
 #: ``state`` register values.
-STATE_CODES = {"READY": 0, "MOVING": 1, "AT": 2, "LATE": 3, "ACKED": 4, "ERROR": 5}
+STATE_CODES = {"READY": 0, "MOVING": 1, "AT": 2, "LATE": 3, "ACKED": 4, "ERROR": 5, "PROMPT": 6, "JOG": 7, "DONE": 8}
+#: Registers only the guided program (HeIo rendered by ``rapid generate --guided``) uses.
+GUIDED_REGISTERS = ("guide_verdict", "guide_hint")
 STATE_NAMES = {v: k for k, v in STATE_CODES.items()}
 
 #: Register name -> (type, count, access) every map must provide.

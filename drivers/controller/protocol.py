@@ -50,6 +50,7 @@ __all__ = [
     "write_key_code",
     "E_AUTH",
     "KEY_TRIES",
+    "GUIDED_COMMANDS",
 ]
 
 PROTOCOL_VERSION = 1
@@ -193,6 +194,12 @@ VERSION = IntField("protocol version", 0, 999)
 STATE = WordField("state", STATES)
 PROGRAM = WordField("program name")
 KEY = KeyField()
+#: The guided program's verdict and hint codes (their names and pendant texts: ``rapid/guided.py``, which
+#: keeps the same ranges; a test checks they agree).
+VERDICT = IntField("verdict", 1, 6)
+HINT = IntField("hint", 0, 15)
+#: Commands only the guided program (``rapid generate --guided``) serves.
+GUIDED_COMMANDS = ("GUIDE",)
 
 
 @dataclass(frozen=True)
@@ -226,6 +233,8 @@ SPECS = {spec.name: spec for spec in (
     CommandSpec("GETTOOLROT", (), (QUATERNION,) * 4, "tframe.rot of the PERS tooldata"),
     CommandSpec("GETTOOLLOAD", (), (MASS,) + (POSITION,) * 3, "tload.mass and tload.cog of the PERS tooldata"),
     CommandSpec("BYE", (), (), "end the session (the socket server closes the connection)"),
+    CommandSpec("GUIDE", (VERDICT, HINT), (POSTURE,),
+                "guided program: the verdict on the last posture and the next hint; replies the postures offered so far"),
 )}
 
 

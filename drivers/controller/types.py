@@ -46,7 +46,10 @@ __all__ = [
 
 #: States of the RAPID program as the PC sees them (STATUS reply, Modbus ``state`` register).
 READY, MOVING, AT, LATE, ACKED, ERROR = "READY", "MOVING", "AT", "LATE", "ACKED", "ERROR"
-STATES = (READY, MOVING, AT, LATE, ACKED, ERROR)
+#: The guided program's own (``rapid/guided.py``): the pendant prompts, the operator jogs (the program is
+#: stopped), the operator pressed Done.
+PROMPT, JOG, DONE = "PROMPT", "JOG", "DONE"
+STATES = (READY, MOVING, AT, LATE, ACKED, ERROR, PROMPT, JOG, DONE)
 
 #: A tool frame farther than this from the flange is refused (a camera sits within centimetres).
 MAX_TOOL_TRANSLATION_MM = 1000.0
@@ -85,7 +88,9 @@ class ControllerStatus:
         ``READY`` (waiting for a posture request), ``MOVING``, ``AT`` (standing still at ``posture``
         after ``MoveAbsJ ... fine``, waiting for the PC's acknowledgement), ``LATE`` (as ``AT``, the
         acknowledgement is overdue), ``ACKED`` (Modbus only: acknowledged, waiting for the PC to clear
-        its request) or ``ERROR`` (Modbus only: the last request was refused).
+        its request) or ``ERROR`` (Modbus only: the last request was refused); the guided program
+        (``rapid/guided.py``) also ``PROMPT``, ``JOG`` (Modbus only: over a line the stopped program
+        answers nothing) and ``DONE``.
     posture : int
         The posture the robot is at or moving to (1-based); 0 before the first one.
     """

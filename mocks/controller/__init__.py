@@ -13,7 +13,9 @@ and sockets are released::
 
 Every server has ``.robot`` (true state: ``current_joints``, ``tool0_pose()``, ``tool`` (the
 program's PERS tooldata), ``arrival_hooks``), ``.program`` (the RAPID runner: ``.task``,
-``.pendant``, ``.error``), ``.faults`` (see :class:`Faults`), ``.host``, ``.port`` and
+``.pendant``, ``.error``), ``.flexpendant`` (the operator's side of TPReadFK, UIMessageBox and Stop
+\\NoRegain: ``answer(key)``, ``start()``; served from outside by ``pendant.PendantService``),
+``.faults`` (see :class:`Faults`), ``.host``, ``.port`` and
 ``.client_options()`` (keyword arguments for ``open_controller``, the idle timeout and the write key
 included). A program the interpreter cannot run is refused at start with its module and line.
 """

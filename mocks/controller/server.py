@@ -13,6 +13,7 @@ import logging
 
 from ...drivers.controller.types import check_write_key
 from ...rapid.interpreter import Bindings
+from ...rapid.interpreter.pendant import FlexPendant
 from .arm import ArmBinding
 from .faults import Faults
 from .runner import RapidRunner
@@ -64,6 +65,9 @@ class RapidControllerServer:
         #: program is replaced). Without it each program starts with the value its module declares.
         self.keep_tool = False
         self.kept_tool = None
+        #: The FlexPendant the program prompts on (TPReadFK, UIMessageBox) and stops for (Stop \NoRegain);
+        #: the operator's side is played by a test or the pendant port (``mocks/controller/pendant.py``).
+        self.flexpendant = FlexPendant()
 
     # ------------------------------------------------------------------ what each link adds
     def _open_endpoint(self) -> Bindings:
@@ -95,6 +99,7 @@ class RapidControllerServer:
         bindings.io = self.cell_signals.over(bindings.io)
         bindings.motion = ArmBinding(self.robot)
         bindings.pendant = self._pendant
+        bindings.flexpendant = self.flexpendant
         self.runner = RapidRunner(self.robot, bindings, f"mock {self.kind} controller")
         try:
             self._run(self.source)

@@ -60,6 +60,9 @@ class MockControllerOptions:
     program : str or None
         A folder of RAPID modules to run instead of the generated ones (its HeKey.sys, if any, holds
         the key; give the same key with ``write_key`` for the PC's side).
+    pendant_port : int or None
+        Also serve the FlexPendant on this loopback port (``mocks/controller/pendant.py``: JOG, START, KEY,
+        STATE), so a test or a person can play the operator of a guided capture (0: a free port).
     camera_port : int or None
         Also serve the simulated XB3 on the flange (rendered frames) on this port for a rehearsal
         station (0: a free port); None: no camera.
@@ -86,6 +89,7 @@ class MockControllerOptions:
     station: RapidStation | None = None
     program: str | None = None
     camera_port: int | None = None
+    pendant_port: int | None = None
     cell: object = None
     signals: tuple = ()
     faults: object = None
@@ -137,7 +141,8 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
         warn(f"warning: the mock controller listens on {options.host}, not a loopback address: anyone on that network "
              "can move the robot's mock and write its tool data; it is for testing only")
     spec = _cell_spec(options)
-    robot = _rehearsal_arm(station, options, spec) if options.camera_port is not None or options.cell else None
+    robot = (_rehearsal_arm(station, options, spec)
+             if options.camera_port is not None or options.cell or options.pendant_port is not None else None)
     try:
         server = start_mock_controller(options.protocol, host=options.host, port=port, postures=station.postures,
                                        robot=robot,
@@ -149,18 +154,21 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
         raise InvalidRequest(f"cannot listen on {options.host}:{port} ({exc}); pick another --port "
                              "(0 = any free port)") from None
     server.keep_tool = True  # a controller's PERS tool data outlives the programs loaded after a write-back
-    cell = None
+    cell = pendant = None
     try:
         if options.camera_port is not None:
             cell = _start_cell(server, options, spec)
+        if options.pendant_port is not None:
+            pendant = _start_pendant(server, options)
         announce(_banner(server, options, len(server.robot.postures), idle)
-                 + (f"\n{cell.banner()}" if cell is not None else ""))
+                 + "".join(f"\n{side.banner()}" for side in (cell, pendant) if side is not None))
         failure = _serve(server, options.duration_s, warn)
     except KeyboardInterrupt:
         failure = None
     finally:
-        if cell is not None:
-            cell.stop()
+        for side in (cell, pendant):
+            if side is not None:
+                side.stop()
         server.stop()
     if failure:
         warn(f"the mock controller's RAPID program {failure}; {server.fix_hint(error=True)}")
@@ -233,6 +241,19 @@ def _rehearsal_arm(station: RapidStation, options: MockControllerOptions, spec):
 
     return SimulatedRobot(station.postures, model=station.robot, time_scale=options.time_scale,
                           start_joints=DEFAULT_START, guard=cell_guard(spec))
+
+
+def _start_pendant(server, options: MockControllerOptions):
+    """The FlexPendant's loopback port (``mocks/controller/pendant.py``)."""
+    from .pendant import PendantService
+
+    try:
+        return PendantService(server, host="127.0.0.1", port=options.pendant_port).start()
+    except OSError as exc:
+        from ...drivers.controller.errors import InvalidRequest
+
+        raise InvalidRequest(f"cannot listen on 127.0.0.1:{options.pendant_port} for the pendant ({exc}); pick "
+                             "another --pendant-port (0 = any free port)") from None
 
 
 def _start_cell(server, options: MockControllerOptions, spec):

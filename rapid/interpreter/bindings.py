@@ -136,6 +136,9 @@ class Bindings:
     io: IoBinding | None = None
     motion: MotionBinding | None = None
     pendant: object = None  # callable(text) for TPWrite, or None to log it
+    #: The operator's pendant (``rapid.interpreter.pendant.FlexPendant``): TPReadFK, UIMessageBox and
+    #: Stop \NoRegain wait for it; None: nobody answers (they stop the program; Stop ends it).
+    flexpendant: object = None
     sysinfo: dict = field(default_factory=lambda: {"LanIp": "127.0.0.1", "SystemName": "handeye",
                                                     "RobotType": "IRB 1400", "SWVersion": "6.0",
                                                     "CtrlId": "handeye-interpreter", "SerialNo": "0"})
@@ -144,6 +147,8 @@ class Bindings:
         return dict(self.io.signals()) if self.io is not None else {}
 
     def write_pendant(self, text: str) -> None:
+        if self.flexpendant is not None:
+            self.flexpendant.write(text)
         if self.pendant is not None:
             self.pendant(text)
         else:

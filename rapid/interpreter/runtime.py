@@ -77,6 +77,7 @@ class Task:
         self.next_due = math.inf
         self.state, self.error, self.ended = "ready", None, None
         self.main_returns = 0
+        self.halted = False  # stopped by Stop \NoRegain, waiting for Start
         self.pendant: deque = deque(maxlen=200)
         self.resources: list = []  # what bindings opened for this task (closed when it ends)
         self._timers: dict[int, _Timer] = {}
@@ -204,6 +205,24 @@ class Task:
             self._reschedule()
         if self._pending and not self._in_trap:
             self._run_traps()
+
+    def halt(self, resumed: threading.Event) -> None:
+        """``Stop \\NoRegain``: execution stops at this instruction (the program pointer stays) until
+        ``resumed`` is set (the pendant's Start); nothing runs meanwhile, no interrupt fires, missed timer
+        periods do not fire in a burst. A stop request ends the wait (``TaskStopped``)."""
+        self.halted = True
+        try:
+            while not resumed.is_set():
+                if self._stop.is_set():
+                    raise TaskStopped()
+                select.select([self._wake_r], [], [], 0.02)
+                self._drain()
+        finally:
+            self.halted = False
+        now = self.clock()
+        for timer in self._timers.values():
+            timer.due = max(timer.due, now)
+        self._reschedule()
 
     def _held_wait(self) -> None:
         if self._stop.is_set():

@@ -110,7 +110,7 @@ SIGNAL_TYPES = frozenset({"signaldi", "signaldo", "signalgi", "signalgo", "signa
 #: The data types RAPID provides that the interpreter knows (lower-case name -> TypeInfo).
 TYPES: dict[str, TypeInfo] = {t.name.lower(): t for t in [
     TypeInfo("num", "atomic"), TypeInfo("dnum", "atomic"), TypeInfo("bool", "atomic"), TypeInfo("string", "atomic"),
-    *[TypeInfo(alias, "atomic", base="num") for alias in ("errnum", "intnum", "byte", "socketstatus", "iounit_state")],
+    *[TypeInfo(alias, "atomic", base="num") for alias in ("errnum", "intnum", "byte", "socketstatus", "iounit_state", "btnres")],
     _record("pos", "x:num", "y:num", "z:num"),
     _record("orient", "q1:num", "q2:num", "q3:num", "q4:num"),
     _record("pose", "trans:pos", "rot:orient"),
@@ -311,6 +311,7 @@ def _predefined() -> dict:
     data.add("STR_LOWER", "string", "abcdefghijklmnopqrstuvwxyz")
     data.add("STR_WHITE", "string", " \t\n\r\x0b\x0c")
     data.add("WAIT_MAX", "num", 8388608)
+    data.add("stEmpty", "string", "")
     data.add("pi", "num", 3.1415926535897931)
     for i, name in enumerate(("SOCKET_CREATED", "SOCKET_CONNECTED", "SOCKET_BOUND", "SOCKET_LISTENING",
                               "SOCKET_CLOSED"), 1):

@@ -25,16 +25,19 @@ the numbered postures; --plan-only writes the plan, the preview and the RAPID pr
 At a real station the first move waits for your yes (or --yes, for scripts); the mock says it moves
 without asking.
 
---guided: for cells that cannot run the automatic program. Jog the robot with the pendant; each time
-it rests (guided.still_s) somewhere new with the board in view, the posture is captured, and the
-command says what is still missing (postures, rotation-axis spread and which way to turn next,
-relative rotation angles, distance spread, where in the image the board has not been) and when the
-set is good enough for the verdict's thresholds. Stop with Ctrl-C; the same command resumes. With
---mock nobody holds a pendant: a simulated operator jogs the embedded arm through --postures N
-postures around the board (lines "MOCK operator (simulated): ..."), then ends the run, so the guided
-flow can be rehearsed end to end; a rehearsal config (camera.mock_arm) is refused with --guided. The
-controller only answers joint and pose reads (its link module must run while you jog: on a real
-IRC5 that needs the link in a background task, see the README's known limits).
+--guided: for cells that calibrate by jogging. Over a line (socket or serial) and over Modbus the
+capture writes and loads the guided RAPID program (SESSION/rapid, as rapid generate --guided): the
+FlexPendant shows what the set still lacks (guided.prompt: fk = TPReadFK, messagebox = UIMessageBox);
+press Capture, jog to a new posture with the board in view, press Start: the posture is captured,
+or refused with the reason (too close to one captured, board not seen, within the margin of a
+keep-out volume), and the pendant says what to do next, then GOOD ENOUGH; Done ends the run. Over
+Robot Web Services no program is needed: the PC reads the joints and captures each time the arm
+rests (guided.still_s) somewhere new. Either way the command says what is still missing (postures,
+rotation-axis spread and which way to turn next, relative rotation angles, distance spread, where
+in the image the board has not been); stop with Ctrl-C, the same command resumes. With --mock
+nobody holds a pendant: a simulated operator jogs the embedded arm (joints read, as over RWS)
+through --postures N postures around the board (lines "MOCK operator (simulated): ..."), then ends
+the run. A rehearsal (camera.mock_arm) is played through the standalone mock's --pendant-port.
 
 --view: serve a live page while capturing (planned or guided) on 127.0.0.1, a free port, printed as
 "live view: http://127.0.0.1:PORT/?token=..." (the token is new each run; a request without it gets
@@ -87,7 +90,9 @@ def add_parser(sub):
     p.add_argument("--postures", type=int, help="number of postures to plan (default: the config's, 30)")
     mode = p.add_mutually_exclusive_group()
     mode.add_argument("--plan-only", action="store_true", help="plan, write the preview and the RAPID program; move nothing")
-    mode.add_argument("--guided", action="store_true", help="the operator jogs; capture whenever the arm rests somewhere new")
+    mode.add_argument("--guided", action="store_true",
+                      help="the operator jogs: the guided RAPID program prompts on the pendant (over RWS and --mock: "
+                           "capture whenever the arm rests somewhere new)")
     p.add_argument("--yes", action="store_true", help="move without asking (scripts; a real station asks otherwise)")
     p.add_argument("--view", action="store_true", help="serve a live page of the capture (URL with a token printed)")
     p.add_argument("--view-host", metavar="ADDRESS", help="with --view: listen on ADDRESS instead of 127.0.0.1 "
@@ -195,14 +200,11 @@ def run(args) -> int:
 def _run_guided(config, args, say) -> int:
     import threading
 
-    from ...calibration.errors import HandEyeError
     from ..guided import guided_capture
-    from ..mock_operator import guided_refusal, mock_operator
+    from ..guided_pendant import pendant_guided_capture, uses_guided_program
+    from ..mock_operator import mock_operator
     from ..runtime import open_station
 
-    refusal = guided_refusal(config)
-    if refusal:
-        raise HandEyeError(refusal)
     stop = threading.Event()  # the embedded mock's simulated operator sets it when done
     with open_station(config, session_dir=args.session) as link, _view(config, args, link, say) as view, \
             mock_operator(config, link, stop, say) as operator:
@@ -212,8 +214,13 @@ def _run_guided(config, args, say) -> int:
                 operator.captured(report)
 
         try:
-            summary = guided_capture(config, args.session, link, progress=say, on_posture=on_posture, stop=stop,
-                                     observer=None if view is None else view.observer)
+            observer = None if view is None else view.observer
+            if uses_guided_program(config, link):
+                summary = pendant_guided_capture(config, args.session, link, progress=say, on_posture=on_posture,
+                                                 stop=stop, observer=observer)
+            else:
+                summary = guided_capture(config, args.session, link, progress=say, on_posture=on_posture, stop=stop,
+                                         observer=observer)
         except KeyboardInterrupt:
             say(f"stopped; the postures on disk stay in {args.session}: run the same command to add more")
             return 0

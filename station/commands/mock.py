@@ -55,6 +55,16 @@ arm really is, a hidden camera mount, a printed board) for a rehearsal station: 
 with camera.backend: mock and camera.mock_arm: HOST:PORT runs capture, calibrate and writeback
 against this mock exactly as on the real station; every output then says MOCK for the camera.
 
+--pendant-port PORT serves the FlexPendant on 127.0.0.1:PORT, one line per request, one reply
+(OK ... or ERR <why>), to play the operator of a guided capture (capture --guided, the program of
+rapid generate --guided) from outside: "JOG j1 j2 j3 j4 j5 j6" jogs the arm there (axis angles,
+deg; a jog whose path comes within the cell margin of a keep-out volume stops there: ERR jog stopped:
+...), "START" continues a program stopped by Stop \\NoRegain, "KEY n" answers the pendant's prompt
+(TPReadFK function key 1-5, UIMessageBox button n), "STATE" replies the execution state (running,
+prompt, stopped, ended, error, none), the keys offered and the last pendant line. Try it with nc:
+  handeye mock controller --config station.yaml --camera-port 5021 --pendant-port 5022 &
+  printf 'STATE\n' | nc 127.0.0.1 5022
+
 Example:
   handeye mock controller --protocol modbus --port 5020 &
   handeye robot joints --protocol modbus --host 127.0.0.1 --port 5020 --json
@@ -112,6 +122,9 @@ def add_parser(sub):
                         "(diFence:signaldi=1); repeatable")
     c.add_argument("--camera-port", type=argtypes.port, metavar="PORT",
                    help="also serve the simulated XB3 on the flange for a rehearsal station (0 = any free port)")
+    c.add_argument("--pendant-port", type=argtypes.port, metavar="PORT",
+                   help="also serve the FlexPendant on 127.0.0.1:PORT (JOG j1..j6, START, KEY n, STATE) to play "
+                        "the operator of a guided capture (0 = any free port)")
     c.add_argument("--write-key", metavar="KEY",
                    help="the key tool writes need (8-32 letters, digits, _ or -; default: the config's "
                         "controller.write_key). Visible in the process list: prefer --config")
@@ -157,6 +170,7 @@ def run(args) -> int:
                                     server_options=server_options, duration_s=args.duration,
                                     idle_timeout_s=args.idle_timeout, write_key=args.write_key,
                                     program=args.program, camera_port=args.camera_port, cell=cell, signals=signals,
+                                    pendant_port=args.pendant_port,
                                      faults=faults)
     return run_mock_controller(options, announce=lambda text: print(text, flush=True),
                                warn=lambda text: print(text, file=sys.stderr, flush=True))

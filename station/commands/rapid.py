@@ -38,8 +38,17 @@ shape the RAPID program; all are optional, missing ones come from the built-in s
 controller_address auto binds to GetSysInfo(\\LanIp); a virtual controller needs 127.0.0.1.
 (`handeye capture` plans the postures itself and writes its program into the session.)
 
+--guided writes the guided capture's program instead of HeMain (every link but rws): HeGuide.mod
+(no jointtarget, never moves the robot) asks the PC what the posture set lacks, shows it on the
+FlexPendant (--prompt fk: TPReadFK, S4C+ and every RobotWare; messagebox: UIMessageBox, RobotWare
+6/7; default guided.prompt of the config), stops with Stop \\NoRegain for the operator to jog in
+manual mode, and on Start offers CJointT()/CRobT() to the PC, then waits for its verdict. The link
+module carries the GUIDE request (Modbus: the guide_verdict and guide_hint registers). Robot Web
+Services needs no program for a guided capture.
+
 Example:
   handeye rapid generate --config station.yaml -o rapid_out
+  handeye rapid generate --config station.yaml -o rapid_guided --guided
 """
 
 
@@ -57,6 +66,10 @@ def add_parser(sub):
     g.add_argument("-o", "--output", required=True, metavar="DIR", help="folder for the .mod files (created)")
     g.add_argument("--protocol", choices=tuple(RAPID_LINKS),
                    help="link module to write (default: controller.protocol of the config)")
+    g.add_argument("--guided", action="store_true",
+                   help="the guided capture's program (HeGuide: pendant prompts, Stop \\NoRegain, offers the posture)")
+    g.add_argument("--prompt", choices=("fk", "messagebox"),
+                   help="--guided: TPReadFK (fk) or UIMessageBox (messagebox, RobotWare 6/7); default guided.prompt")
     p.set_defaults(_rapid_parser=p)
     return p
 
@@ -66,17 +79,24 @@ def run(args) -> int:
         args._rapid_parser.print_help()
         return 2
     from ...drivers.controller.backends import RAPID_LINKS
-    from ...rapid.generate import render_key, render_program, station_link, write_modules
+    from ...calibration.errors import UsageError
+    from ...rapid.generate import render_guided_program, render_key, render_program, station_link, write_modules
     from ...rapid.station import default_station, station_from_dict
     from ..config import load_config
 
+    if args.prompt and not args.guided:
+        raise UsageError("--prompt applies to --guided only")
+    prompt = args.prompt or "fk"
     if args.config:
         config = load_config(args.config)
+        prompt = args.prompt or config.guided.prompt
         postures = config.postures if config.postures is not None else default_station().postures
         station = station_from_dict(config.rapid_dict(postures), args.config, links=RAPID_LINKS)
     else:
         station = default_station().with_(links=RAPID_LINKS)
-    paths = write_modules(render_program(station, protocol=args.protocol), args.output)
+    modules = (render_guided_program(station, args.protocol, prompt) if args.guided
+               else render_program(station, protocol=args.protocol))
+    paths = write_modules(modules, args.output)
     for path in paths:
         print(path)
     names = ", ".join(p.name for p in paths)

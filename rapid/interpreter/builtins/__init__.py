@@ -88,6 +88,6 @@ _LOADED = False
 def _load() -> None:
     global _LOADED
     if not _LOADED:
-        from . import io, motion, moves, numbers, serial, sockets, strings, system  # noqa: F401  (they register)
+        from . import io, motion, moves, numbers, pendant, serial, sockets, strings, system  # noqa: F401  (they register)
 
         _LOADED = True

@@ -60,6 +60,10 @@ def _errwrite(task, a):
 
 @builtin("Stop", "\\NoRegain, \\AllMoveTasks")
 def _stop(task, a):
+    pendant = task.bindings.flexpendant
+    if a[0] and pendant is not None:  # Stop \NoRegain with an operator: wait for Start, then go on
+        pendant.stop_here(task)
+        return
     raise StopSignal()
 
 
