@@ -1,0 +1,128 @@
+"""Self-collision: the pairs of the arm's bodies that must keep clear of each other, and their distances.
+
+The robot file lists the pairs by name (``self_collision.pairs``, :attr:`RobotModel.self_pairs`); the
+word ``carried`` stands for every body the flange carries (the camera, its bracket, a cable loop).
+
+- two capsules are apart by the distance of their axes (``calibration.capsules``) minus both radii;
+- a carried sphere and a capsule by the distance of its centre from the capsule's axis minus both radii;
+- a carried box and a capsule: the capsule's axis is taken into tool0 and sampled at most
+  :data:`AXIS_STEP_MM` apart; the box's signed distance (1-Lipschitz) at the samples, minus the radius
+  and half the spacing, never exceeds the true distance (at most half the spacing below it).
+
+Lengths in mm; negative distances: the bodies overlap.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .capsules import point_segment_distance, segment_distance
+from .cell import Box, Sphere
+from .kinematics import CARRIED
+
+__all__ = ["AXIS_STEP_MM", "SelfCheck"]
+
+#: Largest spacing of the samples along a capsule's axis checked against a carried box, mm.
+AXIS_STEP_MM = 10.0
+
+
+class SelfCheck:
+    """The self-collision pairs of one arm and what it carries, ready to be measured in batches.
+
+    Parameters
+    ----------
+    pairs : sequence of (str, str)
+        Body names (or ``carried``), as :attr:`RobotModel.self_pairs`.
+    capsule_names : sequence of str
+        The name of each capsule of the arm, in the order of the segments given to :meth:`clearances`.
+    capsule_radii : array-like, shape (B,)
+    capsule_lengths : array-like, shape (B,)
+        The length of each capsule's axis, mm.
+    carried : sequence
+        :class:`~handeye.calibration.cell.Box` and :class:`~handeye.calibration.cell.Sphere` bodies in tool0.
+    """
+
+    def __init__(self, pairs, capsule_names, capsule_radii, capsule_lengths, carried=()):
+        capsule_names, carried = list(capsule_names), list(carried)
+        carried_names = [body.name for body in carried]
+        cap_pairs, body_pairs, labels = [], [], []
+        for a, b in pairs:
+            if b == CARRIED or b in carried_names:  # the carried side first
+                a, b = b, a
+            if b == CARRIED or b in carried_names:
+                continue  # carried against carried: they ride together
+            seconds = [j for j, n in enumerate(capsule_names) if n == b]
+            for name in (carried_names if a == CARRIED else [a]):
+                if name in carried_names:
+                    firsts, rows = [carried_names.index(name)], body_pairs
+                else:
+                    firsts, rows = [i for i, n in enumerate(capsule_names) if n == name], cap_pairs
+                if firsts and seconds:
+                    labels.append((name, b))
+                    rows += [(i, j, len(labels) - 1) for i in firsts for j in seconds]
+        self.labels = labels
+        self.carried = carried
+        radii = np.asarray(capsule_radii, float)
+        self._caps = np.array(cap_pairs, int).reshape(-1, 3)
+        self._cap_gap = radii[self._caps[:, 0]] + radii[self._caps[:, 1]]
+        self._bodies = np.array(body_pairs, int).reshape(-1, 3)
+        self._radii = radii
+        longest = float(max([float(capsule_lengths[j]) for _, j, _ in body_pairs], default=0.0))
+        self._t = np.linspace(0.0, 1.0, max(2, math.ceil(longest / AXIS_STEP_MM) + 1))
+        self._half_spacing = np.asarray(capsule_lengths, float) / (len(self._t) - 1) / 2
+
+    def __bool__(self) -> bool:
+        return bool(len(self.labels))
+
+    def _body_gaps(self, segments: np.ndarray, tool02base: np.ndarray) -> np.ndarray:
+        """Distances ``(n, P)`` of the carried bodies of :attr:`_bodies` from their capsules."""
+        n = len(segments)
+        out = np.empty((n, len(self._bodies)))
+        rotation, origin = tool02base[:, :3, :3], tool02base[:, :3, 3]
+        for k, (i, j, _) in enumerate(self._bodies):
+            body = self.carried[i]
+            local = np.einsum("nji,nej->nei", rotation, segments[:, j] - origin[:, None, :])  # (n, 2, 3) in tool0
+            if isinstance(body, Sphere):
+                out[:, k] = (point_segment_distance(np.asarray(body.centre_mm, float), local[:, 0], local[:, 1])
+                             - body.radius_mm - self._radii[j])
+                continue
+            if not isinstance(body, Box):
+                raise TypeError(f"a carried body is a Box or a Sphere; got {type(body).__name__}")
+            t = self._t[None, :, None]
+            points = (1 - t) * local[:, None, 0] + t * local[:, None, 1]
+            out[:, k] = body.signed_distance(points).min(axis=1) - self._radii[j] - self._half_spacing[j]
+        return out
+
+    def clearances(self, segments, tool02base) -> tuple[np.ndarray, np.ndarray]:
+        """Least distance of the pairs at each configuration, and which pair (an index of :attr:`labels`).
+
+        Parameters
+        ----------
+        segments : ndarray, shape (n, B, 2, 3)
+            The capsules' axes in base.
+        tool02base : ndarray, shape (n, 4, 4)
+            The flange at each configuration.
+
+        Returns
+        -------
+        best : ndarray, shape (n,)
+            mm (negative: overlapping); ``inf`` without pairs.
+        pair : ndarray, shape (n,) of int
+        """
+        n = len(segments)
+        parts, which = [], []
+        if len(self._caps):
+            i, j = self._caps[:, 0], self._caps[:, 1]
+            parts.append(segment_distance(segments[:, i, 0], segments[:, i, 1], segments[:, j, 0], segments[:, j, 1])
+                         - self._cap_gap)
+            which.append(self._caps[:, 2])
+        if len(self._bodies):
+            parts.append(self._body_gaps(segments, tool02base))
+            which.append(self._bodies[:, 2])
+        if not parts:
+            return np.full(n, np.inf), np.zeros(n, int)
+        gaps, labels = np.concatenate(parts, axis=1), np.concatenate(which)
+        k = np.argmin(gaps, axis=1)
+        return gaps[np.arange(n), k], labels[k]
