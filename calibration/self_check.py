@@ -28,6 +28,13 @@ __all__ = ["AXIS_STEP_MM", "SelfCheck"]
 AXIS_STEP_MM = 10.0
 
 
+def _bounding_sphere(box: Box) -> tuple[np.ndarray, float]:
+    """Centre ``(3,)`` in the box's parent frame and radius of the sphere through a box's corners."""
+    corners = box.corners()
+    centre = corners.mean(axis=0)
+    return centre, float(np.max(np.linalg.norm(corners - centre, axis=1)))
+
+
 class SelfCheck:
     """The self-collision pairs of one arm and what it carries, ready to be measured in batches.
 
@@ -42,9 +49,13 @@ class SelfCheck:
         The length of each capsule's axis, mm.
     carried : sequence
         :class:`~handeye.calibration.cell.Box` and :class:`~handeye.calibration.cell.Sphere` bodies in tool0.
+    fine_within_mm : float
+        A carried box whose circumscribed sphere is farther than this from a capsule is reported at that
+        sphere's distance (a lower bound); nearer, at its own (use at least the margin plus a little).
     """
 
-    def __init__(self, pairs, capsule_names, capsule_radii, capsule_lengths, carried=()):
+    def __init__(self, pairs, capsule_names, capsule_radii, capsule_lengths, carried=(), fine_within_mm: float = 150.0):
+        self.fine_within_mm = float(fine_within_mm)
         capsule_names, carried = list(capsule_names), list(carried)
         carried_names = [body.name for body in carried]
         cap_pairs, body_pairs, labels = [], [], []
@@ -77,22 +88,33 @@ class SelfCheck:
         return bool(len(self.labels))
 
     def _body_gaps(self, segments: np.ndarray, tool02base: np.ndarray) -> np.ndarray:
-        """Distances ``(n, P)`` of the carried bodies of :attr:`_bodies` from their capsules."""
-        n = len(segments)
-        out = np.empty((n, len(self._bodies)))
+        """Distances ``(n, P)`` of the carried bodies of :attr:`_bodies` from their capsules (one batch per body).
+
+        A box is first bounded by its circumscribed sphere (a lower bound of the distance); only where that
+        bound is below :attr:`fine_within_mm` is the capsule's axis sampled against the box itself."""
+        out = np.empty((len(segments), len(self._bodies)))
         rotation, origin = tool02base[:, :3, :3], tool02base[:, :3, 3]
-        for k, (i, j, _) in enumerate(self._bodies):
+        for i in np.unique(self._bodies[:, 0]):
+            rows = np.flatnonzero(self._bodies[:, 0] == i)
+            caps = self._bodies[rows, 1]
             body = self.carried[i]
-            local = np.einsum("nji,nej->nei", rotation, segments[:, j] - origin[:, None, :])  # (n, 2, 3) in tool0
+            local = np.einsum("nji,ncej->ncei", rotation, segments[:, caps] - origin[:, None, None, :])  # in tool0
             if isinstance(body, Sphere):
-                out[:, k] = (point_segment_distance(np.asarray(body.centre_mm, float), local[:, 0], local[:, 1])
-                             - body.radius_mm - self._radii[j])
+                gap = point_segment_distance(np.asarray(body.centre_mm, float), local[:, :, 0], local[:, :, 1])
+                out[:, rows] = gap - body.radius_mm - self._radii[caps]
                 continue
             if not isinstance(body, Box):
                 raise TypeError(f"a carried body is a Box or a Sphere; got {type(body).__name__}")
-            t = self._t[None, :, None]
-            points = (1 - t) * local[:, None, 0] + t * local[:, None, 1]
-            out[:, k] = body.signed_distance(points).min(axis=1) - self._radii[j] - self._half_spacing[j]
+            centre, reach = _bounding_sphere(body)
+            gap = point_segment_distance(centre, local[:, :, 0], local[:, :, 1]) - reach - self._radii[caps]
+            near = np.nonzero(gap < self.fine_within_mm)
+            if len(near[0]):
+                ends = local[near]  # (K, 2, 3)
+                t = self._t[None, :, None]
+                points = (1 - t) * ends[:, None, 0] + t * ends[:, None, 1]
+                c = caps[near[1]]
+                gap[near] = body.signed_distance(points).min(axis=1) - self._radii[c] - self._half_spacing[c]
+            out[:, rows] = gap
         return out
 
     def clearances(self, segments, tool02base) -> tuple[np.ndarray, np.ndarray]:
