@@ -34,7 +34,7 @@ TARGET_S = 10.0
 BOARD = BoardGeometry((13, 8), 30.0)
 #: The benchmark cell of issue 21 (the tests use the same one).
 CELL = CellModel((Floor("floor", 0.0),
-                  Box("cabinet beside the base", (-700.0, -800.0, 0.0), (0.0, -330.0, 1600.0)),
+                  Box("cabinet beside the base", (-700.0, -900.0, 0.0), (-100.0, -420.0, 1600.0)),
                   Cylinder("post", (380.0, -380.0), 50.0, (0.0, 1400.0))),
                  DEFAULT_CARRIED, stand_margin_mm=50.0, stand_depth_mm=100.0)
 

@@ -123,7 +123,7 @@ def volumes_sdf(board2base) -> dict:
         axial = np.maximum(0.0 - p[..., 2], p[..., 2] - 1400.0)
         return np.hypot(np.maximum(radial, 0), np.maximum(axial, 0)) + np.minimum(np.maximum(radial, axial), 0)
 
-    return {"floor": lambda p: p[..., 2], "cabinet beside the base": lambda p: _box_sdf(p, (-700, -800, 0), (0, -330, 1600)),
+    return {"floor": lambda p: p[..., 2], "cabinet beside the base": lambda p: _box_sdf(p, (-700, -900, 0), (-100, -420, 1600)),
             "post": post, "board stand": stand}
 
 
