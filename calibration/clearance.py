@@ -23,8 +23,9 @@ more than ``step_mm`` between two samples: a point of the part turned by axis ``
 most ``sum_i R_i |d theta_i|`` (serial angles, radians), ``R_i`` the largest distance from axis ``i``
 any watched point can have (the chain's lengths beyond it plus the point's offset on its own part).
 Between two samples every centre is within ``step_mm / 2`` of a sampled place, so the clearance from
-the cell anywhere along the move is at least the sampled one minus ``step_mm / 2``, and between two
-bodies of the arm (both move) at least the sampled one minus ``step_mm``.
+the cell anywhere along the move is at least the sampled one minus ``step_mm / 2``. Two bodies of the
+arm move relative to each other only by the axes between their parts (the same sum over those axes
+alone), so their clearance too is at least the sampled one minus ``step_mm / 2``.
 
 Optionally one more point is watched against volumes of its own: the TCP the controller's world
 zones supervise (``tcp_zones``), against the world-zone shapes (boxes of a frame of their own become
@@ -220,7 +221,8 @@ class CellGuard:
         pairs = robot.self_pairs if self_collision else ()
         self.self_check = SelfCheck(pairs, [c[0] for c in capsules], [c[4] for c in capsules],
                                     [float(np.linalg.norm(c[3] - c[2])) for c in capsules], carried,
-                                    fine_within_mm=self.margin_mm + 100.0)
+                                    fine_within_mm=self.margin_mm + 100.0, capsule_parts=self._parts,
+                                    carried_part=robot.dof)
         reach = float(max((np.linalg.norm(c) for c, _, name in tool), default=0.0))
         self._lever = _levers(robot, capsules, reach)  # R_i
 
@@ -269,14 +271,16 @@ class CellGuard:
     def clearances(self, joints_deg) -> tuple[np.ndarray, np.ndarray]:
         """Least clearance of each configuration ``(n, k)`` from the cell and between the self-collision
         pairs: ``(cell (n,), self (n,))`` in mm (``inf`` where nothing is watched)."""
-        cell, _, _, own, _ = self._evaluate(joints_deg)
+        cell, _, _, own, *_ = self._evaluate(joints_deg)
         return cell, own
 
     def _evaluate(self, joints_deg):
-        """``(cell clearance, sphere, volume, self clearance, pair)``, each ``(n,)``."""
+        """``(cell clearance, sphere, volume, self clearance, pair)``, each ``(n,)``, and each pair's
+        clearance ``(n, L)``."""
         joints = np.atleast_2d(np.asarray(joints_deg, float))
         n = len(joints)
-        out = [np.full(n, np.inf), np.zeros(n, int), np.zeros(n, int), np.full(n, np.inf), np.zeros(n, int)]
+        out = [np.full(n, np.inf), np.zeros(n, int), np.zeros(n, int), np.full(n, np.inf), np.zeros(n, int),
+               np.full((n, len(self.self_check.labels)), np.inf)]
         if not self.watches_anything:
             return tuple(out)
         for start in range(0, n, _BATCH):
@@ -287,12 +291,12 @@ class CellGuard:
                 centres = self._centres(segments, self._tool_centres_at(tool02base))
                 out[0][rows], out[1][rows], out[2][rows] = self._cell_clearances(centres)
             if self.self_check:
-                out[3][rows], out[4][rows] = self.self_check.clearances(segments, tool02base)
+                out[3][rows], out[4][rows], out[5][rows] = self.self_check.clearances(segments, tool02base)
         return tuple(out)
 
     def _closest(self, evaluated, r: int, at: float = 0.0) -> Violation:
         """The closer of the cell's and the self pairs' approaches of configuration ``r``."""
-        cell, sphere, volume, own, pair = (x[r] for x in evaluated)
+        cell, sphere, volume, own, pair = (x[r] for x in evaluated[:5])
         if own < cell:
             body, other = self.self_check.labels[pair]
             return Violation(body, other, float(own), float(at), "self")
@@ -348,10 +352,11 @@ class CellGuard:
         """:meth:`path_violation` of many moves ``[(a, b), ...]``, advanced together.
 
         Each move is walked from its start by conservative advancement: from a sample of clearance
-        ``c`` from the cell and ``d`` between the pairs the next lies where the centres have moved at
-        most ``max(min(c - margin, (d - margin) / 2), step_mm)`` (two bodies of the arm both move), so
-        the clearance between two samples stays at least ``margin`` (when the first was the larger) or at
-        least ``margin - step_mm / 2`` from the cell and ``margin - step_mm`` between the pairs (when
+        ``c`` from the cell the next lies where the centres have moved at most ``c - margin``, and no
+        self-collision pair of clearance ``d`` has moved relative to itself more than ``d - margin``
+        (a pair moves relative to itself only by the axes between its two parts: the camera and the
+        forearm by axes 5 and 6), or at least ``step_mm``; so the clearance between two samples stays
+        at least ``margin`` (when the first was the larger) or at least ``margin - step_mm / 2`` (when
         both samples keep the margin). A move stops at its first sample below the margin. Moves of few
         samples in all (:data:`_DENSE`, e.g. one move of the mock arm) are checked at every sample of
         :meth:`sample_count` in one batch instead: the same bound between samples, fewer round trips.
@@ -364,7 +369,9 @@ class CellGuard:
         counts = [self.sample_count(a, b) for a, b in zip(starts, ends)]
         if sum(counts) <= _DENSE:  # few samples in all: every one at once (one batch, no round trips)
             return [self._dense_violation(a, b, n) for a, b, n in zip(starts, ends, counts)]
-        spans = np.abs(np.radians(ends - starts) @ self.robot.coupling.T) @ self._lever  # mm of motion over the move
+        turns = np.abs(np.radians(ends - starts) @ self.robot.coupling.T)  # serial angles over the move, (m, k)
+        spans = turns @ self._lever  # mm of motion over the move
+        rates = self._pair_rates(turns)  # mm of relative motion of each pair over the move, (m, L)
         s = np.zeros(len(moves))
         active = np.ones(len(moves), bool)
         while active.any():
@@ -377,9 +384,21 @@ class CellGuard:
                 active[rows[r]] = False
             done = active[rows] & (at >= 1.0)
             active[rows[done]] = False
-            free = np.minimum(cell - self.margin_mm, (own - self.margin_mm) / 2)
-            advance = np.maximum(free, self.step_mm) / np.maximum(spans[rows], 1e-9)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                pairs_free = np.where(rates[rows] > 0, (evaluated[5] - self.margin_mm) / rates[rows], np.inf).min(
+                    axis=1, initial=np.inf)
+            span = np.maximum(spans[rows], 1e-9)
+            advance = np.maximum(np.minimum((cell - self.margin_mm) / span, pairs_free), self.step_mm / span)
             s[rows] = np.where(at < 1.0, np.minimum(at + advance, 1.0), at)
+        return out
+
+    def _pair_rates(self, turns: np.ndarray) -> np.ndarray:
+        """``(m, L)``: how far the bodies of each self-collision pair can move relative to each other over
+        moves of serial turns ``(m, k)`` (radians): only the axes between the pair's parts count."""
+        parts = self.self_check.label_parts
+        out = np.zeros((len(turns), len(parts)))
+        for p, (low, high) in enumerate(parts):
+            out[:, p] = turns[:, low:high] @ self._lever[low:high]  # axes low + 1 ... high (1-based)
         return out
 
     def _dense_violation(self, a, b, count: int) -> Violation | None:

@@ -52,9 +52,13 @@ class SelfCheck:
     fine_within_mm : float
         A carried box whose circumscribed sphere is farther than this from a capsule is reported at that
         sphere's distance (a lower bound); nearer, at its own (use at least the margin plus a little).
+    capsule_parts : array-like of int, shape (B,), optional
+        The part each capsule rides on (0 the base, ``i`` the link axis ``i`` turns); ``carried_part``
+        the flange's. They give :attr:`label_parts`: only the axes between a pair's parts change its distance.
     """
 
-    def __init__(self, pairs, capsule_names, capsule_radii, capsule_lengths, carried=(), fine_within_mm: float = 150.0):
+    def __init__(self, pairs, capsule_names, capsule_radii, capsule_lengths, carried=(), fine_within_mm: float = 150.0,
+                 capsule_parts=None, carried_part: int = 0):
         self.fine_within_mm = float(fine_within_mm)
         capsule_names, carried = list(capsule_names), list(carried)
         carried_names = [body.name for body in carried]
@@ -75,6 +79,14 @@ class SelfCheck:
                     rows += [(i, j, len(labels) - 1) for i in firsts for j in seconds]
         self.labels = labels
         self.carried = carried
+        parts = np.zeros(len(capsule_names), int) if capsule_parts is None else np.asarray(capsule_parts, int)
+        spans = [[] for _ in labels]
+        for i, j, k in cap_pairs:
+            spans[k] += [parts[i], parts[j]]
+        for _, j, k in body_pairs:
+            spans[k] += [int(carried_part), parts[j]]
+        #: ``(L, 2)``: the lowest and the highest part of each pair's bodies.
+        self.label_parts = np.array([[min(p), max(p)] for p in spans], int).reshape(-1, 2)
         radii = np.asarray(capsule_radii, float)
         self._caps = np.array(cap_pairs, int).reshape(-1, 3)
         self._cap_gap = radii[self._caps[:, 0]] + radii[self._caps[:, 1]]
@@ -117,8 +129,9 @@ class SelfCheck:
             out[:, rows] = gap
         return out
 
-    def clearances(self, segments, tool02base) -> tuple[np.ndarray, np.ndarray]:
-        """Least distance of the pairs at each configuration, and which pair (an index of :attr:`labels`).
+    def clearances(self, segments, tool02base) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Least distance of the pairs at each configuration, which pair (an index of :attr:`labels`), and
+        the least distance of each pair.
 
         Parameters
         ----------
@@ -132,6 +145,8 @@ class SelfCheck:
         best : ndarray, shape (n,)
             mm (negative: overlapping); ``inf`` without pairs.
         pair : ndarray, shape (n,) of int
+        each : ndarray, shape (n, L)
+            mm, per pair of :attr:`labels`.
         """
         n = len(segments)
         parts, which = [], []
@@ -144,7 +159,9 @@ class SelfCheck:
             parts.append(self._body_gaps(segments, tool02base))
             which.append(self._bodies[:, 2])
         if not parts:
-            return np.full(n, np.inf), np.zeros(n, int)
+            return np.full(n, np.inf), np.zeros(n, int), np.zeros((n, 0))
         gaps, labels = np.concatenate(parts, axis=1), np.concatenate(which)
+        each = np.full((n, len(self.labels)), np.inf)
+        np.minimum.at(each, (np.arange(n)[:, None], labels[None, :]), gaps)
         k = np.argmin(gaps, axis=1)
-        return gaps[np.arange(n), k], labels[k]
+        return gaps[np.arange(n), k], labels[k], each
