@@ -207,3 +207,18 @@ def test_random_postures_where_the_camera_meets_the_arm_are_all_refused(plan):
     assert any(v.kind == "self" and v.body == "camera" for v in refused)
     planned = self_gaps(plan.joints_deg)
     assert np.min([planned["camera", name] for name in CAMERA_MEETS]) >= MARGIN  # none planned among them
+
+
+def test_moves_the_check_passes_keep_the_pairs_apart_all_along():
+    """Random joint moves around the board: every move the planner's check lets through keeps the camera,
+    the bracket and the link pairs apart by the margin less half a step at every dense sample."""
+    rng = np.random.default_rng(5)
+    centre = np.array([0.0, 10.0, 5.0, 0.0, 80.0, -90.0])
+    starts = centre + rng.uniform(-40, 40, (40, 6)) * [1, 0.5, 0.5, 1, 0.6, 1]
+    ends = centre + rng.uniform(-40, 40, (40, 6)) * [1, 0.5, 0.5, 1, 0.6, 1]
+    guard = CellCheck(type(CELL)((), CELL.carried)).guard(ROBOT)  # the pairs alone
+    found = guard.moves_violations(list(zip(starts, ends)))
+    clear = [i for i, v in enumerate(found) if v is None]
+    assert 5 <= len(clear) < len(found)  # some pass, some are refused
+    path = np.concatenate([_dense_path(np.vstack([starts[i], ends[i]]), step_deg=0.5) for i in clear])
+    assert min(g.min() for g in self_gaps(path).values()) >= MARGIN - STEP / 2
