@@ -214,8 +214,8 @@ def test_moves_the_check_passes_keep_the_pairs_apart_all_along():
     the bracket and the link pairs apart by the margin less half a step at every dense sample."""
     rng = np.random.default_rng(5)
     centre = np.array([0.0, 10.0, 5.0, 0.0, 80.0, -90.0])
-    starts = centre + rng.uniform(-40, 40, (40, 6)) * [1, 0.5, 0.5, 1, 0.6, 1]
-    ends = centre + rng.uniform(-40, 40, (40, 6)) * [1, 0.5, 0.5, 1, 0.6, 1]
+    starts = centre + rng.uniform(-40, 40, (20, 6)) * [1, 0.5, 0.5, 1, 0.6, 1]
+    ends = centre + rng.uniform(-40, 40, (20, 6)) * [1, 0.5, 0.5, 1, 0.6, 1]
     guard = CellCheck(type(CELL)((), CELL.carried)).guard(ROBOT)  # the pairs alone
     found = guard.moves_violations(list(zip(starts, ends)))
     clear = [i for i, v in enumerate(found) if v is None]
