@@ -26,6 +26,7 @@ import numpy as np
 from .compact_points import BoardGeometry
 
 __all__ = [
+    "DEFAULT_CARRIED",
     "Box",
     "CellModel",
     "Cylinder",
@@ -194,6 +195,12 @@ class Sphere:
 
     def to_dict(self) -> dict:
         return {"type": "sphere", "name": self.name, "centre_mm": list(self.centre_mm), "radius_mm": self.radius_mm}
+
+
+#: The XB3 (277 x 42 x 37 mm) at the default nominal mount, and its bracket from the flange, in tool0: what the
+#: station's flange carries unless ``cell.carried`` says otherwise (and what the mock's arm carries).
+DEFAULT_CARRIED = (Box("camera", (-136.0, 11.0, 58.0), (-94.0, 288.0, 100.0)),
+                   Box("bracket", (-140.0, -45.0, 0.0), (45.0, 45.0, 58.0)))
 
 
 def floor_height(volumes) -> float | None:

@@ -34,6 +34,7 @@ from .rotations import (
 from .transforms import transform_from_rotation_translation
 
 __all__ = [
+    "FrameBody",
     "LinkBody",
     "RobotModel",
     "load_robot",
@@ -101,6 +102,28 @@ class LinkBody:
     radius_mm: float
 
 
+@dataclass(frozen=True)
+class FrameBody:
+    """A capsule fixed to one link of the arm (the base, links 1-3), for the cell and self-collision checks.
+
+    Attributes
+    ----------
+    name : str
+        How the operator reads it (``link 3``); several capsules may share a name (one part).
+    link : int
+        The part it rides on: 0 the base (never moves), ``i`` the link turned by axis ``i`` (1-based).
+    start_mm, end_mm : tuple of float, shape (3,)
+        The ends of its axis in base with every axis at 0 (the home posture of the dimension drawing).
+    radius_mm : float
+    """
+
+    name: str
+    link: int
+    start_mm: tuple
+    end_mm: tuple
+    radius_mm: float
+
+
 @dataclass(frozen=True, eq=False)
 class RobotModel:
     """A serial robot in the paper's quaternion chain form.
@@ -125,6 +148,11 @@ class RobotModel:
     bodies : tuple of LinkBody
         Capsules around the links the cell checks watch (the wrist end); empty when the robot file
         names none.
+    link_bodies : tuple of FrameBody
+        Capsules of the rest of the arm (the base, links 1-3), each fixed to one link.
+    self_pairs : tuple of (str, str)
+        Which bodies must keep clear of each other (``self_collision.pairs`` of the robot file): names of
+        bodies, or ``carried`` for everything the flange carries. Adjacent links are left out by the file.
     """
 
     name: str
@@ -137,15 +165,20 @@ class RobotModel:
     max_speed_deg_s: np.ndarray
     dh: np.ndarray
     bodies: tuple = ()
+    link_bodies: tuple = ()
+    self_pairs: tuple = ()
 
     @property
     def dof(self) -> int:
         return int(self.axes.shape[0])
 
     @classmethod
-    def from_dh(cls, name, dh, coupling_rows=(), joint_limits_deg=None, max_speed_deg_s=None, bodies=()) -> "RobotModel":
+    def from_dh(cls, name, dh, coupling_rows=(), joint_limits_deg=None, max_speed_deg_s=None, bodies=(),
+                link_bodies=(), self_pairs=()) -> "RobotModel":
         """Build the chain from a standard DH table (rows ``d, a, alpha_deg, theta_offset_deg``);
-        ``bodies``: :class:`LinkBody` capsules, or mappings ``{name, from, to, radius_mm}``."""
+        ``bodies``: :class:`LinkBody` capsules, or mappings ``{name, from, to, radius_mm}``;
+        ``link_bodies``: :class:`FrameBody` capsules, or mappings ``{name, link, from_mm, to_mm, radius_mm}``;
+        ``self_pairs``: pairs of body names (or ``carried``), each name checked (ValueError)."""
         dh = np.asarray(dh, dtype=float)
         k = dh.shape[0]
         frames = np.eye(4)[None].repeat(k + 1, axis=0)
@@ -171,6 +204,8 @@ class RobotModel:
             max_speed_deg_s=speeds,
             dh=dh,
             bodies=tuple(_link_body(b, k) for b in bodies),
+            link_bodies=tuple(_frame_body(b, k) for b in link_bodies),
+            self_pairs=_self_pairs(self_pairs, bodies, link_bodies),
         )
 
     def serial_angles_rad(self, joints_deg) -> np.ndarray:
@@ -224,6 +259,30 @@ class RobotModel:
             points.append(points[-1] + rotate_vectors(q, self.links[i]))  # eq. 12
         return np.stack(points, axis=-2)
 
+    def link_frames(self, joints_deg) -> tuple[np.ndarray, np.ndarray]:
+        """Where each part of the arm is: rotations ``(..., k + 1, 3, 3)`` and pivots ``(..., k + 1, 3)``.
+
+        Part 0 is the base (identity, pivot ``P(0)``); part ``i`` the link turned by axis ``i``:
+        rotation ``Q(i)`` (eq. 11) and pivot ``P(i - 1)`` on axis ``i`` (eq. 12). A point ``x`` of part
+        ``i`` (given in base with every axis at 0) is at ``pivot_i + R_i (x - pivot_i,home)``.
+        """
+        theta = self.serial_angles_rad(joints_deg)
+        lead = theta.shape[:-1]
+        q = np.broadcast_to(np.array([1.0, 0.0, 0.0, 0.0]), lead + (4,))
+        point = np.broadcast_to(self.base_offset, lead + (3,))
+        rotations, pivots = [np.broadcast_to(np.eye(3), lead + (3, 3))], [point]
+        for i in range(self.dof):
+            q = quaternion_multiply(q, quaternion_from_axis_angle(self.axes[i], theta[..., i]))  # eq. 11
+            rotations.append(matrix_from_quaternion(q))
+            pivots.append(point)  # P(i) of the chain, on axis i + 1
+            point = point + rotate_vectors(q, self.links[i])  # eq. 12
+        return np.stack(rotations, axis=-3), np.stack(pivots, axis=-2)
+
+    def home_pivots(self) -> np.ndarray:
+        """The pivots of :meth:`link_frames` with every axis at 0: ``(k + 1, 3)``."""
+        points = self.chain_points(np.zeros(self.dof))
+        return np.vstack([points[:1], points[:-1]])
+
     def forward_transform(self, joints_deg) -> np.ndarray:
         """tool02base ``(..., 4, 4)`` for controller angles ``(..., k)`` in degrees."""
         p, q = self.forward(joints_deg)
@@ -270,6 +329,39 @@ def _link_body(body, dof: int) -> LinkBody:
     return body
 
 
+def _frame_body(body, dof: int) -> FrameBody:
+    """A :class:`FrameBody` from itself or a mapping ``{name, link, from_mm, to_mm, radius_mm}``."""
+    if not isinstance(body, FrameBody):
+        body = FrameBody(str(body["name"]), int(body["link"]), tuple(float(v) for v in body["from_mm"]),
+                         tuple(float(v) for v in body["to_mm"]), float(body["radius_mm"]))
+    if not (0 <= body.link <= dof and len(body.start_mm) == 3 and len(body.end_mm) == 3 and body.radius_mm > 0):
+        raise ValueError(f"link body {body.name!r}: link must be 0..{dof}, from_mm and to_mm 3 numbers, radius > 0")
+    return body
+
+
+#: The word of ``self_collision.pairs`` for everything the flange carries (the camera, its bracket, a cable).
+CARRIED = "carried"
+
+
+def _self_pairs(pairs, bodies, link_bodies) -> tuple:
+    """``self_collision.pairs`` as ``((a, b), ...)``; a name that is no body of the file (nor ``carried``)
+    or a body paired with itself is refused (ValueError), never dropped."""
+    names = {str(b.name if hasattr(b, "name") else b["name"]) for b in (*bodies, *link_bodies)}
+    out = []
+    for pair in pairs:
+        if isinstance(pair, str) or len(pair) != 2:
+            raise ValueError(f"self_collision.pairs: each entry is [body, body]; got {pair!r}")
+        a, b = (str(n) for n in pair)
+        for name in (a, b):
+            if name not in names and name != CARRIED:
+                raise ValueError(f"self_collision.pairs names {name!r}, which is no body of the robot file "
+                                 f"(bodies: {', '.join(sorted(names))}, or {CARRIED!r})")
+        if a == b:
+            raise ValueError(f"self_collision.pairs pairs {a!r} with itself")
+        out.append((a, b))
+    return tuple(out)
+
+
 def _normalise_name(name: str) -> str:
     return "".join(ch for ch in name.lower() if ch.isalnum())
 
@@ -300,8 +392,10 @@ def _load_path(path: Path) -> RobotModel:
             data.get("joint_limits_deg"),
             data.get("max_speed_deg_s"),
             data.get("bodies", ()),
+            data.get("link_bodies", ()),
+            (data.get("self_collision") or {}).get("pairs", ()),
         )
-    except (KeyError, TypeError, ValueError) as exc:
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise ValueError(f"robot file {path} is not a valid robot model: {exc}") from None
 
 

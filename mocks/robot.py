@@ -9,8 +9,10 @@ The arm moves between joint configurations with all axes starting and stopping t
 (a synchronised ``MoveAbsJ``): the move lasts ``max_i |Δq_i| / (speed_fraction * max_speed_i)``,
 axes interpolated linearly in time (no acceleration ramps, no path planning). A cell can be given
 (``guard``: a :class:`~handeye.calibration.clearance.CellGuard`): a move whose joint-interpolated
-path takes the wrist or what the flange carries into one of its volumes is refused before the arm
-moves (:class:`ZoneViolation`), as a real cell's world zones would stop it. The
+path takes any link or what the flange carries into one of its volumes, or into the arm's own links
+(the robot file's self-collision pairs), is refused before the arm moves (:class:`ZoneViolation`), as
+a real cell's world zones, or a real arm's crash, would stop it. Without a cell the arm still
+refuses self-collision (:func:`self_guard`, the default). The
 flange pose comes from the kinematics model (``calibration.kinematics``: the parallel-arm coupling
 of axes 2 and 3 included). ``time_scale`` shrinks wall-clock motion time for tests (0.01 = 100x).
 
@@ -27,14 +29,26 @@ from typing import Callable
 
 import numpy as np
 
+from ..calibration.cell import DEFAULT_CARRIED
+from ..calibration.clearance import CellGuard
 from ..calibration.errors import HandEyeError
-from ..calibration.kinematics import load_robot
+from ..calibration.kinematics import RobotModel, load_robot
 from ..drivers.controller.types import FlangePose, ToolData
 
-__all__ = ["SimulatedRobot", "DEFAULT_TOOL", "ZoneViolation"]
+__all__ = ["SimulatedRobot", "DEFAULT_TOOL", "SELF_ONLY", "ZoneViolation", "self_guard"]
 
 #: What a fresh PERS tooldata holds before calibration: tool0's frame, 1 kg at the flange.
 DEFAULT_TOOL = ToolData((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0), 1.0, (0.0, 0.0, 0.0))
+
+
+#: ``SimulatedRobot(guard=SELF_ONLY)`` (the default): the arm's self-collision check alone (:func:`self_guard`).
+SELF_ONLY = "self-collision only"
+
+
+def self_guard(model: RobotModel, carried=DEFAULT_CARRIED) -> CellGuard:
+    """The arm against itself and what its flange carries, no keep-out volume: touching is refused (margin
+    0), moves sampled every 5 mm of motion."""
+    return CellGuard(model, [], carried, margin_mm=0.0, step_mm=5.0)
 
 
 class ZoneViolation(HandEyeError):
@@ -49,8 +63,13 @@ class ZoneViolation(HandEyeError):
 
     def __init__(self, violation, target_deg, posture: int = 0):
         where = f"posture {posture}" if posture else "the target"
-        super().__init__(f"world zone: {violation.body} would enter '{violation.volume}' on the way to {where} "
-                         f"({violation.describe()} at {violation.at:.0%} of the move); the arm did not move")
+        if violation.kind == "self":
+            text = (f"self-collision: {violation.reason} on the way to {where} ({violation.describe()} at "
+                    f"{violation.at:.0%} of the move); the arm did not move")
+        else:
+            text = (f"world zone: {violation.body} would enter '{violation.volume}' on the way to {where} "
+                    f"({violation.describe()} at {violation.at:.0%} of the move); the arm did not move")
+        super().__init__(text)
         self.violation = violation
         self.target_deg = np.asarray(target_deg, float)
         self.posture = posture
@@ -73,8 +92,10 @@ class SimulatedRobot:
         Initial configuration (default: all zero).
     clock : callable
         Monotonic time source in seconds (default ``time.monotonic``).
-    guard : CellGuard, optional
-        The cell: moves whose path enters one of its volumes are refused (:class:`ZoneViolation`).
+    guard : CellGuard, :data:`SELF_ONLY` or None
+        The cell: moves whose path enters one of its volumes, or brings two of the arm's bodies together,
+        are refused (:class:`ZoneViolation`). Default :data:`SELF_ONLY`: self-collision alone
+        (:func:`self_guard`); None: nothing checked (a test of the motion alone).
 
     Attributes
     ----------
@@ -91,7 +112,7 @@ class SimulatedRobot:
     """
 
     def __init__(self, postures, model: str = "IRB1400", speed_fraction: float = 0.25, time_scale: float = 1.0,
-                 start_joints=None, clock: Callable[[], float] = time.monotonic, guard=None):
+                 start_joints=None, clock: Callable[[], float] = time.monotonic, guard=SELF_ONLY):
         self.model = load_robot(model)
         self.postures = np.array(postures, dtype=float).reshape(-1, self.model.dof)
         for i, row in enumerate(self.postures, start=1):
@@ -124,7 +145,7 @@ class SimulatedRobot:
         self.moves = 0
         #: Simulated seconds of motion so far (what the moves take at full time scale).
         self.motion_s = 0.0
-        self.guard = guard
+        self.guard = self_guard(self.model) if isinstance(guard, str) and guard == SELF_ONLY else guard
         self.refusals: list[ZoneViolation] = []
 
     def load_program(self, postures) -> None:

@@ -14,8 +14,10 @@ What makes it honest:
   the TRUE flange pose. So the calibration meets the kind of systematic error a station meets.
 - The camera mount (``cam2tool0``) is hidden from the PC; only :attr:`MockStation.truth` holds it.
 - The cell is physical: given one (``MockStationSpec.cell``), the arm refuses any move whose
-  joint-interpolated path takes the wrist or what the flange carries into a keep-out volume or the
-  board's stand (built around the TRUE board), as a real cell's world zones would stop it.
+  joint-interpolated path takes any link or what the flange carries into a keep-out volume or the
+  board's stand (built around the TRUE board), as a real cell's world zones would stop it; and with
+  or without a cell, any move that brings the camera or its bracket into the arm's own links, or two
+  links into each other (the robot file's self-collision pairs), as a real arm would crash.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from scipy.spatial.transform import Rotation
 
 from ..calibration.cell import CellModel
 from ..calibration.clearance import CellGuard
+from .robot import self_guard
 from ..calibration.compact_points import STATION_BOARD, BoardGeometry
 from ..calibration.kinematics import RobotModel, load_robot
 from ..calibration.transforms import transform_from_rotation_translation
@@ -202,11 +205,12 @@ class MockStation:
         self.server.load_program(program)
 
 
-def cell_guard(spec: MockStationSpec, robot: RobotModel | None = None) -> CellGuard | None:
-    """The physical cell of ``spec`` (its stand around the true board): entering a volume (margin 0) is
-    refused, moves sampled every 5 mm; None without a cell."""
+def cell_guard(spec: MockStationSpec, robot: RobotModel | None = None) -> CellGuard:
+    """The physical cell of ``spec`` (its stand around the true board) and the arm itself: entering a volume
+    or one of the arm's own bodies (margin 0) is refused, moves sampled every 5 mm; without a cell, the
+    arm's self-collision alone (what it carries: :data:`~handeye.calibration.cell.DEFAULT_CARRIED`)."""
     if spec.cell is None:
-        return None
+        return self_guard(robot or load_robot(spec.robot))
     zones = None
     if spec.zone_tcp_mm is not None:
         zones = (spec.zone_tcp_mm, spec.cell.world_zone_volumes(spec.board2base, spec.board))

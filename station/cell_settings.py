@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..calibration.cell import Box, CellModel, Cylinder, Floor, Sphere
+from ..calibration.cell import DEFAULT_CARRIED, Box, CellModel, Cylinder, Floor, Sphere
 from ..calibration.errors import ConfigError, brief
 from ..rapid.guided import PROMPTS
 from .schema import Custom, Flag, Number, Optional, Text, number, numbers, setting, text
@@ -138,9 +138,6 @@ def _carried(value, key: str, context) -> tuple:
 
 #: The robot stands on the floor: nothing of the wrist or the camera may go below its foot.
 DEFAULT_KEEP_OUT = (Floor("floor", 0.0),)
-#: The XB3 (277 x 42 x 37 mm) at the default nominal mount, and its bracket from the flange.
-DEFAULT_CARRIED = (Box("camera", (-136.0, 11.0, 58.0), (-94.0, 288.0, 100.0)),
-                   Box("bracket", (-140.0, -45.0, 0.0), (45.0, 45.0, 58.0)))
 
 
 @dataclass(frozen=True)

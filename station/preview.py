@@ -1,7 +1,8 @@
 """The preview of a plan: the cell seen from above and from the side, before anything moves.
 
 One PNG (``SESSION/preview.png``, and in the report): the keep-out volumes (boxes, cylinders, the
-floor, the board's stand), the board, the path the flange will run (tool0's origin along the
+floor, the board's stand), the board, the whole arm at the start posture (every capsule the cell and
+self-collision checks watch: the base, links 1-3, the forearm and the wrist), the path the flange will run (tool0's origin along the
 joint-interpolated moves, from the start posture through every posture in order) and the numbered
 postures (the flange there), each by its number: its file's, ``postures/NNN.yaml`` -> NNN
 (:func:`posture_labels`), as capture, calibrate and the report name it. Two views of the base frame: from above (x, y) and from the side
@@ -19,12 +20,14 @@ import io
 import numpy as np
 
 from ..calibration.cell import Box, Cylinder, Floor
+from ..calibration.clearance import CellGuard
 from ..calibration.kinematics import RobotModel
 from .planning import PosturePlan
 
 __all__ = ["plan_preview_figure", "plan_preview_png", "posture_labels", "write_preview"]
 
 _VOLUME, _STAND, _BOARD, _PATH, _CAMERA = "#c62828", "#ef8a17", "#1f5fa8", "#555555", "#1f5fa8"
+_ARM = "#7a7a7a"
 #: The two views: (title, index of the horizontal axis, of the vertical axis, their names).
 _VIEWS = (("from above", 0, 1, ("x (mm)", "y (mm)")), ("from the side (looking along +y)", 0, 2, ("x (mm)", "z (mm)")))
 
@@ -72,6 +75,26 @@ def _volume_patch(ax, volume, h: int, v: int, extent):
         return
     if isinstance(volume, Box):
         ax.add_patch(Polygon(_hull(volume.corners()[:, [h, v]]), closed=True, **style))
+
+
+def _draw_arm(ax, segments: np.ndarray, radii, h: int, v: int) -> None:
+    """The arm's capsules ``(B, 2, 3)`` (base frame) seen along the third axis: each the outline of its two
+    end circles (the capsule's silhouette in that view)."""
+    from matplotlib.patches import Polygon
+
+    turn = np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
+    circle = np.stack([np.cos(turn), np.sin(turn)], axis=1)
+    for (a, b), r in zip(segments, radii):
+        outline = np.vstack([a[[h, v]] + r * circle, b[[h, v]] + r * circle])
+        ax.add_patch(Polygon(_hull(outline), closed=True, facecolor=_ARM, edgecolor=_ARM, alpha=0.25, linewidth=0.8))
+
+
+def _arm_at(robot: RobotModel, guard, joints) -> tuple[np.ndarray, list]:
+    """The capsules' axes ``(B, 2, 3)`` at ``joints`` and their radii (the guard's, or the robot's alone)."""
+    from ..calibration.clearance import arm_capsules
+
+    guard = guard if guard is not None else CellGuard(robot, [], self_collision=False)
+    return guard.capsule_segments(joints)[0], [c[4] for c in arm_capsules(robot)]
 
 
 def _flange_path(robot: RobotModel, plan: PosturePlan, guard) -> np.ndarray:
@@ -167,7 +190,8 @@ def plan_preview_figure(robot: RobotModel, plan: PosturePlan):
     s = plan.board.square_mm
     outline = np.array([[-s, -s, 0], [cols * s, -s, 0], [cols * s, rows * s, 0], [-s, rows * s, 0], [-s, -s, 0]])
     board = outline @ plan.board2base[:3, :3].T + plan.board2base[:3, 3]
-    extent = _extent(np.vstack([path, board, [[0.0, 0.0, 0.0]]]), volumes)
+    arm, arm_radii = _arm_at(robot, guard, plan.start_joints_deg)
+    extent = _extent(np.vstack([path, board, [[0.0, 0.0, 0.0]], arm.reshape(-1, 3)]), volumes)
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     fig = Figure(figsize=(13.0, 6.4), dpi=100)
@@ -177,6 +201,7 @@ def plan_preview_figure(robot: RobotModel, plan: PosturePlan):
     for ax, (title, h, v, names) in zip(axes, _VIEWS):
         for volume in volumes:
             _volume_patch(ax, volume, h, v, extent)
+        _draw_arm(ax, arm, arm_radii, h, v)
         ax.fill(board[:, h], board[:, v], color=_BOARD, alpha=0.35, linewidth=1.5)
         ax.plot(path[:, h], path[:, v], color=_PATH, linewidth=0.8, alpha=0.8)
         ax.plot(flanges[:, h], flanges[:, v], "o", color=_CAMERA, markersize=3.5)
@@ -200,11 +225,12 @@ def plan_preview_figure(robot: RobotModel, plan: PosturePlan):
     handles = [Patch(facecolor=_VOLUME, alpha=0.3, edgecolor=_VOLUME, label="keep-out volume"),
                Patch(facecolor=_STAND, alpha=0.3, edgecolor=_STAND, label="board stand"),
                Patch(facecolor=_BOARD, alpha=0.35, label="board"),
+               Patch(facecolor=_ARM, alpha=0.25, edgecolor=_ARM, label="arm at the start"),
                Line2D([], [], color=_PATH, label="flange path (tool0)"),
                Line2D([], [], marker="o", linestyle="", color=_CAMERA, label="flange at posture n"),
                Line2D([], [], marker="s", linestyle="", color="black", label="start (flange)"),
                Line2D([], [], marker="^", linestyle="", color="black", label="robot base")]
-    fig.legend(handles=handles, loc="lower center", ncol=7, fontsize=8, frameon=False)
+    fig.legend(handles=handles, loc="lower center", ncol=8, fontsize=8, frameon=False)
     margin = f"margin {plan.cell.margin_mm:g} mm" if plan.cell is not None else "no cell given"
     notes = "; ".join([margin] + left_out)
     fig.suptitle(f"Plan preview: {len(plan.joints_deg)} postures in visiting order, numbered as their files "

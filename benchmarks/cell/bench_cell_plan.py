@@ -38,8 +38,8 @@ CELLS = {
     "tests: floor + stand + cabinet beside the board": CellModel(
         (Floor("floor", 0.0), Box("cabinet beside the board", (500, 250, 0), (1200, 700, 1400))), DEFAULT_CARRIED),
     "narrow lane between two walls": CellModel(
-        (Floor("floor", 0.0), Box("left wall", (0, 200, 0), (2000, 1500, 2500)),
-         Box("right wall", (0, -1500, 0), (2000, -250, 2500))), DEFAULT_CARRIED),
+        (Floor("floor", 0.0), Box("left wall", (380, 200, 0), (2000, 1500, 2500)),
+         Box("right wall", (380, -1500, 0), (2000, -250, 2500))), DEFAULT_CARRIED),
 }
 
 

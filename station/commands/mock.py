@@ -43,7 +43,10 @@ door, an UNDO handler) run here as they would on the controller:
 With --config, the moves are checked against the config's cell as a controller's motion supervision
 would: a MoveJ/MoveAbsJ along its joint path, a MoveL along its TCP line (sampled every 5 mm, each
 sample through the inverse kinematics); a move that would enter a volume stops the program at that
-line, naming the volume. The robtargets' configuration (cf1, cf4, cf6, cfx) is respected (ConfJ/ConfL
+line, naming the volume. With or without --config, a move that would bring the camera or its bracket
+into the arm's own links, or two links into each other (the robot file's self-collision pairs), stops
+it at that line naming the pair (self-collision: camera against forearm). Check a program's targets
+beforehand with handeye cell check. The robtargets' configuration (cf1, cf4, cf6, cfx) is respected (ConfJ/ConfL
 \\Off: the nearest solution). The cell's I/O signals are diCellDoor and diCellReady (inputs, 1 at
 start) and doCellLamp and doCellBusy (outputs); --signal NAME:TYPE=VALUE adds one, and a test or the
 pendant sets an input over the camera port ({{"cmd": "signal", "name": "diCellDoor", "value": 0}}).

@@ -1,0 +1,119 @@
+"""``handeye cell check`` (issue 21): exit codes, the JSON keys, the same verdicts as the planner's and the
+mock's check; an unknown self-collision pair name in a robot file is refused at load with one line."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from handeye.calibration.kinematics import ROBOTS_DIR, load_robot
+from handeye.mocks.robot import SimulatedRobot, ZoneViolation
+from handeye.mocks.station import DEFAULT_START
+from handeye.rapid.interpreter import Bindings, Task, load_program
+from handeye.mocks.controller.arm import ArmBinding
+from handeye.station.cell_plan import cell_check
+from handeye.station.cli import main
+from handeye.station.config import ConfigError, config_from_dict, load_config
+
+ROBOT = load_robot("IRB1400")
+#: The wrist folded back (axis 5 at 108 deg): the camera in the forearm.
+CAMERA_IN_FOREARM = [-33.8, 29.3, 2.3, 19.9, 107.7, -115.3]
+#: Leaning over the box of the config below.
+INTO_BOX = [0.0, 45.0, 30.0, 0.0, 30.0, 0.0]
+CONFIG = """\
+robot: IRB1400
+controller: {protocol: mock}
+camera: {backend: mock}
+cell:
+  keep_out:
+    - {type: floor, name: floor, z_mm: 0}
+    - {type: box, name: fixture, min_mm: [900, -300, 0], max_mm: [1300, 300, 700]}
+"""
+
+
+def _files(tmp_path: Path, rows) -> tuple[Path, Path]:
+    config = tmp_path / "station.yaml"
+    config.write_text(CONFIG, encoding="utf-8")
+    joints = tmp_path / "targets.csv"
+    joints.write_text("a1,a2,a3,a4,a5,a6\n" + "".join(",".join(f"{v:g}" for v in row) + "\n" for row in rows),
+                      encoding="utf-8")
+    return config, joints
+
+
+def test_all_clear_exits_0(tmp_path, capsys):
+    config, joints = _files(tmp_path, [DEFAULT_START, [0, 0, 0, 0, 30, 0]])
+    assert main(["cell", "check", "--config", str(config), str(joints), "--moves"]) == 0
+    assert "all clear (2 postures, 1 moves, margin 30 mm)" in capsys.readouterr().out
+
+
+def test_targets_in_the_arm_or_the_cell_exit_3_with_the_pair_and_the_distance(tmp_path, capsys):
+    rows = [DEFAULT_START, CAMERA_IN_FOREARM, INTO_BOX, [0, 80, 0, 0, 0, 0]]
+    config, joints = _files(tmp_path, rows)
+    out = tmp_path / "check.json"
+    assert main(["cell", "check", "--config", str(config), str(joints), "--moves", "--json", str(out)]) == 3
+    text = capsys.readouterr().out
+    assert "row 1 (line 3): NOT CLEAR: camera against forearm" in text
+    data = json.loads(out.read_text())
+    postures, moves = data["postures"], data["moves"]
+    assert [p["row"] for p in postures] == [0, 1, 2, 3] and [p["clear"] for p in postures] == [True, False, False, False]
+    assert {"row", "clear", "closest", "distance_mm"} <= set(postures[0])
+    assert postures[1]["closest"] == "camera - forearm" and postures[1]["distance_mm"] < 0
+    assert postures[2]["closest"].endswith(" - fixture") and postures[2]["kind"] == "cell"
+    assert postures[3]["closest"] == "joint limits"
+    assert [(m["from_row"], m["to_row"], m["clear"]) for m in moves] == [(0, 1, False), (1, 2, False), (2, 3, False)]
+    assert moves[0]["closest"] == "camera - forearm" and 0 < moves[0]["at"] <= 1
+    # the planner's check says the same of every posture
+    guard = cell_check(load_config(config)).guard(ROBOT)
+    for p, row in zip(postures[:3], rows):
+        found = guard.posture_violation(row)
+        assert (found is None) == p["clear"] and (found is None or found.pair == p["closest"])
+
+
+def test_a_bad_joints_file_is_refused_in_one_line(tmp_path, capsys):
+    config, joints = _files(tmp_path, [[1, 2, 3, 4, 5]])
+    assert main(["cell", "check", "--config", str(config), str(joints)]) == 1
+    err = capsys.readouterr().err
+    assert "line 2: expected 6 axis angles (deg), got 5 values" in err and err.count("\n") == 1
+
+
+def test_the_mock_refuses_the_move_into_the_arm_without_a_cell_naming_the_pair():
+    arm = SimulatedRobot([DEFAULT_START], start_joints=DEFAULT_START, time_scale=1e-4)  # no cell: self-collision only
+    with pytest.raises(ZoneViolation, match="self-collision: camera against forearm on the way to the target"):
+        arm.start_move(CAMERA_IN_FOREARM)
+    assert np.allclose(arm.current_joints, DEFAULT_START) and arm.refusals[-1].violation.kind == "self"
+    program = load_program([("MODULE T\n  PROC main()\n    MoveAbsJ [[" + ",".join(f"{v:g}" for v in CAMERA_IN_FOREARM)
+                             + "],[9E9,9E9,9E9,9E9,9E9,9E9]], v200, fine, tool0;\n  ENDPROC\nENDMODULE\n", "T.mod")])
+    task = Task(program, Bindings(motion=ArmBinding(arm))).start()
+    assert task.finished.wait(30) and task.state == "error"
+    assert task.error.startswith("T.mod:3: MoveAbsJ: self-collision: camera against forearm"), task.error
+    assert np.allclose(arm.current_joints, DEFAULT_START)
+
+
+def test_the_standalone_mock_controller_arm_checks_self_collision():
+    from handeye.mocks.controller import start_mock_controller
+
+    server = start_mock_controller("socket", port=0, start=False)
+    assert server.robot.guard is not None and server.robot.guard.self_check
+    assert server.robot.path_violation([DEFAULT_START, CAMERA_IN_FOREARM]).reason == "camera against forearm"
+
+
+def _robot_file(tmp_path: Path, pair: str) -> Path:
+    text = (ROBOTS_DIR / "irb1400.yaml").read_text(encoding="utf-8").replace("name: IRB1400", "name: IRB1400 test")
+    path = tmp_path / "arm.yaml"
+    path.write_text(text.replace("    - [link 3, base]\n", f"    - [link 3, base]\n    - [{pair}]\n"), encoding="utf-8")
+    return path
+
+
+def test_an_unknown_name_in_the_self_collision_pairs_is_refused_at_load(tmp_path):
+    path = _robot_file(tmp_path, "carried, link 9")
+    with pytest.raises(ValueError) as refused:
+        load_robot(str(path))
+    message = str(refused.value)
+    assert "'link 9'" in message and "self_collision.pairs" in message and "\n" not in message
+    with pytest.raises(ConfigError) as config:
+        config_from_dict({"robot": str(path), "controller": {"protocol": "mock"}, "camera": {"backend": "mock"}})
+    assert "'link 9'" in str(config.value) and "\n" not in str(config.value)
+    assert load_robot(str(_robot_file(tmp_path, "link 6, link 3"))).self_pairs[-1] == ("link 6", "link 3")
