@@ -74,7 +74,7 @@ def test_resume_after_a_crash_between_grab_and_acknowledge(tmp_path, no_leaked_t
 
 
 def test_postures_that_fail_quality_are_skipped_with_the_reason(tmp_path, no_leaked_threads):
-    config = _config(5)
+    config = _config(3)  # a posture that fails costs every search stage of OpenCV, three times: few of them
     with open_station(config, mock=True) as link:
         first = capture(config, tmp_path / "s", link, stop_after=2)
         assert first.captured == [0, 1]
@@ -82,10 +82,10 @@ def test_postures_that_fail_quality_are_skipped_with_the_reason(tmp_path, no_lea
         board[:3, 3] += [0.0, 2000.0, 0.0]  # someone moved the board away
         link.camera.set_scene(target2base=board)
         second = capture(config, tmp_path / "s", link)
-    assert second.captured == [] and sorted(second.skipped) == [2, 3, 4]
+    assert second.captured == [] and sorted(second.skipped) == [2]
     assert all("skipped after 3 attempt(s)" in reason for reason in second.skipped.values())
     header = yaml.safe_load((tmp_path / "s" / "session.yaml").read_text())
-    assert sorted(header["capture"]["skipped"]) == ["2", "3", "4"]
+    assert sorted(header["capture"]["skipped"]) == ["2"]
     assert _indices(tmp_path / "s") == [0, 1]
 
 

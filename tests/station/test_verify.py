@@ -115,7 +115,7 @@ def test_board_out_of_view_is_inconclusive(station):
     # The camera turned and the board moved away so far that no corner is in view, no retries: an OpenCV
     # search on a partly seen board costs seconds per attempt, and it is the verdict that is tested here.
     code, data = _verify(station, "blind", "camera_turn_deg: [-30, 30, 0], board_shift_mm: [100, 100, 100]",
-                         config_extra="capture: {retries: 0}\n")
+                         "--postures", "3", config_extra="capture: {retries: 0}\n")
     assert code == 4 and data["verdict"] == "inconclusive"
     assert data["measured"] < 3
 
