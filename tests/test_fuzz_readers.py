@@ -129,21 +129,32 @@ def number_lists(length):
 REPLACEMENTS = st.one_of(ODD_NUMBERS, VALUES)
 
 
+#: The structural choices of a case (where to edit, what to splice) come from one seeded ``random.Random``
+#: per case, drawn by hypothesis (so a run is as reproducible as before); only the values that break
+#: numeric code are drawn through hypothesis' strategies. Dozens of small strategy draws per case were
+#: most of this file's time.
+CHOICES = st.randoms(use_true_random=True)
+
+
 @st.composite
 def mutated(draw, base, steps: int = 3):
     """``base`` with up to ``steps`` random edits: a value replaced, a key or item dropped or added."""
+    rnd = draw(CHOICES)
     value = copy.deepcopy(base)
-    for _ in range(draw(st.integers(0, steps))):
-        value = _edit(draw, value, depth=0)
+    for _ in range(rnd.randint(0, steps)):
+        value = _edit(draw, rnd, value, depth=0)
     return value
 
 
-def _edit(draw, value, depth):
-    if isinstance(value, dict) and value and depth < 6 and draw(st.integers(0, 4)):
-        key = draw(st.sampled_from(sorted(value, key=repr)))
-        action = draw(st.sampled_from(["descend", "descend", "replace", "drop", "add"]))
+EDITS = ["descend", "descend", "replace", "drop", "add"]
+
+
+def _edit(draw, rnd, value, depth):
+    if isinstance(value, dict) and value and depth < 6 and rnd.randint(0, 4):
+        key = rnd.choice(sorted(value, key=repr))
+        action = rnd.choice(EDITS)
         if action == "descend":
-            value[key] = _edit(draw, value[key], depth + 1)
+            value[key] = _edit(draw, rnd, value[key], depth + 1)
         elif action == "replace":
             value[key] = draw(REPLACEMENTS)
         elif action == "drop":
@@ -151,11 +162,11 @@ def _edit(draw, value, depth):
         else:
             value[draw(KEYS)] = draw(REPLACEMENTS)
         return value
-    if isinstance(value, list) and value and depth < 6 and draw(st.integers(0, 4)):
-        i = draw(st.integers(0, len(value) - 1))
-        action = draw(st.sampled_from(["descend", "descend", "replace", "drop", "add"]))
+    if isinstance(value, list) and value and depth < 6 and rnd.randint(0, 4):
+        i = rnd.randint(0, len(value) - 1)
+        action = rnd.choice(EDITS)
         if action == "descend":
-            value[i] = _edit(draw, value[i], depth + 1)
+            value[i] = _edit(draw, rnd, value[i], depth + 1)
         elif action == "replace":
             value[i] = draw(REPLACEMENTS)
         elif action == "drop":
@@ -175,36 +186,40 @@ SNIPPETS = [
 ]
 
 
-@st.composite
-def spoiled_text(draw, text: str):
+def _random_text(rnd, low: int, high: int) -> str:
+    """1-8 characters from anywhere in Unicode (ASCII, the BMP with its surrogates, the astral planes)."""
+    top = rnd.choice([0x7F, 0xFFFF, 0x10FFFF])
+    return "".join(chr(rnd.randint(0, top)) for _ in range(rnd.randint(low, high)))
+
+
+def spoiled_text(rnd, text: str) -> str:
     """``text``, or ``text`` with a snippet or random characters spliced in, or cut short."""
-    how = draw(st.sampled_from(["keep", "keep", "snippet", "chars", "cut"]))
+    how = rnd.choice(["keep", "keep", "snippet", "chars", "cut"])
     if how == "keep" or not text:
         return text
-    at = draw(st.integers(0, len(text)))
+    at = rnd.randint(0, len(text))
     if how == "snippet":
-        return text[:at] + draw(picked(SNIPPETS)) + text[at:]
+        return text[:at] + rnd.choice(SNIPPETS) + text[at:]
     if how == "chars":
-        return text[:at] + draw(st.text(min_size=1, max_size=8)) + text[at:]
+        return text[:at] + _random_text(rnd, 1, 8) + text[at:]
     return text[:at]
 
 
-@st.composite
-def spoiled_bytes(draw, text: str):
+def spoiled_bytes(rnd, text: str) -> bytes:
     """The bytes of a file holding ``text``: mostly UTF-8, sometimes with foreign bytes or re-encoded."""
-    how = draw(st.sampled_from(["utf8", "utf8", "utf8", "insert", "utf16", "latin1", "random", "bom"]))
+    how = rnd.choice(["utf8", "utf8", "utf8", "insert", "utf16", "latin1", "random", "bom"])
     if how == "utf16":
         return text.encode("utf-16", errors="surrogatepass")
     if how == "latin1":
         return text.encode("latin-1", errors="replace") + b"\xe9\xff"
     if how == "random":
-        return draw(st.binary(max_size=300))
+        return rnd.randbytes(rnd.randint(0, 300))
     data = text.encode("utf-8", errors="surrogatepass")
     if how == "bom":
         return b"\xef\xbb\xbf" + data
     if how == "insert":
-        at = draw(st.integers(0, len(data)))
-        return data[:at] + draw(st.binary(min_size=1, max_size=8)) + data[at:]
+        at = rnd.randint(0, len(data))
+        return data[:at] + rnd.randbytes(rnd.randint(1, 8)) + data[at:]
     return data
 
 
@@ -212,7 +227,8 @@ def spoiled_bytes(draw, text: str):
 def file_bodies(draw, documents):
     """Bytes of a file: a document (drawn from ``documents``), spoiled as text and then as bytes."""
     text = draw(documents)
-    return draw(spoiled_bytes(draw(spoiled_text(text))))
+    rnd = draw(CHOICES)
+    return spoiled_bytes(rnd, spoiled_text(rnd, text))
 
 
 _DUMPER = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
