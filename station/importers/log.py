@@ -36,6 +36,7 @@ from ...calibration.session import Session, parse_yaml
 from .common import QUATERNION_ORDERS, Dropped, build_session, check_posture_count, parse_json, read_text
 from .conventions import POSE_WIDTHS, PoseConvention, conventions_for_width, parse_rotation_spec, vendor_units
 from .inference import Side, SideReading
+from .readings import GAP_MAX_DEG, Constraints, screen, side_units
 from .layout_choice import Candidate, choose_layout
 from .layout_search import one_side_lists, propose
 from .layout_text import tokenise
@@ -510,11 +511,12 @@ def read_log(paths, *, setup=None, units=None, board=None, skip_invalid: bool = 
                      + ([f"--quaternion-order {quaternion_order}"] if quaternion_order else [])) or None
     flags = dict(setup=setup, units=units, board=board, robot_pose=robot_pose, camera_pose=camera_pose, given=given)
     results, errors = [], []
-    for candidate in pairings:  # cheapest first; once one reads, only readings as cheap (or one dearer) follow
-        if results and candidate.cost > min(c.cost for c in results) + 1:
+    for candidate in pairings:  # cheapest first; once one reads, only readings as cheap follow
+        if results and candidate.cost > min(c.cost for c in results):
             break
         try:
-            candidate.session = _session_of(candidate, files[0], source, options, skip_invalid, flags)
+            candidate.session = _session_of(candidate, files[0], source, options, skip_invalid, flags,
+                                            screen_out=len(pairings) > 1)
             results.append(candidate)
         except SessionError as exc:
             errors.append((candidate.stage, exc))
@@ -595,8 +597,18 @@ def _distinct(candidates: list) -> list:
     return out
 
 
-def _session_of(candidate: Candidate, path: Path, source, options: dict, skip_invalid: bool, flags: dict) -> Session:
-    """The session one pairing gives (``build_session`` with every reading of its numbers)."""
+def _hopeless(robot: Side, camera: Side, n: int) -> bool:
+    """No pair of readings passes the inference's first screen (the X-free angle gap): a decoy pairing
+    (joint angles, a result matrix) is dropped before the full fit, which would refuse it anyway."""
+    units = side_units(robot, camera, Constraints(), [])
+    gaps, _ = screen(robot, camera, units, n)
+    return bool(gaps.size) and bool(np.nanmin(gaps) > GAP_MAX_DEG) if np.any(np.isfinite(gaps)) else False
+
+
+def _session_of(candidate: Candidate, path: Path, source, options: dict, skip_invalid: bool, flags: dict,
+                screen_out: bool = False) -> Session:
+    """The session one pairing gives (``build_session`` with every reading of its numbers); ``screen_out``
+    drops a pairing no reading can fit before the full inference (when other pairings compete)."""
     candidate.stage = 0
     robot, camera, unpaired = _paired(candidate.robot, candidate.camera, path)
     check_posture_count(path, len(robot.values), FORMAT)  # before the readings multiply the poses
@@ -604,6 +616,9 @@ def _session_of(candidate: Candidate, path: Path, source, options: dict, skip_in
     for _ in range(unpaired):
         dropped.add("pose without a partner of the same posture number", "")
     robot_side, camera_side, labels = _build_sides((robot, camera), options, dropped, skip_invalid, path)
+    if screen_out and _hopeless(robot_side, camera_side, len(robot.values)):
+        raise SessionError(f"{path}: {candidate.words}: no reading of these lists fits AX = XB (angle gap over "
+                           f"{GAP_MAX_DEG:g} deg)")
     candidate.stage = 1
     details = {"layout": {"robot_numbers": robot.width, "camera_numbers": camera.width, "reading": candidate.words}}
     return build_session(FORMAT, source, robot_side, camera_side, labels, setup=flags["setup"], default_setup=None,
