@@ -51,6 +51,7 @@ class Candidate:
     session: object = None
     stage: int = 0
     documented: bool = False
+    extra: dict | None = None
 
     def matches(self, robot_rows: str) -> bool:
         """Whether ``--robot-rows`` names this pairing's robot list (its tag or file, or first/second)."""

@@ -41,6 +41,7 @@ from .layout_choice import Candidate, choose_layout
 from .layout_search import one_side_lists, propose
 from .layout_text import tokenise
 from .log_group import Group
+from .log_result import frame_hints, own_result
 from .log_text import Table, matrices_from_rows, parse_table
 from .log_tree import conventions_of, find_poses
 from .names import INDEX_NAMES, STAMP_NAMES, direction_of, side_of, words_of
@@ -533,7 +534,9 @@ def _one_file_pairings(path: Path) -> list:
         alternatives = _file_alternatives(path)
     except SessionError as exc:
         alternatives, first_error = [], exc
-    for a in alternatives:
+    if _is_tree(path, text):
+        found = _tree_candidates(path, text)
+    for a in alternatives if not found else []:
         if isinstance(a, tuple):
             found.append(Candidate(a[0], a[1], "one posture per row or block (the table reader's layout)", "", "", 0,
                                    documented=True))
@@ -550,6 +553,41 @@ def _one_file_pairings(path: Path) -> list:
         raise SessionError(f"{path}: one list of poses only; give the robot poses and the camera poses (two "
                            f"blocks, two lists, two tags, or two files)")
     return found
+
+
+def _tree_candidates(path: Path, text: str) -> list:
+    """Every pair of equally long pose lists of a JSON/YAML document, the names deciding the sides when they
+    say (else both orders), each carrying the document's frame-name hints and the tool's own result."""
+    document = _document(path, text)
+    try:
+        leaves = find_poses(document)
+    except ValueError as exc:
+        raise SessionError(f"{path}: {exc}") from None
+    groups: dict = {}
+    for leaf in leaves:
+        groups.setdefault(leaf.signature, []).append(leaf)
+    lists = [g for g in groups.values() if len(g) >= 3 and len({len(m.values) for m in g}) == 1]
+    setup, said = frame_hints(document)
+    result = own_result(leaves, {g[0].signature for g in lists})
+    extra = {"declared_setup": setup, "setup_names": said, "log_result": result}
+    out = []
+    for ga, gb in itertools.combinations(lists, 2):
+        if len(ga) != len(gb):
+            continue
+        a, b = _group_of(path, ga), _group_of(path, gb)
+        names = [side_of(list(ga[0].names)) or _side_from_direction(a.direction),
+                 side_of(list(gb[0].names)) or _side_from_direction(b.direction)]
+        words = f"the lists at {ga[0].path} and {gb[0].path} (and their like)"
+        na, nb = ".".join(ga[0].names), ".".join(gb[0].names)
+        if names[0] == "camera" or names[1] == "robot":
+            out.append(Candidate(b, a, words, nb, na, 0, False, extra=extra))
+        elif names[0] == "robot" or names[1] == "camera":
+            out.append(Candidate(a, b, words, na, nb, 0, True, extra=extra))
+        else:
+            swap = len(out) + 1
+            out.append(Candidate(a, b, words, na, nb, 0, True, swap=swap, documented=True, extra=extra))
+            out.append(Candidate(b, a, words, nb, na, 0, False, swap=swap, extra=extra))
+    return out
 
 
 def _two_file_pairings(files: list) -> list:
@@ -621,7 +659,13 @@ def _session_of(candidate: Candidate, path: Path, source, options: dict, skip_in
                            f"{GAP_MAX_DEG:g} deg)")
     candidate.stage = 1
     details = {"layout": {"robot_numbers": robot.width, "camera_numbers": camera.width, "reading": candidate.words}}
+    extra = candidate.extra or {}
+    if extra.get("log_result"):
+        details["log_result"] = extra["log_result"]
+    notes = [f"the frame names say {extra['declared_setup']} ({'; '.join(extra['setup_names'])}): a hint for "
+             f"ties"] if extra.get("declared_setup") else []
     return build_session(FORMAT, source, robot_side, camera_side, labels, setup=flags["setup"], default_setup=None,
+                         declared_setup=extra.get("declared_setup"), notes=notes,
                          units=flags["units"], documented_units=None, board=flags["board"], dropped=dropped,
                          entries_read=len(robot.values), details=details, robot_pose=flags["robot_pose"],
                          camera_pose=flags["camera_pose"], robot_declared=robot.direction,

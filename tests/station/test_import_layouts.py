@@ -101,3 +101,34 @@ def test_real_sets_rewritten_in_other_layouts(tmp_path, real_stations, layout):
             assert "pass --" in str(exc), (name, layout, str(exc))
             continue
         assert same_as_truth(session, st, tol_mm=1e-3, tol_rot=1e-6), (name, layout, written.words)
+
+
+def test_a_tools_json_log_its_frame_names_and_its_own_result(tmp_path, capsys):
+    """A calibration tool's log: per-posture transform pairs among joint lists, frame names and the
+    tool's own result; the result is compared in the import output, never read as input."""
+    import json
+
+    from handeye.station.cli import main
+    from layout_logs import encode
+
+    st = station(21, n=12, setup="eye_in_hand")
+    rng = np.random.default_rng(0)
+    off = st.x.copy()
+    off[:3, 3] += [3.0, 0.0, 4.0]  # the tool's answer, 5 mm from the truth
+    log = {"robot_base_frame": "base", "robot_effector_frame": "tool0", "camera": "attached on robot",
+           "samples": [{"joints": list(rng.uniform(-90, 90, 6)),
+                        "pair": {"a": encode(st.tool0[k:k + 1], "m16", "m", False)[0].reshape(4, 4).tolist(),
+                                 "b": encode(st.target[k:k + 1], "m16", "m", False)[0].reshape(4, 4).tolist()}}
+                       for k in range(st.tool0.shape[0])],
+           "result": {"T camera to tool0": (off * [[1, 1, 1, 1e-3]]).tolist()}}  # in m, as the pairs
+    path = tmp_path / "tool_log.json"
+    path.write_text(json.dumps(log))
+    code = main(["import", str(path), "-o", str(tmp_path / "s")])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "the frame names say eye_in_hand" in out
+    line = next(s for s in out.splitlines() if "the log's own answer" in s)
+    mm = float(line.split("differs from ours by ")[1].split(" mm")[0])
+    assert 3.0 < mm < 7.0 and "as its name says" in line  # ours is near the truth, theirs 5 mm off
+    session = read_any(path)
+    assert same_as_truth(session, st, tol_mm=1e-3, tol_rot=1e-6)
