@@ -77,7 +77,7 @@ def station(seed: int, n: int = 12, setup: str | None = None, sigma_mm: float = 
         x = _pose(Rotation.from_euler("xyz", [-120, 0, 90 + rng.uniform(-20, 20)], degrees=True).as_matrix(),
                   [rng.uniform(1500, 1900), rng.uniform(-800, 800), rng.uniform(1000, 1400)])
         on_flange = _pose(Rotation.from_rotvec(rng.normal(0, 0.2, 3)).as_matrix(), [0, 0, rng.uniform(40, 90)])
-        cam_in_board = _views(rng, n, _pose(np.diag([1.0, -1.0, -1.0]), [0, 0, 0]))
+        cam_in_board = _views(rng, n, np.eye(4))  # cameras on the board's -z side: z into the board
         board_in_cam = invert_transforms(cam_in_board)
         target = board_in_cam
         tool0 = x @ board_in_cam @ invert_transforms(on_flange)

@@ -8,9 +8,10 @@ valid poses is read by the convention inference; the ones it refuses are out. Of
 2. **Which list is the robot's** when no name says it: swapping the two lists fits the invariants
    exactly as well (``B X^-1 = X^-1 A``), so the content decides: the camera sees the board, so
    the board positions in the camera lie in a narrow cone about its optical axis (+z), and a
-   robot's flange positions about its base do not. The reading whose camera cone is at most 50 deg
-   and 1.5 times narrower than the swapped reading's is kept; otherwise the documented layout
-   (robot pose first in a row, the files in the order given) is kept when the pair holds it, and
+   robot's flange positions about its base do not (on generated stations: 20 deg at most against
+   41 deg at least). The reading whose cone is at most 50 deg and 1.5 times narrower than the
+   swapped reading's is kept; otherwise the documented layout
+   (robot pose first in a row) is kept when the pair holds it, and
    the import is refused naming ``--robot-rows`` when it does not.
 3. Of different outcomes, the one whose worst invariant misfit (against its floor: 1 deg, 2 deg,
    8 %) is three times below every other's is kept, and the runner-up is said; two within that
@@ -28,7 +29,7 @@ from .log_group import Group
 
 __all__ = ["Candidate", "choose_layout", "CONE_MAX_DEG", "CONE_FACTOR", "NOISE_FACTOR"]
 
-#: Widest cone (deg) about the camera's +z that a board seen by it fills.
+#: Widest cone (deg) about the camera's +z that the boards it sees fill.
 CONE_MAX_DEG = 50.0
 #: The camera list's cone must be this much narrower than the swapped reading's.
 CONE_FACTOR = 1.5
@@ -70,7 +71,7 @@ class Candidate:
         return max(values)
 
     def cone_deg(self) -> float:
-        """Widest angle (deg) between a board position in the camera and the camera's +z."""
+        """Widest angle (deg) between a board position in the camera and the camera's axis (+z)."""
         t = np.array([p.target_in_camera[:3, 3] for p in self.session.postures])
         cos = t[:, 2] / np.maximum(np.linalg.norm(t, axis=1), 1e-12)
         return float(np.degrees(np.max(np.arccos(np.clip(cos, -1.0, 1.0)))))
@@ -101,7 +102,7 @@ def _sides_decided(results: list, where) -> list:
         narrow, wide = sorted(pair, key=lambda c: c.cone_deg())
         if narrow.cone_deg() <= CONE_MAX_DEG and wide.cone_deg() >= CONE_FACTOR * narrow.cone_deg():
             narrow.session.extra["import"]["notes"].append(
-                f"the camera poses are the list {narrow.camera_name or 'read second'!r}: its board positions lie within "
+                f"the camera poses are the list {narrow.camera_name or 'read second'!r}: its boards lie within "
                 f"{narrow.cone_deg():.0f} deg of the camera axis, the other list's within {wide.cone_deg():.0f} deg")
             out.append(narrow)
         elif any(c.documented for c in pair):

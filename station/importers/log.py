@@ -534,13 +534,19 @@ def _one_file_pairings(path: Path) -> list:
         alternatives = _file_alternatives(path)
     except SessionError as exc:
         alternatives, first_error = [], exc
-    if _is_tree(path, text):
-        found = _tree_candidates(path, text)
+    tree = _is_tree(path, text)
+    if tree:
+        try:
+            found = _tree_candidates(path, text)
+        except SessionError:  # ``robot: 1, 2, ...`` lines look like YAML but are a tagged table
+            if path.suffix.lower() in _TREE_SUFFIXES or text.lstrip()[:1] in ("{", "[") or not tokenise(text):
+                raise
+            tree = False
     for a in alternatives if not found else []:
         if isinstance(a, tuple):
             found.append(Candidate(a[0], a[1], "one posture per row or block (the table reader's layout)", "", "", 0,
                                    documented=True))
-    if not _is_tree(path, text):
+    if not tree:
         for p in propose(text, path.name):
             for k, (robot, camera, name) in enumerate(p.sides()):
                 other = p.second_name if robot is p.first else p.first_name
@@ -610,7 +616,7 @@ def _two_file_pairings(files: list) -> list:
             out.append(Candidate(a, b, words, files[0].stem, files[1].stem, 0, True))
         else:
             swap = object()
-            out.append(Candidate(a, b, words, files[0].stem, files[1].stem, 0, True, swap=id(swap), documented=True))
+            out.append(Candidate(a, b, words, files[0].stem, files[1].stem, 0, True, swap=id(swap)))
             out.append(Candidate(b, a, words, files[1].stem, files[0].stem, 0, False, swap=id(swap)))
     return _distinct(out)
 

@@ -42,7 +42,7 @@ def test_tags_in_any_case_and_the_side_flag(tmp_path):
     path.write_text("\n".join(lines) + "\n")
     session = read_any(path)  # no name says which is which: the board's cone does
     assert same_as_truth(session, st)
-    assert any("its board positions lie within" in n for n in session.extra["import"]["notes"])
+    assert any("its boards lie within" in n for n in session.extra["import"]["notes"])
     forced = read_any(path, robot_rows="beta")  # the side flag forces the other reading, whatever it gives
     assert not same_as_truth(forced, st) if forced is not None else True
     with pytest.raises(SessionError, match="--robot-rows gamma"):
