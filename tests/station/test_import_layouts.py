@@ -132,3 +132,45 @@ def test_a_tools_json_log_its_frame_names_and_its_own_result(tmp_path, capsys):
     assert 3.0 < mm < 7.0 and "as its name says" in line  # ours is near the truth, theirs 5 mm off
     session = read_any(path)
     assert same_as_truth(session, st, tol_mm=1e-3, tol_rot=1e-6)
+
+
+def _fake(cone_deg: float, badness: float):
+    """A read candidate whose boards lie ``cone_deg`` off the camera axis (for the choice alone)."""
+    from types import SimpleNamespace
+
+    from handeye.station.importers.layout_choice import Candidate
+    from handeye.station.importers.log_group import Group
+
+    a = np.radians(cone_deg)
+    postures = [SimpleNamespace(tool0_in_base=np.eye(4), target_in_camera=np.array(
+        [[1, 0, 0, 900 * np.sin(a) * (k % 2)], [0, 1, 0, 0], [0, 0, 1, 900 * np.cos(a * (k % 2))], [0, 0, 0, 1.0]]))
+        for k in range(6)]
+    record = {"inference": {"scores": {"angle_gap_deg": badness, "axis_misfit_deg": 0.0, "translation_misfit": 0.0}},
+              "notes": [], "layout": {}}
+    group = Group(np.zeros((6, 7)), [""] * 6)
+    return Candidate(group, group, "two lists", "a", "b", 0, swap=1,
+                     session=SimpleNamespace(extra={"import": record}, postures=postures, setup="eye_in_hand"))
+
+
+def test_two_lists_the_content_cannot_tell_apart_are_refused_naming_the_side_flag():
+    from handeye.station.importers.layout_choice import choose_layout
+
+    with pytest.raises(SessionError, match=r"cannot tell which list holds the robot poses.*pass --robot-rows a"):
+        choose_layout([_fake(20.0, 0.2), _fake(25.0, 0.2)], "log.txt")  # both look like a camera's view
+    chosen = choose_layout([_fake(20.0, 0.2), _fake(60.0, 0.2)], "log.txt")
+    assert "within 20 deg of the camera axis" in chosen.extra["import"]["notes"][1]
+
+
+def test_two_different_layouts_within_the_noise_are_refused_and_a_clear_best_names_its_runner_up():
+    from handeye.station.importers.layout_choice import choose_layout
+
+    one, two = _fake(20.0, 0.2), _fake(30.0, 0.3)
+    one.swap = two.swap = None
+    two.words = "another grouping"
+    with pytest.raises(SessionError, match=r"two layouts fit within the noise.*pass --robot-rows, or --format"):
+        choose_layout([one, two], "log.txt")
+    one, two = _fake(20.0, 0.2), _fake(30.0, 2.0)
+    one.swap = two.swap = None
+    two.words = "another grouping"
+    notes = choose_layout([one, two], "log.txt").extra["import"]["notes"]
+    assert notes[0] == "layout: two lists (robot poses: 'a')" and notes[1].startswith("layout runner-up: another grouping")
