@@ -11,7 +11,8 @@ rows allow is proposed (:func:`propose`), each with its reading in words:
   text or count lines: two sections of the same length, or 2-3 matrices per posture taken in every
   order (a decoy such as the tool's result matrix is one section, or one matrix more, left out);
 - **per row**: a row holding a robot pose and a camera pose side by side after 0-3 leading columns,
-  with extra columns after them (joints, errors) left out;
+  with extra columns after them (joints, errors) left out; the robot pose first, as the table
+  format documents (a header naming the camera first is the table reader's to read);
 - **per image row** (camera-calibration output: ``image7.png fx 0 cx 0 fy cy 0 0 1 r11 .. r33 tx ty tz
   k1 ..``): the nine columns that are a rotation in every row (orthonormal, det +1) and the three
   beside them as the translation (:func:`rotation_windows`, one side only; the other comes from
@@ -52,13 +53,14 @@ class Proposal:
     first_name: str = ""
     second_name: str = ""
     cost: int = 0
+    robot_first: bool = False
 
     def sides(self) -> list:
         """``[(robot, camera, robot name)]``: the order the names say, else both orders."""
         a, b = side_of(self.first_name) if self.first_name else None, side_of(self.second_name) if self.second_name else None
         if a == "camera" or b == "robot":
             return [(self.second, self.first, self.second_name)]
-        if a == "robot" or b == "camera":
+        if a == "robot" or b == "camera" or self.robot_first:
             return [(self.first, self.second, self.first_name)]
         return [(self.first, self.second, self.first_name), (self.second, self.first, self.second_name)]
 
@@ -258,7 +260,7 @@ def _per_row(rows: list, path_name: str) -> list:
                 a.keys = b.keys = [tuple(v) for v in values[:, :index]]
             words = (f"each row: {wa} numbers then {wb} numbers" + (f" after {skip} leading column(s)" if skip else "")
                      + (f", {extra} trailing column(s) left out" if extra else ""))
-            out.append(Proposal(words, a, b, cost=skip - index + extra))
+            out.append(Proposal(words, a, b, cost=skip - index + extra, robot_first=True))
     return out
 
 

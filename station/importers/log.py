@@ -512,18 +512,36 @@ def read_log(paths, *, setup=None, units=None, board=None, skip_invalid: bool = 
                      + ([f"--quaternion-order {quaternion_order}"] if quaternion_order else [])) or None
     flags = dict(setup=setup, units=units, board=board, robot_pose=robot_pose, camera_pose=camera_pose, given=given)
     results, errors = [], []
+    documented = [c for c in pairings if c.documented]
+    if documented and len(files) == 1:  # the table reader's layouts first: the search only where they read nothing
+        partners = {c.swap for c in documented if c.swap is not None}
+        first = documented + [c for c in pairings if not c.documented and c.swap in partners]
+        results, errors = _read_candidates(first, files[0], source, options, skip_invalid, flags, len(pairings) > 1)
+        if results or any(stage == 1 for stage, _ in errors):
+            if not results:
+                raise max(errors, key=lambda e: e[0])[1]
+            return choose_layout(results, files[0])
+        pairings = [c for c in pairings if c not in first]
+    more, errors_more = _read_candidates(pairings, files[0], source, options, skip_invalid, flags, len(pairings) > 1)
+    results, errors = results + more, errors + errors_more
+    if not results:  # the error of the layout that got furthest (read, then refused by the inference)
+        raise max(errors, key=lambda e: e[0])[1]
+    return choose_layout(results, files[0])
+
+
+def _read_candidates(pairings: list, path: Path, source, options: dict, skip_invalid: bool, flags: dict,
+                     screen_out: bool) -> tuple[list, list]:
+    """``(candidates read, [(stage, error)])``, cheapest first; once one reads, only readings as cheap follow."""
+    results, errors = [], []
     for candidate in pairings:  # cheapest first; once one reads, only readings as cheap follow
         if results and candidate.cost > min(c.cost for c in results):
             break
         try:
-            candidate.session = _session_of(candidate, files[0], source, options, skip_invalid, flags,
-                                            screen_out=len(pairings) > 1)
+            candidate.session = _session_of(candidate, path, source, options, skip_invalid, flags, screen_out=screen_out)
             results.append(candidate)
         except SessionError as exc:
             errors.append((candidate.stage, exc))
-    if not results:  # the error of the layout that got furthest (read, then refused by the inference)
-        raise max(errors, key=lambda e: e[0])[1]
-    return choose_layout(results, files[0])
+    return results, errors
 
 
 def _one_file_pairings(path: Path) -> list:

@@ -82,7 +82,8 @@ def real_stations():
     from helpers import shared_dataset
 
     out = {}
-    for name, file in {"moveit-calibration": "pose_samples.json", "visp-eye-in-hand": None}.items():
+    for name, file in {"moveit-calibration": "pose_samples.json", "visp-eye-in-hand": None,
+                       "camodocal-ar-tag": "TransformPairsInput.yml", "ethz-robot-arm": None}.items():
         folder = shared_dataset(name)
         session = read_any(folder / file if file else folder)
         tool0 = np.array([p.tool0_in_base for p in session.postures])
