@@ -37,7 +37,7 @@ CONE_FACTOR = 1.5
 NOISE_FACTOR = 3.0
 
 
-@dataclass
+@dataclass(eq=False)
 class Candidate:
     """One pairing: the robot and camera lists, the reading in words and what names it."""
 

@@ -521,7 +521,7 @@ def read_log(paths, *, setup=None, units=None, board=None, skip_invalid: bool = 
             if not results:
                 raise max(errors, key=lambda e: e[0])[1]
             return choose_layout(results, files[0])
-        pairings = [c for c in pairings if c not in first]
+        pairings = [c for c in pairings if all(c is not f for f in first)]
     more, errors_more = _read_candidates(pairings, files[0], source, options, skip_invalid, flags, len(pairings) > 1)
     results, errors = results + more, errors + errors_more
     if not results:  # the error of the layout that got furthest (read, then refused by the inference)
