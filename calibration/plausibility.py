@@ -11,8 +11,9 @@ write-back (which solves the session again):
 - a single posture whose distance is 100 times off the others is in another unit than the rest;
 - the flange cannot be farther from the base than the robot's arm is long (when the robot model is
   known);
-- the spacing of the measured board corners matches the session's ``target.square_mm`` within
-  :data:`SQUARE_TOLERANCE` (5 %).
+- the square size the measured corners show (a grid fit with a free scale, ``board_scale``)
+  matches the session's ``target.square_mm``: refused when off by more than
+  :data:`SQUARE_TOLERANCE` (5 %) and by more than 4 standard errors of the estimate.
 
 A session that fails is refused with one line naming the unit or the value; a session known to be
 in metres is converted only when asked (:func:`session_in_mm`, ``--units m``).
@@ -24,6 +25,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .board_scale import SQUARE_TOLERANCE, judge_square_size
 from .errors import CalibrationError, brief
 
 __all__ = [
@@ -42,8 +44,6 @@ __all__ = [
 MIN_DISTANCE_MM = 20.0
 #: A posture whose distance is this factor off the median of the others is in another unit.
 POSTURE_UNIT_FACTOR = 100.0
-#: Largest relative difference between the measured corner spacing and ``target.square_mm``.
-SQUARE_TOLERANCE = 0.05
 #: Length units a session may be declared in, and the factor to millimetres.
 UNITS = {"mm": 1.0, "m": 1000.0}
 
@@ -168,17 +168,22 @@ def implausibilities(session, tool02base) -> list:
             found.append(Implausibility(
                 "reach", f"posture {ids[k]}: the flange is {flange[k]:.0f} mm from the base, beyond the reach of the "
                          f"{name} ({longest:.0f} mm): the pose is in another unit or from another frame", (int(ids[k]),)))
+    found += _square_size(session)
+    return found
+
+
+def _square_size(session) -> list:
+    """The square-size implausibility (``board_scale.judge_square_size``), when it refuses."""
     target = session.target
     with_points = [p.points_mm for p in session.postures if p.points_mm is not None]
-    if (target is not None and target.square_mm and len(with_points) == len(session.postures) and with_points
+    if not (target is not None and target.square_mm and len(with_points) == len(session.postures) and with_points
             and all(len(points) == target.count for points in with_points)):
-        spacing = corner_spacing_mm(np.array(with_points), target.corners)
-        if abs(spacing - target.square_mm) > SQUARE_TOLERANCE * target.square_mm:
-            found.append(Implausibility(
-                "square_size", f"the measured board corners are {spacing:.4g} mm apart but target.square_mm is "
-                               f"{target.square_mm:g} mm (more than {100 * SQUARE_TOLERANCE:.0f} % off): correct the "
-                               "square size in session.yaml, or the stereo calibration's units (T in mm)"))
-    return found
+        return []
+    with np.errstate(all="ignore"):
+        judgement = judge_square_size(np.array(with_points), target.corners, target.square_mm)
+    if judgement.verdict in ("units", "square_size"):
+        return [Implausibility("square_size", judgement.message)]
+    return []
 
 
 def check_plausible(session, tool02base) -> None:

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..calibration.compact_points import BoardGeometry
 from ..calibration.diagnostics import diagnose
-from ..calibration.errors import SessionError, SessionUsageError
+from ..calibration.errors import CalibrationError, SessionError, SessionUsageError, brief
 from ..calibration.invariants import bounded_pairs, pairs_used
 from ..calibration.session import Session, create_session, write_postures
 from .importers import read_any
@@ -70,6 +70,28 @@ def _board(options: ImportOptions) -> BoardGeometry | None:
     return BoardGeometry(tuple(int(c) for c in options.board), options.square_mm)
 
 
+def _compare_with_log_result(session) -> None:
+    """When the log holds the tool's own result, solve the session and note how far that result is from
+    ours (``importers.log_result``); the result is a comparison, never an input."""
+    record = session.extra["import"]
+    result = record.get("log_result")
+    if not result:
+        return
+    from ..calibration.solve import calibrate_session
+    from .importers.log_result import compare_result
+
+    factor = 1000.0 if (record.get("units") or {}).get("robot") == "m" else 1.0
+    try:
+        ours = calibrate_session(session)
+    except (CalibrationError, ValueError, np.linalg.LinAlgError) as exc:
+        record.setdefault("notes", []).append(f"the log holds its own answer ({result['path']}); ours could not be "
+                                              f"computed to compare ({brief(str(exc))})")
+        return
+    line = compare_result(result, ours.x, factor)
+    record.setdefault("notes", []).append(line)
+    result["comparison"] = line
+
+
 def import_to_session(options: ImportOptions, progress=lambda message: None) -> ImportOutcome:
     """Read, check and write: nothing is created until the whole input has been read and validated.
 
@@ -90,6 +112,7 @@ def import_to_session(options: ImportOptions, progress=lambda message: None) -> 
                        units=options.units, quaternion_order=options.quaternion_order, board=_board(options),
                        skip_invalid=options.skip_invalid or None, robot_pose=options.robot_pose,
                        camera_pose=options.camera_pose, **extra)
+    _compare_with_log_result(session)
     tool0 = [p.tool0_in_base for p in session.postures]
     target = [p.target_in_camera for p in session.postures]
     findings = diagnose(np.array(tool0), np.array(target), session.setup, [p.index for p in session.postures])

@@ -18,7 +18,8 @@ Formats (--format; detected from the files when omitted; station/importers/FORMA
   moveit        MoveIt Calibration pose_samples.json: [[T_base_eef, T_cam_target], ...], 4x4, metres
   visp          folder of ViSP pose_fPe_<i>.yaml (or <robot>_pose_rPe_<i>.yaml) + pose_cPo_<i>.yaml,
                 [tx ty tz θux θuy θuz] metres/radians; an app folder of <robot>_image-<i>.png measures
-                the chessboard (chessboard-data.txt, or --board/--square-mm) or an AprilTag (--tag-mm)
+                the chessboard (chessboard-data.txt, or --board/--square-mm) or an AprilTag
+                (apriltag-data.txt, or --tag-mm)
   opencv        OpenCV FileStorage T1_<i> = end effector in base, T2_<i> = marker in camera (camodocal)
                 (or camodocal's folder: its result file CalibratedTransform.yml is skipped and named)
   stream        two CSV streams "t,x,y,z,qx,qy,qz,qw": robot (hand in base) then camera (camera in
@@ -31,7 +32,16 @@ Formats (--format; detected from the files when omitted; station/importers/FORMA
   log           anything else: CSV/TSV/space tables with or without a header (one posture per row,
                 or robot and camera poses in two blocks or two files, or matrices over 4 lines), JSON
                 or YAML of any nesting. A pose is 16/12 numbers (matrix), 7 (position + quaternion)
-                or 6 (position + rotation vector or Euler angles, any of the 24 conventions)
+                or 6 (position + rotation vector or Euler angles, any of the 24 conventions).
+                The layout is searched too: rows tagged by a leading word or letter (hand/eye,
+                robot:/camera:, P + three C rows of a 3x4), matrices over 3-4 rows (blank lines,
+                count lines, sections), one file per side in any order, camera-calibration rows per
+                image (the 3x3 that is a rotation and the translation beside it), extra columns;
+                each reading is scored by the invariants and printed with the runner-up; when two
+                fit within the noise, or the content cannot tell the robot's list, the import is
+                refused naming --robot-rows. A JSON/YAML tool log: every pair of per-posture lists
+                is scored, frame names ("camera to tool0", "attached on robot") hint the set-up,
+                and the tool's own result is compared with ours in the output (never input)
 
 The reading is inferred from the data and printed with a table of the candidates: the rotation
 convention of each side, whether the robot poses are the flange in the base or the base in the
@@ -87,6 +97,9 @@ def add_parser(sub):
                    help="rotation convention of 6-number poses: ZYX (rotating axes) / xyz (static axes) with :deg or "
                         ":rad, rotvec, rvec-tvec, or a vendor: abb, kuka, fanuc, ur, ros, visp, opencv; robot:SPEC or "
                         "camera:SPEC for one side (log format; default: inferred)")
+    p.add_argument("--robot-rows", metavar="NAME",
+                   help="which list holds the robot poses when the content cannot tell: its tag (hand, P, robot), "
+                        "key or file name, or first/second in the file (log format; default: inferred)")
     p.add_argument("--quaternion-order", choices=("wxyz", "xyzw"),
                    help="quaternion order of 7-number poses (default: inferred; names such as qw decide)")
     p.add_argument("--board", type=argtypes.corners, metavar="NXxNY", help="target inner corners, e.g. 9x6 (optional)")
@@ -120,7 +133,7 @@ def run(args) -> int:
             "tolerance_s": None if args.tolerance_ms is None else args.tolerance_ms / 1000.0,
             "max_postures": args.max_postures, "rest_mm_s": args.rest_mm_s, "rest_deg_s": args.rest_deg_s,
             "robot_prefix": args.robot_prefix, "camera_prefix": args.camera_prefix, "euler": args.euler,
-            "tag_mm": args.tag_mm,
+            "tag_mm": args.tag_mm, "robot_rows": args.robot_rows,
         },
     )
     outcome = import_to_session(options)

@@ -89,7 +89,7 @@ IMPORTERS = {
     "easy_handeye": Importer("easy_handeye", read_easy_handeye, "easy_handeye2 .samples (YAML robot/tracking transforms)",
                              None),
     "log": Importer("log", read_log, "any log of pose numbers (CSV/TSV/text table, JSON, YAML; one or two files): "
-                    "conventions inferred from the data", None, ("euler", "quaternion_order"), several_paths=True),
+                    "conventions inferred from the data", None, ("euler", "quaternion_order", "robot_rows"), several_paths=True),
 }
 FORMAT_NAMES = tuple(IMPORTERS)
 

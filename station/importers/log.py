@@ -26,7 +26,7 @@ flag that decides. Names are hints that break ties: column names (``qw``, ``a b 
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -36,6 +36,12 @@ from ...calibration.session import Session, parse_yaml
 from .common import QUATERNION_ORDERS, Dropped, build_session, check_posture_count, parse_json, read_text
 from .conventions import POSE_WIDTHS, PoseConvention, conventions_for_width, parse_rotation_spec, vendor_units
 from .inference import Side, SideReading
+from .readings import GAP_MAX_DEG, Constraints, screen, side_units
+from .layout_choice import Candidate, choose_layout
+from .layout_search import one_side_lists, propose
+from .layout_text import tokenise
+from .log_group import Group
+from .log_result import frame_hints, own_result
 from .log_text import Table, matrices_from_rows, parse_table
 from .log_tree import conventions_of, find_poses
 from .names import INDEX_NAMES, STAMP_NAMES, direction_of, side_of, words_of
@@ -44,23 +50,6 @@ __all__ = ["FORMAT", "read_log", "looks_like_log"]
 
 FORMAT = "log"
 _TREE_SUFFIXES = (".json", ".yaml", ".yml")
-
-
-@dataclass
-class Group:
-    """The numbers of one side: ``values (n, width)``, where each row came from, and what names say."""
-
-    values: np.ndarray
-    labels: list
-    names: list = field(default_factory=list)
-    conventions: list | None = None
-    declared: list = field(default_factory=list)
-    direction: str | None = None
-    keys: list | None = None
-
-    @property
-    def width(self) -> int:
-        return int(self.values.shape[1])
 
 
 # --------------------------------------------------------------------------- detection
@@ -72,7 +61,10 @@ def looks_like_log(path, head: str) -> bool:
     if Path(path).suffix.lower() in _TREE_SUFFIXES or start[:1] in ("{", "["):
         return True
     table = parse_table(head)
-    return any(len(r.values) >= 6 for r in table.rows) or sum(len(r.values) == 4 for r in table.rows) >= 6
+    if any(len(r.values) >= 6 for r in table.rows) or sum(len(r.values) == 4 for r in table.rows) >= 6:
+        return True
+    rows = tokenise(head)  # tagged rows (``hand: 1 2 3 ...``), count lines, image rows
+    return sum(len(r.values) >= 6 for r in rows) >= 2 or sum(len(r.values) == 4 for r in rows) >= 6
 
 
 # --------------------------------------------------------------------------- files -> groups
@@ -477,13 +469,13 @@ def _sources(paths) -> list:
 
 
 def read_log(paths, *, setup=None, units=None, board=None, skip_invalid: bool = False, robot_pose=None,
-             camera_pose=None, euler=None, quaternion_order=None) -> Session:
-    """Read a hand-eye log of unknown convention into a session (mm); the module docstring says how.
+             camera_pose=None, euler=None, quaternion_order=None, robot_rows=None) -> Session:
+    """Read a hand-eye log of unknown convention and layout into a session (mm); the module docstring says how.
 
     Parameters
     ----------
     paths : path, folder or list of one or two paths
-        One file holding both sides, or the robot file and the camera file.
+        One file holding both sides, or the robot file and the camera file (in either order).
     setup, units, robot_pose, camera_pose : str, optional
         Force the set-up, the unit (``m``/``mm``), what the robot poses are (``flange_in_base``,
         ``base_in_flange``) and what the camera poses are (``target_in_camera``, ``camera_in_target``).
@@ -496,63 +488,209 @@ def read_log(paths, *, setup=None, units=None, board=None, skip_invalid: bool = 
         ``abb``, ``visp``, ``opencv``); ``robot:SPEC`` / ``camera:SPEC`` for one side.
     quaternion_order : str, optional
         ``wxyz`` or ``xyzw`` for 7-number poses.
+    robot_rows : str, optional
+        Which list holds the robot poses: a tag (``hand``), a key or file name, or ``first`` /
+        ``second`` (in the file's order); the layout search keeps only the readings that agree.
 
     Raises
     ------
     SessionError
         One line: unreadable file, no poses, unpaired poses, or data that do not decide the reading
-        (naming the flag that does).
+        or the layout (naming the flag that does).
     """
     if quaternion_order is not None and quaternion_order not in QUATERNION_ORDERS:
         raise SessionError(f"quaternion order must be wxyz or xyzw; got {brief(quaternion_order)}")
     files = _sources(paths)
-    if len(files) == 1:
-        alternatives = _file_alternatives(files[0])
-        pairings = [a for a in alternatives if isinstance(a, tuple)]
+    pairings = _one_file_pairings(files[0]) if len(files) == 1 else _two_file_pairings(files)
+    if robot_rows is not None:
+        pairings = [c for c in pairings if c.matches(robot_rows)]
         if not pairings:
-            raise SessionError(f"{files[0]}: one list of poses only; give the robot poses and the camera poses (two "
-                               f"blocks, two lists, or two files)")
-    else:
-        first = [a for a in _file_alternatives(files[0]) if not isinstance(a, tuple)]
-        second = [a for a in _file_alternatives(files[1]) if not isinstance(a, tuple)]
-        if not first or not second:
-            which = files[0] if not first else files[1]
-            raise SessionError(f"{which}: holds robot and camera poses both; give it alone")
-        names = [side_of(words_of(files[0].stem)) or _side_from_direction(direction_of(files[0].stem)),
-                 side_of(words_of(files[1].stem)) or _side_from_direction(direction_of(files[1].stem))]
-        pairings = []
-        for a, b in itertools.product(first, second):
-            a = replace(a, direction=a.direction or direction_of(files[0].stem))
-            b = replace(b, direction=b.direction or direction_of(files[1].stem))
-            pairings.append((b, a) if names[0] == "camera" or names[1] == "robot" else (a, b))
+            raise SessionUsageError(f"--robot-rows {robot_rows}: no list of poses in {files[0]} is named or placed so")
     source = str(files[0]) if len(files) == 1 else [str(f) for f in files]
     options = {"euler": euler, "quaternion_order": quaternion_order}
     given = " ".join([f"--euler {e}" for e in ([euler] if isinstance(euler, str) else euler or [])]
                      + ([f"--quaternion-order {quaternion_order}"] if quaternion_order else [])) or None
+    flags = dict(setup=setup, units=units, board=board, robot_pose=robot_pose, camera_pose=camera_pose, given=given)
     results, errors = [], []
-    for robot, camera in pairings:
-        stage = 0
-        try:
-            robot, camera, unpaired = _paired(robot, camera, files[0])
-            check_posture_count(files[0], len(robot.values), FORMAT)  # before the readings multiply the poses
-            dropped = Dropped()
-            for _ in range(unpaired):
-                dropped.add("pose without a partner of the same posture number", "")
-            robot_side, camera_side, labels = _build_sides((robot, camera), options, dropped, skip_invalid, files[0])
-            stage = 1
-            details = {"layout": {"robot_numbers": robot.width, "camera_numbers": camera.width}}
-            results.append(build_session(FORMAT, source, robot_side, camera_side, labels, setup=setup,
-                                         default_setup=None, units=units, documented_units=None, board=board,
-                                         dropped=dropped, entries_read=len(robot.values), details=details,
-                                         robot_pose=robot_pose, camera_pose=camera_pose, robot_declared=robot.direction,
-                                         camera_declared=camera.direction, conventions_given=given))
-        except SessionError as exc:
-            errors.append((stage, exc))
-    if len(results) == 1:
-        return results[0]
+    documented = [c for c in pairings if c.documented]
+    if documented and len(files) == 1:  # the table reader's layouts first: the search only where they read nothing
+        partners = {c.swap for c in documented if c.swap is not None}
+        first = documented + [c for c in pairings if not c.documented and c.swap in partners]
+        results, errors = _read_candidates(first, files[0], source, options, skip_invalid, flags, len(pairings) > 1)
+        if results or any(stage == 1 for stage, _ in errors):
+            if not results:
+                raise max(errors, key=lambda e: e[0])[1]
+            return choose_layout(results, files[0])
+        pairings = [c for c in pairings if all(c is not f for f in first)]
+    more, errors_more = _read_candidates(pairings, files[0], source, options, skip_invalid, flags, len(pairings) > 1)
+    results, errors = results + more, errors + errors_more
     if not results:  # the error of the layout that got furthest (read, then refused by the inference)
         raise max(errors, key=lambda e: e[0])[1]
-    layouts = ", ".join(f"{r.extra['import']['layout']['robot_numbers']} + {r.extra['import']['layout']['camera_numbers']}"
-                        for r in results)
-    raise SessionError(f"{files[0]}: the columns split into a robot and a camera pose in several ways that all fit "
-                       f"({layouts} numbers): add a header line naming the columns")
+    return choose_layout(results, files[0])
+
+
+def _read_candidates(pairings: list, path: Path, source, options: dict, skip_invalid: bool, flags: dict,
+                     screen_out: bool) -> tuple[list, list]:
+    """``(candidates read, [(stage, error)])``, cheapest first; once one reads, only readings as cheap follow."""
+    results, errors = [], []
+    for candidate in pairings:  # cheapest first; once one reads, only readings as cheap follow
+        if results and candidate.cost > min(c.cost for c in results):
+            break
+        try:
+            candidate.session = _session_of(candidate, path, source, options, skip_invalid, flags, screen_out=screen_out)
+            results.append(candidate)
+        except SessionError as exc:
+            errors.append((candidate.stage, exc))
+    return results, errors
+
+
+def _one_file_pairings(path: Path) -> list:
+    """Every (robot, camera) pairing one file allows: the table and tree readers', then the layout search's."""
+    text = read_text(path)
+    found, first_error = [], None
+    try:
+        alternatives = _file_alternatives(path)
+    except SessionError as exc:
+        alternatives, first_error = [], exc
+    tree = _is_tree(path, text)
+    if tree:
+        try:
+            found = _tree_candidates(path, text)
+        except SessionError:  # ``robot: 1, 2, ...`` lines look like YAML but are a tagged table
+            if path.suffix.lower() in _TREE_SUFFIXES or text.lstrip()[:1] in ("{", "[") or not tokenise(text):
+                raise
+            tree = False
+    for a in alternatives if not found else []:
+        if isinstance(a, tuple):
+            found.append(Candidate(a[0], a[1], "one posture per row or block (the table reader's layout)", "", "", 0,
+                                   documented=True))
+    if not tree:
+        for p in propose(text, path.name):
+            for k, (robot, camera, name) in enumerate(p.sides()):
+                other = p.second_name if robot is p.first else p.first_name
+                found.append(Candidate(robot, camera, p.words, name, other, p.cost, robot is p.first,
+                                       swap=id(p) if len(p.sides()) == 2 else None))
+    found = _distinct(found)
+    if not found:
+        if first_error is not None and "one list" not in str(first_error):
+            raise first_error
+        raise SessionError(f"{path}: one list of poses only; give the robot poses and the camera poses (two "
+                           f"blocks, two lists, two tags, or two files)")
+    return found
+
+
+def _tree_candidates(path: Path, text: str) -> list:
+    """Every pair of equally long pose lists of a JSON/YAML document, the names deciding the sides when they
+    say (else both orders), each carrying the document's frame-name hints and the tool's own result."""
+    document = _document(path, text)
+    try:
+        leaves = find_poses(document)
+    except ValueError as exc:
+        raise SessionError(f"{path}: {exc}") from None
+    groups: dict = {}
+    for leaf in leaves:
+        groups.setdefault(leaf.signature, []).append(leaf)
+    lists = [g for g in groups.values() if len(g) >= 3 and len({len(m.values) for m in g}) == 1]
+    setup, said = frame_hints(document)
+    result = own_result(leaves, {g[0].signature for g in lists})
+    extra = {"declared_setup": setup, "setup_names": said, "log_result": result}
+    out = []
+    for ga, gb in itertools.combinations(lists, 2):
+        if len(ga) != len(gb):
+            continue
+        a, b = _group_of(path, ga), _group_of(path, gb)
+        names = [side_of(list(ga[0].names)) or _side_from_direction(a.direction),
+                 side_of(list(gb[0].names)) or _side_from_direction(b.direction)]
+        words = f"the lists at {ga[0].path} and {gb[0].path} (and their like)"
+        na, nb = ".".join(ga[0].names), ".".join(gb[0].names)
+        if names[0] == "camera" or names[1] == "robot":
+            out.append(Candidate(b, a, words, nb, na, 0, False, extra=extra))
+        elif names[0] == "robot" or names[1] == "camera":
+            out.append(Candidate(a, b, words, na, nb, 0, True, extra=extra))
+        else:
+            swap = len(out) + 1
+            out.append(Candidate(a, b, words, na, nb, 0, True, swap=swap, documented=True, extra=extra))
+            out.append(Candidate(b, a, words, nb, na, 0, False, swap=swap, extra=extra))
+    return out
+
+
+def _two_file_pairings(files: list) -> list:
+    """Pairings of a robot file and a camera file: the names decide the order, else both orders are scored."""
+    lists = []
+    for f in files:
+        found = [(a, "one pose per row") for a in _file_alternatives_safe(f) if not isinstance(a, tuple)]
+        if not _is_tree(f, read_text(f)):
+            found += one_side_lists(read_text(f), f.name)
+        if not found:
+            raise SessionError(f"{f}: holds robot and camera poses both, or none; give it alone")
+        lists.append([(replace(g, direction=g.direction or direction_of(f.stem)), words) for g, words in found])
+    names = [side_of(words_of(f.stem)) or _side_from_direction(direction_of(f.stem)) for f in files]
+    out = []
+    for (a, wa), (b, wb) in itertools.product(*lists):
+        words = f"one file per side: {files[0].name} ({wa}), {files[1].name} ({wb})"
+        if names[0] == "camera" or names[1] == "robot":
+            out.append(Candidate(b, a, words, files[1].stem, files[0].stem, 0, False))
+        elif names[0] == "robot" or names[1] == "camera":
+            out.append(Candidate(a, b, words, files[0].stem, files[1].stem, 0, True))
+        else:
+            swap = object()
+            out.append(Candidate(a, b, words, files[0].stem, files[1].stem, 0, True, swap=id(swap)))
+            out.append(Candidate(b, a, words, files[1].stem, files[0].stem, 0, False, swap=id(swap)))
+    return _distinct(out)
+
+
+def _file_alternatives_safe(path: Path) -> list:
+    try:
+        return _file_alternatives(path)
+    except SessionError:
+        return []
+
+
+def _distinct(candidates: list) -> list:
+    """The candidates without repeats (the same numbers on the same sides), cheapest first."""
+    seen, out = {}, []
+    for c in sorted(candidates, key=lambda c: c.cost):
+        key = (c.robot.values.shape, c.robot.values.tobytes(), c.camera.values.shape, c.camera.values.tobytes())
+        if key not in seen:
+            seen[key] = c
+            out.append(c)
+        elif c.swap is not None and seen[key].swap is None:
+            seen[key].swap = c.swap  # the documented reading joins the pair the content decides between
+    return out
+
+
+def _hopeless(robot: Side, camera: Side, n: int) -> bool:
+    """No pair of readings passes the inference's first screen (the X-free angle gap): a decoy pairing
+    (joint angles, a result matrix) is dropped before the full fit, which would refuse it anyway."""
+    units = side_units(robot, camera, Constraints(), [])
+    gaps, _ = screen(robot, camera, units, n)
+    return bool(gaps.size) and bool(np.nanmin(gaps) > GAP_MAX_DEG) if np.any(np.isfinite(gaps)) else False
+
+
+def _session_of(candidate: Candidate, path: Path, source, options: dict, skip_invalid: bool, flags: dict,
+                screen_out: bool = False) -> Session:
+    """The session one pairing gives (``build_session`` with every reading of its numbers); ``screen_out``
+    drops a pairing no reading can fit before the full inference (when other pairings compete)."""
+    candidate.stage = 0
+    robot, camera, unpaired = _paired(candidate.robot, candidate.camera, path)
+    check_posture_count(path, len(robot.values), FORMAT)  # before the readings multiply the poses
+    dropped = Dropped()
+    for _ in range(unpaired):
+        dropped.add("pose without a partner of the same posture number", "")
+    robot_side, camera_side, labels = _build_sides((robot, camera), options, dropped, skip_invalid, path)
+    if screen_out and _hopeless(robot_side, camera_side, len(robot.values)):
+        raise SessionError(f"{path}: {candidate.words}: no reading of these lists fits AX = XB (angle gap over "
+                           f"{GAP_MAX_DEG:g} deg)")
+    candidate.stage = 1
+    details = {"layout": {"robot_numbers": robot.width, "camera_numbers": camera.width, "reading": candidate.words}}
+    extra = candidate.extra or {}
+    if extra.get("log_result"):
+        details["log_result"] = extra["log_result"]
+    notes = [f"the frame names say {extra['declared_setup']} ({'; '.join(extra['setup_names'])}): a hint for "
+             f"ties"] if extra.get("declared_setup") else []
+    return build_session(FORMAT, source, robot_side, camera_side, labels, setup=flags["setup"], default_setup=None,
+                         declared_setup=extra.get("declared_setup"), notes=notes,
+                         units=flags["units"], documented_units=None, board=flags["board"], dropped=dropped,
+                         entries_read=len(robot.values), details=details, robot_pose=flags["robot_pose"],
+                         camera_pose=flags["camera_pose"], robot_declared=robot.direction,
+                         camera_declared=camera.direction, conventions_given=flags["given"])

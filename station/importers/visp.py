@@ -36,7 +36,8 @@ import numpy as np
 from ...calibration.errors import SessionError, SessionUsageError
 from ...calibration.session import Session, parse_yaml
 from .common import Dropped, EntryErrors, build_session, flat_numbers, read_text, transform_from_rotvec
-from .visp_images import find_images, measure_board_pose, measure_tag_pose, read_chessboard_data, read_visp_camera
+from .visp_images import (find_images, measure_board_pose, measure_tag_pose, read_apriltag_data, read_chessboard_data,
+                          read_visp_camera)
 
 __all__ = ["FORMAT", "DEFAULT_SETUP", "read_visp", "read_pose_vector", "looks_like_visp", "ROBOT_PATTERN", "CAMERA_PATTERN"]
 
@@ -190,11 +191,18 @@ def _read_with_images(where, source, files, robot_files, images, setup, units, b
     camera = read_visp_camera(xml[0])
     if tag_mm is None and (board is None or board.square_mm is None):
         data = [p for p in files if p.name == "chessboard-data.txt"]
-        if not data:
+        tags = [p for p in files if p.name == "apriltag-data.txt"]
+        if tags and data:
+            raise SessionError(f"{where}: both chessboard-data.txt and apriltag-data.txt: pass --tag-mm MM (the "
+                               f"AprilTag) or --board NXxNY --square-mm MM (the chessboard)")
+        if tags:
+            tag_mm = read_apriltag_data(tags[0])
+        elif not data:
             raise SessionError(f"{where}: the target's size is needed to measure its poses from the images: pass "
                                f"--tag-mm MM (an AprilTag 36h11) or --board NXxNY --square-mm MM (a chessboard; or add "
                                f"ViSP's chessboard-data.txt)")
-        board = read_chessboard_data(data[0])
+        else:
+            board = read_chessboard_data(data[0])
     target = f"AprilTag 36h11 of {tag_mm:g} mm" if tag_mm is not None else "board"
     dropped = Dropped()
     errors = EntryErrors(where, skip_invalid, dropped)

@@ -102,6 +102,30 @@ def read_chessboard_data(path) -> BoardGeometry:
     return BoardGeometry((max(nx, ny), min(nx, ny)), size)
 
 
+def read_apriltag_data(path) -> float:
+    """The tag's side in mm from ``apriltag-data.txt`` of ViSP's app (written beside the images).
+
+    The line that names the size (``size``, ``tag size``, ``tag_size``: a number and an optional unit,
+    metres when none is written, as ViSP's apps take ``--tag-size`` in metres) gives it; a family other
+    than 36h11, when the file names one, is refused (only 36h11 is detected).
+    """
+    text = read_text_file(path, "AprilTag file", SessionError, missing=f"{path}: no such file")
+    size = re.search(r"size\s*[:=]?\s*([0-9.eE+-]+)\s*(mm|cm|m)?\b", text, re.IGNORECASE)
+    expected = f"{path}: expected a line 'size: <value> m' (the tag's black square); pass --tag-mm"
+    if not size:
+        raise SessionError(expected)
+    try:
+        value = float(size.group(1)) * {"m": 1000.0, "cm": 10.0, "mm": 1.0}[(size.group(2) or "m").lower()]
+    except ValueError:
+        raise SessionError(expected) from None
+    family = re.search(r"(\d{2}h\d{1,2})", text)
+    if family and family.group(1) != "36h11":
+        raise SessionError(f"{path}: an AprilTag of family {family.group(1)}; only 36h11 is detected")
+    if not 0 < value <= MAX_LENGTH_MM:
+        raise SessionError(f"{path}: a tag of {value:g} mm is not plausible; pass --tag-mm")
+    return value
+
+
 def find_images(files) -> dict:
     """``{number: path}`` of the posture images among ``files``."""
     out = {}

@@ -84,6 +84,14 @@ def test_apriltag_images_eye_to_hand(tmp_path, eth):
     result = calibrate_session(session, "mcb")
     assert result.setup == "eye_to_hand"
     assert np.linalg.norm(result.x[:3, 3] - eth.x[:3, 3]) < 10.0 and rotation_error_deg(result.x, eth.x) < 0.5
+    # the app folder states the tag's size in its own file, as chessboard-data.txt does the board's
+    (folder / "apriltag-data.txt").write_text(f"AprilTag\nfamily: 36h11\nsize: {TAG_MM / 1000.0} m\n")
+    stated = read_any(folder)
+    assert "AprilTag 36h11, 160 mm" in stated.extra["import"]["board_measurement"]["target"]
+    assert np.allclose([p.target_in_camera for p in stated.postures], measured)
+    (folder / "apriltag-data.txt").write_text("AprilTag\nfamily: 25h9\nsize: 0.16 m\n")
+    with pytest.raises(SessionError, match="only 36h11 is detected"):
+        read_any(folder)
 
 
 def test_apriltag_pose_files_eye_to_hand(tmp_path, eth):
