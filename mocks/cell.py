@@ -39,6 +39,7 @@ from ..drivers.camera.interface import Camera, StereoFrame
 from ..rapid.errors import RapidError
 from ..rapid.interpreter import ModuleSource
 from .controller.sources import MODULE_SUFFIXES, ControllerProgram
+from .side_port import SidePort
 
 __all__ = ["CellService", "CellCamera", "mock_camera", "cell_info", "parse_address", "MAX_MESSAGE"]
 
@@ -74,13 +75,8 @@ class _Handler(socketserver.StreamRequestHandler):
             self.wfile.flush()
 
 
-class _Server(socketserver.ThreadingTCPServer):
-    daemon_threads = True
-    allow_reuse_address = True
-    block_on_close = True
 
-
-class CellService:
+class CellService(SidePort):
     """The camera side port of a standalone mock controller (see the module docstring).
 
     Parameters
@@ -101,23 +97,10 @@ class CellService:
         self.camera, self._truth = flange_camera(self.spec, controller.robot)
         self.camera.connect()
         self._lock = threading.Lock()
-        self._server = _Server((host, port), _Handler, bind_and_activate=True)
-        self._server.service = self
-        self.host, self.port = self._server.server_address[:2]
-        self._thread: threading.Thread | None = None
-
-    def start(self) -> "CellService":
-        self._thread = threading.Thread(target=self._server.serve_forever, kwargs={"poll_interval": 0.1},
-                                        name=f"mock-cell-{self.port}", daemon=True)
-        self._thread.start()
-        return self
+        super().__init__(_Handler, host, port, "mock-cell")
 
     def stop(self) -> None:
-        if self._thread is not None:
-            self._server.shutdown()
-            self._thread.join(10)
-            self._thread = None
-        self._server.server_close()
+        super().stop()
         self.camera.close()
 
     def banner(self) -> str:

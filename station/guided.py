@@ -312,6 +312,10 @@ class _GuidedRun:
             self.progress(line)
             self.observer(Verdict(index, NOT_CAPTURED, line, result.quality if result is not None else {}))
             return
+        self.store(index, joints, tool02base, result, frame, attempts)
+
+    def store(self, index: int, joints, tool02base, result, frame, attempts: int) -> None:
+        """Write a measured posture, add it to the set and tell the observer, the caller and the operator."""
         store_posture(self.config, self.session_dir, index, joints, tool02base, result, frame, guided=True)
         self.state.add(index, tool02base, result.points_mm, self.view)
         self.captured.append(index)

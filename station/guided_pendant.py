@@ -21,9 +21,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from ..rapid.guided import VERDICT_CODES, hint_code_for, hint_text, verdict_text
-from .capture import (CaptureError, PostureReport, grab_observer, measure_with_retries, measurement_line, read_flange,
-                      store_posture)
-from .capture_events import CAPTURED, NOT_CAPTURED, TOO_CLOSE, Prompt, Verdict
+from .capture import CaptureError, PostureReport, grab_observer, measure_with_retries, read_flange
+from .capture_events import NOT_CAPTURED, TOO_CLOSE, Prompt, Verdict
 from .config import StationConfig
 from .guided import GuidedSummary, _GuidedRun
 from .runtime import StationLink
@@ -93,14 +92,7 @@ class _PendantRun(_GuidedRun):
             self._refuse(index, NOT_CAPTURED, f"not captured after {attempts} attempt(s): {problem}; turn back towards "
                                               "the board", result.quality if result is not None else {})
             return "NOT_SEEN"
-        store_posture(self.config, self.session_dir, index, joints, tool02base, result, frame, guided=True)
-        self.state.add(index, tool02base, result.points_mm, self.view)
-        self.captured.append(index)
-        count = len(self.state.tool02base)
-        line = f"posture {index}: {measurement_line(result.quality)}"
-        self.observer(Verdict(index, CAPTURED, line, result.quality, tool02base, result.points_mm))
-        self.on_posture(PostureReport(index, count, True, line, result.quality, attempts, done=count))
-        self.say_missing()
+        self.store(index, joints, tool02base, result, frame, attempts)
         return "CAPTURED" if self.missing() else "GOOD_ENOUGH"
 
     def _refuse(self, index: int, word: str, line: str, quality: dict | None = None) -> None:

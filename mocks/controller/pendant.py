@@ -26,6 +26,8 @@ import threading
 
 import numpy as np
 
+from ..side_port import SidePort
+
 __all__ = ["PendantService", "PENDANT_COMMANDS"]
 
 log = logging.getLogger(__name__)
@@ -51,13 +53,8 @@ class _Handler(socketserver.StreamRequestHandler):
             self.wfile.flush()
 
 
-class _Server(socketserver.ThreadingTCPServer):
-    daemon_threads = True
-    allow_reuse_address = True
-    block_on_close = True
 
-
-class PendantService:
+class PendantService(SidePort):
     """The pendant port of a running mock controller (see the module docstring).
 
     Parameters
@@ -70,24 +67,8 @@ class PendantService:
 
     def __init__(self, controller, host: str = "127.0.0.1", port: int = 0):
         self.controller = controller
-        self._server = _Server((host, port), _Handler, bind_and_activate=True)
-        self._server.service = self
-        self.host, self.port = self._server.server_address[:2]
-        self._thread: threading.Thread | None = None
+        super().__init__(_Handler, host, port, "mock-pendant")
         self._jog_lock = threading.Lock()
-
-    def start(self) -> "PendantService":
-        self._thread = threading.Thread(target=self._server.serve_forever, kwargs={"poll_interval": 0.1},
-                                        name=f"mock-pendant-{self.port}", daemon=True)
-        self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        if self._thread is not None:
-            self._server.shutdown()
-            self._thread.join(10)
-            self._thread = None
-        self._server.server_close()
 
     def banner(self) -> str:
         return (f"  pendant: JOG j1..j6, START, KEY n, STATE on {self.host}:{self.port} "
