@@ -361,11 +361,11 @@ class CellGuard:
         samples in all (:data:`_DENSE`, e.g. one move of the mock arm) are checked at every sample of
         :meth:`sample_count` in one batch instead: the same bound between samples, fewer round trips.
         """
-        starts = np.array([np.asarray(a, float) for a, _ in moves]).reshape(len(moves), -1)
-        ends = np.array([np.asarray(b, float) for _, b in moves]).reshape(len(moves), -1)
         out: list = [None] * len(moves)
         if not len(moves) or not self.watches_anything:
             return out
+        starts = np.array([np.asarray(a, float) for a, _ in moves]).reshape(len(moves), -1)
+        ends = np.array([np.asarray(b, float) for _, b in moves]).reshape(len(moves), -1)
         counts = [self.sample_count(a, b) for a, b in zip(starts, ends)]
         if sum(counts) <= _DENSE:  # few samples in all: every one at once (one batch, no round trips)
             return [self._dense_violation(a, b, n) for a, b, n in zip(starts, ends, counts)]

@@ -72,6 +72,13 @@ def test_targets_in_the_arm_or_the_cell_exit_3_with_the_pair_and_the_distance(tm
         assert (found is None) == p["clear"] and (found is None or found.pair == p["closest"])
 
 
+def test_moves_whose_ends_are_all_outside_the_limits_are_reported_not_a_traceback(tmp_path, capsys):
+    config, joints = _files(tmp_path, [DEFAULT_START, [0, 0, 0, 0, 170, 0]])  # axis 5 beyond its limit
+    assert main(["cell", "check", "--config", str(config), str(joints), "--moves"]) == 3
+    out = capsys.readouterr().out
+    assert "move row 0 -> 1: NOT CLEAR: an end is outside the joint limits" in out
+
+
 def test_a_bad_joints_file_is_refused_in_one_line(tmp_path, capsys):
     config, joints = _files(tmp_path, [[1, 2, 3, 4, 5]])
     assert main(["cell", "check", "--config", str(config), str(joints)]) == 1
