@@ -124,3 +124,13 @@ def stop_standalone_mock(proc) -> str:
     except subprocess.TimeoutExpired:  # pragma: no cover - a wedged mock
         proc.kill()
         return proc.communicate()[1]
+
+
+def joint_path(nodes: np.ndarray, step_deg: float) -> np.ndarray:
+    """The joint-interpolated moves through ``nodes`` (n, k), deg, sampled so that no axis turns more
+    than ``step_deg`` between samples (both ends of every move included): the tests' own sweep."""
+    samples = []
+    for a, b in zip(nodes[:-1], nodes[1:]):
+        n = max(2, int(np.ceil(np.max(np.abs(b - a)) / step_deg)) + 1)
+        samples.append(a + np.linspace(0, 1, n)[:, None] * (b - a))
+    return np.concatenate(samples)

@@ -18,6 +18,8 @@ from handeye.station.cell_settings import DEFAULT_CARRIED
 from handeye.station.planning import PlanningError, order_for_short_motions, plan_postures
 from handeye.station.quality import QualityThresholds
 
+from helpers import joint_path
+
 ROBOT = load_robot("IRB1400")
 BOARD = BoardGeometry((13, 8), 30.0)
 #: The cell of the issue: the floor, the board's stand (from the board pose) and a cabinet beside the board.
@@ -69,13 +71,6 @@ def _true_clearance(joints: np.ndarray, volumes) -> np.ndarray:
     return out
 
 
-def _dense_path(nodes: np.ndarray, step_deg: float = 0.25) -> np.ndarray:
-    samples = []
-    for a, b in zip(nodes[:-1], nodes[1:]):
-        n = max(2, int(np.ceil(np.max(np.abs(b - a)) / step_deg)) + 1)
-        samples.append(a + np.linspace(0, 1, n)[:, None] * (b - a))
-    return np.concatenate(samples)
-
 
 @pytest.fixture(scope="module")
 def cell_plan():
@@ -87,7 +82,7 @@ def test_no_posture_and_no_point_of_any_move_enters_the_cell(cell_plan):
     assert [v.name for v in volumes] == ["floor", "cabinet beside the board", "board stand"]  # on the floor: no leg
     assert len(cell_plan.joints_deg) == 30
     assert np.all(_true_clearance(cell_plan.joints_deg, volumes) >= MARGIN)
-    path = _dense_path(np.vstack([DEFAULT_START, cell_plan.joints_deg]))  # the start's move included
+    path = joint_path(np.vstack([DEFAULT_START, cell_plan.joints_deg]), 0.25)  # the start's move included
     assert np.all(_true_clearance(path, volumes) >= MARGIN - STEP / 2)
 
 
@@ -99,7 +94,7 @@ def test_the_cell_mattered_and_the_score_says_why(cell_plan):
     # the same plan without the cell would have taken the arm into it
     plain = _plan()
     volumes = CELL.volumes(plain.board2base, BOARD)
-    path = _dense_path(np.vstack([DEFAULT_START, plain.joints_deg]))
+    path = joint_path(np.vstack([DEFAULT_START, plain.joints_deg]), 0.25)
     assert np.min(_true_clearance(path, volumes)) < 0
 
 

@@ -24,6 +24,7 @@ from handeye.station.cell_plan import CellCheck
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks" / "whole_arm"))
 from bench_whole_arm import BOARD, CELL, plan_once  # noqa: E402  (the benchmark's own cell)
+from helpers import joint_path  # noqa: E402
 
 ROBOT = load_robot("IRB1400")
 MARGIN, STEP = 30.0, 10.0  # the CellCheck defaults the benchmark plans with
@@ -161,13 +162,6 @@ def self_gaps(joints) -> dict:
     return out
 
 
-def _dense_path(nodes: np.ndarray, step_deg: float = 1.0) -> np.ndarray:
-    samples = []
-    for a, b in zip(nodes[:-1], nodes[1:]):
-        n = max(2, int(np.ceil(np.max(np.abs(b - a)) / step_deg)) + 1)
-        samples.append(a + np.linspace(0, 1, n)[:, None] * (b - a))
-    return np.concatenate(samples)
-
 
 # ---------------------------------------------------------------------------------------- the tests
 @pytest.fixture(scope="module")
@@ -187,7 +181,7 @@ def test_the_benchmark_plan_keeps_every_body_clear_of_the_cell_and_of_the_arm(pl
     at_postures = cell_gap(plan.joints_deg, plan.board2base)
     assert at_postures.min() >= MARGIN, at_postures.min()
     assert min(g.min() for g in self_gaps(plan.joints_deg).values()) >= MARGIN
-    path = _dense_path(np.vstack([plan.start_joints_deg, plan.joints_deg]))  # the start's move included
+    path = joint_path(np.vstack([plan.start_joints_deg, plan.joints_deg]), 1.0)  # the start's move included
     along = cell_gap(path, plan.board2base)
     # between its samples the planner's check guarantees the margin less half a step
     assert along.min() >= MARGIN - STEP / 2, along.min()
@@ -220,5 +214,5 @@ def test_moves_the_check_passes_keep_the_pairs_apart_all_along():
     found = guard.moves_violations(list(zip(starts, ends)))
     clear = [i for i, v in enumerate(found) if v is None]
     assert 5 <= len(clear) < len(found)  # some pass, some are refused
-    path = np.concatenate([_dense_path(np.vstack([starts[i], ends[i]]), step_deg=0.5) for i in clear])
+    path = np.concatenate([joint_path(np.vstack([starts[i], ends[i]]), 0.5) for i in clear])
     assert min(g.min() for g in self_gaps(path).values()) >= MARGIN - STEP / 2
