@@ -293,10 +293,8 @@ class _GuidedRun:
         rot, dist, k = self.state.nearest(self.robot.forward_transform(joints))
         if rot < g.min_step_deg and dist < g.min_step_mm:
             if self._told != k:
-                line = (f"at rest {rot:.1f} deg and {dist:.0f} mm from a captured posture: move on (at least "
-                        f"{g.min_step_deg:g} deg or {g.min_step_mm:g} mm)")
-                self.progress(line)
-                self.observer(Verdict(self.state.next_index, TOO_CLOSE, line))
+                self.refuse(self.state.next_index, TOO_CLOSE, f"at rest {rot:.1f} deg and {dist:.0f} mm from a "
+                            f"captured posture: move on (at least {g.min_step_deg:g} deg or {g.min_step_mm:g} mm)")
                 self._told = k
             return
         self._told = None
@@ -308,11 +306,16 @@ class _GuidedRun:
         result, frame, problem, attempts = measure_with_retries(self.config, self.link,
                                                                 grab_observer(self.observer, index, tool02base))
         if problem is not None:
-            line = f"not captured after {attempts} attempt(s): {problem}; turn back towards the board"
-            self.progress(line)
-            self.observer(Verdict(index, NOT_CAPTURED, line, result.quality if result is not None else {}))
+            self.refuse(index, NOT_CAPTURED, f"not captured after {attempts} attempt(s): {problem}; turn back towards "
+                        "the board", result.quality if result is not None else {})
             return
         self.store(index, joints, tool02base, result, frame, attempts)
+
+    def refuse(self, index: int, word: str, line: str, quality: dict | None = None) -> None:
+        """Tell the operator and the observer why posture ``index`` was not captured (``word``: a
+        ``capture_events`` verdict)."""
+        self.progress(line)
+        self.observer(Verdict(index, word, line, quality or {}))
 
     def store(self, index: int, joints, tool02base, result, frame, attempts: int) -> None:
         """Write a measured posture, add it to the set and tell the observer, the caller and the operator."""

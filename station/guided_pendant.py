@@ -22,7 +22,7 @@ from pathlib import Path
 
 from ..rapid.guided import VERDICT_CODES, hint_code_for, hint_text, verdict_text
 from .capture import CaptureError, PostureReport, grab_observer, measure_with_retries, read_flange
-from .capture_events import NOT_CAPTURED, TOO_CLOSE, Prompt, Verdict
+from .capture_events import NOT_CAPTURED, TOO_CLOSE, Prompt
 from .config import StationConfig
 from .guided import GuidedSummary, _GuidedRun
 from .runtime import StationLink
@@ -78,26 +78,22 @@ class _PendantRun(_GuidedRun):
         joints, tool02base = read_flange(self.config, self.link, self.robot, f"offered posture {k}")
         near = self.guard.posture_violation(joints)
         if near is not None:
-            self._refuse(index, NOT_CAPTURED, f"not captured: {near.describe()} (keep-out volume; cell.margin_mm "
-                                              f"{self.guard.margin_mm:g}): jog away from it")
+            self.refuse(index, NOT_CAPTURED, f"not captured: {near.describe()} (keep-out volume; cell.margin_mm "
+                                             f"{self.guard.margin_mm:g}): jog away from it")
             return "NEAR_VOLUME"
         rot, dist, _ = self.state.nearest(tool02base)
         if rot < g.min_step_deg and dist < g.min_step_mm:
-            self._refuse(index, TOO_CLOSE, f"not captured: {rot:.1f} deg and {dist:.0f} mm from a captured posture: move "
-                                           f"on (at least {g.min_step_deg:g} deg or {g.min_step_mm:g} mm)")
+            self.refuse(index, TOO_CLOSE, f"not captured: {rot:.1f} deg and {dist:.0f} mm from a captured posture: move "
+                                          f"on (at least {g.min_step_deg:g} deg or {g.min_step_mm:g} mm)")
             return "TOO_CLOSE"
         result, frame, problem, attempts = measure_with_retries(self.config, self.link,
                                                                 grab_observer(self.observer, index, tool02base))
         if problem is not None:
-            self._refuse(index, NOT_CAPTURED, f"not captured after {attempts} attempt(s): {problem}; turn back towards "
-                                              "the board", result.quality if result is not None else {})
+            self.refuse(index, NOT_CAPTURED, f"not captured after {attempts} attempt(s): {problem}; turn back towards "
+                                             "the board", result.quality if result is not None else {})
             return "NOT_SEEN"
         self.store(index, joints, tool02base, result, frame, attempts)
         return "CAPTURED" if self.missing() else "GOOD_ENOUGH"
-
-    def _refuse(self, index: int, word: str, line: str, quality: dict | None = None) -> None:
-        self.progress(line)
-        self.observer(Verdict(index, word, line, quality or {}))
 
     def prompt(self, verdict: str) -> None:
         """Send ``verdict`` and the hint of what is missing; the pendant prompts."""
