@@ -227,14 +227,21 @@ class RobotModel:
         quaternion_wxyz : ndarray, shape (..., 4)
             ``w >= 0``.
         """
+        rotations, points = self._chain(joints_deg)
+        return points[-1], canonical_quaternions(quaternion_multiply(rotations[-1], self.tool0_home))
+
+    def _chain(self, joints_deg) -> tuple[list, list]:
+        """``Q(0..k)`` (eq. 11) and ``P(0..k)`` (eq. 12) of controller angles ``(..., k)``: lists of
+        ``(..., 4)`` quaternions and ``(..., 3)`` points (mm), ``Q(0) = 1``, ``P(0) = D_0``."""
         theta = self.serial_angles_rad(joints_deg)
         lead = theta.shape[:-1]
-        q = np.broadcast_to(np.array([1.0, 0.0, 0.0, 0.0]), lead + (4,))  # Q(0), θ_0 = 0
-        p = np.broadcast_to(self.base_offset, lead + (3,))  # P(0) = D_0
+        rotations = [np.broadcast_to(np.array([1.0, 0.0, 0.0, 0.0]), lead + (4,))]  # Q(0), θ_0 = 0
+        points = [np.broadcast_to(self.base_offset, lead + (3,))]  # P(0) = D_0
         for i in range(self.dof):
-            q = quaternion_multiply(q, quaternion_from_axis_angle(self.axes[i], theta[..., i]))  # eq. 11
-            p = p + rotate_vectors(q, self.links[i])  # eq. 12
-        return p, canonical_quaternions(quaternion_multiply(q, self.tool0_home))
+            turn = quaternion_from_axis_angle(self.axes[i], theta[..., i])
+            rotations.append(quaternion_multiply(rotations[-1], turn))  # eq. 11
+            points.append(points[-1] + rotate_vectors(rotations[-1], self.links[i]))  # eq. 12
+        return rotations, points
 
     def chain_points(self, joints_deg) -> np.ndarray:
         """Points of the chain in base: ``P(0)`` on axis 1 (``D_0``), ``P(i)`` on axis ``i + 1``
@@ -250,14 +257,7 @@ class RobotModel:
         ndarray, shape (..., k + 1, 3)
             mm.
         """
-        theta = self.serial_angles_rad(joints_deg)
-        lead = theta.shape[:-1]
-        q = np.broadcast_to(np.array([1.0, 0.0, 0.0, 0.0]), lead + (4,))
-        points = [np.broadcast_to(self.base_offset, lead + (3,))]
-        for i in range(self.dof):
-            q = quaternion_multiply(q, quaternion_from_axis_angle(self.axes[i], theta[..., i]))  # eq. 11
-            points.append(points[-1] + rotate_vectors(q, self.links[i]))  # eq. 12
-        return np.stack(points, axis=-2)
+        return np.stack(self._chain(joints_deg)[1], axis=-2)
 
     def link_frames(self, joints_deg) -> tuple[np.ndarray, np.ndarray]:
         """Where each part of the arm is: rotations ``(..., k + 1, 3, 3)`` and pivots ``(..., k + 1, 3)``.
@@ -266,17 +266,11 @@ class RobotModel:
         rotation ``Q(i)`` (eq. 11) and pivot ``P(i - 1)`` on axis ``i`` (eq. 12). A point ``x`` of part
         ``i`` (given in base with every axis at 0) is at ``pivot_i + R_i (x - pivot_i,home)``.
         """
-        theta = self.serial_angles_rad(joints_deg)
-        lead = theta.shape[:-1]
-        q = np.broadcast_to(np.array([1.0, 0.0, 0.0, 0.0]), lead + (4,))
-        point = np.broadcast_to(self.base_offset, lead + (3,))
-        rotations, pivots = [np.broadcast_to(np.eye(3), lead + (3, 3))], [point]
-        for i in range(self.dof):
-            q = quaternion_multiply(q, quaternion_from_axis_angle(self.axes[i], theta[..., i]))  # eq. 11
-            rotations.append(matrix_from_quaternion(q))
-            pivots.append(point)  # P(i) of the chain, on axis i + 1
-            point = point + rotate_vectors(q, self.links[i])  # eq. 12
-        return np.stack(rotations, axis=-3), np.stack(pivots, axis=-2)
+        rotations, points = self._chain(joints_deg)
+        lead = points[0].shape[:-1]
+        matrices = [np.broadcast_to(np.eye(3), lead + (3, 3))] + [matrix_from_quaternion(q) for q in rotations[1:]]
+        # part 0 pivots at P(0), part i at P(i - 1) (on axis i)
+        return np.stack(matrices, axis=-3), np.stack([points[0]] + points[:-1], axis=-2)
 
     def home_pivots(self) -> np.ndarray:
         """The pivots of :meth:`link_frames` with every axis at 0: ``(k + 1, 3)``."""
