@@ -119,6 +119,18 @@ def board_centre(obs: "Observations", fit: "MLFit", keep, start) -> tuple[np.nda
     return found.x[:3], CENTRE_THETA_FLOOR + np.exp(found.x[3:])
 
 
+def _centred_fit(obs: "Observations", centre, current: "MLFit", theta0, keep, kinematic: bool, fit: "MLFit"):
+    """The ML fit about ``centre`` from the variance start ``theta0`` (``None``: the usual start), or
+    ``None`` when it breaks down: on a few postures a start from the centre search can send a variance
+    component off to infinity (the posture covariances become singular); that start is then no candidate."""
+    try:
+        found = fit_ml(centred(obs, centre), current.x, current.target, theta0, keep=keep, kinematic=kinematic,
+                       kinematic0=fit.kinematic, kinematic_var0=fit.kinematic_var)
+    except np.linalg.LinAlgError:
+        return None
+    return found if np.isfinite(found.loglik) and np.all(np.isfinite(found.theta)) else None
+
+
 def _centre_test(obs: "Observations", fit: "MLFit", keep, kinematic: bool):
     """Board rotation noise about a fitted centre (sessions of board poses), kept when the likelihood
     ratio of the restricted likelihoods exceeds :data:`CENTRE_LR`; the centre and the fit are found
@@ -134,8 +146,10 @@ def _centre_test(obs: "Observations", fit: "MLFit", keep, kinematic: bool):
         centre = found[0]
         # the restricted likelihood can have more than one maximum (a component pinned at its floor):
         # from the search's components and from the usual start of every fit, the higher one
-        fits = [fit_ml(centred(obs, centre), current.x, current.target, theta0, keep=keep, kinematic=kinematic,
-                       kinematic0=fit.kinematic, kinematic_var0=fit.kinematic_var) for theta0 in (found[1], None)]
+        fits = [_centred_fit(obs, centre, current, theta0, keep, kinematic, fit) for theta0 in (found[1], None)]
+        fits = [f for f in fits if f is not None]
+        if not fits:
+            break
         current = max(fits, key=lambda f: f.loglik)
     lr = 2.0 * (current.loglik - fit.loglik)
     report = {"modelled": bool(lr > CENTRE_LR), "likelihood_ratio": float(lr), "threshold": CENTRE_LR}

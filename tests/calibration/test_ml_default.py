@@ -461,6 +461,28 @@ def test_no_centre_for_gaussian_pose_noise():
         assert not report["modelled"] and report["likelihood_ratio"] < 16.27
 
 
+def test_a_centre_fit_that_breaks_down_is_no_candidate(monkeypatch):
+    """Known failure (seen on six postures, seeds 3012 and 3020 of the small clean sets): the centre
+    search hands the fit a variance start that runs off to infinity and the posture covariances become
+    singular. That start is dropped and the usual one kept: the session of board rotation noise about a
+    centre still finds it and solves near the truth instead of raising LinAlgError."""
+    from handeye.calibration.eiv import centre as eiv_centre
+
+    real_fit = eiv_centre.fit_ml
+
+    def breaks_from_the_search_start(obs, x0, t0=None, theta0=None, **kw):
+        if theta0 is not None:
+            raise np.linalg.LinAlgError("Singular matrix")
+        return real_fit(obs, x0, t0, theta0, **kw)
+
+    monkeypatch.setattr(eiv_centre, "fit_ml", breaks_from_the_search_start)
+    prob, truth = _tilted_about(0, 40, np.array([200.0, 300.0, 0.0]))
+    sol = solve_eiv(prob, folds=0)
+    assert sol.details["camera_centre"]["modelled"]
+    angle, dist = _truth_errors(sol.x, truth["x"])
+    assert angle < 0.1 and dist < 1.0
+
+
 def test_corner_sessions_leave_the_centre_alone():
     prob, _, _ = problem(12, sigma_cam=5.0, seed=4)
     report = solve_eiv(prob, folds=0).details["camera_centre"]
