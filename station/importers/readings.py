@@ -406,19 +406,64 @@ def mark_plausibility(readings: list) -> None:
 
 
 def mark_outcomes(robot: Side, camera: Side, readings: list, n: int) -> None:
-    """Number the distinct sessions the consistent readings give (same set-up and poses within the noise)."""
+    """Number the distinct sessions the consistent readings give (same set-up and poses within the noise).
+
+    Each reading is compared with the outcomes found so far through :func:`same_outcome`, but only with
+    those that agree on a few probe poses first (one vectorised test against all outcomes): a log read
+    under hundreds of conventions would otherwise compare every pair of readings pose by pose."""
     consistent = [r for r in readings if r.consistent]
     tol_deg = max(0.05, 0.5 * min((finite(r.axis_deg) for r in consistent), default=0.0)) if n >= 3 else 0.05
     outcomes: list = []
+    probes = OutcomeProbes()
     for r in consistent:
         a, b = pose_outcome(robot, camera, r)
-        for k, o in enumerate(outcomes):
-            if same_outcome(o, (a, b, r.setup), tol_deg, 0.5):
-                r.outcome = k
-                break
-        else:
-            outcomes.append((a, b, r.setup))
+        outcome = (a, b, r.setup)
+        r.outcome = next((k for k in probes.candidates(outcome, tol_deg, 0.5)
+                          if same_outcome(outcomes[k], outcome, tol_deg, 0.5)), None)
+        if r.outcome is None:
+            outcomes.append(outcome)
+            probes.add(outcome)
             r.outcome = len(outcomes) - 1
+
+
+class OutcomeProbes:
+    """A few poses of every outcome found so far (first, middle, last of each side), stacked, so that a
+    new outcome is tested against all of them at once. A candidate is any outcome that
+    :func:`same_outcome` could accept: same set-up and shape, and no probe pose outside the tolerances
+    (an outcome with a NaN anywhere is always a candidate: :func:`same_outcome` lets NaN through)."""
+
+    def __init__(self) -> None:
+        self.keys: list = []
+        self.poses: list = []
+        self.any_nan: list = []
+
+    @staticmethod
+    def _probe(outcome) -> tuple:
+        a, b, setup = outcome
+        picks = sorted({0, len(a) // 2, len(a) - 1}) if len(a) else []
+        return (setup, a.shape, b.shape), np.concatenate([a[picks], b[picks]]) if picks else np.zeros((0, 4, 4))
+
+    def add(self, outcome) -> None:
+        key, poses = self._probe(outcome)
+        self.keys.append(key)
+        self.poses.append(poses)
+        self.any_nan.append(self._any_nan(outcome))
+
+    @staticmethod
+    def _any_nan(outcome) -> bool:
+        return bool(np.isnan(outcome[0]).any() or np.isnan(outcome[1]).any())
+
+    def candidates(self, outcome, tol_deg: float, tol_mm: float) -> list:
+        """Indices (ascending) of the outcomes that may be the same as ``outcome``."""
+        key, poses = self._probe(outcome)
+        same_key = [k for k, other in enumerate(self.keys) if other == key]
+        if not same_key or len(poses) == 0 or self._any_nan(outcome):
+            return same_key
+        stacked = np.stack([self.poses[k] for k in same_key])  # (m, p, 4, 4)
+        with np.errstate(invalid="ignore"):
+            far = (rotation_error_deg(stacked, poses[None]) > tol_deg) | (
+                np.linalg.norm(stacked[..., :3, 3] - poses[None, :, :3, 3], axis=-1) > tol_mm)
+        return [k for k, ruled_out in zip(same_key, far.any(axis=1)) if self.any_nan[k] or not ruled_out]
 
 
 def finite(v: float) -> float:
