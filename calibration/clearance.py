@@ -354,8 +354,8 @@ class CellGuard:
         Each move is walked from its start by conservative advancement: from a sample of clearance
         ``c`` from the cell the next lies where the centres have moved at most ``c - margin``, and no
         self-collision pair of clearance ``d`` has moved relative to itself more than ``d - margin``
-        (a pair moves relative to itself only by the axes between its two parts: the camera and the
-        forearm by axes 5 and 6), or at least ``step_mm``; so the clearance between two samples stays
+        (a pair moves relative to itself only by the axes between its two parts: the camera and
+        link 3 by axes 4, 5 and 6), or at least ``step_mm``; so the clearance between two samples stays
         at least ``margin`` (when the first was the larger) or at least ``margin - step_mm / 2`` (when
         both samples keep the margin). A move stops at its first sample below the margin. Moves of few
         samples in all (:data:`_DENSE`, e.g. one move of the mock arm) are checked at every sample of
