@@ -1,6 +1,6 @@
 """The whole arm in the cell and against itself (issue 21), checked by a geometry of the test's own.
 
-The benchmark cell (a cabinet beside the base where the upper arm swings, a post the forearm passes, the
+The benchmark cell (a cabinet beside the base where the upper arm swings, a post the upper arm passes, the
 board's stand, the floor): a 30-posture plan keeps every link and every carried body out of every volume
 by the margin, at the postures and along every move; random postures where the camera meets the arm
 (found by this file's geometry) are all refused by the planner's check and none is planned.
@@ -172,6 +172,20 @@ def plan():
 def test_the_own_kinematics_agree_with_the_robot_model():
     joints = np.random.default_rng(3).uniform(ROBOT.joint_limits_deg[:, 0], ROBOT.joint_limits_deg[:, 1], (50, 6))
     assert np.allclose(frames(joints)[:, 6], ROBOT.forward_transform(joints), atol=1e-6)
+
+
+def test_the_tube_in_front_of_the_elbow_is_fixed_in_link_3():
+    """The tube's capsule lies on axis 4 and is round about it: carried by link 4 (turned by axis 4) or by
+    link 3, its axis has the same ends at every posture, whatever axis 4's angle, so it is one body of link 3."""
+    ends = np.array([(150.0, 0.0, 1195.0, 1.0), (670.0, 0.0, 1195.0, 1.0)])
+    joints = np.random.default_rng(4).uniform(ROBOT.joint_limits_deg[:, 0], ROBOT.joint_limits_deg[:, 1], (200, 6))
+    f = frames(joints)
+    on_link_3 = np.einsum("nij,mj->nmi", f[:, 3] @ np.linalg.inv(HOME[3]), ends)
+    for q4 in (-150.0, -60.0, 0.0, 45.0, 150.0):
+        turned = joints.copy()
+        turned[:, 3] = q4
+        on_link_4 = np.einsum("nij,mj->nmi", frames(turned)[:, 4] @ np.linalg.inv(HOME[4]), ends)
+        assert np.allclose(on_link_4, on_link_3, atol=1e-9)
 
 
 def test_the_benchmark_plan_keeps_every_body_clear_of_the_cell_and_of_the_arm(plan):
