@@ -5,7 +5,8 @@ What moves is covered by spheres, never smaller than the body (the check errs on
 - each capsule of the robot model: the wrist's (:attr:`RobotModel.bodies`: links 4-6 of the IRB 1400)
   and the rest of the arm's (:attr:`RobotModel.link_bodies`: the base, links 1-3): spheres along its
   axis spaced ``s = r``, each of radius ``sqrt(r^2 + (s/2)^2)`` (1.12 r). The base never moves: it is
-  left out of the keep-out check (the robot stands where it stands) and kept in the self-collision check;
+  left out of the keep-out check at every posture (``calibration.base_clearance`` checks it once, when the
+  cell is loaded) and kept in the self-collision check;
 - each box the flange carries (tool0): a grid of cells at most :data:`CELL_MM` wide, one sphere per
   cell of radius half the cell's diagonal (at most 0.87 x :data:`CELL_MM` beyond a face);
 - each carried sphere: itself.
@@ -354,8 +355,8 @@ class CellGuard:
         Each move is walked from its start by conservative advancement: from a sample of clearance
         ``c`` from the cell the next lies where the centres have moved at most ``c - margin``, and no
         self-collision pair of clearance ``d`` has moved relative to itself more than ``d - margin``
-        (a pair moves relative to itself only by the axes between its two parts: the camera and the
-        forearm by axes 5 and 6), or at least ``step_mm``; so the clearance between two samples stays
+        (a pair moves relative to itself only by the axes between its two parts: the camera and
+        link 3 by axes 4, 5 and 6), or at least ``step_mm``; so the clearance between two samples stays
         at least ``margin`` (when the first was the larger) or at least ``margin - step_mm / 2`` (when
         both samples keep the margin). A move stops at its first sample below the margin. Moves of few
         samples in all (:data:`_DENSE`, e.g. one move of the mock arm) are checked at every sample of

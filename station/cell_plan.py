@@ -21,13 +21,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..calibration.base_clearance import base_clearances, base_envelope
 from ..calibration.cell import CellModel
 from ..calibration.clearance import CellGuard
 from ..calibration.compact_points import BoardGeometry, board_corners
 from ..calibration.kinematics import RobotModel
 
-__all__ = ["CellCheck", "PostureVeto", "Rejections", "board_problem", "cell_check", "clear_route", "start_problem",
-           "view_points"]
+__all__ = ["CellCheck", "PostureVeto", "Rejections", "base_problem", "board_problem", "cell_check", "clear_route",
+           "start_problem", "view_points"]
 
 #: Rounds of drawing replacements for postures at blocked moves.
 REPAIR_ROUNDS = 4
@@ -166,6 +167,40 @@ def board_problem(model: CellModel, board2base, board: BoardGeometry, distance_m
                     "shrink it to what the arm must avoid (the board's own stand is kept out already: "
                     "cell.stand_margin_mm)")
     return None
+
+
+def base_problem(robot: RobotModel, volumes, margin_mm: float, keep_out=None) -> str | None:
+    """Why the cell cannot be planned in because a keep-out volume comes within the margin of the robot's
+    base, which never moves (``calibration.base_clearance``; volumes wholly at or below the mounting plane,
+    base z 0, carry the robot and are left out), or None. The nearest such volume is named.
+
+    Parameters
+    ----------
+    robot : RobotModel
+        Its base capsules (:attr:`RobotModel.link_bodies` on part 0).
+    volumes : sequence
+        Keep-out volumes in base.
+    margin_mm : float
+        ``cell.margin_mm``.
+    keep_out : sequence, optional
+        The configured volumes (``cell.keep_out``); any other of ``volumes`` is the board's stand. None:
+        all are configured.
+    """
+    near = [(volume, gap) for volume, gap in base_clearances(robot, volumes) if gap < margin_mm]
+    if not near:
+        return None
+    volume, gap = min(near, key=lambda pair: pair[1])
+    low, high = base_envelope(robot)
+    where = (f"reaches {-gap:.0f} mm into" if gap < 0 else f"is {gap:.0f} mm from") + " the robot's base"
+    envelope = (f"x {low[0]:.0f}..{high[0]:.0f}, y {low[1]:.0f}..{high[1]:.0f}, z up to {high[2]:.0f} mm in base, "
+                f"the robot file's base capsule")
+    if keep_out is None or volume in keep_out:
+        return (f"the keep-out volume {volume.name!r} ({volume.kind}, cell.keep_out) {where} ({envelope}), within "
+                f"cell.margin_mm ({margin_mm:g} mm); the base never moves, so no posture could keep the margin: move or "
+                "shrink the volume to what the arm must avoid, or, if the robot stands on it (the floor, a "
+                "foundation), give it wholly at or below base z 0")
+    return (f"the board's stand {volume.name!r} {where} ({envelope}), within cell.margin_mm ({margin_mm:g} mm): "
+            "place the board farther from the robot's foot, or lower cell.stand_margin_mm")
 
 
 def start_problem(guard: CellGuard, start) -> str | None:

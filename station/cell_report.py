@@ -68,7 +68,7 @@ class CellCheckResult:
         return {"clear": self.clear, "margin_mm": self.margin_mm, "postures": self.postures, "moves": self.moves}
 
     def lines(self) -> list[str]:
-        """One line per row and move: ``row 3 (line 5): NOT CLEAR: camera against forearm: 12 mm into it``."""
+        """One line per row and move: ``row 3 (line 5): NOT CLEAR: camera against link 3: 12 mm into it``."""
         out = []
         for p in self.postures:
             out.append(f"row {p['row']} (line {p['line']}): {'clear' if p['clear'] else 'NOT CLEAR'}: {p['text']}")
@@ -108,7 +108,7 @@ def check_joints(robot: RobotModel, guard: CellGuard, joints, lines=None, moves:
     Returns
     -------
     CellCheckResult
-        ``postures``: ``{row, line, clear, closest ("camera - forearm"), distance_mm, kind, text}`` (``row``
+        ``postures``: ``{row, line, clear, closest ("camera - link 3"), distance_mm, kind, text}`` (``row``
         0-based, ``line`` the file's); ``moves``: ``{from_row, to_row, clear, closest, distance_mm, at, kind,
         text}``, ``at`` the fraction of the move (0 start, 1 end) where it is closest (or first too close).
     """

@@ -38,6 +38,7 @@ from ..calibration.session import parse_yaml
 from ..calibration.transforms import pose_from_transform, transform_from_pose
 from ..calibration.write_key import WRITE_KEY_PATTERN
 from ..drivers.controller.backends import DEFAULT_PROTOCOL
+from .cell_plan import base_problem
 from .cell_settings import CellSettings, GuidedSettings
 from .schema import (
     Custom,
@@ -541,12 +542,16 @@ def _check_hardware_named(data: dict, config: StationConfig) -> None:
 
 
 def _check_cell(config: StationConfig) -> None:
-    """The cell's keys that depend on each other: the path step within the margin, and the carried
+    """The cell's keys that depend on each other: the path step within the margin, the keep-out volumes
+    clear of the robot's base (it never moves: ``station.cell_plan.base_problem``), and the carried
     geometry where the camera is mounted."""
     cell = config.cell
     if cell.path_step_mm > cell.margin_mm:
         raise ConfigError(f"cell.path_step_mm ({cell.path_step_mm:g}) must not exceed cell.margin_mm ({cell.margin_mm:g}): "
                           "between two samples of a move the clearance may drop by half the step")
+    problem = base_problem(load_robot(config.robot), cell.keep_out, cell.margin_mm)
+    if problem is not None:
+        raise ConfigError(problem)
     if not cell.carried:
         return
     camera = np.asarray(config.camera.nominal_mount[0], float)

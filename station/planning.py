@@ -36,7 +36,7 @@ from ..calibration.solve import calibrate, problem_from_session
 from ..calibration.synthetic import NoiseConfig, Scene, SceneConfig, sample_session
 from ..calibration.transforms import invert_transforms
 from ..calibration.views import NOMINAL_XB3, ViewSampling, sample_eye_in_hand_postures
-from .cell_plan import CellCheck, PostureVeto, Rejections, board_problem, clear_route, start_problem
+from .cell_plan import CellCheck, PostureVeto, Rejections, base_problem, board_problem, clear_route, start_problem
 from .quality import QualityThresholds, motion_shortfalls
 
 __all__ = [
@@ -293,6 +293,7 @@ def _draw_clear_of_cell(robot, cam2tool0, board2base, board, corners, count, rng
     ``min_inlier_postures`` of them, and why the others were rejected."""
     guard = cell.guard(robot, board2base, board)
     problem = (board_problem(cell.model, board2base, board, sampling.distance_mm, sampling.cone_deg)
+               or base_problem(robot, cell.model.volumes(board2base, board), cell.margin_mm, cell.model.keep_out)
                or start_problem(guard, start))
     if problem is not None:
         raise PlanningError(problem)

@@ -17,10 +17,10 @@ file atomically, acknowledge.
 
 The plan keeps clear of the cell (the config's cell section: keep-out volumes, the floor, what the
 flange carries, the board's stand): every posture and every move between two postures, sampled
-along the joint-interpolated path MoveAbsJ runs, keeps the whole arm (links 1-3, the forearm, the
+along the joint-interpolated path MoveAbsJ runs, keeps the whole arm (links 1-3 and the
 wrist) and the carried bodies cell.margin_mm away, and the robot file's self-collision pairs (the
-camera against the forearm, ...) as far apart; postures or moves that do not are replaced or
-reordered, and the plan line says how many were rejected and why ("camera against forearm"). A start
+camera against link 3, ...) as far apart; postures or moves that do not are replaced or
+reordered, and the plan line says how many were rejected and why ("camera against link 3"). A start
 posture inside (or within the margin of) a volume is refused. SESSION/preview.png shows the cell
 from above and from the side with the arm, the flange path and the numbered postures; --plan-only writes the plan, the preview and the RAPID program and stops.
 At a real station the first move waits for your yes (or --yes, for scripts); the mock says it moves

@@ -11,7 +11,7 @@ JOINTS.csv holds one posture a line: the robot's axis angles in deg (a1, ..., a6
 comma-separated; a header line, blank lines and # comments are skipped. Each row is checked as the
 planner checks a posture: every link of the arm (base, links 1-3, the wrist) and what the flange
 carries (cell.carried) against every keep-out volume (cell.keep_out), and the robot file's
-self-collision pairs (the camera against the forearm, link 4 against link 1, ...), all within
+self-collision pairs (the camera against link 3, link 4 against link 1, ...), all within
 cell.margin_mm. With --moves each joint-interpolated move (MoveAbsJ, MoveJ) between consecutive rows
 is checked too, sampled as the planner samples it (cell.path_step_mm). The board's stand is not
 checked (its pose comes from a capture). The planner, the mock arm and this command call the same check.
@@ -20,7 +20,7 @@ For each row and move: clear, or the closest pair (body - volume, or body - body
 (negative: inside). Exit status: 0 all clear, 3 any not clear, 1 errors, 2 usage errors.
 
 --json FILE writes {"clear": ..., "margin_mm": ..., "postures": [{"row": i, "line": n, "clear": true|false,
-"closest": "camera - forearm", "distance_mm": d, "kind": "cell"|"self"|"limits", "text": ...}],
+"closest": "camera - link 3", "distance_mm": d, "kind": "cell"|"self"|"limits", "text": ...}],
 "moves": [{"from_row": i, "to_row": i + 1, "clear": ..., "closest": ..., "distance_mm": ..., "at": s, ...}]}
 (row 0-based; at: the fraction of the move where it comes closest, or first too close).
 

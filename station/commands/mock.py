@@ -45,7 +45,7 @@ would: a MoveJ/MoveAbsJ along its joint path, a MoveL along its TCP line (sample
 sample through the inverse kinematics); a move that would enter a volume stops the program at that
 line, naming the volume. With or without --config, a move that would bring the camera or its bracket
 into the arm's own links, or two links into each other (the robot file's self-collision pairs), stops
-it at that line naming the pair (self-collision: camera against forearm). Check a program's targets
+it at that line naming the pair (self-collision: camera against link 3). Check a program's targets
 beforehand with handeye cell check. The robtargets' configuration (cf1, cf4, cf6, cfx) is respected (ConfJ/ConfL
 \\Off: the nearest solution). The cell's I/O signals are diCellDoor and diCellReady (inputs, 1 at
 start) and doCellLamp and doCellBusy (outputs); --signal NAME:TYPE=VALUE adds one, and a test or the

@@ -19,8 +19,8 @@ from handeye.station.cli import main
 from handeye.station.config import ConfigError, config_from_dict, load_config
 
 ROBOT = load_robot("IRB1400")
-#: The wrist folded back (axis 5 at 108 deg): the camera in the forearm.
-CAMERA_IN_FOREARM = [-33.8, 29.3, 2.3, 19.9, 107.7, -115.3]
+#: The wrist folded back (axis 5 at 108 deg): the camera in link 3 (the tube of the upper arm).
+CAMERA_IN_LINK_3 = [-33.8, 29.3, 2.3, 19.9, 107.7, -115.3]
 #: Leaning over the box of the config below.
 INTO_BOX = [0.0, 45.0, 30.0, 0.0, 30.0, 0.0]
 CONFIG = """\
@@ -50,21 +50,21 @@ def test_all_clear_exits_0(tmp_path, capsys):
 
 
 def test_targets_in_the_arm_or_the_cell_exit_3_with_the_pair_and_the_distance(tmp_path, capsys):
-    rows = [DEFAULT_START, CAMERA_IN_FOREARM, INTO_BOX, [0, 80, 0, 0, 0, 0]]
+    rows = [DEFAULT_START, CAMERA_IN_LINK_3, INTO_BOX, [0, 80, 0, 0, 0, 0]]
     config, joints = _files(tmp_path, rows)
     out = tmp_path / "check.json"
     assert main(["cell", "check", "--config", str(config), str(joints), "--moves", "--json", str(out)]) == 3
     text = capsys.readouterr().out
-    assert "row 1 (line 3): NOT CLEAR: camera against forearm" in text
+    assert "row 1 (line 3): NOT CLEAR: camera against link 3" in text
     data = json.loads(out.read_text())
     postures, moves = data["postures"], data["moves"]
     assert [p["row"] for p in postures] == [0, 1, 2, 3] and [p["clear"] for p in postures] == [True, False, False, False]
     assert {"row", "clear", "closest", "distance_mm"} <= set(postures[0])
-    assert postures[1]["closest"] == "camera - forearm" and postures[1]["distance_mm"] < 0
+    assert postures[1]["closest"] == "camera - link 3" and postures[1]["distance_mm"] < 0
     assert postures[2]["closest"].endswith(" - fixture") and postures[2]["kind"] == "cell"
     assert postures[3]["closest"] == "joint limits"
     assert [(m["from_row"], m["to_row"], m["clear"]) for m in moves] == [(0, 1, False), (1, 2, False), (2, 3, False)]
-    assert moves[0]["closest"] == "camera - forearm" and 0 < moves[0]["at"] <= 1
+    assert moves[0]["closest"] == "camera - link 3" and 0 < moves[0]["at"] <= 1
     # the planner's check says the same of every posture
     guard = cell_check(load_config(config)).guard(ROBOT)
     for p, row in zip(postures[:3], rows):
@@ -88,14 +88,14 @@ def test_a_bad_joints_file_is_refused_in_one_line(tmp_path, capsys):
 
 def test_the_mock_refuses_the_move_into_the_arm_without_a_cell_naming_the_pair():
     arm = SimulatedRobot([DEFAULT_START], start_joints=DEFAULT_START, time_scale=1e-4)  # no cell: self-collision only
-    with pytest.raises(ZoneViolation, match="self-collision: camera against forearm on the way to the target"):
-        arm.start_move(CAMERA_IN_FOREARM)
+    with pytest.raises(ZoneViolation, match="self-collision: camera against link 3 on the way to the target"):
+        arm.start_move(CAMERA_IN_LINK_3)
     assert np.allclose(arm.current_joints, DEFAULT_START) and arm.refusals[-1].violation.kind == "self"
-    program = load_program([("MODULE T\n  PROC main()\n    MoveAbsJ [[" + ",".join(f"{v:g}" for v in CAMERA_IN_FOREARM)
+    program = load_program([("MODULE T\n  PROC main()\n    MoveAbsJ [[" + ",".join(f"{v:g}" for v in CAMERA_IN_LINK_3)
                              + "],[9E9,9E9,9E9,9E9,9E9,9E9]], v200, fine, tool0;\n  ENDPROC\nENDMODULE\n", "T.mod")])
     task = Task(program, Bindings(motion=ArmBinding(arm))).start()
     assert task.finished.wait(30) and task.state == "error"
-    assert task.error.startswith("T.mod:3: MoveAbsJ: self-collision: camera against forearm"), task.error
+    assert task.error.startswith("T.mod:3: MoveAbsJ: self-collision: camera against link 3"), task.error
     assert np.allclose(arm.current_joints, DEFAULT_START)
 
 
@@ -104,7 +104,7 @@ def test_the_standalone_mock_controller_arm_checks_self_collision():
 
     server = start_mock_controller("socket", port=0, start=False)
     assert server.robot.guard is not None and server.robot.guard.self_check
-    assert server.robot.path_violation([DEFAULT_START, CAMERA_IN_FOREARM]).reason == "camera against forearm"
+    assert server.robot.path_violation([DEFAULT_START, CAMERA_IN_LINK_3]).reason == "camera against link 3"
 
 
 def _robot_file(tmp_path: Path, pair: str) -> Path:

@@ -80,3 +80,69 @@ def test_plausible_cells_still_load():
         {"type": "floor", "z_mm": -250}, {"type": "box", "name": "fixture", "min_mm": [1150, -600, 0], "max_mm": [1600, -250, 700]},
         {"type": "cylinder", "name": "column", "centre_mm": [-400, 700], "radius_mm": 120, "z_mm": [0, 2200]}]}})
     assert [v.name for v in config.cell.keep_out] == ["floor", "fixture", "column"]
+
+
+# ---------------------------------------------------------------- the base against the keep-out volumes
+#: The robot file's base capsule, written again: its axis (-90, 0, 110) - (90, 0, 110), radius 230 mm.
+BASE_END_X, BASE_AXIS_Z, BASE_RADIUS = 90.0, 110.0, 230.0
+
+
+def test_the_base_distance_is_the_capsule_geometry():
+    """A box beside the base, its face at x = 340: 340 - 90 - 230 = 20 mm from the capsule, to within half
+    a sample spacing below (never above); one behind, above the axis: 20 mm from the capsule's other end."""
+    from handeye.calibration.base_clearance import BASE_STEP_MM, base_clearances
+
+    beside = Box("beside", (BASE_END_X + BASE_RADIUS + 20.0, -100.0, 0.0), (900.0, 100.0, 800.0))
+    behind = Box("behind", (-900.0, -100.0, 0.0), (-BASE_END_X - BASE_RADIUS - 20.0, 100.0, 800.0))
+    gaps = dict((v.name, d) for v, d in base_clearances(ROBOT, [beside, behind, Floor("floor", 0.0)]))
+    assert set(gaps) == {"beside", "behind"}  # the floor carries the robot: not measured
+    for gap in gaps.values():
+        assert 20.0 - BASE_STEP_MM / 2 - 1e-9 <= gap <= 20.0
+
+
+@pytest.mark.parametrize("volume, words", [
+    ({"type": "box", "name": "cabinet", "min_mm": [200, -200, 0], "max_mm": [600, 200, 900]},
+     ["the keep-out volume 'cabinet' (box, cell.keep_out) reaches 120 mm into the robot's base", "cell.margin_mm (30 mm)",
+      "move or shrink the volume", "wholly at or below base z 0"]),
+    ({"type": "box", "name": "tool rack", "min_mm": [340, -100, -50], "max_mm": [700, 100, 900]},
+     ["'tool rack' (box, cell.keep_out) is 20 mm from the robot's base", "within cell.margin_mm (30 mm)"]),
+    ({"type": "cylinder", "name": "post", "centre_mm": [0, -300], "radius_mm": 50, "z_mm": [-200, 1500]},
+     ["'post' (cylinder, cell.keep_out) is 20 mm from the robot's base"]),
+])
+def test_a_volume_within_the_margin_of_the_base_is_refused_at_load(volume, words):
+    """The base never moves: a volume at (or within the margin of) it is refused once, when the config loads,
+    naming the volume and the distance (a post reaching below the foot is no floor: its top is above z 0)."""
+    with pytest.raises(ConfigError) as refused:
+        config_from_dict({**MOCK, "cell": {"keep_out": [{"type": "floor", "z_mm": 0}, volume]}})
+    message = str(refused.value)
+    assert all(w in message for w in words), message
+    assert "\n" not in message
+
+
+def test_volumes_the_robot_stands_on_and_volumes_clear_of_the_base_load():
+    """The floor, a foundation box and a pedestal cylinder wholly at or below base z 0 overlap the base's
+    envelope (it reaches 120 mm below the foot) and are accepted; so is a cabinet 40 mm from the base."""
+    config = config_from_dict({**MOCK, "cell": {"keep_out": [
+        {"type": "floor", "name": "floor", "z_mm": -400},
+        {"type": "box", "name": "foundation", "min_mm": [-600, -600, -400], "max_mm": [600, 600, 0]},
+        {"type": "cylinder", "name": "pedestal", "centre_mm": [0, 0], "radius_mm": 300, "z_mm": [-400, 0]},
+        {"type": "box", "name": "cabinet", "min_mm": [BASE_END_X + BASE_RADIUS + 40, -200, 0], "max_mm": [900, 200, 700]}]}})
+    assert [v.name for v in config.cell.keep_out] == ["floor", "foundation", "pedestal", "cabinet"]
+
+
+def test_the_planner_refuses_a_cell_built_in_code_with_a_volume_in_the_base():
+    """A CellCheck built without a config (a script, a benchmark) gets the same line from the planner, and
+    the board's stand is checked against the base too."""
+    from handeye.station.cell_plan import base_problem
+
+    cell = CellModel((Floor("floor", 0.0), Box("cabinet", (200, -200, 0), (600, 200, 900))), DEFAULT_CARRIED)
+    view = invert_transforms(ROBOT.forward_transform(DEFAULT_START) @ DEFAULT_MOUNT) @ DEFAULT_BOARD
+    with pytest.raises(PlanningError) as refused:
+        plan_postures(ROBOT, DEFAULT_START, view, DEFAULT_MOUNT, BOARD, count=12, seed=1, cell=CellCheck(cell))
+    assert str(refused.value).startswith("the keep-out volume 'cabinet' (box, cell.keep_out) reaches 120 mm into the "
+                                         "robot's base")
+    stand = Box("board stand", (300, -100, 0), (500, 100, 600))  # not configured; 320 - 300 = 20 mm into the base
+    message = base_problem(ROBOT, [Floor("floor", 0.0), stand], 30.0, keep_out=(Floor("floor", 0.0),))
+    assert message.startswith("the board's stand 'board stand' reaches 20 mm into the robot's base")
+    assert "place the board farther" in message
+    assert base_problem(ROBOT, list(cell.keep_out[:1]), 30.0) is None

@@ -217,7 +217,7 @@ def test_the_cell_keys_read_back_from_the_session_record():
     config = config_from_dict({**MOCK, "cell": yaml.safe_load("""
         keep_out:
           - {type: floor, z_mm: -10}
-          - {type: box, name: fixture, min_mm: [1, 2, 3], max_mm: [4, 5, 6]}
+          - {type: box, name: fixture, min_mm: [1001, 202, 3], max_mm: [1404, 505, 606]}  # clear of the base
           - {type: cylinder, centre_mm: [0, 700], radius_mm: 100, z_mm: [0, 2000]}
         stand_margin_mm: null
         world_zones: true

@@ -1,6 +1,6 @@
 """The whole arm in the cell and against itself (issue 21), checked by a geometry of the test's own.
 
-The benchmark cell (a cabinet beside the base where the upper arm swings, a post the forearm passes, the
+The benchmark cell (a cabinet beside the base where the upper arm swings, a post the upper arm passes, the
 board's stand, the floor): a 30-posture plan keeps every link and every carried body out of every volume
 by the margin, at the postures and along every move; random postures where the camera meets the arm
 (found by this file's geometry) are all refused by the planner's check and none is planned.
@@ -40,7 +40,7 @@ CAPSULES = [
     ("link 1", 1, (150, -160, 475), (150, 160, 475), 125.0),
     ("link 2", 2, (150, 0, 475), (150, 0, 1075), 105.0),
     ("link 3", 3, (-100, 0, 1180), (330, 0, 1180), 125.0),
-    ("forearm", 4, (150, 0, 1195), (670, 0, 1195), 75.0),
+    ("link 3", 3, (150, 0, 1195), (670, 0, 1195), 75.0),  # the upper arm's tube, on axis 4
     ("link 4", 4, (150, 0, 1195), (870, 0, 1195), 70.0),
     ("link 5", 5, (870, 0, 1195), (870, 0, 1195), 75.0),
     ("link 6", 6, (870, 0, 1195), (955, 0, 1195), 45.0),
@@ -50,7 +50,7 @@ CARRIED = {"camera": ((-136.0, 11.0, 58.0), (-94.0, 288.0, 100.0)), "bracket": (
 #: The robot file's self-collision pairs, written again.
 LINK_PAIRS = [("link 4", "base"), ("link 4", "link 1"), ("link 5", "base"), ("link 5", "link 1"), ("link 5", "link 2"),
               ("link 6", "base"), ("link 6", "link 1"), ("link 6", "link 2"), ("link 3", "base")]
-CAMERA_MEETS = ("base", "link 1", "link 2", "link 3", "forearm")
+CAMERA_MEETS = ("base", "link 1", "link 2", "link 3")
 
 
 def _dh(theta: np.ndarray, row) -> np.ndarray:
@@ -174,6 +174,20 @@ def test_the_own_kinematics_agree_with_the_robot_model():
     assert np.allclose(frames(joints)[:, 6], ROBOT.forward_transform(joints), atol=1e-6)
 
 
+def test_the_tube_in_front_of_the_elbow_is_fixed_in_link_3():
+    """The tube's capsule lies on axis 4 and is round about it: carried by link 4 (turned by axis 4) or by
+    link 3, its axis has the same ends at every posture, whatever axis 4's angle, so it is one body of link 3."""
+    ends = np.array([(150.0, 0.0, 1195.0, 1.0), (670.0, 0.0, 1195.0, 1.0)])
+    joints = np.random.default_rng(4).uniform(ROBOT.joint_limits_deg[:, 0], ROBOT.joint_limits_deg[:, 1], (200, 6))
+    f = frames(joints)
+    on_link_3 = np.einsum("nij,mj->nmi", f[:, 3] @ np.linalg.inv(HOME[3]), ends)
+    for q4 in (-150.0, -60.0, 0.0, 45.0, 150.0):
+        turned = joints.copy()
+        turned[:, 3] = q4
+        on_link_4 = np.einsum("nij,mj->nmi", frames(turned)[:, 4] @ np.linalg.inv(HOME[4]), ends)
+        assert np.allclose(on_link_4, on_link_3, atol=1e-9)
+
+
 def test_the_benchmark_plan_keeps_every_body_clear_of_the_cell_and_of_the_arm(plan):
     assert len(plan.joints_deg) == 30
     assert any("cabinet beside the base" in line for line in plan.score.rejections)  # the cell mattered
@@ -194,13 +208,39 @@ def test_random_postures_where_the_camera_meets_the_arm_are_all_refused(plan):
     gaps = self_gaps(joints)
     camera = np.min([gaps["camera", name] for name in CAMERA_MEETS], axis=0)
     meeting = joints[camera < MARGIN]
-    assert len(meeting) >= 20  # the test's own geometry finds them (forearm, link 1 and the base)
+    # the test's own geometry finds them: 57 where the camera meets link 3 (the housing or the tube in front of
+    # it), 71 where it meets the base, 155 in all (seed 21)
+    assert np.sum(gaps["camera", "link 3"] < MARGIN) >= 20 and np.sum(gaps["camera", "base"] < MARGIN) >= 20
     guard = CellCheck(CELL).guard(ROBOT, plan.board2base, BOARD)  # the planner's check
     refused = [guard.posture_violation(q) for q in meeting]
     assert all(v is not None for v in refused)
     assert any(v.kind == "self" and v.body == "camera" for v in refused)
     planned = self_gaps(plan.joints_deg)
     assert np.min([planned["camera", name] for name in CAMERA_MEETS]) >= MARGIN  # none planned among them
+
+
+@pytest.mark.parametrize("body", ["link 3", "base"])
+def test_the_self_check_names_the_pair_the_test_geometry_finds_closest(body):
+    """Where the camera meets link 3 (or the base), the planner's self-collision check alone refuses every
+    posture and names the pair this file's geometry finds closest ("camera against link 3", "bracket
+    against link 3", ...) wherever that pair is the closest by more than 10 mm."""
+    rng = np.random.default_rng(21)
+    joints = rng.uniform(ROBOT.joint_limits_deg[:, 0], ROBOT.joint_limits_deg[:, 1], (1500, 6))
+    gaps = self_gaps(joints)
+    meeting = np.flatnonzero(gaps["camera", body] < MARGIN)
+    pairs = list(gaps)
+    table = np.array([gaps[p][meeting] for p in pairs])  # (pairs, postures)
+    order = np.sort(table, axis=0)
+    guard = CellCheck(type(CELL)((), CELL.carried)).guard(ROBOT)  # the pairs alone
+    found = [guard.posture_violation(q) for q in joints[meeting]]
+    assert all(v is not None and v.kind == "self" for v in found)
+    clear_first = order[1] - order[0] > 10.0
+    named = [(v.body, v.volume) for v in found]
+    closest = [pairs[k] for k in table.argmin(axis=0)]
+    assert np.sum(clear_first) >= 15
+    assert all(n == c for n, c, keep in zip(named, closest, clear_first) if keep)
+    if body == "link 3":
+        assert ("camera", "link 3") in named  # the plan line can say "camera against link 3"
 
 
 def test_moves_the_check_passes_keep_the_pairs_apart_all_along():
