@@ -409,16 +409,16 @@ def mark_outcomes(robot: Side, camera: Side, readings: list, n: int) -> None:
     """Number the distinct sessions the consistent readings give (same set-up and poses within the noise).
 
     Each reading is compared with the outcomes found so far through :func:`same_outcome`, but only with
-    those that agree on a few probe poses first (one vectorised test against all outcomes): a log read
-    under hundreds of conventions would otherwise compare every pair of readings pose by pose."""
+    those :class:`OutcomeProbes` finds near it: a log read under hundreds of conventions would otherwise
+    compare every pair of readings pose by pose."""
     consistent = [r for r in readings if r.consistent]
     tol_deg = max(0.05, 0.5 * min((finite(r.axis_deg) for r in consistent), default=0.0)) if n >= 3 else 0.05
     outcomes: list = []
-    probes = OutcomeProbes()
+    probes = OutcomeProbes(tol_deg, 0.5)
     for r in consistent:
         a, b = pose_outcome(robot, camera, r)
         outcome = (a, b, r.setup)
-        r.outcome = next((k for k in probes.candidates(outcome, tol_deg, 0.5)
+        r.outcome = next((k for k in probes.candidates(outcome)
                           if same_outcome(outcomes[k], outcome, tol_deg, 0.5)), None)
         if r.outcome is None:
             outcomes.append(outcome)
@@ -427,15 +427,18 @@ def mark_outcomes(robot: Side, camera: Side, readings: list, n: int) -> None:
 
 
 class OutcomeProbes:
-    """A few poses of every outcome found so far (first, middle, last of each side), stacked, so that a
-    new outcome is tested against all of them at once. A candidate is any outcome that
-    :func:`same_outcome` could accept: same set-up and shape, and no probe pose outside the tolerances
-    (an outcome with a NaN anywhere is always a candidate: :func:`same_outcome` lets NaN through)."""
+    """The outcomes found so far, indexed so that a new one meets only those :func:`same_outcome` could
+    accept: same set-up and shapes, the first robot pose's translation in the same or a neighbouring cell
+    of a grid of the translation tolerance (within the tolerance means at most one cell apart on each
+    axis), then no probe pose (first, middle, last of each side) outside the tolerances. An outcome with
+    a NaN anywhere is always a candidate (:func:`same_outcome` lets NaN through). The cost per outcome
+    does not grow with the number found (a log read under hundreds of conventions gives thousands)."""
 
-    def __init__(self) -> None:
-        self.keys: list = []
-        self.poses: list = []
-        self.any_nan: list = []
+    def __init__(self, tol_deg: float, tol_mm: float) -> None:
+        self.tol_deg, self.tol_mm = tol_deg, tol_mm
+        self.poses: list = []                      # probe poses per outcome, (p, 4, 4)
+        self.cells: dict = {}                      # (key, i, j, k) -> outcome indices
+        self.unplaced: dict = {}                   # key -> outcomes with a NaN or no pose: always candidates
 
     @staticmethod
     def _probe(outcome) -> tuple:
@@ -443,27 +446,41 @@ class OutcomeProbes:
         picks = sorted({0, len(a) // 2, len(a) - 1}) if len(a) else []
         return (setup, a.shape, b.shape), np.concatenate([a[picks], b[picks]]) if picks else np.zeros((0, 4, 4))
 
-    def add(self, outcome) -> None:
-        key, poses = self._probe(outcome)
-        self.keys.append(key)
-        self.poses.append(poses)
-        self.any_nan.append(self._any_nan(outcome))
+    def _cell(self, poses) -> tuple | None:
+        """The grid cell of the first robot pose's translation; ``None`` for no pose or a NaN anywhere."""
+        if len(poses) == 0:
+            return None
+        return tuple(np.floor(poses[0, :3, 3] / self.tol_mm).astype(int))
 
     @staticmethod
-    def _any_nan(outcome) -> bool:
-        return bool(np.isnan(outcome[0]).any() or np.isnan(outcome[1]).any())
+    def _placeable(outcome, poses) -> bool:
+        return len(poses) > 0 and not (np.isnan(outcome[0]).any() or np.isnan(outcome[1]).any()) \
+            and bool(np.all(np.abs(poses[0, :3, 3]) < 1e12))
 
-    def candidates(self, outcome, tol_deg: float, tol_mm: float) -> list:
+    def add(self, outcome) -> None:
+        key, poses = self._probe(outcome)
+        index = len(self.poses)
+        self.poses.append(poses)
+        if self._placeable(outcome, poses):
+            self.cells.setdefault((key, *self._cell(poses)), []).append(index)
+        else:
+            self.unplaced.setdefault(key, []).append(index)
+
+    def candidates(self, outcome) -> list:
         """Indices (ascending) of the outcomes that may be the same as ``outcome``."""
         key, poses = self._probe(outcome)
-        same_key = [k for k, other in enumerate(self.keys) if other == key]
-        if not same_key or len(poses) == 0 or self._any_nan(outcome):
-            return same_key
-        stacked = np.stack([self.poses[k] for k in same_key])  # (m, p, 4, 4)
-        with np.errstate(invalid="ignore"):
-            far = (rotation_error_deg(stacked, poses[None]) > tol_deg) | (
-                np.linalg.norm(stacked[..., :3, 3] - poses[None, :, :3, 3], axis=-1) > tol_mm)
-        return [k for k, ruled_out in zip(same_key, far.any(axis=1)) if self.any_nan[k] or not ruled_out]
+        if not self._placeable(outcome, poses):  # compared with every outcome of its kind, in full
+            return sorted([k for (other, *_), ks in self.cells.items() if other == key for k in ks]
+                          + self.unplaced.get(key, []))
+        i, j, k = self._cell(poses)
+        near = [n for di in (-1, 0, 1) for dj in (-1, 0, 1) for dk in (-1, 0, 1)
+                for n in self.cells.get((key, i + di, j + dj, k + dk), ())]
+        if near:
+            stacked = np.stack([self.poses[n] for n in near])  # (m, p, 4, 4)
+            far = (rotation_error_deg(stacked, poses[None]) > self.tol_deg) | (
+                np.linalg.norm(stacked[..., :3, 3] - poses[None, :, :3, 3], axis=-1) > self.tol_mm)
+            near = [n for n, ruled_out in zip(near, far.any(axis=1)) if not ruled_out]
+        return sorted(near + self.unplaced.get(key, []))
 
 
 def finite(v: float) -> float:

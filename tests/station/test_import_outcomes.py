@@ -76,10 +76,24 @@ def test_outcomes_are_numbered_as_the_plain_rule_and_the_work_grows_linearly(mon
 def test_an_outcome_with_nan_is_still_compared_in_full():
     rng = np.random.default_rng(3)
     a, b = _poses(rng, 5), _poses(rng, 5)
-    probes = rd.OutcomeProbes()
+    probes = rd.OutcomeProbes(0.1, 0.5)
     probes.add((a, b, "eye_in_hand"))
     other = _poses(rng, 5)
-    assert probes.candidates((other, b, "eye_in_hand"), 0.1, 0.5) == []
+    assert probes.candidates((other, b, "eye_in_hand")) == []
     other[2, 0, 3] = np.nan
-    assert probes.candidates((other, b, "eye_in_hand"), 0.1, 0.5) == [0]
-    assert probes.candidates((a, b, "eye_to_hand"), 0.1, 0.5) == []
+    assert probes.candidates((other, b, "eye_in_hand")) == [0]
+    assert probes.candidates((a, b, "eye_to_hand")) == []
+
+
+def test_a_repeat_across_a_cell_boundary_is_found():
+    """The grid's cells are the translation tolerance wide: a pose 0.4 mm away in the next cell (and in
+    the next cell on all three axes at once) is still a candidate, one 0.6 mm away is not."""
+    rng = np.random.default_rng(5)
+    a, b = _poses(rng, 5), _poses(rng, 5)
+    a[0, :3, 3] = [100.45, -0.05, 20.45]  # cells (200, -1, 40) of 0.5 mm
+    probes = rd.OutcomeProbes(0.1, 0.5)
+    probes.add((a, b, "eye_in_hand"))
+    for shift, expected in (([0.1, 0.0, 0.0], [0]), ([0.2, 0.2, 0.2], [0]), ([0.6, 0.0, 0.0], [])):
+        moved = a.copy()
+        moved[0, :3, 3] += shift
+        assert probes.candidates((moved, b, "eye_in_hand")) == expected, shift
