@@ -31,8 +31,8 @@ from .capture import CaptureRun, confirm_motion, install_program, release_waitin
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
 from .runtime import StationLink
-from .verify_plan import (TIME_BUDGET, VerifyError, cell_guard, create_verify_session, order_postures, path_time,
-                          path_time_along, verify_folder)
+from .verify_plan import (TIME_BUDGET, TIME_LIMIT, TIME_TIGHTEN, TIME_TRIES, VerifyError, capture_time, cell_guard,
+                          create_verify_session, order_postures, path_time, path_time_along, verify_folder)
 
 __all__ = ["OK", "DRIFT", "INCONCLUSIVE", "EXIT_CODES", "VerifyOutcome", "SessionBaseline", "check_request",
            "session_baseline", "verify"]
@@ -154,7 +154,18 @@ def _tool_finding(config: StationConfig, link: StationLink, base: SessionBaselin
 
 
 def _chosen(config, session, base: SessionBaseline, robot, here, count: int):
-    """SESSION's posture numbers to revisit (informative, then ordered) and their jointtargets."""
+    """SESSION's posture numbers to revisit (informative, then ordered) and their jointtargets.
+
+    The time the choice is held to is the check's real path (from ``here``, where the robot stands,
+    through the chosen postures in the order they are visited clear of the cell) against the full
+    capture's robot time (``verify_plan.capture_time``): aimed at :data:`TIME_BUDGET` of it, never above
+    :data:`TIME_LIMIT` (chosen again with a tighter budget, refused when nothing fits).
+
+    Raises
+    ------
+    VerifyError
+        No choice of ``count`` postures is reachable within :data:`TIME_LIMIT` of the capture's time.
+    """
     from ..calibration.verify_postures import informative_postures
 
     record = session.extra["capture"]
@@ -162,14 +173,23 @@ def _chosen(config, session, base: SessionBaseline, robot, here, count: int):
     problem, sol = base.problem, base.solution
     ids = np.array([int(i) for i in problem.posture_ids])
     allowed = ~np.asarray(sol.outliers, bool) & (ids < len(plan))
-    start = np.asarray(record.get("start_joints_deg") or plan[0], float)
-    budget = TIME_BUDGET * path_time_along(robot, start, plan)  # a check: a fifth of the capture's robot time at most
+    full = capture_time(robot, record)
     targets = plan[np.minimum(ids, len(plan) - 1)]
-    picked = informative_postures(base.baseline, sol.observations, problem.joints_deg, robot, count, allowed,
-                                  path_time=lambda chosen: path_time(robot, here, targets[chosen]), budget=budget)
-    order = order_postures(robot, here, plan[ids[picked]], cell_guard(config, robot, record))
-    numbers = [int(ids[picked[i]]) for i in order]
-    return numbers, plan[numbers]
+    guard = cell_guard(config, robot, record)
+    budget, took = TIME_BUDGET * full, np.inf
+    for _ in range(TIME_TRIES):
+        picked = informative_postures(base.baseline, sol.observations, problem.joints_deg, robot, count, allowed,
+                                      path_time=lambda chosen: path_time(robot, here, targets[chosen]), budget=budget)
+        order = order_postures(robot, here, plan[ids[picked]], guard)
+        numbers = [int(ids[picked[i]]) for i in order]
+        took = path_time_along(robot, here, plan[numbers])
+        if took <= TIME_LIMIT * full:
+            return numbers, plan[numbers]
+        budget *= TIME_TIGHTEN
+    raise VerifyError(f"no {count} postures of the session are reachable from where the robot stands within "
+                      f"{TIME_LIMIT:.0%} of the capture's robot time (the tightest choice tried takes {took / full:.0%}): "
+                      "move the robot to the session's start posture and run verify again, or use fewer postures "
+                      "(--postures)")
 
 
 def _revisit(config, link: StationLink, folder: Path, session, numbers, joints, progress, confirm, on_posture):
