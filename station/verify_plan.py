@@ -93,8 +93,9 @@ def capture_time(robot, record: dict) -> float:
 #: they are visited (the program stays at the last one: it has no move home).
 TIME_BUDGET = 0.15
 #: A check whose real path would exceed this fraction of the capture's robot time is chosen again
-#: with a tighter budget (:data:`TIME_BUDGET` times ``TIME_TIGHTEN`` each time), and refused when no
-#: choice fits (the issue's bound is a fifth; this keeps a margin below it).
+#: with a tighter budget (:data:`TIME_BUDGET` times ``TIME_TIGHTEN`` each time, up to ``TIME_TRIES``
+#: choices); the bound is a fifth, this keeps a margin below it. When no choice fits (a session of
+#: few postures) the shortest tried is taken and the check says so (``station.verify._chosen``).
 TIME_LIMIT = 0.18
 TIME_TIGHTEN = 0.8
 TIME_TRIES = 6
