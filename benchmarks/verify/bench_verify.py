@@ -11,7 +11,10 @@ station through ``mock.faults`` (or, for ``tooldata``, the controller's tool dat
 - ``board_shift`` 1 mm, ``board_turn`` 0.1 deg;
 - ``joint1`` .. ``joint6``: a 0.05 deg zero shift of that axis;
 - ``tooldata``: the controller holds another tool data (0.5 mm off);
-- ``update``: the camera moved 2 mm / 0.2 deg: the quick update against the new truth, in its sigmas.
+- ``update``: the camera moved 2 mm / 0.2 deg: the quick update against the new truth, in its sigmas
+  (the truth both as the physical mount on the true flange and as the arm's model sees it: the mount
+  behind the true arm's last-link deviation, which no hand-eye data can tell from the mount;
+  :func:`last_link_mount`).
 
 Each verify's outcome is appended to ``--out`` (JSON lines) as it ends, so an interrupted run keeps
 what it measured; ``--summary`` prints the figures of such a file. Runs in one process, one trial
