@@ -144,12 +144,15 @@ class QuickUpdate:
     covariance : ndarray, shape (6, 6)
         Of ``(shift mm, turn deg)`` of ``x`` in tool0 (as ``uncertainty.covariance`` of a calibration).
     sigma_translation_mm, sigma_rotation_deg : ndarray, shape (3,)
+    reduced_chi2 : float
+        ``χ² / (6 K - 6)`` of the update's own residuals; the covariance is scaled by it when above 1.
     """
 
     x: np.ndarray
     covariance: np.ndarray
     sigma_translation_mm: np.ndarray
     sigma_rotation_deg: np.ndarray
+    reduced_chi2: float = 1.0
 
 
 def quick_update(baseline: Baseline, obs, joints_deg=None, iterations: int = 3) -> QuickUpdate:
@@ -158,19 +161,43 @@ def quick_update(baseline: Baseline, obs, joints_deg=None, iterations: int = 3) 
     Gauss-Newton on the camera explanation: ``X_(k+1) = X_k ⊕ p̂`` with ``p̂`` the GLS fit of
     ``d ≈ J_camera p`` under ``Σ' = blockdiag(S_j) + J_(t,u) C_(t,u) J_(t,u)^T`` (the board's and the
     kinematics' uncertainty kept, the old X's dropped).
+
+    The covariance ``(J^T Σ'^-1 J)^-1`` holds only if ``Σ'`` (the session's noise levels) describes
+    the revisited postures. When the update's own residuals say otherwise (``χ² / (6 K - 6) > 1``:
+    the arm's unmodelled errors at these postures, or a change the camera explanation does not hold
+    entirely), the covariance is scaled by that reduced chi-square (never shrunk below 1), so a
+    quick update never claims more certainty than its own fit shows; its thresholds then ask for a
+    recapture sooner. What no revisit can show stays at the session's prior: a deviation of the arm's
+    last link (its DH row) is one rigid change with the camera mount, bounded only by the kinematic
+    prior the calibration estimated (``C_(u)``).
+
+    Parameters
+    ----------
+    baseline : Baseline
+    obs : eiv.Observations
+        The K revisited postures.
+    joints_deg : ndarray, shape (K, dof), optional
+    iterations : int
+
+    Returns
+    -------
+    QuickUpdate
     """
     x = np.array(baseline.x, float)
-    cov = np.eye(6)
+    cov, chi2, dof = np.eye(6), 0.0, 1
     for _ in range(iterations):
         disc = discrepancy(replace(baseline, x=x), obs, joints_deg)
         rest = disc.estimate[:, 6:]
         sigma = disc.noise + rest @ baseline.covariance[6:, 6:] @ rest.T
         jac = hypothesis_jacobians(disc, x)["camera"]
-        p, cov, _ = _fit(jac, disc.d, np.linalg.inv(sigma))
+        p, cov, chi2 = _fit(jac, disc.d, np.linalg.inv(sigma))
+        dof = max(len(disc.d) - jac.shape[1], 1)
         x = retract(x, p)
+    reduced = chi2 / dof
+    cov = cov * max(reduced, 1.0)
     block = np.zeros((6, 6))
     block[:3, :3] = block[3:, 3:] = x[:3, :3]
     scale = np.r_[np.ones(3), np.full(3, 180.0 / np.pi)]
     parent = (block @ cov @ block.T) * np.outer(scale, scale)
     sig = np.sqrt(np.maximum(np.diag(parent), 0.0))
-    return QuickUpdate(x, parent, sig[:3], sig[3:])
+    return QuickUpdate(x, parent, sig[:3], sig[3:], float(reduced))

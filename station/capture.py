@@ -82,6 +82,7 @@ __all__ = [
     "install_program",
     "measure_board",
     "measure_with_retries",
+    "measure_posture",
     "grab_observer",
     "measurement_line",
     "read_flange",
@@ -123,6 +124,8 @@ class PostureReport:
     elapsed_s : float
     done : int
         Postures visited so far, this one included (for a progress bar).
+    board_absent : bool
+        The last grab found no checkerboard at all (``NoBoardInView``): the board is out of view.
     """
 
     index: int
@@ -133,6 +136,7 @@ class PostureReport:
     attempts: int = 1
     elapsed_s: float = 0.0
     done: int = 0
+    board_absent: bool = False
 
 
 @dataclass
@@ -471,12 +475,15 @@ def release_waiting_posture(controller, done: set, progress) -> None:
 
 
 def visit_postures(config: StationConfig, session_dir: Path, run: CaptureRun, link: StationLink, on_posture,
-                   stop_after: int | None = None, observer: Callable | None = None) -> tuple[list, dict]:
+                   stop_after: int | None = None, observer: Callable | None = None,
+                   stop_when: Callable[[PostureReport], bool] | None = None) -> tuple[list, dict]:
     """The posture loop: move, measure, write each posture not yet on disk, record skips, acknowledge.
 
     Returns the posture numbers (the files' ``NNN``) captured in this run and ``{number: reason}`` of those
     skipped. The controller is asked for posture ``index + 1`` (its program counts from 1). ``observer``
     receives the ``station.capture_events`` of each posture (Prompt, Measured per grab, Verdict).
+    ``stop_when(report)``, when given, ends the loop after a posture for which it is true (a check that
+    can no longer reach its minimum); a posture whose grab sees no board at all is then not grabbed again.
     """
     observer = observer or (lambda event: None)
     controller, robot = link.controller, load_robot(config.robot)
@@ -493,7 +500,8 @@ def visit_postures(config: StationConfig, session_dir: Path, run: CaptureRun, li
         if not (status.awaiting_ack and status.posture == k):
             observer(Prompt("move", f"moving to posture {index} ({len(done) + n + 1} of {total})", index))
             controller.goto_posture(k, expected_joints=run.plan_joints[index])
-        report = _capture_posture(config, session_dir, link, robot, index, total, run.plan_joints[index], observer)
+        report = _capture_posture(config, session_dir, link, robot, index, total, run.plan_joints[index], observer,
+                                  retry_absent=stop_when is None)
         report.elapsed_s, report.done = time.monotonic() - t0, len(done) + n + 1
         if report.ok:
             captured.append(index)
@@ -505,6 +513,8 @@ def visit_postures(config: StationConfig, session_dir: Path, run: CaptureRun, li
         _write_header(session_dir, run.session)
         controller.acknowledge(k)
         on_posture(report)
+        if stop_when is not None and stop_when(report):
+            break
     return captured, skipped
 
 
@@ -633,25 +643,38 @@ def measure_with_retries(config: StationConfig, link: StationLink, on_grab: Call
     """Grab and triangulate until the quality holds (``capture.retries`` more tries): ``(result, frame,
     problem, attempts)``, ``problem`` None when the measurement is good. ``on_grab(result, frame, problem)``,
     when given, after every grab (``result`` None when the board was not measured)."""
+    return measure_posture(config, link, on_grab)[:4]
+
+
+def measure_posture(config: StationConfig, link: StationLink, on_grab: Callable | None = None,
+                    retry_absent: bool = True):
+    """:func:`measure_with_retries` and whether the last grab saw no checkerboard at all:
+    ``(result, frame, problem, attempts, absent)``; ``retry_absent=False``: no retry after such a grab
+    (retries help a blurred, glaring or badly lit board, not one that is out of view)."""
+    from ..drivers.camera.errors import NoBoardInView
+
     problem = "no frame"
     result = frame = None
-    attempts = 0
+    attempts, absent = 0, False
     for attempts in range(1, config.capture.retries + 2):
         grabbed = None
         try:
             grabbed = link.camera.grab(config.camera.grab_timeout_s)
             result, frame = _triangulate(grabbed, link.stereo_model, config.target), grabbed
         except CameraError as exc:
-            problem = str(exc)
+            problem, absent = str(exc), isinstance(exc, NoBoardInView)
             if on_grab is not None and grabbed is not None:
                 on_grab(None, grabbed, problem)
+            if absent and not retry_absent:
+                break
             continue
+        absent = False
         problem = _quality_problem(result, config)
         if on_grab is not None:
             on_grab(result, frame, problem)
         if problem is None:
             break
-    return result, frame, problem, attempts
+    return result, frame, problem, attempts, absent
 
 
 def store_posture(config: StationConfig, session_dir: Path, index: int, joints, tool02base, result, frame,
@@ -686,17 +709,19 @@ def grab_observer(observer: Callable | None, index: int, tool02base) -> Callable
 
 
 def _capture_posture(config, session_dir, link: StationLink, robot, index, total, planned,
-                     observer: Callable | None = None) -> PostureReport:
-    """Steps 2-4 at posture ``index`` (the robot at rest there): check the pose, measure, write the posture file."""
+                     observer: Callable | None = None, retry_absent: bool = True) -> PostureReport:
+    """Steps 2-4 at posture ``index`` (the robot at rest there): check the pose, measure, write the posture file
+    (``retry_absent``: :func:`measure_posture`)."""
     observer = observer or (lambda event: None)
     joints, tool02base = read_flange(config, link, robot, f"posture {index}")
     if np.max(np.abs(joints - planned)) > 0.05:
         raise CaptureError(f"posture {index}: the robot stands at {np.round(joints, 3).tolist()}, not at the planned "
                            f"{np.round(planned, 3).tolist()}: is the right program loaded?")
-    result, frame, problem, attempts = measure_with_retries(config, link, grab_observer(observer, index, tool02base))
+    result, frame, problem, attempts, absent = measure_posture(config, link, grab_observer(observer, index, tool02base),
+                                                               retry_absent)
     if problem is not None:
         report = PostureReport(index, total, False, f"posture {index} skipped after {attempts} attempt(s): {problem}",
-                               result.quality if result is not None else {}, attempts)
+                               result.quality if result is not None else {}, attempts, board_absent=absent)
         observer(Verdict(index, SKIPPED, report.message, report.quality))
         return report
     store_posture(config, session_dir, index, joints, tool02base, result, frame, controller_posture=index + 1)

@@ -31,8 +31,8 @@ from .capture import CaptureRun, confirm_motion, install_program, release_waitin
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
 from .runtime import StationLink
-from .verify_plan import (TIME_BUDGET, VerifyError, cell_guard, create_verify_session, order_postures, path_time,
-                          path_time_along, verify_folder)
+from .verify_plan import (TIME_BUDGET, TIME_LIMIT, TIME_TIGHTEN, TIME_TRIES, VerifyError, capture_time, cell_guard,
+                          create_verify_session, order_postures, path_time, path_time_along, verify_folder)
 
 __all__ = ["OK", "DRIFT", "INCONCLUSIVE", "EXIT_CODES", "VerifyOutcome", "SessionBaseline", "check_request",
            "session_baseline", "verify"]
@@ -153,8 +153,16 @@ def _tool_finding(config: StationConfig, link: StationLink, base: SessionBaselin
     return {"held": held, "session": expected}
 
 
-def _chosen(config, session, base: SessionBaseline, robot, here, count: int):
-    """SESSION's posture numbers to revisit (informative, then ordered) and their jointtargets."""
+def _chosen(config, session, base: SessionBaseline, robot, here, count: int, progress=lambda m: None):
+    """SESSION's posture numbers to revisit (informative, then ordered) and their jointtargets.
+
+    The time the choice is held to is the check's real path (from ``here``, where the robot stands,
+    through the chosen postures in the order they are visited clear of the cell; the program has no
+    move home) against the full capture's robot time (``verify_plan.capture_time``): aimed at
+    :data:`TIME_BUDGET` of it and chosen again with a tighter budget while above :data:`TIME_LIMIT`.
+    When no choice fits (a short session: K of its few postures are more than a fifth of its path),
+    the shortest one tried is taken and ``progress`` says so.
+    """
     from ..calibration.verify_postures import informative_postures
 
     record = session.extra["capture"]
@@ -162,19 +170,56 @@ def _chosen(config, session, base: SessionBaseline, robot, here, count: int):
     problem, sol = base.problem, base.solution
     ids = np.array([int(i) for i in problem.posture_ids])
     allowed = ~np.asarray(sol.outliers, bool) & (ids < len(plan))
-    start = np.asarray(record.get("start_joints_deg") or plan[0], float)
-    budget = TIME_BUDGET * path_time_along(robot, start, plan)  # a check: a fifth of the capture's robot time at most
+    full = capture_time(robot, record)
     targets = plan[np.minimum(ids, len(plan) - 1)]
-    picked = informative_postures(base.baseline, sol.observations, problem.joints_deg, robot, count, allowed,
-                                  path_time=lambda chosen: path_time(robot, here, targets[chosen]), budget=budget)
-    order = order_postures(robot, here, plan[ids[picked]], cell_guard(config, robot, record))
-    numbers = [int(ids[picked[i]]) for i in order]
+    guard = cell_guard(config, robot, record)
+    budget, best = TIME_BUDGET * full, (np.inf, None)
+    for _ in range(TIME_TRIES):
+        picked = informative_postures(base.baseline, sol.observations, problem.joints_deg, robot, count, allowed,
+                                      path_time=lambda chosen: path_time(robot, here, targets[chosen]), budget=budget)
+        order = order_postures(robot, here, plan[ids[picked]], guard)
+        numbers = [int(ids[picked[i]]) for i in order]
+        took = path_time_along(robot, here, plan[numbers])
+        best = min(best, (took, numbers), key=lambda b: b[0])
+        if took <= TIME_LIMIT * full:
+            break
+        budget *= TIME_TIGHTEN
+    took, numbers = best
+    if took > TIME_LIMIT * full:
+        progress(f"the check's {count} postures take {took / max(full, 1e-9):.0%} of the capture's robot time from where "
+                 f"the robot stands ({len(plan)} postures in the session; the aim is {TIME_BUDGET:.0%})")
     return numbers, plan[numbers]
+
+
+class _Stop:
+    """``stop_when`` of the check's posture loop: stop at the first posture where no board at all is seen
+    (the check cannot diagnose a station whose board is out of view), or once the postures left cannot
+    bring the measured ones to :data:`MIN_VERIFY_POSTURES`; ``reason`` says which, in one line."""
+
+    def __init__(self, numbers, session_name: str):
+        self.numbers, self.session_name = list(numbers), session_name
+        self.visited = self.measured = 0
+        self.reason: str | None = None
+
+    def __call__(self, report) -> bool:
+        self.visited += 1
+        self.measured += bool(report.ok)
+        n = self.numbers[report.index] if 0 <= report.index < len(self.numbers) else report.index
+        if not report.ok and report.board_absent:
+            self.reason = (f"board not seen at posture {n} of {self.session_name} (no checkerboard in the image; "
+                           f"stopped after {self.visited} of {len(self.numbers)} postures): check that the board is "
+                           "on its stand, lit and in the camera's view (nothing in front of the lens), then run "
+                           "verify again")
+        elif self.measured + len(self.numbers) - self.visited < MIN_VERIFY_POSTURES:
+            self.reason = (f"{self.measured} of {self.visited} postures measured so far (the board was not measured "
+                           f"at posture {n} of {self.session_name}: {report.message}); the test needs "
+                           f"{MIN_VERIFY_POSTURES} of {len(self.numbers)}: check the view and run verify again")
+        return self.reason is not None
 
 
 def _revisit(config, link: StationLink, folder: Path, session, numbers, joints, progress, confirm, on_posture):
     """Visit the chosen postures with the capture's program and loop; returns (measured, problem) or a
-    reason the link failed."""
+    reason the check cannot go on (the link failed, the board is not seen: :class:`_Stop`)."""
     from ..drivers.errors import StationError
 
     station = MOCK if config.is_mock or config.is_rehearsal else REAL
@@ -182,18 +227,19 @@ def _revisit(config, link: StationLink, folder: Path, session, numbers, joints, 
                                     folder=folder, station=station)
     created.path = folder
     run = CaptureRun(created, np.round(joints, 4), created.extra["capture"]["plan_score"])
+    stop = _Stop(numbers, Path(session.path).name)
     try:
         install_program(config, folder, run.plan_joints, link, progress, run.board2base)
         confirm_motion(config, folder, run, link, confirm, progress)
         release_waiting_posture(link.controller, run.done, progress)
-        captured, skipped = visit_postures(config, folder, run, link, on_posture)
+        captured, skipped = visit_postures(config, folder, run, link, on_posture, stop_when=stop)
         if link.stop_program is not None:
             link.stop_program()
     except StationError as exc:
         return None, f"the link failed during the check ({exc})"
     for index, why in skipped.items():
         progress(f"posture {numbers[index]} of the session not measured: {why}")
-    return captured, None
+    return captured, stop.reason
 
 
 def verify(config: StationConfig, session_dir, link: StationLink, postures: int = 5, level: float = DEFAULT_LEVEL,
@@ -214,12 +260,12 @@ def verify(config: StationConfig, session_dir, link: StationLink, postures: int 
     robot = load_robot(config.robot)
     tool = _tool_finding(config, link, base)
     motion0 = link.mock.arm.motion_s if link.is_mock else None
-    numbers, joints = _chosen(config, session, base, robot, link.controller.read_joints(), postures)
+    numbers, joints = _chosen(config, session, base, robot, link.controller.read_joints(), postures, progress)
     progress(f"revisiting postures {', '.join(map(str, numbers))} of {session_dir.name}")
     folder = verify_folder(session_dir)
     captured, failure = _revisit(config, link, folder, session, numbers, joints, progress, confirm, on_posture)
     motion = None if motion0 is None else link.mock.arm.motion_s - motion0
-    outcome = VerifyOutcome(INCONCLUSIVE, failure or "", folder, numbers, 0 if captured is None else len(captured),
+    outcome = VerifyOutcome(INCONCLUSIVE, failure or "", folder, numbers, len(captured or ()),
                             tool_finding=tool, motion_s=motion, baseline=base)
     if failure is None:
         judge(outcome, folder, base, robot, level, numbers)

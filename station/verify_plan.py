@@ -22,7 +22,8 @@ from ..calibration.transforms import transform_from_pose
 from .cell_plan import cell_check
 from .config import StationConfig
 
-__all__ = ["TIME_BUDGET", "VerifyError", "cell_guard", "create_verify_session", "order_postures", "path_time", "path_time_along", "verify_folder"]
+__all__ = ["TIME_BUDGET", "TIME_LIMIT", "TIME_TIGHTEN", "TIME_TRIES", "VerifyError", "capture_time", "cell_guard",
+           "create_verify_session", "order_postures", "path_time", "path_time_along", "verify_folder"]
 
 
 class VerifyError(HandEyeError):
@@ -77,8 +78,27 @@ def path_time_along(robot, start, joints) -> float:
     return _path_s(robot, start, joints, range(len(joints)))
 
 
-#: A check may take this fraction of the full capture's robot time (the plan's path, at full axis speed).
+def capture_time(robot, record: dict) -> float:
+    """The full capture's robot time (s, full axis speed) from its capture record: from its start
+    through every planned posture in the plan's order, each move synchronised (the slowest axis sets
+    its time), as the mock arm and a ``MoveAbsJ`` time it. At the arm's speed fraction both this and a
+    check's :func:`path_time_along` scale alike, so their ratio is the ratio of robot times."""
+    plan = np.asarray(record["plan_joints_deg"], float)
+    start = np.asarray(record.get("start_joints_deg") or plan[0], float)
+    return path_time_along(robot, start, plan)
+
+
+#: The posture choice aims at this fraction of the full capture's robot time (:func:`capture_time`)
+#: for the check's real path: from where the robot stands through the chosen postures in the order
+#: they are visited (the program stays at the last one: it has no move home).
 TIME_BUDGET = 0.15
+#: A check whose real path would exceed this fraction of the capture's robot time is chosen again
+#: with a tighter budget (:data:`TIME_BUDGET` times ``TIME_TIGHTEN`` each time, up to ``TIME_TRIES``
+#: choices); the bound is a fifth, this keeps a margin below it. When no choice fits (a session of
+#: few postures) the shortest tried is taken and the check says so (``station.verify._chosen``).
+TIME_LIMIT = 0.18
+TIME_TIGHTEN = 0.8
+TIME_TRIES = 6
 
 
 def _nearest_next(robot, start, joints) -> tuple:

@@ -101,7 +101,8 @@ def update_json(update, thresholds) -> dict | None:
     return {"camera_pose": {"parent": "tool0", **pose_from_transform(update.x)},
             "uncertainty": {"translation_mm": [float(v) for v in update.sigma_translation_mm],
                             "rotation_deg": [float(v) for v in update.sigma_rotation_deg],
-                            "covariance": [[float(v) for v in row] for row in update.covariance]},
+                            "covariance": [[float(v) for v in row] for row in update.covariance],
+                            "reduced_chi2": round(float(update.reduced_chi2), 4)},
             "within_thresholds": passed,
             "advice": "write it with handeye writeback" if passed else
             "its uncertainty is above the quality thresholds: recapture (handeye capture) and calibrate"}

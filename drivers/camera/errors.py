@@ -9,7 +9,8 @@ from __future__ import annotations
 from ...calibration.errors import UsageError
 from ..errors import CameraError
 
-__all__ = ["CameraError", "FrameError", "FrameUsageError", "BoardNotFound", "StereoModelError", "StereoMismatch", "SquareSizeMismatch"]
+__all__ = ["CameraError", "FrameError", "FrameUsageError", "BoardNotFound", "NoBoardInView", "StereoModelError",
+           "StereoMismatch", "SquareSizeMismatch"]
 
 
 class FrameError(CameraError):
@@ -22,6 +23,11 @@ class FrameUsageError(UsageError, FrameError):
 
 class BoardNotFound(CameraError):
     """The checkerboard was not found (completely, with the expected corner count) in an image."""
+
+
+class NoBoardInView(BoardNotFound):
+    """No checkerboard at all in an image (not a part of one, not another count): the board is out of
+    view, covered or unlit; grabbing again from the same view does not find it."""
 
 
 class StereoModelError(CameraError):

@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 
 from .board_pattern import MAX_OUTER_ALTERNATION, MIN_CONTRAST, canonical_orderings, outer_alternation, pattern_score
-from .errors import BoardNotFound
+from .errors import BoardNotFound, NoBoardInView
 
 __all__ = ["DETECT_FLAGS", "OPENCV_DEFAULT_FLAGS", "ROI_FLAGS", "SB_FLAGS", "SEARCH_STAGES", "GridSearch", "board_region",
            "find_grid", "refuse_missing_grid"]
@@ -250,4 +250,4 @@ def refuse_missing_grid(result: GridSearch, gray: np.ndarray, pattern: tuple, wh
                 f"the whole board with its white margin is in view and that {nx}x{ny} is its inner-corner count "
                 f"(--board; e.g. 13x8 for 14x9 squares)"
             )
-        raise BoardNotFound(f"no checkerboard in the {what}: check that the board is in view, lit evenly and in focus")
+        raise NoBoardInView(f"no checkerboard in the {what}: check that the board is in view, lit evenly and in focus")

@@ -119,6 +119,22 @@ def test_board_out_of_view_is_inconclusive(station):
     assert code == 4 and data["verdict"] == "inconclusive"
     assert data["measured"] < 3
 
+def test_board_out_of_view_stops_the_check_at_its_first_posture(station, capsys, monkeypatch):
+    # With the retries a capture uses (2), a check of 5 postures whose board is out of view would run
+    # 15 full chessboard searches; it stops after the first grab that sees no checkerboard at all.
+    from handeye.mocks.camera import MockCamera
+
+    grabs = []
+    grab = MockCamera.grab
+    monkeypatch.setattr(MockCamera, "grab", lambda self, *a, **k: grabs.append(1) or grab(self, *a, **k))
+    code, data = _verify(station, "blind5", "camera_turn_deg: [-30, 30, 0], board_shift_mm: [100, 100, 100]",
+                         config_extra="capture: {retries: 2}\n")
+    assert code == 4 and data["verdict"] == "inconclusive"
+    assert data["measured"] == 0 and len(grabs) == 1
+    out = capsys.readouterr().out
+    assert f"board not seen at posture {data['revisited'][0]} " in out and "run verify again" in out
+    assert data["reason"].startswith("board not seen at posture")
+
 def test_history_lists_every_check(station, capsys):
     root, session, config = station
     before = (root / "history.jsonl").read_text().splitlines()
