@@ -17,10 +17,9 @@ import math
 
 import numpy as np
 
-from .cell import Box, Cylinder, Floor
 from .kinematics import RobotModel
 
-__all__ = ["BASE_STEP_MM", "base_capsules", "base_clearances", "base_envelope", "carries_the_robot", "volume_top_mm"]
+__all__ = ["BASE_STEP_MM", "base_capsules", "base_clearances", "base_envelope", "carries_the_robot"]
 
 #: Largest spacing of the samples along a base capsule's axis, mm.
 BASE_STEP_MM = 0.5
@@ -42,20 +41,9 @@ def base_envelope(robot: RobotModel) -> tuple[np.ndarray, np.ndarray] | None:
     return low, high
 
 
-def volume_top_mm(volume) -> float:
-    """The highest point of a keep-out volume in base (``inf`` for a kind this module does not know)."""
-    if isinstance(volume, Floor):
-        return float(volume.z_mm)
-    if isinstance(volume, Box):
-        return float(volume.corners()[:, 2].max())
-    if isinstance(volume, Cylinder):
-        return float(volume.z_mm[1])
-    return math.inf
-
-
 def carries_the_robot(volume) -> bool:
     """True for a volume wholly at or below the robot's mounting plane (base z 0): the floor, a foundation."""
-    return volume_top_mm(volume) <= 0.0
+    return volume.top_mm <= 0.0
 
 
 def base_clearances(robot: RobotModel, volumes) -> list:

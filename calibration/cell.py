@@ -92,6 +92,11 @@ class Box:
         frame = _matrix(self.box2parent)
         return local @ frame[:3, :3].T + frame[:3, 3]
 
+    @property
+    def top_mm(self) -> float:
+        """The highest point in the parent frame, mm."""
+        return float(self.corners()[:, 2].max())
+
     def world_zone(self) -> dict:
         """The world zone of this volume: ``{type: box, name, min_mm, max_mm}``, axis-aligned in base
         (a box of a frame of its own: its bounding box)."""
@@ -136,6 +141,11 @@ class Cylinder:
         outside = np.hypot(np.maximum(radial, 0.0), np.maximum(axial, 0.0))
         return outside + np.minimum(np.maximum(radial, axial), 0.0)
 
+    @property
+    def top_mm(self) -> float:
+        """The height of its top in base, mm."""
+        return float(self.z_mm[1])
+
     def world_zone(self) -> dict:
         """``{type: cylinder, name, base_mm: [x, y, z_min], radius_mm, height_mm}`` (``WZCylDef``)."""
         low, high = self.z_mm
@@ -166,6 +176,11 @@ class Floor:
     def signed_distance(self, points) -> np.ndarray:
         """Height (mm) of points ``(..., 3)`` in base above the floor, negative below; ``(...)``."""
         return _points(points)[..., 2] - self.z_mm
+
+    @property
+    def top_mm(self) -> float:
+        """The floor's height in base, mm."""
+        return float(self.z_mm)
 
     def world_zone(self) -> dict:
         """A box from far below up to the floor, :data:`WORLD_ZONE_REACH_MM` wide either way."""

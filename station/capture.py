@@ -62,7 +62,7 @@ from ..calibration.session import (
 )
 from ..calibration.transforms import pose_from_transform, rotation_error_deg, transform_from_pose, translation_error_mm
 from ..calibration.views import PinholeView, ViewSampling
-from ..drivers.camera.errors import CameraError, SquareSizeMismatch
+from ..drivers.camera.errors import CameraError, NoBoardInView, SquareSizeMismatch
 from ..drivers.camera.triangulate import triangulate_images
 from .capture_events import CAPTURED, SKIPPED, CaptureStarted, Measured, Prompt, Verdict
 from .config import StationConfig
@@ -651,8 +651,6 @@ def measure_posture(config: StationConfig, link: StationLink, on_grab: Callable 
     """:func:`measure_with_retries` and whether the last grab saw no checkerboard at all:
     ``(result, frame, problem, attempts, absent)``; ``retry_absent=False``: no retry after such a grab
     (retries help a blurred, glaring or badly lit board, not one that is out of view)."""
-    from ..drivers.camera.errors import NoBoardInView
-
     problem = "no frame"
     result = frame = None
     attempts, absent = 0, False

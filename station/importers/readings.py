@@ -446,10 +446,8 @@ class OutcomeProbes:
         picks = sorted({0, len(a) // 2, len(a) - 1}) if len(a) else []
         return (setup, a.shape, b.shape), np.concatenate([a[picks], b[picks]]) if picks else np.zeros((0, 4, 4))
 
-    def _cell(self, poses) -> tuple | None:
-        """The grid cell of the first robot pose's translation; ``None`` for no pose or a NaN anywhere."""
-        if len(poses) == 0:
-            return None
+    def _cell(self, poses) -> tuple:
+        """The grid cell ``(i, j, k)`` of the first robot pose's translation (of a :meth:`_placeable` outcome)."""
         return tuple(np.floor(poses[0, :3, 3] / self.tol_mm).astype(int))
 
     @staticmethod
