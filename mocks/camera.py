@@ -201,16 +201,13 @@ class ViewRenderer:
             ox, oy = np.meshgrid(cells, cells)
             ox, oy = ox.ravel().astype(np.float32), oy.ravel().astype(np.float32)
             n = len(ey)
-            if options.jitter:
-                ox = ox[None, :] + ((rng.random((n, s * s), dtype=np.float32) - 0.5) / s)
-                oy = oy[None, :] + ((rng.random((n, s * s), dtype=np.float32) - 0.5) / s)
-            else:
-                ox, oy = ox[None, :], oy[None, :]
-            if jac is not None:
-                px_x = xn[0 if xn.shape[0] == 1 else ey, ex][:, None]
-                px_y = yn[ey, 0 if yn.shape[1] == 1 else ex][:, None]
-                sx = px_x + np.float32(jac[0, 0]) * ox + np.float32(jac[0, 1]) * oy
-                sy = px_y + np.float32(jac[1, 1]) * oy
+            ox, oy = _sample_offsets(ox, oy, n, s, rng if options.jitter else None)
+            if jac is not None:  # px + J @ offset, summed in this order (in place: same bits, fewer passes)
+                sx = np.float32(jac[0, 0]) * ox
+                sx += xn[0 if xn.shape[0] == 1 else ey, ex][:, None]
+                sx += np.float32(jac[0, 1]) * oy
+                sy = np.float32(jac[1, 1]) * oy
+                sy += yn[ey, 0 if yn.shape[1] == 1 else ex][:, None]
             else:  # linearised ray map inside the pixel (the distortion is smooth at this scale)
                 gx_y, gx_x = np.gradient(xn)
                 gy_y, gy_x = np.gradient(yn)
@@ -226,13 +223,44 @@ class ViewRenderer:
         return image
 
 
+def _sample_offsets(ox, oy, n: int, s: int, rng):
+    """Sub-sample offsets ``(n, s * s)`` float32 of ``n`` edge pixels: the cell centres ``ox``, ``oy``
+    (``(s * s,)``), each jittered inside its cell by ``(U - 0.5) / s`` when ``rng`` is given (x first)."""
+    if rng is None:
+        return np.tile(ox, (n, 1)), np.tile(oy, (n, 1))
+    out = []
+    for centre in (ox, oy):
+        jitter = rng.random((n, s * s), dtype=np.float32)
+        jitter -= 0.5
+        jitter /= s
+        jitter += centre
+        out.append(jitter)
+    return out[0], out[1]
+
+
 def _board_coords(inv: np.ndarray, xn, yn):
-    """Board coordinates (mm) where rays ``(xn, yn, 1)`` meet the board plane, and whether in front."""
+    """Board coordinates (mm) where rays ``(xn, yn, 1)`` meet the board plane, and whether in front.
+
+    Each coordinate is ``(i0 * xn + i1 * yn + i2) / (i6 * xn + i7 * yn + i8)`` in float32, evaluated
+    in that order (the products, then the sums left to right, then the reciprocal of the denominator
+    times the numerator) with the results written in place: the images depend on these bits.
+    """
     i = inv.astype(np.float32)
-    hw = i[2, 0] * xn + i[2, 1] * yn + i[2, 2]
+
+    def affine(row):
+        out = i[row, 0] * xn + i[row, 1] * yn  # xn or yn may be a row or a column (undistorted rays)
+        out += i[row, 2]
+        return out
+
+    hw = affine(2)
     front = hw > 1e-9
-    rw = 1.0 / np.where(front, hw, np.float32(1.0))
-    return (i[0, 0] * xn + i[0, 1] * yn + i[0, 2]) * rw, (i[1, 0] * xn + i[1, 1] * yn + i[1, 2]) * rw, front
+    hw[~front] = 1.0
+    rw = np.divide(1.0, hw, out=hw)
+    u = affine(0)
+    u *= rw
+    v = affine(1)
+    v *= rw
+    return u, v, front
 
 
 def _labels(u, v, front, board: PrintedBoard) -> np.ndarray:
@@ -244,7 +272,13 @@ def _labels(u, v, front, board: PrintedBoard) -> np.ndarray:
     sq = np.float32(board.square_mm)
     on_sheet = front & (u >= su0) & (u <= su1) & (v >= sv0) & (v <= sv1)
     black = (u >= cu0) & (u < cu1) & (v >= cv0) & (v < cv1)
-    black &= ((np.floor(u / sq) + np.floor(v / sq)) % 2) == 0
+    parity = np.floor(u / sq)
+    parity += np.floor(v / sq)  # a whole number a + b - 2; even <=> parity - 2 * floor(parity / 2) == 0
+    half = np.multiply(parity, np.float32(0.5))
+    np.floor(half, out=half)
+    half *= np.float32(2.0)
+    parity -= half  # (float ``% 2`` gives the same bits, NaN included, at ten times the cost)
+    black &= parity == 0
     return on_sheet.astype(np.uint8) + black.astype(np.uint8)
 
 
@@ -272,7 +306,11 @@ def _sensor(image: np.ndarray, options: RenderOptions, rng) -> np.ndarray:
         image = cv2.GaussianBlur(image, (0, 0), options.blur_sigma_px)
     if options.colour:
         image = image * _gain_map(image.shape, options.channel_gains)
-    sigma = np.sqrt(np.float32(options.read_noise_dn**2) + np.float32(options.shot_noise) * np.maximum(image, 0))
+    # sqrt(read^2 + shot * max(image, 0)), in place (the same float32 operations, one array)
+    sigma = np.maximum(image, 0)
+    sigma *= np.float32(options.shot_noise)
+    sigma += np.float32(options.read_noise_dn**2)
+    np.sqrt(sigma, out=sigma)
     noise = np.empty(image.shape, np.float32)
     cv2.setRNGSeed(int(rng.integers(0, 2**31 - 1)))
     cv2.randn(noise, 0.0, 1.0)
