@@ -97,6 +97,9 @@ class LineController(Controller):
         self.flushed_replies = 0
         #: The id of a STATUS still waiting for its reply (``wait_operator``).
         self._pending_status: int | None = None
+        #: When the last line came from the controller (monotonic): a shared line quiet for the idle
+        #: timeout is woken with a PING first (see :meth:`_flush_line`).
+        self._heard_at: float | None = None
 
     # ------------------------------------------------------------------ link
     @abstractmethod
@@ -131,9 +134,28 @@ class LineController(Controller):
         would glue our first request to it) and late replies to an earlier PC. The line break ends
         the unfinished request; every reply before the PING's own ``OK`` is dropped. A line that is
         no reply at all (an echo, noise) is a protocol error, as everywhere.
+
+        The program clears its input buffer each idle timeout while nothing arrives, and a clear that
+        falls as our line arrives discards it: no reply ever comes. So a PING unanswered for half
+        the idle timeout is sent again (a new id; a late reply to the first is dropped like the rest),
+        within ``deadline``. PING changes nothing on the controller, so sending it twice is harmless.
         """
-        request_id = self._next_id()
-        self._transport.write(b"\n" + P.encode_request(request_id, "PING"), deadline)
+        resend_s = max(self.idle_timeout / 2.0, 0.05)
+        while True:
+            request_id = self._next_id()
+            self._transport.write(b"\n" + P.encode_request(request_id, "PING"), deadline)
+            if deadline.remaining() <= resend_s:
+                self._await_pong(request_id, deadline)
+                return
+            try:
+                self._await_pong(request_id, Deadline(resend_s))
+                return
+            except ControllerTimeout:
+                log.debug("no reply to PING %d within %.2f s on %s: sending it again", request_id, resend_s,
+                          self.address)
+
+    def _await_pong(self, request_id: int, deadline: Deadline) -> None:
+        """Read lines up to the reply to PING ``request_id``, dropping every other reply."""
         while True:
             raw = self._read_line("PING", deadline)
             if not raw.strip(b"\r\n"):
@@ -162,6 +184,9 @@ class LineController(Controller):
     def _exchange(self, steps, deadline: Deadline) -> list[tuple]:
         """Send each ``(command, args)`` in turn and return the typed values of each OK reply."""
         self._pending_status = None  # its reply, if it comes, is skipped as late
+        if (self._transport is not None and self._transport.shared_line and self._heard_at is not None
+                and time.monotonic() - self._heard_at >= self.idle_timeout):
+            self._flush_line(deadline)  # the program may be clearing its buffer as our request arrives
         results = []
         for command, args in steps:
             request_id = self._next_id()
@@ -189,7 +214,9 @@ class LineController(Controller):
     def _read_line(self, command: str, deadline: Deadline) -> bytes:
         """One line from the transport, its failures worded for ``command``."""
         try:
-            return self._transport.read_line(deadline)
+            line = self._transport.read_line(deadline)
+            self._heard_at = time.monotonic()
+            return line
         except P.ProtocolError as exc:
             raise self.protocol_error(f"{command}: {exc.detail}") from None
         except ControllerTimeout as exc:
