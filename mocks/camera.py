@@ -273,7 +273,7 @@ def _labels(u, v, front, board: PrintedBoard) -> np.ndarray:
     on_sheet = front & (u >= su0) & (u <= su1) & (v >= sv0) & (v <= sv1)
     black = (u >= cu0) & (u < cu1) & (v >= cv0) & (v < cv1)
     parity = np.floor(u / sq)
-    parity += np.floor(v / sq)  # a whole number a + b - 2; even <=> parity - 2 * floor(parity / 2) == 0
+    parity += np.floor(v / sq)  # (a - 1) + (b - 1), a whole number: even <=> parity - 2 * floor(parity / 2) == 0
     half = np.multiply(parity, np.float32(0.5))
     np.floor(half, out=half)
     half *= np.float32(2.0)

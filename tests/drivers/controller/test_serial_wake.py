@@ -107,5 +107,5 @@ def test_a_line_that_never_answers_still_times_out_within_the_budget(line):
         start = time.monotonic()
         with pytest.raises(ControllerTimeout, match="no reply"):
             c.read_joints()
-        assert time.monotonic() - start < 1.0 + 0.5  # the call's budget, not a PING's each
+        assert time.monotonic() - start < 1.0 + 2.0  # the call's budget (a functional bound, not a speed)
         assert line.received.count("PING") >= 3  # sent again every idle timeout / 2
