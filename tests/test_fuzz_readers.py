@@ -160,9 +160,10 @@ def random_value(rnd, leaves: int = 12):
     """A scalar, or lists (up to 6 items) and mappings (up to 4 keys) of them, up to ``leaves`` scalars."""
     if leaves <= 1 or rnd.random() < 0.45:
         return random_scalar(rnd)
-    size = rnd.randint(0, 6 if rnd.random() < 0.5 else 4)
+    mapping = rnd.random() < 0.5
+    size = rnd.randint(0, 4 if mapping else 6)
     budget = max(1, (leaves - 1) // max(size, 1))
-    if size and rnd.random() < 0.5:
+    if mapping:
         return {random_key(rnd): random_value(rnd, budget) for _ in range(size)}
     return [random_value(rnd, budget) for _ in range(size)]
 
