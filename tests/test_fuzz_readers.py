@@ -91,11 +91,6 @@ def expect_only_handeye_errors(read, *args, **kwargs):
 
 # --------------------------------------------------------------------------- values and documents
 
-def picked(values):
-    """``sampled_from`` without the values in the strategy's repr (some are kilobytes long)."""
-    return st.integers(0, len(values) - 1).map(lambda i: values[i])
-
-
 #: The values that break naive numeric code, and the rest of a document's scalars. A case's values
 #: come from one seeded ``random.Random`` drawn by hypothesis (``CHOICES``, below), as its structural
 #: choices do: a recursive hypothesis strategy cost dozens of draws per value and was most of this
@@ -191,10 +186,6 @@ def alias_bomb(name: str, levels: int = 8) -> str:
     for k in range(1, levels):
         text = f"&{name}{k} [{text}, " + ", ".join([f"*{name}{k - 1}"] * 8) + "]"
     return text
-
-
-def number_lists(length):
-    return st.lists(st.one_of(st.floats(-2000, 2000), st.integers(-2000, 2000)), min_size=length, max_size=length)
 
 
 #: The choices of a case (where to edit, what to splice, the values put there) come from one seeded
@@ -300,12 +291,16 @@ def spoiled_bytes(rnd, text: str) -> bytes:
     return data
 
 
+def spoiled(rnd, text: str) -> bytes:
+    """The bytes of a file holding ``text``, spoiled as text and then as bytes."""
+    return spoiled_bytes(rnd, spoiled_text(rnd, text))
+
+
 @st.composite
 def file_bodies(draw, documents):
-    """Bytes of a file: a document (drawn from ``documents``), spoiled as text and then as bytes."""
+    """Bytes of a file: a document (drawn from ``documents``), :func:`spoiled`."""
     text = draw(documents)
-    rnd = draw(CHOICES)
-    return spoiled_bytes(rnd, spoiled_text(rnd, text))
+    return spoiled(draw(CHOICES), text)
 
 
 _DUMPER = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
@@ -394,7 +389,7 @@ def posture_body(rnd) -> bytes:
         text = yaml_text({**GOOD_POSTURE, "index": rnd.randint(0, 1200)})
     else:
         text = yaml_text(random_value(rnd))
-    return spoiled_bytes(rnd, spoiled_text(rnd, text))
+    return spoiled(rnd, text)
 
 
 @st.composite
@@ -403,7 +398,7 @@ def session_folders(draw):
     rnd = draw(CHOICES)
     header_kind = rnd.choice(KIND_NAMES)
     header = yaml_text(mutate(rnd, GOOD_HEADER) if rnd.random() < 0.5 else random_value(rnd))
-    header = spoiled_bytes(rnd, spoiled_text(rnd, header))
+    header = spoiled(rnd, header)
     postures_kind = rnd.choice(["folder"] * 8 + ["file", "missing"])
     postures = {}
     for _ in range(rnd.randint(0, 3)):
