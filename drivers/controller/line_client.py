@@ -305,7 +305,8 @@ class LineController(Controller):
 
     def wait_operator(self, timeout: float) -> ControllerStatus | None:
         # One STATUS waits for the program to serve again (it prompts, or is stopped): a later call reads on
-        # for the same reply rather than queueing more requests on the line.
+        # for the same reply rather than queueing more requests on the line. (No wake PING here, unlike
+        # _exchange: a program that prompts reads nothing, and a PING per poll would pile up on its line.)
         def wait(deadline: Deadline) -> tuple:
             if self._pending_status is None:
                 request_id = self._next_id()
