@@ -228,20 +228,21 @@ class RobotModel:
             ``w >= 0``.
         """
         rotations, points = self._chain(joints_deg)
-        return points[-1], canonical_quaternions(quaternion_multiply(rotations[-1], self.tool0_home))
+        return points[..., -1, :], canonical_quaternions(quaternion_multiply(rotations[-1], self.tool0_home))
 
-    def _chain(self, joints_deg) -> tuple[list, list]:
-        """``Q(0..k)`` (eq. 11) and ``P(0..k)`` (eq. 12) of controller angles ``(..., k)``: lists of
-        ``(..., 4)`` quaternions and ``(..., 3)`` points (mm), ``Q(0) = 1``, ``P(0) = D_0``."""
+    def _chain(self, joints_deg) -> tuple[list, np.ndarray]:
+        """``Q(0..k)`` (eq. 11) and ``P(0..k)`` (eq. 12) of controller angles ``(..., k)``: a list of
+        ``(..., 4)`` quaternions and points ``(..., k + 1, 3)`` (mm), ``Q(0) = 1``, ``P(0) = D_0``."""
         theta = self.serial_angles_rad(joints_deg)
         lead = theta.shape[:-1]
+        turns = quaternion_from_axis_angle(self.axes, theta)  # (..., k, 4): every axis at once
         rotations = [np.broadcast_to(np.array([1.0, 0.0, 0.0, 0.0]), lead + (4,))]  # Q(0), θ_0 = 0
-        points = [np.broadcast_to(self.base_offset, lead + (3,))]  # P(0) = D_0
         for i in range(self.dof):
-            turn = quaternion_from_axis_angle(self.axes[i], theta[..., i])
-            rotations.append(quaternion_multiply(rotations[-1], turn))  # eq. 11
-            points.append(points[-1] + rotate_vectors(rotations[-1], self.links[i]))  # eq. 12
-        return rotations, points
+            rotations.append(quaternion_multiply(rotations[-1], turns[..., i, :]))  # eq. 11
+        # eq. 12 for every link in one rotation; the running sum adds them in the chain's order
+        steps = rotate_vectors(np.stack(rotations[1:], axis=-2), self.links)
+        starts = np.broadcast_to(self.base_offset, lead + (1, 3))  # P(0) = D_0
+        return rotations, np.cumsum(np.concatenate([starts, steps], axis=-2), axis=-2)
 
     def chain_points(self, joints_deg) -> np.ndarray:
         """Points of the chain in base: ``P(0)`` on axis 1 (``D_0``), ``P(i)`` on axis ``i + 1``
@@ -257,7 +258,7 @@ class RobotModel:
         ndarray, shape (..., k + 1, 3)
             mm.
         """
-        return np.stack(self._chain(joints_deg)[1], axis=-2)
+        return self._chain(joints_deg)[1]
 
     def link_frames(self, joints_deg) -> tuple[np.ndarray, np.ndarray]:
         """Where each part of the arm is: rotations ``(..., k + 1, 3, 3)`` and pivots ``(..., k + 1, 3)``.
@@ -267,10 +268,11 @@ class RobotModel:
         ``i`` (given in base with every axis at 0) is at ``pivot_i + R_i (x - pivot_i,home)``.
         """
         rotations, points = self._chain(joints_deg)
-        lead = points[0].shape[:-1]
-        matrices = [np.broadcast_to(np.eye(3), lead + (3, 3))] + [matrix_from_quaternion(q) for q in rotations[1:]]
+        lead = points.shape[:-2]
+        base = np.broadcast_to(np.eye(3), lead + (1, 3, 3))
+        matrices = np.concatenate([base, matrix_from_quaternion(np.stack(rotations[1:], axis=-2))], axis=-3)
         # part 0 pivots at P(0), part i at P(i - 1) (on axis i)
-        return np.stack(matrices, axis=-3), np.stack([points[0]] + points[:-1], axis=-2)
+        return matrices, np.concatenate([points[..., :1, :], points[..., :-1, :]], axis=-2)
 
     def home_pivots(self) -> np.ndarray:
         """The pivots of :meth:`link_frames` with every axis at 0: ``(k + 1, 3)``."""

@@ -139,10 +139,9 @@ def _parse_literal_numbers(tokens: list[Token], start: int) -> tuple[list[float]
 
 
 def _collect_globals(modules) -> tuple[dict, dict]:
-    """Global data and routine names of every module: name -> module."""
+    """Global data and routine names of every module (``(name, tokens)`` pairs): name -> module."""
     data, routines = {}, {}
-    for name, text in modules:
-        tokens = tokenize(text)
+    for name, tokens in modules:
         depth = 0
         for i, t in enumerate(tokens):
             upper = t.text.upper() if t.kind == "id" else ""
@@ -180,17 +179,15 @@ def check_program(modules, approved=None, robot: str = "IRB1400", external=(), m
     findings: list[Finding] = []
     model = load_robot(robot)
     approved_arr = None if approved is None else np.asarray(approved, dtype=float).reshape(-1, model.dof)
-    try:
-        global_data, routines = _collect_globals(modules)
-    except ValueError as exc:
-        return [Finding("?", 0, str(exc))]
-    known_external = {e.lower() for e in external}
+    tokenized = []  # each module read once, for the globals and for its own checks
     for name, text in modules:
         try:
-            tokens = tokenize(text)
-        except ValueError as exc:
-            findings.append(Finding(name, 0, str(exc)))
-            continue
+            tokenized.append((name, tokenize(text)))
+        except ValueError as exc:  # the names of the other modules cannot be known: nothing else is checked
+            return [Finding(name, 0, str(exc))]
+    global_data, routines = _collect_globals(tokenized)
+    known_external = {e.lower() for e in external}
+    for name, tokens in tokenized:
         findings += _check_module(name, tokens, global_data, routines, known_external, approved_arr, model,
                                   tuple(move_tools))
     return findings

@@ -58,6 +58,13 @@ def test_checks_catch_each_fault(socket_program, name, old, new, message):
     assert any(message in f for f in findings), findings
 
 
+def test_a_module_that_cannot_be_read_is_named_with_its_line(socket_program):
+    broken = _edit(socket_program, "HeSocket", "ENDMODULE", "  x := 1 ~ 2;\nENDMODULE")
+    findings = _check(broken)
+    assert len(findings) == 1 and findings[0].startswith("HeSocket:0: line "), findings
+    assert "cannot read '~" in findings[0]
+
+
 def test_local_data_is_not_visible_from_other_modules(socket_program):
     broken = _edit(socket_program, "HeMain", "    HeLinkOpen;\n", "    HeLinkOpen;\n    heConnected := TRUE;\n")
     assert any("'heConnected' is used before" in f for f in _check(broken))
