@@ -9,11 +9,15 @@ prints its reproduction blob.
 from __future__ import annotations
 
 import os
+import shutil
+import tempfile
 import threading
 import time
 
 import pytest
 from hypothesis import settings
+
+from helpers import RUN_CACHE
 
 FUZZ_PROFILE = "explore" if os.environ.get("HANDEYE_FUZZ") == "explore" else "gate"
 settings.register_profile("gate", derandomize=True)
@@ -42,6 +46,23 @@ def _pin_the_local_constants() -> None:
 
 if FUZZ_PROFILE == "gate":
     _pin_the_local_constants()
+
+
+def pytest_configure(config):
+    """The folder the workers of this run share their deterministic builds in (``helpers.shared_by_workers``):
+    made by the controlling process (or the only one, without xdist) before the workers start, so they
+    inherit it in their environment; removed when the run ends."""
+    if hasattr(config, "workerinput") or os.environ.get(RUN_CACHE):
+        return
+    os.environ[RUN_CACHE] = tempfile.mkdtemp(prefix="handeye-test-run-")
+    config._handeye_run_cache = os.environ[RUN_CACHE]
+
+
+def pytest_unconfigure(config):
+    folder = getattr(config, "_handeye_run_cache", None)
+    if folder:
+        shutil.rmtree(folder, ignore_errors=True)
+        os.environ.pop(RUN_CACHE, None)
 
 
 @pytest.fixture

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import ast
+import os
+import pickle
 from functools import lru_cache
 from pathlib import Path
 
@@ -26,10 +28,38 @@ def shared_dataset(name: str) -> Path:
     return path
 
 
+#: Environment variable naming the folder the workers of one test run share (``tests/conftest.py`` makes it).
+RUN_CACHE = "HANDEYE_TEST_RUN_CACHE"
+
+
+def shared_by_workers(key: str, build):
+    """``build()``, or the value another worker of this run already built under ``key``.
+
+    For deterministic builders only (the same value in every process): the first worker to finish writes
+    it to the run's folder (a pickle, written whole and renamed, so a reader never sees half of one);
+    workers that come later read it. Without the folder (a test file imported outside pytest) it builds.
+    """
+    folder = os.environ.get(RUN_CACHE)
+    if not folder or not os.path.isdir(folder):
+        return build()
+    path = Path(folder) / f"{key}.pickle"
+    try:
+        return pickle.loads(path.read_bytes())
+    except FileNotFoundError:
+        pass
+    value = build()
+    partial = path.with_name(f"{path.name}.{os.getpid()}.part")
+    partial.write_bytes(pickle.dumps(value))
+    os.replace(partial, path)
+    return value
+
+
 @lru_cache(maxsize=None)
 def scene(postures: int = 12, setup: str = "eye_in_hand", seed: int = 0):
-    """A synthetic scene (cached: inverse kinematics makes them cost about 0.1 s a posture)."""
-    return make_scene(SceneConfig(postures=postures, setup=setup, seed=seed))
+    """A synthetic scene, built once per run: inverse kinematics makes one cost up to 0.2 s a posture,
+    so the workers share it (:func:`shared_by_workers`) and each keeps it (the same object per process)."""
+    config = SceneConfig(postures=postures, setup=setup, seed=seed)
+    return shared_by_workers(f"scene-{postures}-{setup}-{seed}", lambda: make_scene(config))
 
 
 def problem(postures=12, setup="eye_in_hand", sigma_cam=0.0, sigma_rob=0.0, seed=0, scene_seed=0):
