@@ -17,7 +17,7 @@ import time
 import pytest
 from hypothesis import settings
 
-from helpers import RUN_CACHE
+from run_cache import RUN_CACHE
 
 FUZZ_PROFILE = "explore" if os.environ.get("HANDEYE_FUZZ") == "explore" else "gate"
 settings.register_profile("gate", derandomize=True)
@@ -48,18 +48,21 @@ if FUZZ_PROFILE == "gate":
     _pin_the_local_constants()
 
 
+#: The run's folder, in the stash of the process that made it.
+_RUN_FOLDER = pytest.StashKey[str]()
+
+
 def pytest_configure(config):
-    """The folder the workers of this run share their deterministic builds in (``helpers.shared_by_workers``):
-    made by the controlling process (or the only one, without xdist) before the workers start, so they
-    inherit it in their environment; removed when the run ends."""
+    """The folder the workers of this run share their deterministic builds in (``run_cache``): made by
+    the controlling process (or the only one, without xdist) before the workers start, so they inherit
+    it in their environment; removed when the run ends."""
     if hasattr(config, "workerinput") or os.environ.get(RUN_CACHE):
         return
-    os.environ[RUN_CACHE] = tempfile.mkdtemp(prefix="handeye-test-run-")
-    config._handeye_run_cache = os.environ[RUN_CACHE]
+    config.stash[_RUN_FOLDER] = os.environ[RUN_CACHE] = tempfile.mkdtemp(prefix="handeye-test-run-")
 
 
 def pytest_unconfigure(config):
-    folder = getattr(config, "_handeye_run_cache", None)
+    folder = config.stash.get(_RUN_FOLDER, None)
     if folder:
         shutil.rmtree(folder, ignore_errors=True)
         os.environ.pop(RUN_CACHE, None)

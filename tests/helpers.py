@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import ast
-import os
-import pickle
 from functools import lru_cache
 from pathlib import Path
 
@@ -13,6 +11,8 @@ import pytest
 
 from handeye.calibration.solve import problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session
+
+from run_cache import shared_by_workers
 
 
 REPO = Path(__file__).resolve().parents[1]
@@ -26,32 +26,6 @@ def shared_dataset(name: str) -> Path:
     if not path.is_dir():
         pytest.skip(f"data set {name} not available: ../shared/datasets is only beside a development checkout")
     return path
-
-
-#: Environment variable naming the folder the workers of one test run share (``tests/conftest.py`` makes it).
-RUN_CACHE = "HANDEYE_TEST_RUN_CACHE"
-
-
-def shared_by_workers(key: str, build):
-    """``build()``, or the value another worker of this run already built under ``key``.
-
-    For deterministic builders only (the same value in every process): the first worker to finish writes
-    it to the run's folder (a pickle, written whole and renamed, so a reader never sees half of one);
-    workers that come later read it. Without the folder (a test file imported outside pytest) it builds.
-    """
-    folder = os.environ.get(RUN_CACHE)
-    if not folder or not os.path.isdir(folder):
-        return build()
-    path = Path(folder) / f"{key}.pickle"
-    try:
-        return pickle.loads(path.read_bytes())
-    except FileNotFoundError:
-        pass
-    value = build()
-    partial = path.with_name(f"{path.name}.{os.getpid()}.part")
-    partial.write_bytes(pickle.dumps(value))
-    os.replace(partial, path)
-    return value
 
 
 @lru_cache(maxsize=None)

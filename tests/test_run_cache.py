@@ -1,11 +1,11 @@
-"""The workers of one run share deterministic builds (``helpers.shared_by_workers``): what a later
+"""The workers of one run share deterministic builds (``run_cache.shared_by_workers``): what a later
 worker reads is what it would have built, and it does not build it again."""
 
 import numpy as np
 
 from handeye.calibration.synthetic import SceneConfig, make_scene
 
-from helpers import RUN_CACHE, shared_by_workers
+from run_cache import RUN_CACHE, shared_by_workers
 
 
 def test_a_later_worker_reads_the_same_scene_without_building_it(tmp_path, monkeypatch):
