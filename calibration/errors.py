@@ -5,7 +5,7 @@ from __future__ import annotations
 import reprlib
 
 __all__ = ["HandEyeError", "UsageError", "SessionError", "SessionUsageError", "CalibrationError", "ConfigError", "OutputError",
-           "brief", "with_backend"]
+           "brief", "exception_line", "with_backend"]
 
 
 class _Brief(reprlib.Repr):
@@ -26,6 +26,14 @@ def brief(value) -> str:
     in the work it takes (a YAML alias bomb, a list of lists of the same list ..., is not expanded;
     an integer of thousands of digits is described, not printed)."""
     return _BRIEF.repr(value)
+
+
+def exception_line(exc: BaseException) -> str:
+    """``Type: the first line of its message`` (at most 200 characters), for a one-line message about an
+    exception that is not the package's own (a plug-in's, a library's)."""
+    text = (str(exc).splitlines() or [""])[0].strip()
+    text = text if len(text) <= 200 else text[:197] + "..."
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
 class HandEyeError(Exception):

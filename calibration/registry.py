@@ -63,6 +63,7 @@ class Registry(Mapping, Generic[E]):
         self.kind, self.group, self.entry_type = kind, group, entry_type
         self._registered: dict[str, E] = {}
         self._discovered: dict[str, E] | None = None  # None: entry points not read yet
+        self._providers: dict[str, str] = {}  # name -> the installed package behind an entry point's entry
 
     # ------------------------------------------------------------------ filling
     def register(self, entry: E) -> E:
@@ -99,16 +100,44 @@ class Registry(Mapping, Generic[E]):
     def _entry_points(self) -> dict[str, E]:
         if self._discovered is None:
             found: dict[str, E] = {}
+            self._providers = {}
             for point in importlib.metadata.entry_points(group=self.group):
                 try:
                     entry = self._describe(point.name, point.load())
                 except Exception as exc:  # a broken plug-in must not break the package
                     log.warning("%s %r from entry point %s is unusable: %s", self.kind, point.name, point.value, exc)
                     continue
-                if entry.name not in self._registered:
-                    found.setdefault(entry.name, entry)
+                if entry.name in self._registered or entry.name in found:
+                    log.warning("warning: the %s %r of the installed package %s (entry point %s) is ignored: %s; "
+                                "rename it in that package", self.kind, entry.name, _package(point), point.value,
+                                self._origin(entry.name))
+                    continue
+                found[entry.name] = entry
+                self._providers[entry.name] = f"the installed package {_package(point)} (entry point {point.value})"
             self._discovered = found
         return self._discovered
+
+    def _origin(self, name: str) -> str:
+        """Who has ``name`` already, for a message: handeye (or code), or another package."""
+        if name in self._registered:
+            return f"handeye already has a {self.kind} of that name"
+        return f"{self._providers.get(name, 'another entry point')} registers one of that name first"
+
+    def plugin_modules(self) -> dict[str, str]:
+        """``{top-level module: installed package}`` of every entry point of this registry's group (usable
+        or not): whose code a traceback's frames are (``station.unexpected``)."""
+        return {point.value.partition(":")[0].split(".")[0]: _package(point)
+                for point in importlib.metadata.entry_points(group=self.group)}
+
+    def provider(self, name: str) -> str | None:
+        """The installed package an entry point's entry comes from, for messages (``the installed package
+        handeye-kabsch (entry point handeye_kabsch:METHOD)``); None for an entry registered in code (the
+        package's own)."""
+        key = str(name).lower()
+        if key in self._registered:
+            return None
+        self._entry_points()
+        return self._providers.get(key)
 
     def _describe(self, name: str, obj) -> E:
         """The entry an entry point's object stands for (here: the object itself, of ``entry_type``)."""
@@ -143,3 +172,10 @@ class Registry(Mapping, Generic[E]):
     def unknown(self, name, names=None) -> str:
         """The one-line message for a name that is not registered."""
         return f"unknown {self.kind} {name!r}; choose one of {', '.join(self.names() if names is None else names)}"
+
+
+def _package(point) -> str:
+    """The distribution an entry point belongs to (its module's top-level name when that is unknown)."""
+    dist = getattr(point, "dist", None)
+    name = getattr(dist, "name", None) if dist is not None else None
+    return name or point.value.partition(":")[0].split(".")[0]

@@ -12,7 +12,7 @@ import numpy as np
 
 from .compact_points import compact_points_from_corners, compact_points_from_poses
 from .consistency import consistent_majority
-from .errors import CalibrationError
+from .errors import CalibrationError, HandEyeError, exception_line
 from .invariants import bounded_pairs
 from .kinematics import load_robot
 from .methods import DEFAULT_METHOD, METHODS, Method, get_method, method_names
@@ -31,7 +31,7 @@ from .quality_words import (
     usable_axes,
 )
 from .session import Session
-from .transforms import pose_from_transform, transform_from_pose
+from .transforms import pose_from_transform, rigid_defect, transform_from_pose
 from .triplets import relative_motions
 
 __all__ = [
@@ -364,6 +364,8 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
         raise CalibrationError(f"the {method or DEFAULT_METHOD} solver failed on these data ({reason}); check the "
                                f"session's values: lengths in mm, distinct finite poses, the whole board seen") from None
     if not np.all(np.isfinite(result.x)):
+        if METHODS.provider(result.method) is not None:
+            raise CalibrationError(_method_fault(method_row(result.method), "found no finite camera pose"))
         raise CalibrationError(f"the {result.method} solver found no finite camera pose; check the session's values: "
                                f"lengths in mm, distinct finite poses, the whole board seen")
     return result
@@ -383,7 +385,7 @@ def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict |
     solver = _load_solver(row)
     _warm_up_numerics()
     start = time.perf_counter()
-    solved = _BY_KIND[row.kind](row, solver, problem, truth, progress)
+    solved = _solve(row, solver, problem, truth, progress)
     runtime = time.perf_counter() - start
     x = solved.x
     flags = np.zeros(problem.n, bool) if solved.outliers is None else np.asarray(solved.outliers, bool)
@@ -450,6 +452,70 @@ def _by_axxb(row: Method, solver, problem: HandEyeProblem, truth, progress) -> _
 
 #: How each kind of method is called (``calibration.methods``, "Kinds").
 _BY_KIND = {"estimator": _by_estimator, "paper": _by_selection, "classic": _by_axxb}
+
+#: Largest ``max |R^T R - I|`` of the rotation a method returns: every method gives a rotation to
+#: rounding, so beyond this the method is at fault, not the data, and its answer is refused.
+SOLUTION_ORTHONORMAL_TOLERANCE = 1e-6
+
+
+def _solve(row: Method, solver, problem: HandEyeProblem, truth, progress) -> _Solved:
+    """The row's solver called as its kind says, and what it gives checked (:func:`_checked_solution`).
+
+    Raises
+    ------
+    CalibrationError
+        What the method's own code raises beyond handeye's errors, in one line naming the method and,
+        for a plug-in, the package that provides it (handeye's own methods' numeric failures on
+        degenerate data are left to :func:`calibrate`, which blames the data).
+    """
+    try:
+        solved = _BY_KIND[row.kind](row, solver, problem, truth, progress)
+    except HandEyeError:
+        raise
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+        if METHODS.provider(row.name) is None:
+            raise
+        raise CalibrationError(_method_fault(row, f"failed ({exception_line(exc)})")) from None
+    except Exception as exc:  # noqa: BLE001 (a method's own fault: one line, never a traceback)
+        raise CalibrationError(_method_fault(row, f"raised {exception_line(exc)}")) from None
+    return _checked_solution(row, solved, problem.n)
+
+
+def _checked_solution(row: Method, solved, n: int) -> _Solved:
+    """``solved`` with ``x`` a rigid (4, 4) transform and ``outliers`` an (n,) bool array or None.
+
+    Raises
+    ------
+    CalibrationError
+        A solution without the attributes of its kind, an ``x`` that is not a rigid transform (a
+        scaled or sheared rotation, a reflection, another shape) or outlier flags of another length:
+        the method's fault, named. A non-finite ``x`` is the data's (``calibrate``'s message).
+    """
+    try:
+        x = np.asarray(solved.x, dtype=float)
+        outliers = None if solved.outliers is None else np.asarray(solved.outliers, dtype=bool)
+        checked = _Solved(x, dict(solved.details or {}), outliers, solved.uncertainty, solved.cross_validation)
+    except (AttributeError, TypeError, ValueError) as exc:
+        raise CalibrationError(_method_fault(row, f"returned a {type(solved).__name__}, not a solution with x, outliers, "
+                                                  f"details, uncertainty and cross_validation ({exception_line(exc)})")) from None
+    if x.shape == (4, 4) and not np.all(np.isfinite(x)):
+        return checked  # the data's fault, said by calibrate
+    defect = rigid_defect(x, SOLUTION_ORTHONORMAL_TOLERANCE)
+    if defect:
+        raise CalibrationError(_method_fault(row, f"returned a camera pose that is not a rigid transform: {defect}"))
+    if outliers is not None and outliers.shape != (n,):
+        raise CalibrationError(_method_fault(row, f"returned {outliers.size} outlier flags for {n} postures"))
+    return checked
+
+
+def _method_fault(row: Method, what: str) -> str:
+    """One line for a method whose own code failed: which method, who provides it, what to do."""
+    provider = METHODS.provider(row.name)
+    if provider is None:
+        return (f"method {row.name} {what}: a fault in handeye, not in the data; run another --method and report it "
+                "with the session")
+    return (f"method {row.name}, from {provider}, {what}; if handeye's own methods solve this session, the fault is "
+            "that package's: run another --method (handeye calibrate --help lists them) and report it to its authors")
 
 
 def _residuals_by_posture(problem: HandEyeProblem, x: np.ndarray, kept: np.ndarray) -> dict:

@@ -18,6 +18,7 @@ __all__ = [
     "transform_points",
     "rotation_error_deg",
     "translation_error_mm",
+    "rigid_defect",
 ]
 
 
@@ -114,3 +115,37 @@ def translation_error_mm(transform_a, transform_b) -> np.ndarray:
     ta = np.asarray(transform_a, dtype=float)[..., :3, 3]
     tb = np.asarray(transform_b, dtype=float)[..., :3, 3]
     return np.linalg.norm(ta - tb, axis=-1)
+
+
+def rigid_defect(matrix, tolerance: float = 1e-3) -> str | None:
+    """Why ``matrix`` is not a 4x4 rigid transform, in a few words; None when it is one.
+
+    Parameters
+    ----------
+    matrix : ndarray
+        The candidate (any shape: a wrong one is the reason).
+    tolerance : float
+        Largest accepted ``max |R^T R - I|`` of the rotation part; the bottom row may differ from
+        ``0 0 0 1`` by 1e-6 at most.
+
+    Returns
+    -------
+    str or None
+        ``must be a 4x4 matrix; got shape 3x3``, ``holds NaN or inf``, ``bottom row must be 0 0 0 1; got
+        ...``, ``rotation part is not orthonormal (|R^T R - I| = 3)``, ``rotation part is a reflection
+        (determinant -1)``; None for a rigid transform.
+    """
+    m = np.asarray(matrix, dtype=float)
+    if m.shape != (4, 4):
+        return f"must be a 4x4 matrix; got shape {'x'.join(map(str, m.shape)) or 'scalar'}"
+    if not np.all(np.isfinite(m)):
+        return "holds NaN or inf"
+    if np.max(np.abs(m[3] - [0.0, 0.0, 0.0, 1.0])) > 1e-6:
+        return f"bottom row must be 0 0 0 1; got {' '.join(f'{v:g}' for v in m[3])}"
+    r = m[:3, :3]
+    error = float(np.max(np.abs(r.T @ r - np.eye(3))))
+    if error > tolerance:
+        return f"rotation part is not orthonormal (|R^T R - I| = {error:.3g})"
+    if np.linalg.det(r) < 0:
+        return "rotation part is a reflection (determinant -1)"
+    return None

@@ -15,7 +15,7 @@ verdict) and ``handeye demo`` all call :func:`assess`.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -82,6 +82,9 @@ class Assessment:
     plan_preview_missing : str or None
         Why a planned capture's preview is not shown (its file is missing or unreadable), so the report
         says so instead of dropping the section; None when shown or when the session had no plan.
+    comparison_failures : dict
+        ``{method: the one-line reason}`` of the compared methods that could not solve these data (a
+        plug-in's fault named as such): every presenter lists them under the comparison.
     """
 
     session_path: Path | str
@@ -96,6 +99,7 @@ class Assessment:
     tooldata_literal: str | None = None
     plan_preview: bytes | None = None
     plan_preview_missing: str | None = None
+    comparison_failures: dict = field(default_factory=dict)
 
     @property
     def d_org(self) -> DOrg:
@@ -152,14 +156,14 @@ def assess(outcome: CalibrationOutcome, thresholds: QualityThresholds | None = N
     problem, result = outcome.problem, outcome.result
     figures = quality_figures(problem, result)
     judged = verdict(result, problem, thresholds, figures) if judge else None
-    comparison = None
+    comparison, failures = None, {}
     if methods:
-        solved = comparison_results(problem, methods, outcome.truth, known={result.method: result})
+        solved = comparison_results(problem, methods, outcome.truth, known={result.method: result}, failures=failures)
         comparison = method_comparison(problem, result, solved)
     origin = outcome.origin if outcome.origin is not None else session_origin(path=outcome.session_path)
     return Assessment(outcome.session_path, problem, result, origin, figures, judged, comparison,
                       _findings(problem), corner_repeatability(problem, result), tooldata_literal,
-                      *_plan_preview(outcome.session_path, outcome.session))
+                      *_plan_preview(outcome.session_path, outcome.session), comparison_failures=failures)
 
 
 def _plan_preview(session_path, session=None) -> tuple[bytes | None, str | None]:
@@ -193,10 +197,11 @@ def _findings(problem: HandEyeProblem) -> list | None:
 
 
 def comparison_results(problem: HandEyeProblem, methods=None, truth: dict | None = None,
-                       known: dict | None = None) -> dict:
+                       known: dict | None = None, failures: dict | None = None) -> dict:
     """Solve ``problem`` with several methods: ``{method: CalibrationResult}``.
 
-    Methods that raise :class:`CalibrationError` on these data are left out.
+    Methods that raise :class:`CalibrationError` on these data (a plug-in's fault included:
+    ``calibration.solve.calibrate`` names it) are left out, their one-line reason put in ``failures``.
 
     Parameters
     ----------
@@ -207,6 +212,8 @@ def comparison_results(problem: HandEyeProblem, methods=None, truth: dict | None
         ``{'x', 'target2fixed'}`` of a synthetic session (fills ``truth_errors``).
     known : dict, optional
         Results already computed (``{method: result}``), reused instead of solving again.
+    failures : dict, optional
+        Filled with ``{method: reason}`` of the methods left out.
     """
     from ..calibration.solve import calibrate
 
@@ -218,8 +225,9 @@ def comparison_results(problem: HandEyeProblem, methods=None, truth: dict | None
             continue
         try:
             out[method] = calibrate(problem, method, truth)
-        except CalibrationError:
-            continue
+        except CalibrationError as exc:
+            if failures is not None:
+                failures[method] = str(exc)
     for method, result in known.items():
         out.setdefault(method, result)
     return out

@@ -123,8 +123,13 @@ def _z_rms(x, x_true, uncertainty) -> float:
     return float(np.sqrt(np.mean(z**2)))
 
 
-def run_benchmark(options: BenchmarkOptions, progress=None) -> list[dict]:
-    """Run the sweeps; returns one row per (cell, trial, method). ``progress(done, total, label)``."""
+def run_benchmark(options: BenchmarkOptions, progress=None, failures: dict | None = None) -> list[dict]:
+    """Run the sweeps; returns one row per (cell, trial, method). ``progress(done, total, label)``.
+
+    A method that cannot solve a trial (``CalibrationError``: degenerate draws, or a plug-in's fault,
+    named) has no row for it; ``failures``, when given, is filled with ``{method: [trials failed, the
+    first reason]}``.
+    """
     ours = _methods(options)
     use_opencv = options.opencv and opencv_available()
     ocv = [m[len("opencv_"):] for m in ours if m.startswith("opencv_")] if options.methods else list(OPENCV_METHODS)
@@ -143,7 +148,9 @@ def run_benchmark(options: BenchmarkOptions, progress=None) -> list[dict]:
             for method in ours:
                 try:
                     r = calibrate(problem, method, truth)
-                except CalibrationError:
+                except CalibrationError as exc:
+                    if failures is not None:
+                        failures.setdefault(method, [0, str(exc)])[0] += 1
                     continue
                 rows.append(_row(sweep, value, trial, method, r.x, truth, problem, r.runtime_s, len(r.outliers),
                                  r.uncertainty))
@@ -322,11 +329,23 @@ def benchmark(options: BenchmarkOptions, progress=None) -> dict:
     _methods(options)  # an unknown method fails before anything is written
     folder = make_folder(options.output)  # fails before the long run, not after
     started = time.time()
-    rows = run_benchmark(options, progress)
+    failures: dict = {}
+    rows = run_benchmark(options, progress, failures)
     if not rows:
         raise HandEyeError("the benchmark produced no results")
     table = medians(rows)
     write_csv(rows, folder / "results.csv")
-    write_text_atomic(folder / "summary.md", markdown(table, options))
+    write_text_atomic(folder / "summary.md", markdown(table, options) + failures_markdown(failures))
     plots = plot(table, folder) if options.plots else []
-    return {"rows": len(rows), "folder": str(folder), "plots": [str(p) for p in plots], "wall_s": time.time() - started}
+    return {"rows": len(rows), "folder": str(folder), "plots": [str(p) for p in plots], "wall_s": time.time() - started,
+            "failures": failures}
+
+
+def failures_markdown(failures: dict) -> str:
+    """The section of ``summary.md`` naming the methods that could not solve some trials (their medians
+    are over the trials they solved); empty when every method solved every trial."""
+    if not failures:
+        return ""
+    rows = [f"| {method} | {count} | {reason.replace('|', chr(92) + '|')} |" for method, (count, reason) in failures.items()]
+    return "\n".join(["", "## Trials a method could not solve (its medians above leave them out)", "",
+                      "| method | trials | first reason |", "|---|---|---|", *rows, ""])

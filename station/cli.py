@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 import warnings
 
@@ -83,6 +84,13 @@ def main(argv=None) -> int:
         where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
         print(f"handeye {args.command}: error: {(exc.strerror or str(exc) or type(exc).__name__).lower()}{where}",
               file=sys.stderr)
+        return 1
+    except Exception as exc:  # a fault in code (a plug-in's or ours): one line naming whose
+        from .unexpected import DEBUG_VARIABLE, unexpected_error_line
+
+        if os.environ.get(DEBUG_VARIABLE, "") not in ("", "0"):
+            raise
+        print(f"handeye {args.command}: error: {unexpected_error_line(exc, args.command)}", file=sys.stderr)
         return 1
 
 

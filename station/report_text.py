@@ -137,6 +137,7 @@ def _comparison_lines(assessment: Assessment) -> list[str]:
     lines.append("  (* = the chosen result)")
     if assessment.comparison_note:
         lines.append(f"  {assessment.comparison_note}")
+    lines += [f"  not compared: {reason}" for reason in assessment.comparison_failures.values()]
     return lines
 
 

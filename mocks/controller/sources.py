@@ -49,9 +49,13 @@ class ControllerProgram:
     tool_name: str | None = None
 
 
-def _link_of(names, origin: str) -> str | None:
-    found = [protocol for protocol in RAPID_LINKS if RAPID_LINKS[protocol].module.lower() in names]
-    if len(found) > 1:
+def _link_of(names, origin: str, protocol: str | None = None) -> str | None:
+    """The protocol whose link module is among the module ``names``: ``protocol`` when its module is
+    there (back ends may share one: a plug-in running the socket link's HeSocket), else the one found."""
+    found = [name for name in RAPID_LINKS if RAPID_LINKS[name].module.lower() in names]
+    if protocol in found:
+        return protocol
+    if len({RAPID_LINKS[name].module.lower() for name in found}) > 1:
         raise RapidError(f"{origin} holds the link modules of {' and '.join(found)}: load one")
     return found[0] if found else None
 
@@ -116,7 +120,7 @@ def program_from_folder(folder, protocol: str | None = None) -> ControllerProgra
             modules.append(ModuleSource(file.read_text(encoding="latin-1"), file.name))
         except OSError as exc:
             raise RapidError(f"--program {path}: cannot read {file.name} ({exc.strerror})") from None
-    link = _link_of({f.stem.lower() for f in files}, str(path))
+    link = _link_of({f.stem.lower() for f in files}, str(path), protocol)
     if protocol is not None and link is not None and link != protocol:
         raise RapidError(f"--program {path} holds {RAPID_LINKS[link].module} ({link}), not the {protocol} link module "
                          f"{RAPID_LINKS[protocol].module}: choose --protocol {link}")

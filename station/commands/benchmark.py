@@ -80,4 +80,6 @@ def run(args) -> int:
         summary = benchmark(options, update)
     print(f"{summary['rows']} results in {summary['folder']} ({summary['wall_s']:.0f} s): results.csv, summary.md"
           + (", " + ", ".join(p.split("/")[-1] for p in summary["plots"]) if summary["plots"] else ""))
+    for method, (count, reason) in summary["failures"].items():
+        print(f"{method}: {count} trial(s) not solved, left out of its medians (summary.md lists them): {reason}")
     return 0

@@ -24,6 +24,7 @@ from ...calibration.errors import SessionError, brief
 from ...calibration.files import parse_yaml, read_text_file
 from ...calibration.problem import SETUPS
 from ...calibration.session import MAX_LENGTH_MM, MAX_LENGTH_WORDS, MAX_POSTURE_INDEX, Posture, Session
+from ...calibration.transforms import rigid_defect
 from .head import check_log_head, read_head
 from .inference import METRES_BELOW, Constraints, Side, SideReading, infer
 
@@ -106,18 +107,10 @@ def rigid_transform(value) -> np.ndarray:
         raise ValueError("is not a 4x4 matrix of numbers") from None
     if m.shape == (16,):
         m = m.reshape(4, 4)
-    if m.shape != (4, 4):
-        raise ValueError(f"must be a 4x4 matrix; got shape {'x'.join(map(str, m.shape)) or 'scalar'}")
-    if not np.all(np.isfinite(m)):
-        raise ValueError("holds NaN or inf")
-    if np.max(np.abs(m[3] - [0.0, 0.0, 0.0, 1.0])) > 1e-6:
-        raise ValueError(f"bottom row must be 0 0 0 1; got {' '.join(f'{v:g}' for v in m[3])}")
+    defect = rigid_defect(m, ROTATION_TOLERANCE)
+    if defect:
+        raise ValueError(defect)
     r = m[:3, :3]
-    error = float(np.max(np.abs(r.T @ r - np.eye(3))))
-    if error > ROTATION_TOLERANCE:
-        raise ValueError(f"rotation part is not orthonormal (|R^T R - I| = {error:.3g})")
-    if np.linalg.det(r) < 0:
-        raise ValueError("rotation part is a reflection (determinant -1)")
     u, _, vt = np.linalg.svd(r)
     m[:3, :3] = u @ vt
     return m
