@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import ast
+import sys
+from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
 
@@ -26,6 +28,29 @@ def shared_dataset(name: str) -> Path:
     if not path.is_dir():
         pytest.skip(f"data set {name} not available: ../shared/datasets is only beside a development checkout")
     return path
+
+
+@contextmanager
+def plugin_installed(monkeypatch, folder, modules=()):
+    """A plug-in package installed for one test: ``folder`` (its ``.dist-info`` and modules) on
+    ``sys.path`` and every registry reading its entry points again; afterwards the folder, its
+    ``modules`` (imported names) and its entries are gone again."""
+    from handeye.calibration.methods import METHODS
+    from handeye.drivers.camera.backends import CAMERAS
+    from handeye.drivers.controller.backends import CONTROLLERS
+
+    registries = (METHODS, CONTROLLERS, CAMERAS)
+    monkeypatch.syspath_prepend(str(folder))
+    for registry in registries:
+        registry.refresh()
+    try:
+        yield Path(folder)
+    finally:
+        monkeypatch.undo()
+        for module in modules:
+            sys.modules.pop(module, None)
+        for registry in registries:
+            registry.refresh()
 
 
 @lru_cache(maxsize=None)

@@ -7,32 +7,23 @@ from __future__ import annotations
 
 import csv
 import json
-import sys
 from pathlib import Path
 
 import pytest
 
 from handeye.calibration.methods import METHODS, comparison_methods, method_names
-from handeye.drivers.camera.backends import CAMERAS
-from handeye.drivers.controller.backends import CONTROLLERS
 from handeye.station.cli import main
 
+from helpers import plugin_installed
+
 PLUGIN = Path(__file__).with_name("plugin")
-REGISTRIES = (METHODS, CONTROLLERS, CAMERAS)  # the plug-in's .dist-info feeds all three
 
 
 @pytest.fixture
 def plugin(monkeypatch):
     """The test plug-in installed (its folder on sys.path); uninstalled again afterwards."""
-    monkeypatch.syspath_prepend(str(PLUGIN))
-    for registry in REGISTRIES:
-        registry.refresh()
-    yield
-    monkeypatch.undo()
-    for module in ("handeye_test_plugin", "handeye_test_plugin_method"):
-        sys.modules.pop(module, None)
-    for registry in REGISTRIES:
-        registry.refresh()
+    with plugin_installed(monkeypatch, PLUGIN, ("handeye_test_plugin", "handeye_test_plugin_method")):
+        yield
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,6 @@ handeye's own faults are one line too, their traceback saved to a file.
 from __future__ import annotations
 
 import json
-import sys
 import tempfile
 import textwrap
 from pathlib import Path
@@ -19,13 +18,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from handeye.calibration.methods import METHODS, Method
-from handeye.drivers.camera.backends import CAMERAS
 from handeye.drivers.controller.backends import CONTROLLERS, ControllerBackend
 from handeye.station.cli import main
 
+from helpers import plugin_installed
+
 PACKAGE = "handeye-faulty-plugin"
 MODULE = "handeye_faulty_plugin"
-REGISTRIES = (METHODS, CONTROLLERS, CAMERAS)
 
 SOURCE = '''
 import numpy as np
@@ -121,14 +120,8 @@ def faulty(tmp_path, monkeypatch):
     (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {PACKAGE}\nVersion: 1.0\n")
     (info / "entry_points.txt").write_text(textwrap.dedent(ENTRY_POINTS))
     (folder / f"{MODULE}.py").write_text(SOURCE)
-    monkeypatch.syspath_prepend(str(folder))
-    for registry in REGISTRIES:
-        registry.refresh()
-    yield folder
-    monkeypatch.undo()
-    sys.modules.pop(MODULE, None)
-    for registry in REGISTRIES:
-        registry.refresh()
+    with plugin_installed(monkeypatch, folder, (MODULE,)):
+        yield folder
 
 
 @pytest.fixture(scope="module")

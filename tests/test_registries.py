@@ -10,7 +10,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from handeye.calibration.methods import METHODS
 from handeye.drivers.camera import CameraError, open_camera
 from handeye.drivers.camera.backends import CAMERAS, CameraBackend, register_backend
 from handeye.drivers.controller import InvalidRequest, open_controller
@@ -28,6 +27,8 @@ from handeye.station.cli import build_parser, main
 from handeye.station.config import ConfigError, config_from_dict, describe_keys
 from handeye.station.runtime import _controller_options, open_station
 
+from helpers import plugin_installed
+
 PLUGIN = Path(__file__).with_name("plugin")
 BUILT_IN_CONTROLLERS = ("socket", "serial", "modbus", "rws")
 
@@ -35,17 +36,8 @@ BUILT_IN_CONTROLLERS = ("socket", "serial", "modbus", "rws")
 @pytest.fixture
 def plugin(monkeypatch):
     """The test plug-in installed (its folder on sys.path); uninstalled again afterwards."""
-    monkeypatch.syspath_prepend(str(PLUGIN))
-    CONTROLLERS.refresh()
-    CAMERAS.refresh()
-    METHODS.refresh()  # its .dist-info adds a method too (tests/test_method_plugin.py)
-    yield
-    monkeypatch.undo()
-    sys.modules.pop("handeye_test_plugin", None)
-    sys.modules.pop("handeye_test_plugin_method", None)
-    CONTROLLERS.refresh()
-    CAMERAS.refresh()
-    METHODS.refresh()
+    with plugin_installed(monkeypatch, PLUGIN, ("handeye_test_plugin", "handeye_test_plugin_method")):
+        yield
 
 
 def _choices(argv_prefix, option="--protocol"):
