@@ -364,7 +364,7 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
         raise CalibrationError(f"the {method or DEFAULT_METHOD} solver failed on these data ({reason}); check the "
                                f"session's values: lengths in mm, distinct finite poses, the whole board seen") from None
     if not np.all(np.isfinite(result.x)):
-        if METHODS.provider(result.method) is not None:
+        if _method_provider(method_row(result.method)) is not None:
             raise CalibrationError(_method_fault(method_row(result.method), "found no finite camera pose"))
         raise CalibrationError(f"the {result.method} solver found no finite camera pose; check the session's values: "
                                f"lengths in mm, distinct finite poses, the whole board seen")
@@ -473,7 +473,7 @@ def _solve(row: Method, solver, problem: HandEyeProblem, truth, progress) -> _So
     except HandEyeError:
         raise
     except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
-        if METHODS.provider(row.name) is None:
+        if _method_provider(row) is None:
             raise
         raise CalibrationError(_method_fault(row, f"failed ({exception_line(exc)})")) from None
     except Exception as exc:  # noqa: BLE001 (a method's own fault: one line, never a traceback)
@@ -508,9 +508,21 @@ def _checked_solution(row: Method, solved, n: int) -> _Solved:
     return checked
 
 
+def _method_provider(row: Method) -> str | None:
+    """Who provides the row's solver when it is not handeye: the installed package of its entry point,
+    or the module of a solver registered in code from outside handeye; None for handeye's own."""
+    provider = METHODS.provider(row.name)
+    if provider is not None:
+        return provider
+    module = row.solver.partition(":")[0] if isinstance(row.solver, str) else getattr(row.solver, "__module__", None)
+    if module and module.split(".")[0] != __name__.split(".")[0]:
+        return f"the module {module} (registered in code)"
+    return None
+
+
 def _method_fault(row: Method, what: str) -> str:
     """One line for a method whose own code failed: which method, who provides it, what to do."""
-    provider = METHODS.provider(row.name)
+    provider = _method_provider(row)
     if provider is None:
         return (f"method {row.name} {what}: a fault in handeye, not in the data; run another --method and report it "
                 "with the session")

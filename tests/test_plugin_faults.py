@@ -17,7 +17,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from handeye.calibration.errors import CalibrationError
 from handeye.calibration.methods import METHODS, Method
+from handeye.calibration.session import read_session
+from handeye.calibration.solve import calibrate_session
 from handeye.drivers.controller.backends import CONTROLLERS, ControllerBackend
 from handeye.station.cli import main
 
@@ -218,17 +221,25 @@ def test_handeyes_own_fault_is_one_line_with_the_traceback_saved(tmp_path, monke
 
 
 def test_handeyes_own_method_fault_blames_handeye(simulated, monkeypatch):
-    from handeye.calibration.errors import CalibrationError
-    from handeye.calibration.session import read_session
-    from handeye.calibration.solve import calibrate_session
+    from handeye.calibration.classic import tsai
 
     def buggy(hand, target2cam, pairs=None):
         raise TypeError("unsupported operand")
 
-    monkeypatch.setitem(METHODS, "buggy", Method("buggy", "classic", "Us (2026)", "", buggy))
-    with pytest.raises(CalibrationError, match="method buggy raised TypeError: unsupported operand: a fault in "
+    monkeypatch.setattr(tsai, "solve_tsai", buggy)
+    with pytest.raises(CalibrationError, match="method tsai raised TypeError: unsupported operand: a fault in "
                                                "handeye, not in the data"):
-        calibrate_session(read_session(simulated), "buggy")
+        calibrate_session(read_session(simulated), "tsai")
+
+
+def test_a_method_registered_in_code_from_outside_is_named_by_its_module(simulated, monkeypatch):
+    def first_triplet(theta, inputs):
+        return 3  # not a Selection
+
+    monkeypatch.setitem(METHODS, "first", Method("first", "paper", "Me (2026)", "", first_triplet))
+    with pytest.raises(CalibrationError, match=f"method first, from the module {__name__} \\(registered in code\\), "
+                                               "raised AttributeError"):
+        calibrate_session(read_session(simulated), "first")
 
 
 def test_back_ends_sharing_a_link_module_read_the_folder_as_the_one_asked(tmp_path, monkeypatch):
