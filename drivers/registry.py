@@ -19,13 +19,14 @@ command-line choices, the runtime, the mocks, test parameters) asks the registry
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TypeVar
 
 from ..calibration.registry import Registry as _Registry
 from ..calibration.registry import load_target
 
-__all__ = ["Backend", "Registry", "load_target"]
+__all__ = ["Backend", "Registry", "Setting", "declared_settings", "load_target"]
 
 
 @dataclass(frozen=True)
@@ -49,6 +50,80 @@ class Backend:
     def load(self) -> type:
         """The back end's class (imports its module, and so its hardware libraries, now)."""
         return load_target(self.target)
+
+
+@dataclass(frozen=True)
+class Setting:
+    """One setting of a back end, described once: the station config's key (``controller.<key>`` of a
+    controller back end, ``camera.<key>`` of a camera back end; checked and documented from this), the
+    command-line flag (``handeye robot``'s, or ``handeye mock controller``'s for a mock's option) and
+    the keyword of the back end's class. The controller back ends call it ``LinkSetting``.
+
+    Attributes
+    ----------
+    key : str
+        The key in its config section (``serial_url``; for a controller also on ``ControllerLink``).
+    type : type
+        ``str``, ``int`` or ``float``: what a value is (the config checks it, the command line parses it).
+    default : object
+        The config's value when the file names none (None: unset, the class's own default).
+    help : str
+        What it is, one line (the config's doc and the flag's help; the back ends' names go in front).
+    flag : str or None
+        The command-line flag (default ``--key`` with ``-`` for ``_``).
+    keyword : str or None
+        The class's keyword argument (default: ``key``).
+    metavar : str or None
+        The flag's value in ``--help``.
+    low, high : float
+        Range of a number.
+    secret : bool
+        Never printed (masked in the config's record).
+    check : callable or None
+        ``check(value, name) -> value``: a check of its own, raising ``ValueError`` (the controllers'
+        ``InvalidRequest`` is one) naming ``name``.
+    required : str
+        Not empty: the back end cannot open without it; what it is, for the message (``a device or pyserial URL``).
+    note : str
+        More about it for the documented example (``station/example_station.yaml``), beyond ``help``.
+    """
+
+    key: str
+    type: type = str
+    default: object = None
+    help: str = ""
+    flag: str | None = None
+    keyword: str | None = None
+    metavar: str | None = None
+    low: float = float("-inf")
+    high: float = float("inf")
+    secret: bool = False
+    check: Callable | None = None
+    required: str = ""
+    note: str = ""
+
+    @property
+    def option(self) -> str:
+        """The command-line flag."""
+        return self.flag or "--" + self.key.replace("_", "-")
+
+    @property
+    def usage(self) -> str:
+        """The flag with its value (``--url DEVICE_OR_URL``), in brackets when it may be left out."""
+        text = f"{self.option} {self.metavar or self.key.upper()}"
+        return text if self.required else f"[{text}]"
+
+
+def declared_settings(registry, attribute: str) -> dict:
+    """``{key: (Setting, names of the back ends declaring it)}`` over every back end of ``registry``
+    (registry order), from each one's ``attribute`` (a tuple of :class:`Setting`): the keys of one
+    station config section. Two back ends sharing a key share its description (the first one's)."""
+    out: dict = {}
+    for name in registry:
+        for setting in getattr(registry[name], attribute):
+            first, names = out.get(setting.key, (setting, ()))
+            out[setting.key] = (first, names + (name,))
+    return out
 
 
 B = TypeVar("B", bound=Backend)

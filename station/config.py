@@ -113,36 +113,80 @@ def _link_settings() -> dict:
     return link_settings()
 
 
+def _camera_settings() -> dict:
+    """``key -> (Setting, back-end names)`` of every registered camera back end."""
+    from ..drivers.camera.backends import camera_settings  # noqa: PLC0415
+
+    return camera_settings()
+
+
 def _checked_by(check: Callable, rule) -> Callable:
-    """A rule that runs ``rule`` and then a back end's own ``check(value, name)`` (InvalidRequest -> ConfigError)."""
-    from ..drivers.controller.errors import InvalidRequest  # noqa: PLC0415
+    """A rule that runs ``rule`` and then a back end's own ``check(value, name)`` (its ValueError, the
+    controllers' InvalidRequest included, becomes a ConfigError)."""
 
     def checked(value, key: str, context):
         value = rule(value, key, context)
         try:
             return check(value, key)
-        except InvalidRequest as exc:
+        except ValueError as exc:
             raise ConfigError(str(exc)) from None
 
     return checked
 
 
-def link_fields() -> tuple:
-    """The ``controller`` keys the back ends declare (``ControllerBackend.link_settings``), as
-    :func:`~handeye.station.schema.setting` fields: rule from the type and range, the back ends'
-    names in front of the doc, secret as declared."""
+def declared_setting_fields(declared: dict, own=()) -> tuple:
+    """The keys back ends declare (``{key: (Setting, back-end names)}``: ``ControllerBackend.link_settings``,
+    ``CameraBackend.settings``) as :func:`~handeye.station.schema.setting` fields: rule from the type and
+    range, the back ends' names in front of the doc, secret as declared. A key that is one of the
+    section's ``own`` fields is left out: the back end reads the section's own value."""
     out = []
-    for key, (declared, names) in _link_settings().items():
-        kinds = {int: Number(declared.low, declared.high, integer=True), float: Number(declared.low, declared.high)}
-        rule = kinds.get(declared.type, Text())
-        if declared.check is not None:
-            rule = Custom(_checked_by(declared.check, rule))
-        if declared.default is None:
+    for key, (declared_setting, names) in declared.items():
+        if key in own:
+            continue
+        kinds = {int: Number(declared_setting.low, declared_setting.high, integer=True),
+                 float: Number(declared_setting.low, declared_setting.high)}
+        rule = kinds.get(declared_setting.type, Text())
+        if declared_setting.check is not None:
+            rule = Custom(_checked_by(declared_setting.check, rule))
+        if declared_setting.default is None:
             rule = Optional(rule)
-        made = setting(declared.default, rule, f"{', '.join(names)}: {declared.help}", secret=declared.secret)
+        made = setting(declared_setting.default, rule, f"{', '.join(names)}: {declared_setting.help}",
+                       secret=declared_setting.secret)
         made.name = key
         out.append(made)
     return tuple(out)
+
+
+def link_fields() -> tuple:
+    """The ``controller`` keys the back ends declare (``ControllerBackend.link_settings``), as
+    :func:`~handeye.station.schema.setting` fields (:func:`declared_setting_fields`)."""
+    return declared_setting_fields(_link_settings(), _own_keys(ControllerSettings))
+
+
+def _own_keys(cls) -> set:
+    return {f.name for f in fields(cls)}
+
+
+class _DeclaredByBackEnds:
+    """A section that also takes the keys its back ends declare (``_declared()``: ``{key: (Setting,
+    names)}``): kept by key in ``backend_settings``, read as attributes (``section.serial_url``, the
+    declared default when the file names none); a key no back end declares is refused."""
+
+    EXTRA_FIELD: ClassVar[str] = "backend_settings"
+    _WHAT: ClassVar[str] = ""
+
+    @classmethod
+    def extra_settings(cls) -> tuple:
+        """The keys the registered back ends declare (:func:`declared_setting_fields`)."""
+        return declared_setting_fields(cls._declared(), _own_keys(cls))
+
+    def __getattr__(self, name: str):
+        if name.startswith("_") or name == "backend_settings":
+            raise AttributeError(name)
+        declared = type(self)._declared().get(name)
+        if declared is None:
+            raise AttributeError(f"no {self._WHAT} key {name!r}")
+        return self.__dict__.get("backend_settings", {}).get(name, declared[0].default)
 
 
 def _mount(value, key: str, context) -> tuple:
@@ -227,7 +271,7 @@ def _as_is(value, key: str, context):
 
 # ---------------------------------------------------------------------------------- the sections
 @dataclass(frozen=True)
-class ControllerSettings:
+class ControllerSettings(_DeclaredByBackEnds):
     """``controller``: the robot controller's link, and the settings of the generated RAPID program."""
 
     protocol: str = setting(MOCK, Text(lambda: controller_protocols() + (MOCK,)),
@@ -250,25 +294,13 @@ class ControllerSettings:
     #: by each back end (``ControllerBackend.link_settings``), read as attributes (``c.serial_url``).
     backend_settings: dict = field(default_factory=dict, hash=False, repr=False)  # may hold secrets
 
-    EXTRA_FIELD: ClassVar[str] = "backend_settings"
-
-    @staticmethod
-    def extra_settings() -> tuple:
-        """The keys the registered controller back ends declare (:func:`link_fields`)."""
-        return link_fields()
-
-    def __getattr__(self, name: str):
-        if name.startswith("_") or name == "backend_settings":
-            raise AttributeError(name)
-        declared = _link_settings().get(name)
-        if declared is None:
-            raise AttributeError(f"no controller key {name!r}")
-        return self.__dict__.get("backend_settings", {}).get(name, declared[0].default)
+    _WHAT: ClassVar[str] = "controller"
+    _declared = staticmethod(_link_settings)
 
 
 @dataclass(frozen=True)
-class CameraSettings:
-    """``camera``: the stereo head."""
+class CameraSettings(_DeclaredByBackEnds):
+    """``camera``: the stereo head, and the settings its back end declares (``CameraBackend.settings``)."""
 
     backend: str = setting(MOCK, Text(lambda: camera_backends() + (MOCK,)),
                            "camera back end: a registered one (xb3), or mock", required=True)
@@ -281,6 +313,12 @@ class CameraSettings:
     mock_arm: str | None = setting(None, Optional(Custom(_mock_arm)), "rehearsal only (backend mock with a real "
                                    "controller protocol): HOST:PORT where `handeye mock controller --camera-port` "
                                    "serves the simulated XB3 on its arm")
+    #: The back ends' own settings a file sets (``guid`` ...), by key: declared by each camera back end
+    #: (``CameraBackend.settings``), read as attributes (``camera.guid``).
+    backend_settings: dict = field(default_factory=dict, hash=False, repr=False)
+
+    _WHAT: ClassVar[str] = "camera"
+    _declared = staticmethod(_camera_settings)
 
     def nominal_mount_transform(self) -> np.ndarray:
         return transform_from_pose(self.nominal_mount[0], self.nominal_mount[1])

@@ -76,7 +76,7 @@ def _camera_options(config: StationConfig) -> dict:
     """The keyword options of ``open_camera`` for the config's camera, as its back end builds them."""
     from ..drivers.camera.backends import CAMERAS
 
-    return CAMERAS[config.camera.backend].options(config.camera)
+    return CAMERAS[config.camera.backend].camera_options(config.camera)
 
 
 #: The embedded mock controller's memory (its PERS tool data), in the folder of the sessions.

@@ -25,7 +25,7 @@ from handeye.mocks.controller import start_mock_controller
 from handeye.rapid.links import BUILT_IN_LINKS
 from handeye.station.cli import build_parser, main
 from handeye.station.config import ConfigError, config_from_dict, describe_keys
-from handeye.station.runtime import _controller_options, open_station
+from handeye.station.runtime import _camera_options, _controller_options, open_station
 
 from helpers import plugin_installed
 
@@ -124,7 +124,7 @@ def test_entry_points_add_a_controller_and_a_camera(plugin):
     assert CONTROLLERS.names() == BUILT_IN_CONTROLLERS + ("loopback",)
     assert CONTROLLERS["loopback"].default_port == 11025 and CONTROLLERS["loopback"].mock.default_port == 11026
     assert mock_protocols()[-1] == "loopback" and RAPID_LINKS["loopback"].module == "HeLoop"
-    assert CAMERAS.names() == ("xb3", "mock", "blank") and "BlankCamera" in CAMERAS["blank"].help
+    assert CAMERAS.names() == ("xb3", "mock", "blank", "tinted") and "BlankCamera" in CAMERAS["blank"].help
     with open_camera("blank", grey=9) as camera:
         assert camera.grab().left.max() == 9
 
@@ -134,6 +134,35 @@ def test_the_plugin_back_ends_pass_the_station_config(plugin):
     assert (config.controller.protocol, config.camera.backend) == ("loopback", "blank") and not config.is_mock
     with pytest.raises(ConfigError, match="controller.protocol must be one of socket, serial, modbus, rws, loopback, mock"):
         config_from_dict({"controller": {"protocol": "x"}, "camera": {"backend": "blank"}})
+
+
+def test_a_plugin_cameras_own_setting_is_a_station_config_key(plugin):
+    config = config_from_dict({"controller": {"protocol": "loopback"}, "camera": {"backend": "tinted", "tint": 40}})
+    assert config.camera.tint == 40 and config.to_dict()["camera"]["tint"] == 40
+    assert _camera_options(config) == {"grey": 40}  # what open_station opens the camera with
+    with open_camera("tinted", **_camera_options(config)) as camera:
+        assert camera.grab().left.max() == 40
+    with pytest.raises(ConfigError, match="camera.tint must be"):
+        config_from_dict({"controller": {"protocol": "loopback"}, "camera": {"backend": "tinted", "tint": 300}})
+    untinted = config_from_dict({"controller": {"protocol": "loopback"}, "camera": {"backend": "tinted"}})
+    with pytest.raises(CameraError, match=r"the tinted camera needs a grey level 0..255 \(camera.tint in the station "
+                                          r"config\)"):
+        _camera_options(untinted)
+
+
+def test_a_camera_key_no_back_end_declares_is_refused():
+    with pytest.raises(ConfigError, match="unknown key camera.tint; known keys of camera: backend, grab_timeout_s, "
+                                          "guid, mock_arm"):
+        config_from_dict({"controller": {"protocol": "socket"}, "camera": {"backend": "xb3", "tint": 40}})
+
+
+@pytest.mark.parametrize("given, kept", [("00B09D0100AABBCC", "00b09d0100aabbcc"), ("0x2222", "0000000000002222")])
+def test_the_xb3_is_chosen_by_the_guid_of_the_station_config(given, kept):
+    config = config_from_dict({"controller": {"protocol": "socket"}, "camera": {"backend": "xb3", "guid": given}})
+    assert config.camera.guid == kept and _camera_options(config) == {"guid": kept}
+    for wrong, says in (("zz", "must be the camera.s FireWire GUID, up to 16 hex digits"), (2222, "must be a text")):
+        with pytest.raises(ConfigError, match=f"camera.guid {says}"):
+            config_from_dict({"controller": {"protocol": "socket"}, "camera": {"backend": "xb3", "guid": wrong}})
 
 
 def test_the_plugin_controller_is_a_choice_of_robot_joints(plugin, capsys, no_leaked_threads):

@@ -1,8 +1,10 @@
 """The camera back ends: each described once, in :data:`CAMERAS`.
 
 A back end is a :class:`CameraBackend`: its name (the ``camera.backend`` word), its class (imported
-when it is opened), how its options are built from the station config's ``camera`` section, whether
-it is simulated, and one line of help. The package registers ``xb3`` here; ``handeye.mocks``
+when it is opened), its own settings (:class:`~handeye.drivers.registry.Setting`: key, type, default,
+help; each a ``camera.<key>`` of the station config, checked and documented from it, and a keyword of
+the class), how further options are built from the config's ``camera`` section, whether it is
+simulated, and one line of help. The package registers ``xb3`` here; ``handeye.mocks``
 registers its simulated XB3 as ``mock`` (the drivers never name the mocks); another package adds one
 with :func:`register_backend` or an entry point in the ``handeye.cameras`` group.
 """
@@ -12,9 +14,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from ..registry import Backend, Registry
+from ..registry import Backend, Registry, Setting, declared_settings
+from .errors import CameraError
 
-__all__ = ["CameraBackend", "CAMERAS", "register_backend", "no_options"]
+__all__ = ["CameraBackend", "CAMERAS", "camera_settings", "register_backend", "no_options"]
 
 
 def no_options(section) -> dict:
@@ -28,22 +31,64 @@ class CameraBackend(Backend):
 
     Attributes
     ----------
+    settings : tuple of Setting
+        Its own settings, described once: each is the station config's ``camera.<key>`` (checked
+        and documented from it) and a keyword of the class (:meth:`camera_options`).
     options : callable
-        ``options(section) -> dict``: the class's keyword options from the station config's
+        ``options(section) -> dict``: further keyword options of the class from the station config's
         ``camera`` section (default: none).
     simulated : bool
         A simulated camera (the mock): not a choice for a real station's ``camera.backend``.
     """
 
+    settings: tuple = ()
     options: Callable = no_options
     simulated: bool = False
+
+    def camera_options(self, section) -> dict:
+        """The class's keyword options for the station config's ``camera`` section: its settings that
+        the section sets, then what :attr:`options` adds.
+
+        Raises
+        ------
+        CameraError
+            A required setting is not set.
+        """
+        out = {}
+        for setting in self.settings:
+            value = getattr(section, setting.key, None)
+            if value is None and setting.required:
+                raise CameraError(f"the {self.name} camera needs {setting.required} (camera.{setting.key} in the "
+                                  "station config)")
+            if value is not None:
+                out[setting.keyword or setting.key] = value
+        return {**out, **self.options(section)}
 
 
 #: Every camera back end by name: the package's, the mock once ``handeye.mocks`` is imported, plug-ins.
 CAMERAS: Registry[CameraBackend] = Registry("camera back end", "handeye.cameras", CameraBackend)
 
-CAMERAS.register(CameraBackend("xb3", f"{__package__}.xb3:XB3Camera",
-                               help="Point Grey Bumblebee XB3 on IEEE-1394 (libdc1394)"))
+
+
+def _guid(value, name: str) -> str:
+    """A FireWire GUID as 16 hex digits (``00b09d0100aabbcc``; given with a ``0x`` or fewer digits too)."""
+    digits = str(value).strip().lower().removeprefix("0x")
+    if not 1 <= len(digits) <= 16 or any(c not in "0123456789abcdef" for c in digits):
+        raise ValueError(f"{name} must be the camera's FireWire GUID, up to 16 hex digits (as the camera's error "
+                         f"lists them: '00b09d0100aabbcc', quoted); got {value!r}")
+    return f"{int(digits, 16):016x}"
+
+
+CAMERAS.register(CameraBackend(
+    "xb3", f"{__package__}.xb3:XB3Camera", help="Point Grey Bumblebee XB3 on IEEE-1394 (libdc1394)",
+    settings=(Setting("guid", str, None, "the XB3 to open by its FireWire GUID (16 hex digits, quoted); null: the "
+                      "only XB3 on the bus (several are refused, naming their GUIDs)", check=_guid, metavar="GUID"),)))
+
+
+def camera_settings() -> dict:
+    """Every camera back end's settings by key, with the back ends that declare it (registry order):
+    the keys of the station config's ``camera`` section beyond its own."""
+    return declared_settings(CAMERAS, "settings")
 
 
 def register_backend(backend, target=None, **fields) -> CameraBackend:

@@ -343,8 +343,9 @@ class XB3Camera(Camera):
 
     Parameters
     ----------
-    guid : int, optional
-        Camera GUID; default: the first Bumblebee XB3 on the bus.
+    guid : int or str, optional
+        Camera GUID (a number, or its hex digits: ``camera.guid`` of the station config); default: the
+        Bumblebee XB3 on the bus, refused when there are several.
     layout : {"rgb8", "raw16"}
         3-sensor RGB8 stream (left, centre and right) or 2-sensor 16-bit stream.
     pair : {"wide", "narrow"}
@@ -359,13 +360,16 @@ class XB3Camera(Camera):
 
     name = "xb3"
 
-    def __init__(self, guid: int | None = None, *, layout: str = "rgb8", pair: str = "wide", output: str = "bgr",
+    def __init__(self, guid: int | str | None = None, *, layout: str = "rgb8", pair: str = "wide", output: str = "bgr",
                  library=None, width: int = 1280, height: int = 960, dma_buffers: int = 4):
         if layout not in ("rgb8", "raw16"):
             raise CameraError(f"layout must be rgb8 (3 sensors) or raw16 (2 sensors); got {layout!r}")
         if pair not in ("wide", "narrow"):
             raise CameraError(f"pair must be wide or narrow; got {pair!r}")
-        self.guid = guid
+        try:
+            self.guid = int(guid, 16) if isinstance(guid, str) else guid
+        except ValueError:
+            raise CameraError(f"guid must be the camera's FireWire GUID in hex digits; got {guid!r}") from None
         self.layout, self.pair, self.output = layout, pair, output
         self.width, self.height, self.dma_buffers = int(width), int(height), int(dma_buffers)
         self._library = library
@@ -395,25 +399,43 @@ class XB3Camera(Camera):
                     f"no camera found: libdc1394 sees 0 cameras, looked for {LOOKING_FOR}; check the cable and "
                     f"power (FireWire 800 powers the head) and read access to /dev/fw*"
                 )
-            chosen = None
-            seen = []
-            for guid, unit in found:
-                cam = dc.camera_new(guid, unit)
-                desc = dc.describe(cam)
-                seen.append(f"{desc['vendor']} {desc['model']} (GUID {guid:016x})".strip())
-                if (self.guid is not None and guid == self.guid) or (self.guid is None and _is_xb3(desc)):
-                    chosen = (cam, desc)
-                    break
-                dc.camera_free(cam)
-            if chosen is None:
-                wanted = f"no camera with GUID {self.guid:016x}" if self.guid is not None else "no Bumblebee XB3"
-                raise CameraError(f"{wanted} among the cameras on the bus: {'; '.join(seen)}")
-            cam, desc = chosen
+            cam, desc = self._choose(dc, found)
             self._cam = cam
             self._setup(dc, cam, desc)
         except BaseException:
             self.close()
             raise
+
+    def _choose(self, dc: Dc1394, found: list) -> tuple:
+        """The camera to open among ``found`` (``(guid, unit)`` pairs): the one of :attr:`guid`, else the only
+        Bumblebee XB3; the others are freed.
+
+        Raises
+        ------
+        CameraError
+            No such camera, or several XB3 and no GUID to choose (a station must not calibrate the wrong
+            head): the message lists what is on the bus with the GUIDs.
+        """
+        chosen, seen = [], []
+        for guid, unit in found:
+            cam = dc.camera_new(guid, unit)
+            desc = dc.describe(cam)
+            seen.append(f"{desc['vendor']} {desc['model']} (GUID {guid:016x})".strip())
+            if (self.guid is not None and guid == self.guid) or (self.guid is None and _is_xb3(desc)):
+                chosen.append((cam, desc))
+                if self.guid is not None:
+                    break
+            else:
+                dc.camera_free(cam)
+        if not chosen:
+            wanted = f"no camera with GUID {self.guid:016x}" if self.guid is not None else "no Bumblebee XB3"
+            raise CameraError(f"{wanted} among the cameras on the bus: {'; '.join(seen)}")
+        if len(chosen) > 1:
+            for cam, _ in chosen:
+                dc.camera_free(cam)
+            raise CameraError(f"{len(chosen)} Bumblebee XB3 on the bus ({'; '.join(seen)}): set camera.guid in the "
+                              "station config to the GUID of the one to calibrate")
+        return chosen[0]
 
     def _setup(self, dc: Dc1394, cam, desc: dict) -> None:
         self._serial = dc.get_registers(cam, REG_SERIAL)[0]

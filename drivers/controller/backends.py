@@ -19,83 +19,23 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 
-from ..registry import Backend, Registry, load_target
+from ..registry import Backend, Registry, Setting, declared_settings, load_target
 from .errors import InvalidRequest
 
 __all__ = ["ControllerBackend", "ControllerLink", "LinkSetting", "MockServer", "CONTROLLERS", "DEFAULT_PROTOCOL", "RAPID_LINKS",
            "link_settings", "register_backend", "setting_options", "standard_options", "tcp_options"]
 
 
-@dataclass(frozen=True)
-class LinkSetting:
-    """One setting of a back end's link, described once: the station config's key
-    (``controller.<key>``, checked and documented from this), the command-line flag of ``handeye
-    robot`` and the keyword of the back end's class.
-
-    Attributes
-    ----------
-    key : str
-        The key in the config's ``controller`` section and on :class:`ControllerLink` (``serial_url``).
-    type : type
-        ``str``, ``int`` or ``float``: what a value is (the config checks it, the command line parses it).
-    default : object
-        The config's value when the file names none (None: unset, the class's own default).
-    help : str
-        What it is, one line (the config's doc and the flag's help; the back ends' names go in front).
-    flag : str or None
-        The command-line flag (default ``--key`` with ``-`` for ``_``).
-    keyword : str or None
-        The class's keyword argument (default: ``key``).
-    metavar : str or None
-        The flag's value in ``--help``.
-    low, high : float
-        Range of a number.
-    secret : bool
-        Never printed (masked in the config's record).
-    check : callable or None
-        ``check(value, name) -> value``: a check of its own, raising :class:`InvalidRequest` naming ``name``.
-    required : str
-        Not empty: the link cannot open without it; what it is, for the message (``a device or pyserial URL``).
-    note : str
-        More about it for the documented example (``station/example_station.yaml``), beyond ``help``.
-    """
-
-    key: str
-    type: type = str
-    default: object = None
-    help: str = ""
-    flag: str | None = None
-    keyword: str | None = None
-    metavar: str | None = None
-    low: float = float("-inf")
-    high: float = float("inf")
-    secret: bool = False
-    check: Callable | None = None
-    required: str = ""
-    note: str = ""
-
-    @property
-    def option(self) -> str:
-        """The command-line flag."""
-        return self.flag or "--" + self.key.replace("_", "-")
-
-    @property
-    def usage(self) -> str:
-        """The flag with its value (``--url DEVICE_OR_URL``), in brackets when it may be left out."""
-        text = f"{self.option} {self.metavar or self.key.upper()}"
-        return text if self.required else f"[{text}]"
+#: A controller back end's setting (:class:`handeye.drivers.registry.Setting`: the station config's
+#: ``controller.<key>``, a flag of ``handeye robot``, a keyword of the class).
+LinkSetting = Setting
 
 
 def link_settings() -> dict[str, tuple[LinkSetting, tuple[str, ...]]]:
     """Every back end's link settings by key, with the back ends that declare it (registry order):
     the keys of the config's ``controller`` section and the flags of ``handeye robot`` beyond
     ``host`` and ``port``. Two back ends sharing a key share its description (the first one's)."""
-    out: dict[str, tuple[LinkSetting, tuple[str, ...]]] = {}
-    for name in CONTROLLERS:
-        for setting in CONTROLLERS[name].link_settings:
-            first, names = out.get(setting.key, (setting, ()))
-            out[setting.key] = (first, names + (name,))
-    return out
+    return declared_settings(CONTROLLERS, "link_settings")
 
 
 class ControllerLink:

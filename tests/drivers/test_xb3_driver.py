@@ -189,3 +189,17 @@ def test_camera_chosen_by_guid_and_calibration_file_read():
     with XB3Camera(0x2222, library=fake) as cam:
         assert cam.info["guid"] == 0x2222
         assert cam.calibration_file() == text
+    with XB3Camera("0000000000001111", library=fake) as cam:  # camera.guid of a station config
+        assert cam.info["guid"] == 0x1111
+
+
+def test_two_xb3_and_no_guid_is_refused_naming_both():
+    cams = [(0x1111, 0, "Point Grey Research", "Bumblebee XB3"), (0x4444, 0, "Basler", "scA640"),
+            (0x2222, 0, "Point Grey Research", "Bumblebee XB3")]
+    fake = FakeDc1394(cameras=cams)
+    with pytest.raises(CameraError, match=r"2 Bumblebee XB3 on the bus \(Point Grey Research Bumblebee XB3 \(GUID "
+                                          r"0000000000001111\); .*GUID 0000000000002222\)\): set camera.guid"):
+        XB3Camera(library=fake).connect()
+    assert sorted(fake.freed) == [0x1111, 0x2222, 0x4444]  # none left open
+    with pytest.raises(CameraError, match="guid must be the camera's FireWire GUID"):
+        XB3Camera("not hex")

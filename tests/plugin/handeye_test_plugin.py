@@ -1,11 +1,13 @@
 """A third-party package as the tests see one: it adds a controller back end (``loopback``, the
-line protocol over TCP on another default port) and a camera back end (``blank``, grey frames)
-through the entry points of its ``.dist-info``, with no change to handeye.
+line protocol over TCP on another default port) and two camera back ends (``blank``, grey frames,
+and ``tinted`` (the same frames at a grey level the station config sets: ``camera.tint``) through
+the entry points of its ``.dist-info``, with no change to handeye.
 
 The controller is declared by one ``ControllerBackend`` (name, class, default port, help), which
 also brings the RAPID module its controller runs (``HeLoop``, from this package's own template) and
-the mock that serves it (the socket mock's server, running HeLoop); the camera by its class alone
-(the registry describes it with the defaults).
+the mock that serves it (the socket mock's server, running HeLoop); the ``blank`` camera by its class
+alone (the registry describes it with the defaults), ``tinted`` by a ``CameraBackend`` declaring its
+own setting.
 """
 
 from __future__ import annotations
@@ -15,6 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from handeye.drivers.camera import Camera, StereoFrame
+from handeye.drivers.camera.backends import CameraBackend
+from handeye.drivers.registry import Setting
 from handeye.drivers.controller.backends import ControllerBackend, LinkSetting, MockServer
 from handeye.drivers.controller.socket_client import SocketController
 from handeye.rapid.links import RapidLink
@@ -78,3 +82,10 @@ class BlankCamera(Camera):
     def grab(self, timeout_s: float = 2.0) -> StereoFrame:
         image = np.full((8, 8), self.grey, np.uint8)
         return StereoFrame(image, image.copy())
+
+
+#: The same camera described by a back end with a setting of its own: ``camera.tint`` of a station
+#: config (checked 0..255, required), the class's ``grey``.
+TINTED = CameraBackend("tinted", f"{__name__}:BlankCamera", help="grey frames at the station's tint",
+                       settings=(Setting("tint", int, None, "grey level of the frames", keyword="grey", low=0, high=255,
+                                         required="a grey level 0..255"),))
