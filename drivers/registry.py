@@ -26,7 +26,7 @@ from typing import TypeVar
 from ..calibration.registry import Registry as _Registry
 from ..calibration.registry import load_target
 
-__all__ = ["Backend", "Registry", "Setting", "declared_settings", "load_target"]
+__all__ = ["Backend", "Registry", "Setting", "declared_settings", "keyword_options", "load_target"]
 
 
 @dataclass(frozen=True)
@@ -123,6 +123,19 @@ def declared_settings(registry, attribute: str) -> dict:
         for setting in getattr(registry[name], attribute):
             first, names = out.get(setting.key, (setting, ()))
             out[setting.key] = (first, names + (name,))
+    return out
+
+
+def keyword_options(settings, value_of: Callable, missing: Callable) -> dict:
+    """The class's keyword options of ``settings`` (:class:`Setting` s) whose value ``value_of(key)`` is
+    set (not None); ``missing(setting)`` makes the exception raised for a required one that is not."""
+    out = {}
+    for setting in settings:
+        value = value_of(setting.key)
+        if value is None and setting.required:
+            raise missing(setting)
+        if value is not None:
+            out[setting.keyword or setting.key] = value
     return out
 
 

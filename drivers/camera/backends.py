@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from ..registry import Backend, Registry, Setting, declared_settings
+from ..registry import Backend, Registry, Setting, declared_settings, keyword_options
 from .errors import CameraError
 
 __all__ = ["CameraBackend", "CAMERAS", "camera_settings", "register_backend", "no_options"]
@@ -54,15 +54,9 @@ class CameraBackend(Backend):
         CameraError
             A required setting is not set.
         """
-        out = {}
-        for setting in self.settings:
-            value = getattr(section, setting.key, None)
-            if value is None and setting.required:
-                raise CameraError(f"the {self.name} camera needs {setting.required} (camera.{setting.key} in the "
-                                  "station config)")
-            if value is not None:
-                out[setting.keyword or setting.key] = value
-        return {**out, **self.options(section)}
+        declared = keyword_options(self.settings, lambda key: getattr(section, key, None), lambda setting: CameraError(
+            f"the {self.name} camera needs {setting.required} (camera.{setting.key} in the station config)"))
+        return {**declared, **self.options(section)}
 
 
 #: Every camera back end by name: the package's, the mock once ``handeye.mocks`` is imported, plug-ins.

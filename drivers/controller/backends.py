@@ -19,7 +19,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 
-from ..registry import Backend, Registry, Setting, declared_settings, load_target
+from ..registry import Backend, Registry, Setting, declared_settings, keyword_options, load_target
 from .errors import InvalidRequest
 
 __all__ = ["ControllerBackend", "ControllerLink", "LinkSetting", "MockServer", "CONTROLLERS", "DEFAULT_PROTOCOL", "RAPID_LINKS",
@@ -155,15 +155,9 @@ def setting_options(link: ControllerLink, backend: "ControllerBackend") -> dict:
     InvalidRequest
         A required setting is not set.
     """
-    options = {}
-    for setting in backend.link_settings:
-        value = link.get(setting.key)
-        if value is None and setting.required:
-            raise InvalidRequest(f"the {backend.name} link needs {setting.required} ({setting.option} "
-                                 f"{setting.metavar or setting.key.upper()}; controller.{setting.key} in a station config)")
-        if value is not None:
-            options[setting.keyword or setting.key] = value
-    return options
+    return keyword_options(backend.link_settings, link.get, lambda setting: InvalidRequest(
+        f"the {backend.name} link needs {setting.required} ({setting.option} {setting.metavar or setting.key.upper()}; "
+        f"controller.{setting.key} in a station config)"))
 
 
 def standard_options(link: ControllerLink, backend: "ControllerBackend") -> dict:
