@@ -12,7 +12,7 @@ import numpy as np
 
 from .compact_points import compact_points_from_corners, compact_points_from_poses
 from .consistency import consistent_majority
-from .errors import CalibrationError, HandEyeError, exception_line
+from .errors import CalibrationError, HandEyeError, brief, exception_line
 from .invariants import bounded_pairs
 from .kinematics import load_robot
 from .methods import DEFAULT_METHOD, METHODS, Method, get_method, method_names
@@ -505,7 +505,32 @@ def _checked_solution(row: Method, solved, n: int) -> _Solved:
         raise CalibrationError(_method_fault(row, f"returned a camera pose that is not a rigid transform: {defect}"))
     if outliers is not None and outliers.shape != (n,):
         raise CalibrationError(_method_fault(row, f"returned {outliers.size} outlier flags for {n} postures"))
+    defect = _judgement_defect(checked.uncertainty, checked.cross_validation)
+    if defect:
+        raise CalibrationError(_method_fault(row, f"returned {defect}"))
     return checked
+
+
+def _judgement_defect(uncertainty, cross_validation) -> str | None:
+    """What is wrong with an estimator's ``uncertainty`` and ``cross_validation`` as the presenters and
+    the verdict read them (``CalibrationResult``), in a few words; None when both are usable (or None)."""
+    def numbers(mapping, key, count):
+        try:
+            values = np.asarray(mapping[key], dtype=float).reshape(-1)
+        except (KeyError, TypeError, ValueError):
+            return False
+        return values.size == count and bool(np.all(np.isfinite(values) & (values >= 0)))
+
+    if uncertainty is not None and not (isinstance(uncertainty, dict) and numbers(uncertainty, "translation_mm", 3)
+                                        and numbers(uncertainty, "rotation_deg", 3)):
+        return ("an uncertainty that is not translation_mm and rotation_deg, three finite one-sigma values each "
+                f"(got {brief(uncertainty)})")
+    if cross_validation is not None and not (
+            isinstance(cross_validation, dict) and numbers(cross_validation, "folds", 1)
+            and numbers(cross_validation, "rms_mm", 1)
+            and ("predicted_rms_mm" not in cross_validation or numbers(cross_validation, "predicted_rms_mm", 1))):
+        return f"a cross-validation without folds and rms_mm (crossval.CrossValidation.to_dict; got {brief(cross_validation)})"
+    return None
 
 
 def _method_provider(row: Method) -> str | None:

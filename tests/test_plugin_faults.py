@@ -1,9 +1,9 @@
 """Other people's plug-ins as they really are: a method, a controller or a name that is wrong.
 
 A package written in this test (a ``.dist-info`` and a module in a temporary folder, on ``sys.path``)
-registers, through entry points only, methods that raise, that return what is not a rigid transform
-or no solution at all, a method named like one of handeye's own, and a controller whose class fails.
-Each is refused in one line that names the package and what to do; a faulty method in the report's
+registers, through entry points only, methods that raise, that return what is not a rigid transform,
+no solution at all or an uncertainty or cross-validation the report cannot read, a method named like
+one of handeye's own, and a controller whose class fails. Each is refused in one line that names the package and what to do; a faulty method in the report's
 comparison leaves the report whole and is listed as not compared; the benchmark counts its failures.
 handeye's own faults are one line too, their traceback saved to a file.
 """
@@ -69,6 +69,23 @@ def text(problem, progress=None):
     return "a pose"
 
 
+def _solution(problem, **judgements):
+    from types import SimpleNamespace
+
+    from handeye.calibration.solve import calibrate
+
+    fields = {"outliers": None, "details": {}, "uncertainty": None, "cross_validation": None, **judgements}
+    return SimpleNamespace(x=calibrate(problem, "tsai").x, **fields)
+
+
+def unsure(problem, progress=None):
+    return _solution(problem, uncertainty={"translation": 0.1})
+
+
+def unfolded(problem, progress=None):
+    return _solution(problem, cross_validation={"rms_mm": float("nan"), "folds": 5})
+
+
 BOOM = _method("boom", "raises")
 BROADCAST = _method("broadcast", "value_error")
 SCALED = _method("scaled", "scaled")
@@ -76,6 +93,8 @@ REFLECTED = _method("reflected", "reflected")
 SMALL = _method("small", "small")
 NAN = _method("nanx", "nan")
 TEXT = _method("text", "text", kind="estimator")
+UNSURE = _method("unsure", "unsure", kind="estimator")
+UNFOLDED = _method("unfolded", "unfolded", kind="estimator")
 TSAI = Method("tsai", "classic", "An impostor (2026)", "", f"{__name__}:nan")
 
 
@@ -96,6 +115,8 @@ reflected = handeye_faulty_plugin:REFLECTED
 small = handeye_faulty_plugin:SMALL
 nanx = handeye_faulty_plugin:NAN
 text = handeye_faulty_plugin:TEXT
+unsure = handeye_faulty_plugin:UNSURE
+unfolded = handeye_faulty_plugin:UNFOLDED
 tsai = handeye_faulty_plugin:TSAI
 
 [handeye.controllers]
@@ -111,6 +132,8 @@ FAULTS = {
     "small": "not a rigid transform: must be a 4x4 matrix; got shape 3x3",
     "nanx": "found no finite camera pose",
     "text": "returned a str, not a solution with x, outliers",
+    "unsure": "returned an uncertainty that is not translation_mm and rotation_deg, three finite one-sigma values each",
+    "unfolded": "returned a cross-validation without folds and rms_mm",
 }
 
 
