@@ -157,12 +157,6 @@ def declared_setting_fields(declared: dict, own=()) -> tuple:
     return tuple(out)
 
 
-def link_fields() -> tuple:
-    """The ``controller`` keys the back ends declare (``ControllerBackend.link_settings``), as
-    :func:`~handeye.station.schema.setting` fields (:func:`declared_setting_fields`)."""
-    return declared_setting_fields(_link_settings(), _own_keys(ControllerSettings))
-
-
 def _own_keys(cls) -> set:
     return {f.name for f in fields(cls)}
 
