@@ -63,7 +63,6 @@ class CameraBackend(Backend):
 CAMERAS: Registry[CameraBackend] = Registry("camera back end", "handeye.cameras", CameraBackend)
 
 
-
 def _guid(value, name: str) -> str:
     """A FireWire GUID as 16 hex digits (``00b09d0100aabbcc``; given with a ``0x`` or fewer digits too)."""
     digits = str(value).strip().lower().removeprefix("0x")
