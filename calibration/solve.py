@@ -363,11 +363,6 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
         reason = (str(exc).splitlines() or [type(exc).__name__])[0]
         raise CalibrationError(f"the {method or DEFAULT_METHOD} solver failed on these data ({reason}); check the "
                                f"session's values: lengths in mm, distinct finite poses, the whole board seen") from None
-    if not np.all(np.isfinite(result.x)):
-        if _method_provider(method_row(result.method)) is not None:
-            raise CalibrationError(_method_fault(method_row(result.method), "found no finite camera pose"))
-        raise CalibrationError(f"the {result.method} solver found no finite camera pose; check the session's values: "
-                               f"lengths in mm, distinct finite poses, the whole board seen")
     return result
 
 
@@ -489,7 +484,8 @@ def _checked_solution(row: Method, solved, n: int) -> _Solved:
     CalibrationError
         A solution without the attributes of its kind, an ``x`` that is not a rigid transform (a
         scaled or sheared rotation, a reflection, another shape) or outlier flags of another length:
-        the method's fault, named. A non-finite ``x`` is the data's (``calibrate``'s message).
+        the method's fault, named. A non-finite ``x`` from handeye's own method is the data's fault,
+        and said so.
     """
     try:
         x = np.asarray(solved.x, dtype=float)
@@ -499,7 +495,10 @@ def _checked_solution(row: Method, solved, n: int) -> _Solved:
         raise CalibrationError(_method_fault(row, f"returned a {type(solved).__name__}, not a solution with x, outliers, "
                                                   f"details, uncertainty and cross_validation ({exception_line(exc)})")) from None
     if x.shape == (4, 4) and not np.all(np.isfinite(x)):
-        return checked  # the data's fault, said by calibrate
+        if _method_provider(row) is not None:
+            raise CalibrationError(_method_fault(row, "found no finite camera pose"))
+        raise CalibrationError(f"the {row.name} solver found no finite camera pose; check the session's values: "
+                               f"lengths in mm, distinct finite poses, the whole board seen")
     defect = rigid_defect(x, SOLUTION_ORTHONORMAL_TOLERANCE)
     if defect:
         raise CalibrationError(_method_fault(row, f"returned a camera pose that is not a rigid transform: {defect}"))
