@@ -17,7 +17,8 @@ import time
 import traceback
 from pathlib import Path
 
-from ..calibration.errors import exception_line
+from ..calibration.errors import HandEyeError, exception_line
+from ..calibration.files import write_text_atomic
 
 __all__ = ["DEBUG_VARIABLE", "plugin_packages", "unexpected_error_line"]
 
@@ -52,13 +53,14 @@ def unexpected_error_line(exc: BaseException, command: str) -> str:
     where = blamed[1:] if blamed else ((frames[-1][0].f_code.co_filename, frames[-1][1]) if frames else None)
     place = f" at {_short(where[0])}:{where[1]}" if where else ""
     saved = _save_traceback(exc, command)
-    kept = "its traceback is in " + saved if saved else f"set {DEBUG_VARIABLE}=1 to see its traceback"
+    kept = (f"its traceback is in {saved}" if saved
+            else f"its traceback could not be saved (run again with {DEBUG_VARIABLE}=1 to see it)")
     if blamed:
         return (f"the installed plug-in package {blamed[0]} failed ({exception_line(exc)}{place}); {kept}: report it to "
                 f"its authors, or uninstall it (pip uninstall {blamed[0]}) to work without it; what was written so far "
                 f"is kept")
     return (f"unexpected {exception_line(exc)}{place}: a fault in handeye, not in your data or set-up; {kept}: report "
-            f"it with that file; what was written so far is kept")
+            f"it with the traceback; what was written so far is kept")
 
 
 def _owners() -> dict[str, str]:
@@ -77,12 +79,11 @@ def _short(filename: str) -> str:
 
 
 def _save_traceback(exc: BaseException, command: str) -> str | None:
-    """Writes the whole traceback to a new file in the temporary folder; its path, or None."""
+    """Writes the whole traceback to a file in the temporary folder (as every file is written:
+    ``calibration.files.write_text_atomic``); its path, or None when it cannot be written."""
     text = f"handeye {command}\n" + "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
+    path = Path(tempfile.gettempdir()) / f"handeye-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}.traceback.txt"
     try:
-        handle, path = tempfile.mkstemp(prefix=f"handeye-{time.strftime('%Y%m%d-%H%M%S')}-", suffix=".traceback.txt")
-        with os.fdopen(handle, "w", encoding="utf-8") as out:
-            out.write(text)
-    except OSError:
+        return str(write_text_atomic(path, text))
+    except HandEyeError:
         return None
-    return path

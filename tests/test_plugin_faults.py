@@ -243,6 +243,22 @@ def test_handeyes_own_fault_is_one_line_with_the_traceback_saved(tmp_path, monke
         main(["calibrate", str(tmp_path)])
 
 
+def test_a_traceback_that_cannot_be_saved_is_said_so(tmp_path, monkeypatch, capsys):
+    from handeye.station.commands import calibrate as command
+
+    def broken(args):
+        return {}["x"]
+
+    blocker = tmp_path / "a-file"
+    blocker.write_text("not a folder")
+    monkeypatch.setattr(tempfile, "tempdir", str(blocker))
+    monkeypatch.setattr(command, "run", broken)
+    monkeypatch.delenv("HANDEYE_DEBUG", raising=False)
+    assert main(["calibrate", str(tmp_path)]) == 1
+    line = _one_line_error(capsys, "calibrate")
+    assert "its traceback could not be saved (run again with HANDEYE_DEBUG=1 to see it)" in line, line
+
+
 def test_handeyes_own_method_fault_blames_handeye(simulated, monkeypatch):
     from handeye.calibration.classic import tsai
 
