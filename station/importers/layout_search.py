@@ -176,12 +176,27 @@ def _per_tag(rows: list, position: dict, path_name: str) -> list:
         return []
     lists = []
     for tag in tags:
-        for group, words, cost in _lists_of_rows([r for r in rows if r.tag == tag], position, path_name, tag):
-            lists.append((tag, group, words, cost))
+        for key, name, members in _under_headers([r for r in rows if r.tag == tag], tag):
+            for group, words, cost in _lists_of_rows(members, position, path_name, name):
+                lists.append((key, name, group, words, cost))
     out = []
-    for (ta, a, wa, ca), (tb, b, wb, cb) in itertools.combinations(lists, 2):
-        if ta != tb and len(a.values) == len(b.values):
+    for (ka, ta, a, wa, ca), (kb, tb, b, wb, cb) in itertools.combinations(lists, 2):
+        if ka != kb and len(a.values) == len(b.values):
             out.append(Proposal(f"rows tagged '{ta}' ({wa}) and rows tagged '{tb}' ({wb})", a, b, ta, tb, ca + cb))
+    return out
+
+
+def _under_headers(rows: list, tag: str) -> list:
+    """``[(key, name, rows)]``: a tag's rows, and when they fall under several section headers (``Robot TCP
+    Position:`` / ``Camera Position in Marker Coordinate Space:`` above untagged matrix rows), the rows under
+    each header, named by it."""
+    out = [((tag, None), tag, rows)]
+    labels = list(dict.fromkeys(r.label for r in rows))
+    if len(labels) > 1:
+        for label in labels:
+            name = label.strip("#%/ :<>")
+            out.append(((tag, label), f"{tag} {name}".strip() if tag else name,
+                        [r for r in rows if r.label == label]))
     return out
 
 

@@ -6,7 +6,10 @@ whose first field is not a number carries a *tag*: its leading words (``hand``, 
 are one tag; the digits, when there are some, are kept as the row's posture *key*: ``image7.png`` ->
 7). Lines that hold no number, or start with ``#``, ``//`` or ``%``, are *text lines* (comments,
 headers, labels); a line holding one whole number alone is a *count line* (``12`` before a list of
-twelve matrices). Both, and blank lines, are recorded as breaks between the numeric rows:
+twelve matrices). An XML-like element on one line (``<Position X="812.4" Y="-120.3" ... C="30"/>``,
+``<X>812.4</X>``) is a row tagged by its element name, its values the numbers of its attributes and
+text, in order (words such as ``Mode="AUTO"`` skipped; an element without a number is a text
+line). Both, and blank lines, are recorded as breaks between the numeric rows:
 ``section`` counts text and count lines, ``run`` counts every break (blank lines too), so that a
 layout can read blocks either way.
 """
@@ -21,6 +24,8 @@ __all__ = ["TextRow", "tokenise"]
 _SPLIT = re.compile(r"[\s,;:|=\[\](){}]+")
 _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf|infinity)", re.IGNORECASE)
 _DIGITS = re.compile(r"\d+")
+_ELEMENT = re.compile(r"^<\s*([A-Za-z_][\w:.\-]*)")
+_ELEMENT_VALUES = re.compile(r"""=\s*"([^"]*)"|=\s*'([^']*)'|>([^<]+)<""")
 #: Longer rows are no pose log's (a camera-calibration row with intrinsics, R, t and 14 distortion
 #: coefficients is under 40 numbers).
 MAX_NUMBERS = 96
@@ -56,9 +61,28 @@ class TextRow:
     label: str = ""
 
 
+def _element(line: str) -> tuple[list, list] | None:
+    """(element name, numbers of its attributes and text) of an XML-like line, ``None`` for other lines."""
+    found = _ELEMENT.match(line)
+    if not found:
+        return None
+    numbers = []
+    for match in _ELEMENT_VALUES.finditer(line + "<"):
+        for field in (next(g for g in match.groups() if g is not None)).split():
+            if _NUMBER.fullmatch(field):
+                try:
+                    numbers.append(float(field))
+                except (ValueError, OverflowError):
+                    return [found.group(1)], []
+    return [found.group(1)], numbers
+
+
 def _split(line: str) -> tuple[list, list]:
     """(leading words, numbers) of a line; the numbers are ``None`` when words follow the first number
     and are not all units or names between numbers (then the line is text)."""
+    element = _element(line.strip())
+    if element is not None:
+        return element
     fields = [f for f in _SPLIT.split(line.strip()) if f]
     words, numbers = [], []
     for f in fields:

@@ -1,0 +1,76 @@
+"""Hand-eye logs in the structures other tools write (XML-like state lines, section headers, comment
+headers, folders of per-posture files with decoys beside them), generated from a known station.
+
+Each writer takes a :class:`layout_logs.Station` and a seed (the words, element and attribute
+names, conventions and decoys are drawn from it) and returns the paths to import; the test then
+checks that the import recovers the station's poses and its mount X.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from handeye.calibration.solve import calibrate_session
+from handeye.calibration.transforms import invert_transforms
+from layout_logs import encode
+
+#: Attribute names of a 6-number pose (position, then Euler angles) as controllers write them.
+POSE_ATTRIBUTES = (tuple("XYZABC"), ("x", "y", "z", "rx", "ry", "rz"), ("X", "Y", "Z", "W", "P", "R"))
+ROBOT_HEADERS = ("Robot TCP Position:", "Flange pose", "TCP in base frame:", "Tool pose [mm]:")
+CAMERA_HEADERS = ("Camera Position in Marker Coordinate Space:", "Marker pose in camera:", "Board in camera frame")
+
+
+def _num(v: float) -> str:
+    return f"{v:.6f}"
+
+
+def matrix_lines(m, indent: str = "") -> list:
+    """A 4x4 matrix printed over four lines."""
+    return [indent + " ".join(_num(v) for v in row) for row in np.asarray(m, float).reshape(4, 4)]
+
+
+def state_log(folder, st, seed: int, robot_matrix: bool = False) -> list:
+    """A controller state log: per posture an XML-like element carrying the flange pose as attributes
+    (Euler angles, KUKA or Fanuc), joint values as another element (not a pose), non-numeric
+    attributes, and the board printed as a 4x4 matrix under a section header (camera in marker or
+    marker in camera); with ``robot_matrix`` the flange also as a matrix under its own header."""
+    rng = np.random.default_rng(seed)
+    names = POSE_ATTRIBUTES[rng.integers(len(POSE_ATTRIBUTES))]
+    kind = "fanuc" if names[3] == "W" else str(rng.choice(("kuka", "fanuc")))
+    unit = "m" if rng.uniform() < 0.3 else "mm"
+    robot = encode(st.tool0, kind, unit, False)
+    invert = bool(rng.uniform() < 0.5)
+    camera = invert_transforms(st.target) if invert else st.target
+    element = str(rng.choice(("Position", "TCP", "RobotPos", "Pose")))
+    header = CAMERA_HEADERS[0] if invert else CAMERA_HEADERS[1 + rng.integers(2)]
+    lines = [f"Controller state log, seed {seed}", ""]
+    for k, (pose, cam) in enumerate(zip(robot, camera)):
+        lines.append(f'<RobotState Seq="{k}" Mode="AUTO" Time="2024-05-0{1 + k % 9}T12:00:{k:02d}">')
+        lines.append(f"  <{element} " + " ".join(f'{n}="{v:.5f}"' for n, v in zip(names, pose)) + " />")
+        joints = " ".join(f'A{j + 1}="{v:.3f}"' for j, v in enumerate(st.joints[k]))
+        lines.append(f"  <Joints {joints} />")
+        lines.append("</RobotState>")
+        if robot_matrix:
+            tool0 = st.tool0[k].copy()
+            tool0[:3, 3] /= 1000.0 if unit == "m" else 1.0
+            lines += [ROBOT_HEADERS[rng.integers(len(ROBOT_HEADERS))]] + matrix_lines(tool0, "  ")
+        c = cam.copy()
+        c[:3, 3] /= 1000.0 if unit == "m" else 1.0
+        lines += [header] + matrix_lines(c, "  ") + [""]
+    path = folder / f"state{seed}.log"
+    path.write_text("\n".join(lines) + "\n")
+    return [path]
+
+
+def recovers_x(session, st, tol_mm: float = 2.0, tol_deg: float = 0.3) -> bool:
+    """The session, solved, gives the station's mount X (within ``tol_mm`` and ``tol_deg``)."""
+    x = calibrate_session(session).x
+    d_t = float(np.linalg.norm(x[:3, 3] - st.x[:3, 3]))
+    cos = (np.trace(x[:3, :3].T @ st.x[:3, :3]) - 1) / 2
+    return d_t < tol_mm and float(np.degrees(np.arccos(np.clip(cos, -1, 1)))) < tol_deg and session.setup == st.setup
+
+
+def dump_json(path, data) -> None:
+    path.write_text(json.dumps(data, indent=1))
