@@ -74,3 +74,30 @@ def recovers_x(session, st, tol_mm: float = 2.0, tol_deg: float = 0.3) -> bool:
 
 def dump_json(path, data) -> None:
     path.write_text(json.dumps(data, indent=1))
+
+
+def commented_log(folder, st, seed: int) -> list:
+    """Tagged rows (``P`` + a 6-number pose, three ``C`` rows of a 3x4 matrix, or two tags of 6/7
+    numbers) under comment lines naming the columns, with colons (``# P: X Y Z A B C``) or without."""
+    rng = np.random.default_rng(seed)
+    kind = str(rng.choice(("kuka", "fanuc")))
+    unit = "m" if rng.uniform() < 0.3 else "mm"
+    robot = encode(st.tool0, kind, unit, False)
+    colon = ":" if rng.uniform() < 0.7 else ""
+    lines = [f"# recorded: 2024-05-0{1 + seed % 9} 12:00", f"# units{colon} {unit}, angles: deg"]
+    names = "X Y Z A B C" if kind == "kuka" else "X Y Z W P R"
+    if rng.uniform() < 0.5:
+        camera = encode(st.target, "m12", unit, False)
+        tags = ("P", "C") if rng.uniform() < 0.5 else ("pose", "cam")
+        lines += [f"# {tags[0]}{colon} {names}", f"# {tags[1]}{colon} r11 r12 r13 tx (three rows: the marker in the camera)"]
+        for a, b in zip(robot, camera):
+            lines.append(f"{tags[0]} " + " ".join(_num(v) for v in a))
+            lines += [f"{tags[1]} " + " ".join(_num(v) for v in b[4 * i:4 * i + 4]) for i in range(3)]
+    else:
+        camera = encode(st.target, "wxyz", unit, False)
+        lines += [f"# robot{colon} {names}", f"# marker{colon} x y z qw qx qy qz"]
+        for a, b in zip(robot, camera):
+            lines += ["robot " + " ".join(_num(v) for v in a), "marker " + " ".join(_num(v) for v in b)]
+    path = folder / f"commented{seed}.txt"
+    path.write_text("\n".join(lines) + "\n")
+    return [path]

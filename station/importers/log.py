@@ -77,7 +77,12 @@ def _is_tree(path: Path, text: str) -> bool:
     if path.suffix.lower() in _TREE_SUFFIXES:
         return True
     table = parse_table(text)
-    return not table.rows and ":" in text
+    return not table.rows and any(":" in line for line in text.splitlines()
+                                  if not line.lstrip().startswith(_COMMENT_STARTS))
+
+
+#: Lines starting so are comments (a header naming the columns, ``# P: X Y Z A B C``), never YAML keys.
+_COMMENT_STARTS = ("#", "//", "%")
 
 
 def _document(path: Path, text: str):
@@ -557,8 +562,10 @@ def _one_file_pairings(path: Path) -> list:
         try:
             found = _tree_candidates(path, text)
         except SessionError:  # ``robot: 1, 2, ...`` lines look like YAML but are a tagged table
-            if path.suffix.lower() in _TREE_SUFFIXES or text.lstrip()[:1] in ("{", "[") or not tokenise(text):
+            if _declared_tree(path, text) or not tokenise(text):
                 raise
+            tree = False
+        if not found and not _declared_tree(path, text):  # a text YAML reads as strings: read it as text
             tree = False
     for a in alternatives if not found else []:
         if isinstance(a, tuple):
@@ -577,6 +584,11 @@ def _one_file_pairings(path: Path) -> list:
         raise SessionError(f"{path}: one list of poses only; give the robot poses and the camera poses (two "
                            f"blocks, two lists, two tags, or two files)")
     return found
+
+
+def _declared_tree(path: Path, text: str) -> bool:
+    """The file says it is JSON/YAML: by its suffix, or a first character opening a list or a mapping."""
+    return path.suffix.lower() in _TREE_SUFFIXES or text.lstrip()[:1] in ("{", "[")
 
 
 def _tree_candidates(path: Path, text: str) -> list:
