@@ -39,7 +39,7 @@ from ..drivers.camera.interface import Camera, StereoFrame
 from ..rapid.errors import RapidError
 from ..rapid.interpreter import ModuleSource
 from .controller.sources import MODULE_SUFFIXES, ControllerProgram
-from .side_port import SidePort
+from .side_port import TOO_LONG, SidePort, read_line
 
 __all__ = ["CellService", "CellCamera", "mock_camera", "cell_info", "parse_address", "MAX_MESSAGE"]
 
@@ -63,10 +63,12 @@ class _Handler(socketserver.StreamRequestHandler):
     def handle(self) -> None:
         service = self.server.service
         while True:
-            line = self.rfile.readline(MAX_MESSAGE)
+            line = read_line(self.rfile, MAX_MESSAGE)
             if not line:
                 return
             try:
+                if line is TOO_LONG:
+                    raise ValueError(f"a request line longer than {MAX_MESSAGE} bytes (refused whole)")
                 request = json.loads(line)
                 reply, payload = service.answer(request)
             except (ValueError, KeyError, TypeError) as exc:

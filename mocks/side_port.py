@@ -2,21 +2,63 @@
 (the rehearsal camera, :mod:`~handeye.mocks.cell`; the FlexPendant, :mod:`~handeye.mocks.controller.pendant`).
 
 A threading TCP server whose handler reaches the service as ``self.server.service``, served in a
-daemon thread of its own from :meth:`SidePort.start` until :meth:`SidePort.stop`.
+daemon thread of its own from :meth:`SidePort.start` until :meth:`SidePort.stop`. Requests are lines:
+:func:`read_line` reads one to its newline and refuses a line longer than the port takes as a whole (its
+tail is never read as a request of its own); a client that hangs up mid-request ends its connection
+quietly, never with a traceback on the mock's stderr.
 """
 
 from __future__ import annotations
 
+import logging
 import socketserver
+import sys
 import threading
 
-__all__ = ["SidePort"]
+__all__ = ["SidePort", "TOO_LONG", "read_line"]
+
+log = logging.getLogger(__name__)
+
+#: What :func:`read_line` returns for a line longer than its limit (the whole line read and dropped).
+TOO_LONG = object()
+
+#: A client's hang-up, seen by the server as one of these (nothing to report).
+_HANG_UPS = (ConnectionError, TimeoutError)
+
+
+def read_line(stream, limit: int):
+    """The next request line of ``stream`` (bytes with its newline; ``b""`` at the end of the stream), or
+    :data:`TOO_LONG` when it has more than ``limit`` bytes before its newline: the rest of that line is
+    read and dropped (at most ``limit`` bytes held at a time), so its tail is never taken as a request.
+
+    Parameters
+    ----------
+    stream : binary file
+        The connection's ``rfile``.
+    limit : int
+        Longest line taken, in bytes, its newline not counted.
+    """
+    line = stream.readline(limit + 1)
+    if len(line) <= limit or line.endswith(b"\n"):
+        return line
+    while True:  # over long: drop up to the newline (or the end of the stream)
+        rest = stream.readline(limit + 1)
+        if not rest or rest.endswith(b"\n"):
+            return TOO_LONG
 
 
 class _Server(socketserver.ThreadingTCPServer):
     daemon_threads = True
     allow_reuse_address = True
     block_on_close = True
+
+    def handle_error(self, request, client_address) -> None:
+        """A client that hung up early ends its connection without a word; anything else is the mock's
+        fault, logged with its traceback."""
+        if isinstance(sys.exc_info()[1], _HANG_UPS):
+            log.debug("side port: %s hung up", client_address)
+            return
+        super().handle_error(request, client_address)
 
 
 class SidePort:

@@ -13,43 +13,67 @@ from __future__ import annotations
 import csv
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 from ..calibration.clearance import CellGuard
 from ..calibration.errors import HandEyeError
 from ..calibration.kinematics import RobotModel
+from .csv_values import is_header, parse_value, value_problem
 
-__all__ = ["CellCheckResult", "check_joints", "read_joints_csv"]
+__all__ = ["CellCheckResult", "JointRows", "check_joints", "read_joints_csv"]
 
 
-def read_joints_csv(path, dof: int) -> tuple[np.ndarray, list[int]]:
-    """Rows ``(n, dof)`` of axis angles (deg) and their line numbers; a header line, blank lines and ``#``
-    comments are skipped. A row that is not ``dof`` numbers is refused (HandEyeError, one line)."""
+class JointRows(NamedTuple):
+    """What :func:`read_joints_csv` read: the rows, their line numbers and the header line it skipped.
+
+    Attributes
+    ----------
+    rows : ndarray, shape (n, dof)
+        Axis angles (deg), one posture a row.
+    lines : list of int
+        The file's line number (1-based) of each row.
+    header : tuple of (int, str) or None
+        ``(line number, text)`` of the line taken as a header (no field of it looks like a number), if any.
+    """
+
+    rows: np.ndarray
+    lines: list
+    header: tuple | None = None
+
+
+def read_joints_csv(path, dof: int) -> JointRows:
+    """Rows ``(n, dof)`` of axis angles (deg), their line numbers and the header line skipped, if any.
+
+    Blank lines and ``#`` comments are skipped; the first other line is a header only when none of its
+    fields looks like a number (:func:`~handeye.station.csv_values.is_header`). Every value is a finite
+    number (:func:`~handeye.station.csv_values.parse_value`); a row that is not ``dof`` of them is refused
+    (HandEyeError, one line naming the line and what is wrong)."""
     try:
         text = Path(path).read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise HandEyeError(f"cannot read {path}: {getattr(exc, 'strerror', None) or exc}") from None
-    rows, lines, header = [], [], False
+    rows, lines, header = [], [], None
     for number, cells in enumerate(csv.reader(text.splitlines()), start=1):
         cells = [c.strip() for c in cells if c.strip()]
         if not cells or cells[0].startswith("#"):
             continue
-        try:
-            values = [float(c) for c in cells]
-        except ValueError:
-            if not rows and not header:  # one header line before the first row
-                header = True
-                continue
-            raise HandEyeError(f"{path} line {number}: not numbers: {','.join(cells)[:60]!r}; give the axis "
-                               f"angles in deg, {dof} a line") from None
-        if len(values) != dof or not np.all(np.isfinite(values)):
-            raise HandEyeError(f"{path} line {number}: expected {dof} axis angles (deg), got {len(values)} values")
-        rows.append(values)
+        if not rows and header is None and is_header(cells):  # one header line before the first row
+            header = (number, ",".join(cells))
+            continue
+        problems = [value_problem(c) for c in cells]
+        bad = next((p for p in problems if p), None)
+        if bad:
+            raise HandEyeError(f"{path} line {number}: {bad}; give the axis angles in deg, {dof} a line, comma "
+                               "separated (a header line may hold no number)")
+        if len(cells) != dof:
+            raise HandEyeError(f"{path} line {number}: expected {dof} axis angles (deg), got {len(cells)} values")
+        rows.append([parse_value(c) for c in cells])
         lines.append(number)
     if not rows:
         raise HandEyeError(f"{path} holds no row of axis angles (deg, {dof} a line)")
-    return np.array(rows, float), lines
+    return JointRows(np.array(rows, float), lines, header)
 
 
 @dataclass

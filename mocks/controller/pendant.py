@@ -26,7 +26,7 @@ import threading
 
 import numpy as np
 
-from ..side_port import SidePort
+from ..side_port import TOO_LONG, SidePort, read_line
 
 __all__ = ["PendantService", "PENDANT_COMMANDS"]
 
@@ -34,24 +34,31 @@ log = logging.getLogger(__name__)
 
 #: The pendant port's requests.
 PENDANT_COMMANDS = ("JOG", "START", "KEY", "STATE")
-_MAX_LINE = 200
+#: Longest request line taken (bytes before its newline); a longer one is refused whole.
+MAX_LINE = 200
 
 
 class _Handler(socketserver.StreamRequestHandler):
     def handle(self) -> None:
         service = self.server.service
         while True:
-            line = self.rfile.readline(_MAX_LINE)
+            line = read_line(self.rfile, MAX_LINE)
             if not line:
                 return
-            try:
-                reply = service.answer(line.decode("ascii", "replace").strip())
-            except Exception as exc:  # one bad request never ends the port
-                log.exception("pendant port")
-                reply = f"ERR {type(exc).__name__}: {exc}"
+            if line is TOO_LONG:
+                reply = f"ERR request line longer than {MAX_LINE} bytes: refused whole, nothing done"
+            else:
+                reply = self._answer(service, line)
             self.wfile.write(reply.encode("ascii", "replace") + b"\n")
             self.wfile.flush()
 
+    @staticmethod
+    def _answer(service, line: bytes) -> str:
+        try:
+            return service.answer(line.decode("ascii", "replace").strip())
+        except Exception as exc:  # one bad request never ends the port
+            log.exception("pendant port")
+            return f"ERR {type(exc).__name__}: {exc}"
 
 
 class PendantService(SidePort):

@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 HELP = "check robot targets (axis angles) against the cell's keep-out volumes and the arm's own links"
 
 EPILOG = """\
 JOINTS.csv holds one posture a line: the robot's axis angles in deg (a1, ..., a6 for the IRB 1400),
-comma-separated; a header line, blank lines and # comments are skipped. Each row is checked as the
+comma-separated, finite numbers (no nan/inf, no digit separators such as 1_000); blank lines and
+# comments are skipped, and so is one header line before the first row, only if none of its fields
+looks like a number (a1,a2,...: the output says which line it took as the header; a first row with a
+typo is refused, never skipped). Each row is checked as the
 planner checks a posture: every link of the arm (base, links 1-3, the wrist) and what the flange
 carries (cell.carried) against every keep-out volume (cell.keep_out), and the robot file's
 self-collision pairs (the camera against link 3, link 4 against link 1, ...), all within
@@ -19,7 +23,7 @@ checked (its pose comes from a capture). The planner, the mock arm and this comm
 For each row and move: clear, or the closest pair (body - volume, or body - body) and the distance
 (negative: inside). Exit status: 0 all clear, 3 any not clear, 1 errors, 2 usage errors.
 
---json FILE writes {"clear": ..., "margin_mm": ..., "postures": [{"row": i, "line": n, "clear": true|false,
+--json FILE writes {"clear": ..., "margin_mm": ..., "header_line": n or null, "postures": [{"row": i, "line": n, "clear": true|false,
 "closest": "camera - link 3", "distance_mm": d, "kind": "cell"|"self"|"limits", "text": ...}],
 "moves": [{"from_row": i, "to_row": i + 1, "clear": ..., "closest": ..., "distance_mm": ..., "at": s, ...}]}
 (row 0-based; at: the fraction of the move where it comes closest, or first too close).
@@ -57,10 +61,13 @@ def run(args) -> int:
         check_output_file(args.json)
     config = load_config(args.config) if args.config else default_config()
     robot = load_robot(config.robot)
-    joints, lines = read_joints_csv(args.joints, robot.dof)
+    joints, lines, header = read_joints_csv(args.joints, robot.dof)
     result = check_joints(robot, cell_check(config).guard(robot), joints, lines, moves=args.moves)
+    if header is not None:  # said on stderr when the JSON goes to standard output
+        print(f"line {header[0]} taken as a header (no number in it), not checked: {header[1][:60]!r}",
+              file=sys.stdout if args.json != "-" else sys.stderr)
     if args.json != "-":
         print("\n".join(result.lines()))
     if args.json:
-        write_json(args.json, result.to_dict())
+        write_json(args.json, {**result.to_dict(), "header_line": None if header is None else header[0]})
     return 0 if result.clear else 3

@@ -1,6 +1,7 @@
 """Time-stamped pose streams in CSV (the ETH Zurich ``hand_eye_calibration`` layout).
 
-Two files, one pose per line, no header (a first line that is not numbers is skipped)::
+Two files, one pose per line, no header (a first line none of whose fields looks like a number is
+skipped; values by the rules of :mod:`handeye.station.csv_values`)::
 
     t, x, y, z, qx, qy, qz, qw          stamp in seconds, position, quaternion scalar LAST, metres
 
@@ -27,6 +28,7 @@ from scipy.spatial.transform import Rotation
 
 from ...calibration.errors import SessionError, brief
 from ...calibration.session import Session
+from ..csv_values import is_header, parse_value, value_problem
 from .common import (
     Dropped,
     EntryErrors,
@@ -131,7 +133,7 @@ def read_pose_stream(path, order: str = "xyzw", errors: EntryErrors | None = Non
 
 def _stream_rows(text: str, order: str) -> tuple[list, list, list]:
     """The line numbers and values of the lines of 8 numbers, and ``(line, reason)`` of the others
-    (blank lines, comments and a header line left out)."""
+    (blank lines, comments and a header line left out: :mod:`handeye.station.csv_values`)."""
     numbers, rows, problems = [], [], []
     first = True
     for number, line in enumerate(text.splitlines(), start=1):
@@ -139,18 +141,18 @@ def _stream_rows(text: str, order: str) -> tuple[list, list, list]:
         if not stripped or stripped.startswith("#"):
             continue
         fields = [f.strip() for f in stripped.split(",")]
-        if first and not all(_is_number(f) for f in fields):
+        if first and is_header(fields):
             first = False
-            continue  # a header line
+            continue  # a header line: no field of it looks like a number
         first = False
+        bad = next((p for p in map(value_problem, fields) if p), None)
+        if bad:
+            problems.append((number, bad))
+            continue
         if len(fields) != 8:
             problems.append((number, f"expected 8 values (t, x, y, z, quaternion {order}); got {len(fields)}"))
             continue
-        try:
-            rows.append([float(f) for f in fields])
-        except ValueError:
-            problems.append((number, f"not a number in {stripped[:60]!r}"))
-            continue
+        rows.append([parse_value(f) for f in fields])
         numbers.append(number)
     return numbers, rows, problems
 

@@ -124,3 +124,53 @@ def test_an_unknown_name_in_the_self_collision_pairs_is_refused_at_load(tmp_path
         config_from_dict({"robot": str(path), "controller": {"protocol": "mock"}, "camera": {"backend": "mock"}})
     assert "'link 9'" in str(config.value) and "\n" not in str(config.value)
     assert load_robot(str(_robot_file(tmp_path, "link 6, link 3"))).self_pairs[-1] == ("link 6", "link 3")
+
+
+# ------------------------------------------------------------------ the joints file read by the CSV rules (issue 42.1)
+def _check(tmp_path, text, *extra):
+    config = tmp_path / "station.yaml"
+    config.write_text(CONFIG, encoding="utf-8")
+    joints = tmp_path / "t.csv"
+    joints.write_text(text, encoding="utf-8")
+    return main(["cell", "check", "--config", str(config), str(joints), "--moves", *extra])
+
+
+#: Link 4 against link 1: the row of the issue, which is not clear.
+COLLIDING = "0,-30,60,0,90,0"
+
+
+@pytest.mark.parametrize("first, why", [
+    ("0,-30,6O,0,90,0", "not a number: '6O'"),                      # a letter O for a zero
+    ("0 -30 60 0 90 0", "not one number: '0 -30 60 0 90 0' (separate the values by commas)"),
+    ("0,-30,60,0,90,0 # the colliding one", "not a number: '0 # the colliding one' (a comment is a line of its own"),
+    ("0,-30,nan,0,90,0", "not finite: 'nan'"),
+    ("0,-30,inf,0,90,0", "not finite: 'inf'"),
+    ("0,-30,1e400,0,90,0", "not finite: '1e400' is beyond the float range"),
+    ("0,-30,60,0,90,1_000", "not a number: '1_000' (write it without digit separators"),
+])
+def test_a_bad_first_row_is_refused_never_taken_as_a_header(tmp_path, capsys, first, why):
+    assert _check(tmp_path, first + "\n0,10,0,0,0,0\n") == 1
+    captured = capsys.readouterr()
+    assert "all clear" not in captured.out
+    assert f"t.csv line 1: {why}" in captured.err and captured.err.count("\n") == 1, captured.err
+
+
+def test_the_same_bad_value_on_a_later_row_says_what_is_wrong(tmp_path, capsys):
+    assert _check(tmp_path, "a1,a2,a3,a4,a5,a6\n0,10,0,0,0,0\n0,-30,nan,0,90,0\n") == 1
+    err = capsys.readouterr().err
+    assert "t.csv line 3: not finite: 'nan'" in err and "got 6 values" not in err
+
+
+def test_a_header_is_a_line_without_numbers_and_the_output_names_it(tmp_path, capsys):
+    assert _check(tmp_path, "# targets of HeCal\naxis 1,a2,a3,a4,a5,a6\n" + COLLIDING + "\n0,10,0,0,0,0\n") == 3
+    out = capsys.readouterr().out
+    assert "line 2 taken as a header (no number in it), not checked: 'axis 1,a2,a3,a4,a5,a6'" in out
+    assert "row 0 (line 3): NOT CLEAR: link 4 against link 1" in out
+    assert _check(tmp_path, COLLIDING + "\n0,10,0,0,0,0\n") == 3  # no header: none named
+    assert "taken as a header" not in capsys.readouterr().out
+
+
+def test_the_json_names_the_header_line_and_stdout_stays_json(tmp_path, capsys):
+    assert _check(tmp_path, "a1,a2,a3,a4,a5,a6\n" + COLLIDING + "\n", "--json", "-") == 3
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["header_line"] == 1 and "taken as a header" in captured.err

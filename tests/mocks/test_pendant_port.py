@@ -1,0 +1,63 @@
+"""The mock's pendant port as a careless or hostile client meets it: an over-long line is one request,
+refused whole (its tail never runs), and a client that hangs up early leaves no traceback behind."""
+
+from __future__ import annotations
+
+import socket
+import struct
+import time
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from handeye.mocks.controller.pendant import MAX_LINE, PendantService
+from handeye.mocks.robot import SimulatedRobot
+
+
+@pytest.fixture
+def port():
+    robot = SimulatedRobot(np.zeros((1, 6)), time_scale=0.01)
+    service = PendantService(SimpleNamespace(robot=robot, program=None, flexpendant=SimpleNamespace(prompt=None, stopped=False, last_line="-"))).start()
+    try:
+        yield service, robot
+    finally:
+        service.stop()
+
+
+def _ask(service, data: bytes, replies: int = 1) -> list[str]:
+    with socket.create_connection((service.host, service.port), timeout=10) as sock:
+        sock.sendall(data)
+        stream = sock.makefile("rb")
+        return [stream.readline().decode().strip() for _ in range(replies)]
+
+
+@pytest.mark.parametrize("pad", [MAX_LINE - len("JOG 10 0 0 0 0 0") + 1, MAX_LINE, 5 * MAX_LINE + 7])
+def test_an_over_long_line_is_refused_whole_and_its_tail_never_moves_the_arm(port, pad):
+    service, robot = port
+    before = robot.current_joints.copy()
+    replies = _ask(service, b"X" * pad + b"JOG 10 0 0 0 0 0\nSTATE\n", replies=2)
+    assert replies[0].startswith("ERR request line longer than"), replies
+    assert replies[1].startswith("OK none"), replies  # the next line is the next request
+    assert np.array_equal(robot.current_joints, before)
+
+
+def test_a_line_of_the_longest_length_taken_is_served(port):
+    service, robot = port
+    request = b"JOG 10 0 0 0 0 0"
+    line = request + b" " * (MAX_LINE - len(request))  # exactly MAX_LINE bytes before the newline
+    assert _ask(service, line + b"\n")[0].startswith("OK 10.0000")
+    assert robot.current_joints[0] == pytest.approx(10.0)
+
+
+def test_a_client_that_hangs_up_early_leaves_no_traceback(port, capfd):
+    service, _ = port
+    for _ in range(3):
+        sock = socket.create_connection((service.host, service.port), timeout=10)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))  # reset, not a clean close
+        sock.sendall(b"JOG 40 0 0 0 0 0\n")  # the reply comes once the arm stands still: after the hang-up
+        sock.close()
+    time.sleep(1.0)
+    assert _ask(service, b"STATE\n")[0].startswith("OK ")  # the port still serves
+    err = capfd.readouterr().err
+    assert "Traceback" not in err and "Exception occurred" not in err, err
