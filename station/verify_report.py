@@ -12,8 +12,11 @@ from .verify_history import history_lines, trend_png
 __all__ = ["write_history_report"]
 
 
-def write_history_report(path, records: list, thresholds, data: dict | None) -> Path:
-    """Write the page (the check ``data`` when given, then the history's trend and lines); returns its path."""
+def write_history_report(path, history, thresholds, data: dict | None) -> Path:
+    """Write the page (the check ``data`` when given, then the history's trend and lines, and the
+    damaged records skipped); returns its path. ``history``: a ``verify_history.History`` or its records."""
+    records = getattr(history, "records", history)
+    skipped = history.skipped_line() if hasattr(history, "skipped_line") else None
     png = base64.b64encode(trend_png(records, thresholds.max_sigma_translation_mm,
                                      thresholds.max_sigma_rotation_deg)).decode("ascii")
     head = ""
@@ -26,5 +29,6 @@ def write_history_report(path, records: list, thresholds, data: dict | None) -> 
     rows = "".join(f"<li><code>{html.escape(line)}</code></li>" for line in history_lines(records))
     text = (f"<!doctype html><html><head><meta charset='utf-8'><title>handeye verify</title></head><body "
             f"style='font-family:sans-serif;max-width:900px;margin:2em auto'>{head}<h2>History</h2>"
-            f"<img alt='trend' src='data:image/png;base64,{png}'><ul>{rows}</ul></body></html>\n")
+            f"<img alt='trend' src='data:image/png;base64,{png}'><ul>{rows}</ul>"
+            + (f"<p class='skipped'>{html.escape(skipped)}</p>" if skipped else "") + "</body></html>\n")
     return write_text_atomic(path, text)

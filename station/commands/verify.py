@@ -51,18 +51,22 @@ def add_parser(sub):
 
 
 def _history(args, config) -> int:
+    import sys
+
     from ..quality import config_thresholds
-    from ..verify_history import history_lines, history_path, read_history
+    from ..verify_history import history_lines, history_path, load_history
     from ..verify_report import write_history_report
 
     path = history_path(args.against)
-    records = read_history(path)
+    history = load_history(path)
     print(f"history of checks: {path}")
-    for line in history_lines(records):
+    for line in history_lines(history.records):
         print("  " + line)
+    if history.skipped:
+        print(history.skipped_line(), file=sys.stderr)
     if args.report is not None:
         target = args.report or str(path.with_suffix(".html"))
-        print(f"report: {write_history_report(target, records, config_thresholds(config), None)}")
+        print(f"report: {write_history_report(target, history, config_thresholds(config), None)}")
     return 0
 
 
@@ -104,11 +108,12 @@ def _check(args, config, link, tag: str) -> str:
     from ...calibration.files import write_text_atomic
     from ..quality import config_thresholds
     from ..verify import verify
-    from ..verify_history import append_record, check_record, history_path, read_history
+    from ..verify_history import append_record, check_record, history_path, load_history
     from ..verify_report import write_history_report
     from ..verify_result import advice, outcome_json, outcome_lines
 
     import json
+    import sys
 
     def say(message: str) -> None:
         print(tag + message, flush=True)
@@ -123,16 +128,39 @@ def _check(args, config, link, tag: str) -> str:
         say(line)
     station = "mock" if config.is_mock else str(getattr(config, "source", "station"))
     path = history_path(args.against)
-    append_record(path, check_record(data, station))
-    say(f"history: {path}")
+
+    def record() -> None:
+        append_record(path, check_record(data, station))
+        say(f"history: {path}")
+
+    def report() -> None:
+        history = load_history(path)
+        if history.skipped:
+            print(history.skipped_line(), file=sys.stderr)
+        target = args.report or str(outcome.folder / "verify_report.html")
+        say(f"report: {write_history_report(target, history, thresholds, data)}")
+
+    _after_check(record, "the check was not added to the history")
     if args.json:
         write_text_atomic(args.json, json.dumps(data, indent=1) + "\n")
     if outcome.folder is not None and outcome.folder.is_dir():
         write_text_atomic(outcome.folder / "verify.json", json.dumps(data, indent=1) + "\n")
     if args.report is not None:
-        target = args.report or str(outcome.folder / "verify_report.html")
-        say(f"report: {write_history_report(target, read_history(path), thresholds, data)}")
+        _after_check(report, "no report was written")
     return outcome.verdict
+
+
+def _after_check(step, what: str) -> None:
+    """Run one output step after the check: an error it raises is said in one line on stderr, and the
+    check's verdict (its exit status) stands."""
+    import sys
+
+    from ...calibration.errors import HandEyeError
+
+    try:
+        step()
+    except HandEyeError as exc:
+        print(f"{exc}: {what}; the verdict above stands", file=sys.stderr)
 
 
 def _ask(question: str) -> bool:
