@@ -101,3 +101,62 @@ def commented_log(folder, st, seed: int) -> list:
     path = folder / f"commented{seed}.txt"
     path.write_text("\n".join(lines) + "\n")
     return [path]
+
+
+def _png(path) -> None:
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(200))
+
+
+def side_files_folder(folder, st, seed: int) -> list:
+    """A folder holding one text file per side, the tool's own result (one 4x4 matrix, in a ``.txt``
+    or ``.yaml``) and a settings ``.ini``: the folder imports, the result and settings are skipped."""
+    from layout_logs import encode as enc
+
+    rng = np.random.default_rng(seed)
+    sub = folder / f"run{seed}"
+    sub.mkdir(parents=True, exist_ok=True)
+    kind_r, kind_c = str(rng.choice(("kuka", "wxyz", "m16"))), str(rng.choice(("rotvec", "xyzw", "m16")))
+    names = (("robot_poses.txt", "camera_poses.txt"), ("tcp.csv", "marker.csv"), ("hand.txt", "eye.txt"))[seed % 3]
+    sep = "," if names[0].endswith(".csv") else " "
+    for name, values in zip(names, (enc(st.tool0, kind_r, "mm", False), enc(st.target, kind_c, "mm", False))):
+        (sub / name).write_text("\n".join(sep.join(_num(v) for v in row) for row in values) + "\n")
+    if rng.uniform() < 0.5:
+        (sub / "result.txt").write_text("# hand-eye result\n" + "\n".join(matrix_lines(st.x)) + "\n")
+    else:
+        (sub / "calibration_result.yaml").write_text(
+            "camera_to_tool: " + json.dumps(np.round(st.x, 6).tolist()) + "\nresidual_mm: 0.42\n")
+    (sub / "settings.ini").write_text("[capture]\nexposure=12000\npostures=12\nspeed=100\n")
+    return [sub]
+
+
+def posture_files_folder(folder, st, seed: int) -> list:
+    """A capture tool's folder: one JSON (or YAML) per posture holding the flange pose as a 4x4 stored
+    row-major (flat 16 or nested), the board pose as OpenCV ``rvec`` / ``tvec`` nested 3x1 lists
+    (``[[x], [y], [z]]``), joint values beside them (not a pose), an image per posture, the tool's
+    result and a settings file."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(seed)
+    sub = folder / f"capture{seed}"
+    sub.mkdir(parents=True, exist_ok=True)
+    yaml_files = seed % 3 == 2
+    flat = rng.uniform() < 0.5
+    robot_key = str(rng.choice(("robot_pose", "T_base_tcp", "pose", "flange")))
+    for k in range(st.tool0.shape[0]):
+        m = st.tool0[k]
+        rvec = Rotation.from_matrix(st.target[k][:3, :3]).as_rotvec()
+        doc = {"id": k, "stamp": 1700000000.0 + 3.5 * k,
+               robot_key: (m.ravel().tolist() if flat else m.tolist()),
+               "board": {"rvec": [[float(v)] for v in rvec], "tvec": [[float(v)] for v in st.target[k][:3, 3]]},
+               "joints": [float(v) for v in st.joints[k]], "corners_found": 88}
+        stem = f"pose_{k:03d}" if seed % 2 else f"{k:03d}"
+        if yaml_files:
+            import yaml
+
+            (sub / f"{stem}.yaml").write_text(yaml.safe_dump(doc))
+        else:
+            dump_json(sub / f"{stem}.json", doc)
+        _png(sub / f"{stem}.png")
+    dump_json(sub / "handeye_result.json", {"cam2gripper": np.round(st.x, 6).tolist(), "rms": 0.3})
+    (sub / "settings.ini").write_text("[camera]\nserial=1234\n")
+    return [sub]

@@ -36,6 +36,7 @@ from ...calibration.errors import SessionError, SessionUsageError
 from ...calibration.session import Session
 from .easy_handeye import looks_like_easy_handeye, read_easy_handeye
 from .head import head_text as _head
+from .log_folder import plan_folder
 from .log import looks_like_log, read_log
 from .moveit import looks_like_moveit, read_moveit
 from .opencv_storage import looks_like_opencv, pairs_files, read_opencv
@@ -137,6 +138,8 @@ def detect_format(paths) -> str:
             return "stream"
         files = [p for p in path.iterdir() if p.is_file() and not p.name.startswith(".")]
         if len(files) in (1, 2) and all(looks_like_log(p, _head(p, strict=False)) for p in files):
+            return "log"
+        if plan_folder(path) is not None:  # side files or per-posture files, results and settings beside
             return "log"
         raise SessionError(f"{path}: a folder without ViSP pose files, two CSV streams or one or two logs; "
                            f"{_formats_hint()}")

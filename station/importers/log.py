@@ -40,6 +40,7 @@ from .readings import GAP_MAX_DEG, Constraints, screen, side_units
 from .layout_choice import Candidate, choose_layout
 from .layout_search import one_side_lists, propose
 from .layout_text import tokenise
+from .log_folder import parse_document, plan_folder
 from .log_group import Group
 from .log_result import frame_hints, own_result
 from .log_text import Table, matrices_from_rows, parse_table
@@ -85,13 +86,7 @@ def _is_tree(path: Path, text: str) -> bool:
 _COMMENT_STARTS = ("#", "//", "%")
 
 
-def _document(path: Path, text: str):
-    start = text.lstrip()
-    if start[:1] in ("{", "[") and path.suffix.lower() not in (".yaml", ".yml"):
-        return parse_json(text, path)
-    if text.startswith("%YAML"):  # OpenCV's directive line, which PyYAML refuses
-        text = "\n" + text.split("\n", 1)[-1] if "\n" in text else ""
-    return parse_yaml(text, path)
+_document = parse_document
 
 
 def _tree_groups(path: Path, text: str) -> list:
@@ -455,22 +450,29 @@ def _take(group: Group, index: list) -> Group:
 # --------------------------------------------------------------------------- the reader
 
 
-def _sources(paths) -> list:
+def _sources(paths) -> tuple[list, object]:
+    """``(files, folder plan or None)``: the one or two files to read (a folder's side files), or the folder
+    itself when it holds one file per posture (``log_folder.plan_folder``)."""
     if isinstance(paths, (str, Path)):
         paths = [paths]
     paths = [Path(p) for p in paths]
+    plan = None
     if len(paths) == 1 and paths[0].is_dir():
-        files = sorted(p for p in paths[0].iterdir() if p.is_file() and not p.name.startswith("."))
-        if len(files) not in (1, 2):
-            raise SessionError(f"{paths[0]}: a folder of {len(files)} files; give the log file (or the robot and the "
+        plan = plan_folder(paths[0])
+        if plan is None:
+            files = [p for p in paths[0].iterdir() if p.is_file() and not p.name.startswith(".")]
+            raise SessionError(f"{paths[0]}: a folder of {len(files)} files, none (or more than two) holding a list of "
+                               f"poses and no set of per-posture files; give the log file (or the robot and the "
                                f"camera file)")
-        paths = files
+        if plan.posture_files:
+            return [paths[0]], plan
+        paths = plan.side_files
     if len(paths) not in (1, 2):
         raise SessionError(f"a log is one file (robot and camera poses) or two (robot poses, camera poses); got {len(paths)}")
     for p in paths:
         if not p.exists():
             raise SessionError(f"{p}: no such file")
-    return paths
+    return paths, plan
 
 
 def read_log(paths, *, setup=None, units=None, board=None, skip_invalid: bool = False, robot_pose=None,
@@ -505,17 +507,39 @@ def read_log(paths, *, setup=None, units=None, board=None, skip_invalid: bool = 
     """
     if quaternion_order is not None and quaternion_order not in QUATERNION_ORDERS:
         raise SessionError(f"quaternion order must be wxyz or xyzw; got {brief(quaternion_order)}")
-    files = _sources(paths)
-    pairings = _one_file_pairings(files[0]) if len(files) == 1 else _two_file_pairings(files)
+    files, plan = _sources(paths)
+    if plan is not None and plan.posture_files:
+        pairings = _tree_candidates(files[0], plan.document())
+    else:
+        pairings = _one_file_pairings(files[0]) if len(files) == 1 else _two_file_pairings(files)
+    session = _read_pairings(pairings, files, options_of(euler, quaternion_order), skip_invalid, robot_rows,
+                             dict(setup=setup, units=units, board=board, robot_pose=robot_pose,
+                                  camera_pose=camera_pose))
+    note = plan.note() if plan is not None else None
+    if note:
+        session.extra["import"].setdefault("notes", []).append(note)
+    return session
+
+
+def options_of(euler, quaternion_order) -> tuple[dict, str | None]:
+    """``({euler, quaternion_order}, the flags in words or None)``."""
+    given = " ".join([f"--euler {e}" for e in ([euler] if isinstance(euler, str) else euler or [])]
+                     + ([f"--quaternion-order {quaternion_order}"] if quaternion_order else [])) or None
+    return {"euler": euler, "quaternion_order": quaternion_order}, given
+
+
+def _read_pairings(pairings: list, files: list, options_given: tuple, skip_invalid: bool, robot_rows, flags: dict):
+    """The session of the best pairing (the table reader's layouts first, the search's where they read nothing)."""
+    options, given = options_given
+    flags = dict(flags, given=given)
+    if not pairings:
+        raise SessionError(f"{files[0]}: no two lists of poses of the same postures found (a robot list and a camera "
+                           f"list); give the log file (or the robot and the camera file)")
     if robot_rows is not None:
         pairings = [c for c in pairings if c.matches(robot_rows)]
         if not pairings:
             raise SessionUsageError(f"--robot-rows {robot_rows}: no list of poses in {files[0]} is named or placed so")
     source = str(files[0]) if len(files) == 1 else [str(f) for f in files]
-    options = {"euler": euler, "quaternion_order": quaternion_order}
-    given = " ".join([f"--euler {e}" for e in ([euler] if isinstance(euler, str) else euler or [])]
-                     + ([f"--quaternion-order {quaternion_order}"] if quaternion_order else [])) or None
-    flags = dict(setup=setup, units=units, board=board, robot_pose=robot_pose, camera_pose=camera_pose, given=given)
     results, errors = [], []
     documented = [c for c in pairings if c.documented]
     if documented and len(files) == 1:  # the table reader's layouts first: the search only where they read nothing
@@ -591,10 +615,11 @@ def _declared_tree(path: Path, text: str) -> bool:
     return path.suffix.lower() in _TREE_SUFFIXES or text.lstrip()[:1] in ("{", "[")
 
 
-def _tree_candidates(path: Path, text: str) -> list:
-    """Every pair of equally long pose lists of a JSON/YAML document, the names deciding the sides when they
-    say (else both orders), each carrying the document's frame-name hints and the tool's own result."""
-    document = _document(path, text)
+def _tree_candidates(path: Path, text) -> list:
+    """Every pair of equally long pose lists of a JSON/YAML document (its text, or the parsed document), the
+    names deciding the sides when they say (else both orders), each carrying the document's frame-name
+    hints and the tool's own result."""
+    document = _document(path, text) if isinstance(text, str) else text
     try:
         leaves = find_poses(document)
     except ValueError as exc:

@@ -3,7 +3,8 @@
 :func:`find_poses` walks a parsed document and collects its *pose leaves*:
 
 - a list of 6, 7, 12 or 16 numbers; a list of 4 (or 3) lists of 4 numbers (a matrix); a list of six
-  one-number lists (ViSP's pose vector column);
+  one-number lists (ViSP's pose vector column); positions and rotation vectors as such columns too
+  (OpenCV's ``rvec``/``tvec``, ``[[x], [y], [z]]``);
 - an OpenCV/ViSP matrix mapping ``{rows, cols, data}``;
 - a mapping with a position (``position``, ``translation``, ``t``, ``xyz``, ... as 3 numbers or
   ``{x, y, z}``) and a rotation (``orientation``, ``rotation``, ``quaternion``, ``rvec``, ``rpy``,
@@ -80,7 +81,15 @@ def _numbers(value, count: int | None = None):
         return None
 
 
+def _column(value):
+    """A column vector written as one-number lists (``[[x], [y], [z]]``, OpenCV's rvec/tvec) as a flat list."""
+    if isinstance(value, list) and value and all(isinstance(r, list) and len(r) == 1 for r in value):
+        return [r[0] for r in value]
+    return value
+
+
 def _vector3(value):
+    value = _column(value)
     if isinstance(value, dict):
         keys = {str(k).lower(): v for k, v in value.items()}
         if all(k in keys for k in "xyz") and all(type(keys[k]) in (int, float) for k in "xyz"):
@@ -95,6 +104,7 @@ def _vector3(value):
 def _rotation(value, key: str):
     """``(numbers, conventions)`` of a rotation value under ``key``, or ``None``."""
     key = key.lower()
+    value = _column(value)
     if isinstance(value, dict):
         keys = {str(k).lower(): v for k, v in value.items()}
         for names, convention in ((("x", "y", "z", "w"), PoseConvention("quaternion", "xyzw", width=7)),
