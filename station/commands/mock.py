@@ -64,9 +64,13 @@ rapid generate --guided) from outside: "JOG j1 j2 j3 j4 j5 j6" jogs the arm ther
 deg; a jog whose path comes within the cell margin of a keep-out volume stops there: ERR jog stopped:
 ...), "START" continues a program stopped by Stop \\NoRegain, "KEY n" answers the pendant's prompt
 (TPReadFK function key 1-5, UIMessageBox button n), "STATE" replies the execution state (running,
-prompt, stopped, ended, error, none), the keys offered and the last pendant line. Try it with nc:
+prompt, stopped, ended, error, none), the keys offered and the last pendant line. Play it with
+handeye mock pendant (nothing else to install; without REQUEST it reads one request per line from stdin):
   handeye mock controller --config station.yaml --camera-port 5021 --pendant-port 5022 &
-  printf 'STATE\n' | nc 127.0.0.1 5022
+  handeye mock pendant --port 5022 STATE
+The mock's state lives in its process: a restart resets its arm, its program and its tool data (a
+write-back is lost), and its faults (mock.faults of --config) are read at start only: restart it
+with the faults config to rehearse a drift.
 
 Example:
   handeye mock controller --protocol modbus --port 5020 &
@@ -131,11 +135,72 @@ def add_parser(sub):
     c.add_argument("--write-key", metavar="KEY",
                    help="the key tool writes need (8-32 letters, digits, _ or -; default: the config's "
                         "controller.write_key). Visible in the process list: prefer --config")
+    _add_pendant_parser(targets)
     p.set_defaults(_mock_parser=p)
     return p
 
 
+PENDANT_HELP = "send requests to a running mock controller's pendant port and print its replies"
+
+PENDANT_EPILOG = """\
+Plays the operator of a guided capture by hand, against `handeye mock controller --pendant-port P`.
+Each REQUEST is one line to the port (quote it), its reply is printed; without REQUEST one request
+is read per line from stdin until end of input. Exit status 0 when every reply is OK, 1 when one is
+ERR (printed) or the port cannot be reached.
+
+Requests: STATE (execution running|prompt|stopped|ended|error|none, the keys offered, the last
+pendant line), KEY n (answer the prompt: TPReadFK key 1-5, UIMessageBox button n), JOG j1 .. j6 (axis
+angles, deg), START (continue a program stopped by Stop \\NoRegain).
+
+One posture of a guided capture (the PC's `capture --guided` running against the mock):
+  handeye mock pendant --port 5022 STATE          (OK prompt 1=Capture,5=Done | ...)
+  handeye mock pendant --port 5022 "KEY 1"        (Capture: the program stops for the jog)
+  handeye mock pendant --port 5022 "JOG 10 -20 15 0 60 0"
+  handeye mock pendant --port 5022 START          (the posture is offered to the PC, which captures)
+repeated for each posture; at the last prompt the Done key ("KEY 5"; "KEY 2" with the guided
+program's --prompt messagebox: STATE shows the keys offered) ends the capture.
+"""
+
+
+def _add_pendant_parser(targets) -> None:
+    t = targets.add_parser("pendant", help=PENDANT_HELP, description=PENDANT_HELP, epilog=PENDANT_EPILOG,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
+    t.add_argument("--host", default="127.0.0.1", help="the mock's address (default 127.0.0.1)")
+    t.add_argument("--port", type=argtypes.port, required=True, help="its --pendant-port")
+    t.add_argument("requests", nargs="*", metavar="REQUEST",
+                   help='one request line each: STATE, "KEY n", "JOG j1 .. j6", START (default: stdin)')
+
+
+def _run_pendant(args) -> int:
+    """Sends each request to the pendant port and prints the reply; 1 when a reply is ERR."""
+    import sys
+
+    from ...calibration.errors import HandEyeError
+    from ..pendant_operator import PendantClient
+
+    requests = args.requests or (line.strip() for line in sys.stdin if line.strip())
+    try:
+        client = PendantClient(f"{args.host}:{args.port}", timeout_s=10.0)
+    except OSError as exc:
+        raise HandEyeError(f"cannot reach the pendant port {args.host}:{args.port} ({exc.strerror or exc}): "
+                           "start handeye mock controller with --pendant-port, or check --port") from None
+    status = 0
+    try:
+        for request in requests:
+            reply = client.ask(request)
+            print(reply, flush=True)
+            status = status or (0 if reply.startswith("OK") else 1)
+    except (OSError, ConnectionError) as exc:
+        raise HandEyeError(f"the pendant port {args.host}:{args.port} closed the link ({exc}); "
+                           "is the mock controller still running?") from None
+    finally:
+        client.close()
+    return status
+
+
 def run(args) -> int:
+    if getattr(args, "mock_target", None) == "pendant":
+        return _run_pendant(args)
     if getattr(args, "mock_target", None) != "controller":
         args._mock_parser.print_help()
         return 2

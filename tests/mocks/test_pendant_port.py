@@ -61,3 +61,53 @@ def test_a_client_that_hangs_up_early_leaves_no_traceback(port, capfd):
     assert _ask(service, b"STATE\n")[0].startswith("OK ")  # the port still serves
     err = capfd.readouterr().err
     assert "Traceback" not in err and "Exception occurred" not in err, err
+
+
+def test_the_pendant_command_plays_the_operator_without_nc(port, capsys):
+    """``handeye mock pendant``: each request a line, each reply printed; ERR gives exit 1."""
+    from handeye.station.cli import main
+
+    service, robot = port
+    assert main(["mock", "pendant", "--port", str(service.port), "STATE", "JOG 12 0 0 0 0 0"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("OK none") and out[1].startswith("OK 12.0000"), out
+    assert robot.current_joints[0] == pytest.approx(12.0)
+    assert main(["mock", "pendant", "--port", str(service.port), "JOG 1 2"]) == 1
+    assert capsys.readouterr().out.startswith("ERR JOG takes 6 axis angles")
+
+
+def test_the_pendant_command_reads_requests_from_stdin(port, capsys, monkeypatch):
+    import io
+
+    from handeye.station.cli import main
+
+    service, robot = port
+    monkeypatch.setattr("sys.stdin", io.StringIO("JOG 0 5 0 0 0 0\n\nSTATE\n"))
+    assert main(["mock", "pendant", "--port", str(service.port)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert len(out) == 2 and out[1].startswith("OK none"), out
+    assert robot.current_joints[1] == pytest.approx(5.0)
+
+
+def test_the_pendant_command_says_what_to_do_when_nothing_listens(capsys):
+    from handeye.station.cli import main
+
+    with socket.socket() as sock:  # a port that was free a moment ago: nothing listens there
+        sock.bind(("127.0.0.1", 0))
+        free = sock.getsockname()[1]
+    assert main(["mock", "pendant", "--port", str(free), "STATE"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--pendant-port" in err[0] and "Traceback" not in err[0], err
+
+
+def test_the_mock_controller_help_prints_its_examples_on_one_line_each(capsys):
+    """The epilog's example request is one command line (it printed a literal line break inside
+    ``printf 'STATE``), needs no ``nc`` and says what a restart loses."""
+    from handeye.station.cli import main
+
+    with pytest.raises(SystemExit):
+        main(["mock", "controller", "--help"])
+    text = capsys.readouterr().out
+    assert "handeye mock pendant --port 5022 STATE" in text
+    assert "nc " not in text and not any(line.strip().startswith("' |") for line in text.splitlines())
+    assert "restart resets" in text and "faults" in text
