@@ -117,6 +117,16 @@ class Assessment:
         return d_org_note(self.comparison) if self.comparison else None
 
     @property
+    def rank_note(self) -> str | None:
+        """Why the chosen method is not first by the held-out error (:func:`rank_note`), or ``None``."""
+        return rank_note(self.comparison, self.result) if self.comparison else None
+
+    @property
+    def verdict_scope(self) -> str | None:
+        """What a PASS does not cover when the robot's errors are systematic (:func:`verdict_scope`)."""
+        return verdict_scope(self.verdict, self.result)
+
+    @property
     def units(self):
         """The units advice (``station.units_advice.UnitsAdvice``), or ``None``."""
         return self.figures.units
@@ -293,6 +303,48 @@ def d_org_note(rows: list[dict]) -> str | None:
             f"{lowest['d_org_mm']:.3f} mm): d_org is in-sample, measured on the postures each method was fitted to, "
             f"and rewards fitting their noise; the held-out error (each posture predicted by a fit without it) ranks "
             f"the methods.")
+
+
+def _systematic(result) -> bool:
+    """The result's cross-validation found the held-out error beyond its noise model (SYSTEMATIC)."""
+    return bool((getattr(result, "cross_validation", None) or {}).get("systematic"))
+
+
+def rank_note(rows: list[dict], result) -> str | None:
+    """One line on why the chosen method is not first by the held-out error (``None`` when it is).
+
+    The held-out error scores how well each X carries the board points of these postures through the
+    robot's nominal flange poses; it does not measure the camera pose. With systematic robot errors a
+    method that fits X alone folds them into X: it predicts these postures better with a camera
+    further off. The line says how far the better-ranked methods' X lie from the chosen one.
+    """
+    ranked = [r for r in rows if r["held_out_mm"] is not None]
+    place = next((k for k, r in enumerate(ranked, start=1) if r["chosen"]), None)
+    if place is None or place == 1 or round(ranked[place - 1]["held_out_mm"], 3) <= round(ranked[0]["held_out_mm"], 3):
+        return None
+    chosen, better = ranked[place - 1], ranked[:place - 1]
+    far = max(better, key=lambda r: r["d_position_mm"])
+    turn = max(r["d_rotation_deg"] for r in better)
+    head = (f"{chosen['method']} ranks {place} of {len(ranked)} by the held-out error, which scores how well each X "
+            f"predicts these postures' board points through the robot's nominal flange poses, not how close X is to "
+            f"the camera; the {len(better)} ranked above it put the camera up to {far['d_position_mm']:.3f} mm "
+            f"({far['method']}) and {turn:.4f} deg from {chosen['method']}'s")
+    if _systematic(result):
+        return (head + ". The errors here are systematic (SYSTEMATIC above): a method that fits X alone can fold "
+                "them into X and predict these postures better with a camera further off. "
+                f"{chosen['method']} stays the result: in the benchmarks (README) it is the most accurate camera pose "
+                "in every noise regime.")
+    return (head + f". {chosen['method']} stays the result: in the benchmarks (README) it is the most accurate "
+            "camera pose in every noise regime; compare those differences with its one-sigma.")
+
+
+def verdict_scope(verdict, result) -> str | None:
+    """What a PASS does not cover when the robot's errors are systematic; ``None`` otherwise."""
+    if verdict is None or not verdict.passed or not _systematic(result):
+        return None
+    return ("PASS is for the camera pose on the flange. The systematic errors found (SYSTEMATIC above) are not in it: "
+            "where a tool lands in the cell also depends on them; act on that advice before trusting positions away "
+            "from the calibration postures.")
 
 
 def corner_repeatability(problem: HandEyeProblem, result) -> dict:

@@ -143,6 +143,7 @@ def comparison_section(a: Assessment) -> str:
         + "Methods that agree within a few tenths of a millimetre confirm the result; one far off is usually a "
         "method thrown by outliers or weak geometry.</p>"
         + (f'<p class="note" data-note="d-org">{escape(a.comparison_note)}</p>' if a.comparison_note else "")
+        + (f'<p class="note" data-note="rank">{escape(a.rank_note)}</p>' if a.rank_note else "")
         + "".join(f'<p class="note" data-note="not-compared">Not compared: {escape(reason)}</p>'
                   for reason in a.comparison_failures.values())
         + _comparison_table(rows) + img(plot_method_comparison(rows), "method comparison") + "</section>")

@@ -51,7 +51,7 @@ def _literals(x, tooldata_literal, label: str, verdict) -> list[str]:
             "<code>handeye writeback</code> refuses a failed result.</div></div>"]
 
 
-def _verdict_banner(verdict: Verdict | None) -> str:
+def _verdict_banner(verdict: Verdict | None, scope: str | None = None) -> str:
     if verdict is None:
         return '<div class="verdict none">NO VERDICT</div><div class="verdict-line">no thresholds were applied</div>'
     cls, word = ("pass", "PASS") if verdict.passed else ("fail", "FAIL")
@@ -60,7 +60,8 @@ def _verdict_banner(verdict: Verdict | None) -> str:
             (f"{verdict.cause}. " if verdict.cause else "")
             + f"{len(failed)} of {len(verdict.checks)} checks failed: " + ", ".join(c.name for c in failed)
             + " (see the advice below)")
-    return f'<div class="verdict {cls}">{word}</div><div class="verdict-line">{escape(line)}</div>'
+    scope_html = f'<div class="verdict-line" data-note="verdict-scope">{escape(scope)}</div>' if scope else ""
+    return f'<div class="verdict {cls}">{word}</div><div class="verdict-line">{escape(line)}</div>' + scope_html
 
 
 def _pose_facts(result) -> list:
@@ -120,7 +121,7 @@ def summary_section(a: Assessment) -> str:
     """The head of the report: origin banner, verdict, RAPID literals, pose and session facts."""
     verdict, eye_in_hand = a.verdict, a.result.setup == EYE_IN_HAND
     literal_label = "tframe (camera in tool0)" if eye_in_hand else "camera pose in base"
-    parts = [_origin_banner(a.origin), _verdict_banner(verdict)] + _literals(a.result.x, a.tooldata_literal,
+    parts = [_origin_banner(a.origin), _verdict_banner(verdict, a.verdict_scope)] + _literals(a.result.x, a.tooldata_literal,
                                                                              literal_label, verdict)
     if eye_in_hand and not a.tooldata_literal and (verdict is None or verdict.passed):
         parts.append('<div class="note">tooldata: the load (mass, centre of gravity) comes from the station '

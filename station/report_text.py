@@ -119,7 +119,8 @@ def calibration_summary(assessment: Assessment) -> str:
         "",
         "Quality (lower is better):",
     ]
-    return "\n".join(lines + _quality_lines(assessment) + _closing_lines(r) + _comparison_lines(assessment))
+    scope = [""] + [assessment.verdict_scope] if assessment.verdict_scope else []
+    return "\n".join(lines + _quality_lines(assessment) + _closing_lines(r) + _comparison_lines(assessment) + scope)
 
 
 def _comparison_lines(assessment: Assessment) -> list[str]:
@@ -137,6 +138,8 @@ def _comparison_lines(assessment: Assessment) -> list[str]:
     lines.append("  (* = the chosen result)")
     if assessment.comparison_note:
         lines.append(f"  {assessment.comparison_note}")
+    if assessment.rank_note:
+        lines.append(f"  {assessment.rank_note}")
     lines += [f"  not compared: {reason}" for reason in assessment.comparison_failures.values()]
     return lines
 
