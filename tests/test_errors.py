@@ -67,10 +67,10 @@ def test_every_back_end_raises_the_shared_kind_with_its_name(protocol):
 
 def _exception_classes():
     for room in ("calibration", "drivers", "rapid", "mocks", "station"):
-        for path in sorted((REPO / room).rglob("*.py")):
+        for path in sorted((REPO / "src" / "handeye" / room).rglob("*.py")):
             if path.name in ("__init__.py", "__main__.py"):
                 continue
-            module = importlib.import_module("handeye." + ".".join(path.relative_to(REPO).with_suffix("").parts))
+            module = importlib.import_module("handeye." + ".".join(path.relative_to(REPO / "src" / "handeye").with_suffix("").parts))
             for name, obj in vars(module).items():
                 if inspect.isclass(obj) and issubclass(obj, BaseException) and obj.__module__ == module.__name__:
                     yield name, obj

@@ -21,7 +21,7 @@ ALLOWED: dict = {}
 def _function_bodies():
     """``(file, qualified name, body lines, line)`` of every function of the rooms."""
     for room in ROOMS:
-        for path in sorted((REPO / room).rglob("*.py")):
+        for path in sorted((REPO / "src" / "handeye" / room).rglob("*.py")):
             tree = ast.parse(path.read_text())
             yield from _walk(tree, path.relative_to(REPO).as_posix(), "")
 

@@ -53,8 +53,8 @@ def protocol_constants(source: str, names=BUILT_IN) -> list[tuple[int, str]]:
 
 def _python_files():
     for room in ROOMS:
-        for path in sorted((REPO / room).rglob("*.py")):
-            yield path.relative_to(REPO).as_posix(), path
+        for path in sorted((REPO / "src" / "handeye" / room).rglob("*.py")):
+            yield path.relative_to(REPO / 'src' / 'handeye').as_posix(), path
 
 
 def test_no_code_outside_a_back_end_and_the_registries_names_a_protocol():
@@ -71,7 +71,7 @@ def test_no_code_outside_a_back_end_and_the_registries_names_a_protocol():
 
 
 def test_the_allowed_files_exist():
-    assert all((REPO / rel).is_file() for rel in list(ALLOWED) + list(OTHER_MEANING))
+    assert all((REPO / "src" / "handeye" / rel).is_file() for rel in list(ALLOWED) + list(OTHER_MEANING))
 
 
 def test_the_scan_sees_a_protocol_special_case():
@@ -96,12 +96,12 @@ def test_no_text_lists_the_protocols_and_misses_one():
     # "socket, serial or modbus" written before rws existed: a list of most of them must name all
     stale = []
     for room in ROOMS:
-        for path in sorted((REPO / room).rglob("*")):
+        for path in sorted((REPO / "src" / "handeye" / room).rglob("*")):
             if path.suffix not in (".py", ".yaml", ".md") or not path.is_file():
                 continue
             for found in protocol_lists(path.read_text()):
                 if len(found) >= len(BUILT_IN) - 1 and found != set(BUILT_IN):
-                    stale.append(f"{path.relative_to(REPO)}: {sorted(found)}")
+                    stale.append(f"{path.relative_to(REPO / 'src' / 'handeye')}: {sorted(found)}")
     assert not stale, stale
 
 

@@ -16,7 +16,7 @@ nominal model, rendered XB3 frames through the real detection and triangulation)
 the recovered camera pose against the hidden mount, per axis in units of the reported one-sigma,
 and the RMS of those ratios over all seeds and axes (honest: near 1).
 
-``small``: OpenCV's pose-noise model (``calibration/synthetic_poses.py``) with 6, 8, 10 and 20 poses,
+``small``: OpenCV's pose-noise model (``src/handeye/calibration/synthetic_poses.py``) with 6, 8, 10 and 20 poses,
 100 clean sets each: in how many the default excludes a posture, and its mean error; then 30 sets
 of 8 poses with one gross error at posture 2 (a 3 deg board turn, a 25 mm or a 50 mm shift on each
 axis): how often it is found, what else is excluded, and the mean error.

@@ -6,7 +6,7 @@ Run from the repository root:
 
 For each set: d_org (eq. 22) of the same three target-frame points over ALL postures (the measure
 of issue 3), the AX = XB rotation residual in degrees (RMS over all posture pairs of the angle
-between R_A R_X and R_X R_B, eq. 16), the 5-fold posture cross-validation (calibration/crossval.py:
+between R_A R_X and R_X R_B, eq. 16), the 5-fold posture cross-validation (src/handeye/calibration/crossval.py:
 held-out board points against the training postures' mean points; the same definition for every
 method; once with posture i in fold i mod 5, and as the mean over ``repeats`` random 5-fold splits,
 default 20, the same splits for every method, because which method wins one split is partly the

@@ -56,7 +56,7 @@ def test_the_default_method_is_defined_once():
     import handeye.calibration.methods as methods
 
     assert solve.DEFAULT_METHOD is methods.DEFAULT_METHOD == "ml"
-    assignments = [f"{path.relative_to(REPO)}" for room in ROOMS for path in sorted((REPO / room).rglob("*.py"))
+    assignments = [f"{path.relative_to(REPO / 'src' / 'handeye')}" for room in ROOMS for path in sorted((REPO / "src" / "handeye" / room).rglob("*.py"))
                    for line in path.read_text().splitlines() if line.startswith("DEFAULT_METHOD =")]
     assert assignments == ["calibration/methods.py"]
 

@@ -72,7 +72,7 @@ def test_protocol_md_lists_the_verdicts_hints_and_guide_registers_of_the_code():
 
     from handeye.rapid.guided import HINTS
 
-    text = (Path(__file__).resolve().parents[2] / "rapid" / "PROTOCOL.md").read_text()
+    text = (Path(__file__).resolve().parents[2] / "src" / "handeye" / "rapid" / "PROTOCOL.md").read_text()
     section = text.split("## Guided capture without options")[1].split("\n## ")[0]
     assert set(re.findall(r"^\| (\d+) \| ([A-Z_]+) \| (.+) \|$", section, re.M)) == \
         {(str(v.code), v.name, v.text) for v in VERDICTS}

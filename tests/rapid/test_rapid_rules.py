@@ -110,7 +110,7 @@ def test_protocol_md_lists_every_instruction_and_function_the_interpreter_runs()
 
     from handeye.rapid.interpreter import supported_builtins
 
-    text = (Path(__file__).resolve().parents[2] / "rapid" / "PROTOCOL.md").read_text()
+    text = (Path(__file__).resolve().parents[2] / "src" / "handeye" / "rapid" / "PROTOCOL.md").read_text()
     listed = text.split("**Every instruction and function**:")[1].split("- **Refused at load**")[0]
     names = {n.strip(" .\n") for n in listed.replace("\n", " ").split(",")}
     assert set(supported_builtins()) <= names, sorted(set(supported_builtins()) - names)

@@ -117,10 +117,11 @@ def test_the_shipped_rehearsal_config_is_a_rehearsal_of_the_mock_the_readme_star
 
     config = load_config(REHEARSAL_FILE)
     assert config.is_rehearsal and not config.is_mock
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    repo = Path(__file__).resolve().parents[2]
+    readme = (repo / "README.md").read_text()
     command = re.search(r"handeye mock controller --port (\d+) --camera-port (\d+) --write-key (\S+)", readme)
     assert command, "the README starts the mock for the rehearsal"
     port, camera_port, key = command.groups()
     assert (config.controller.port, config.camera.mock_arm) == (int(port), f"127.0.0.1:{camera_port}")
     assert config.controller.write_key == key
-    assert f"--config {REHEARSAL_FILE.relative_to(REHEARSAL_FILE.parents[1]).as_posix()}" in readme
+    assert f"--config {REHEARSAL_FILE.resolve().relative_to(repo).as_posix()}" in readme

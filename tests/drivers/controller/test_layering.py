@@ -17,10 +17,10 @@ RULES = {
 
 def _imported_rooms(path: Path) -> set:
     rooms = set()
-    depth_of_file = len(path.relative_to(REPO).parts) - 1  # folders below the repository root
+    depth_of_file = len(path.relative_to(REPO / 'src' / 'handeye').parts) - 1  # folders below the package (src/handeye)
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.ImportFrom) and node.level:
-            parts = path.relative_to(REPO).parts[:depth_of_file - node.level + 1]
+            parts = path.relative_to(REPO / 'src' / 'handeye').parts[:depth_of_file - node.level + 1]
             target = list(parts) + (node.module.split(".") if node.module else [])
             if target:
                 rooms.add(target[0])
@@ -34,8 +34,8 @@ def _imported_rooms(path: Path) -> set:
 
 @pytest.mark.parametrize("folder", sorted(RULES))
 def test_imports_respect_the_rooms(folder):
-    files = sorted((REPO / folder).rglob("*.py"))
+    files = sorted((REPO / "src" / "handeye" / folder).rglob("*.py"))
     assert files
     for path in files:
         bad = _imported_rooms(path) & RULES[folder]
-        assert not bad, f"{path.relative_to(REPO)} imports {sorted(bad)}"
+        assert not bad, f"{path.relative_to(REPO / 'src' / 'handeye')} imports {sorted(bad)}"

@@ -1,0 +1,351 @@
+"""Render the RAPID modules of a station: posture sequencing, the link to the PC, the camera tool data.
+
+For one station (:class:`~handeye.rapid.station.RapidStation`) the program is three modules,
+loaded together into the robot task:
+
+- ``HeMain`` : ``main``, the approved postures as ``CONST jointtarget`` (the robot can go only
+  there, with ``MoveAbsJ ... fine`` at the configured speed), the program state;
+- a link module, by protocol: ``HeSocket`` (TCP server accepting only the PC's address),
+  ``HeSerial`` (same line protocol on a serial channel) or ``HeIo`` (I/O handshake for a Modbus
+  gateway: ``SetGO``/``SetDO``/``WaitDI \\MaxTime``) or ``HeRws`` (PERS data the PC reads and writes
+  through Robot Web Services);
+- ``HeTool`` : ``PERS tooldata`` of the camera (identity frame until calibrated);
+- ``HeCell`` (only when the station sets a speed override or world zones, :mod:`handeye.rapid.cell`):
+  ``VelSet`` and the keep-out world zones, set up by ``HeCellSetup``, which ``main`` then calls first;
+  with world zones the posture moves use the camera's nominal tool, whose TCP the zones watch.
+
+A station with a write key (``controller.write_key``) also gets ``HeKey.sys`` (:func:`render_key`):
+a system module holding the key, loaded once on the controller and never part of the program
+that ``capture`` writes into a session (:func:`render_program` never includes it). Without a key
+the link modules refuse every tool write.
+
+Templates are ``templates/*.tmpl`` filled with :class:`string.Template`. Every rendered program is
+checked (:func:`handeye.rapid.checks.check_program`) before it is returned; postures outside the
+joint limits are refused.
+"""
+
+from __future__ import annotations
+
+import os
+import string
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..calibration.session import write_text_atomic
+from ..calibration.write_key import write_key_code
+from .cell import CELL_MODULE, ZONE_TOOL, needs_cell_module, render_cell_text
+from .checks import check_program
+from .errors import RapidError
+from .literals import format_num, jointtarget_literal, speeddata_literal, tooldata_literal
+from .guided import GUIDE_MODULE, GUIDED_IO_SIGNALS, guide_fields
+from .guided import link_fields as guided_link_fields
+from .links import LINK_MODULES, RapidLink, read_template
+from .station import RapidStation, check_postures, default_station, load_station
+
+__all__ = [
+    "RAPID_PROTOCOL_VERSION",
+    "LINK_MODULES",
+    "IO_SIGNALS",
+    "RapidModule",
+    "render_main",
+    "render_link",
+    "render_guide",
+    "render_guided_program",
+    "GUIDED_LINKS",
+    "link_fields",
+    "station_link",
+    "render_tool",
+    "render_cell",
+    "render_key",
+    "render_program",
+    "KEY_ROUTINES",
+    "KEY_TRIES",
+    "write_modules",
+    "generate_station_modules",
+]
+
+#: Version of the handeye line protocol the modules speak (src/handeye/drivers/controller/protocol.py keeps the
+#: same number; a test checks they agree).
+RAPID_PROTOCOL_VERSION = 1
+#: Signals HeIo expects in the controller's I/O configuration.
+IO_SIGNALS = (
+    ["goHeProtocol", "goHeCount", "goHeState", "goHePosture", "doHeAtPosture", "goHeError", "goHeBeat",
+     "goHeToolAck", "goHeToolErr", "giHeRequest", "diHeGrabbed", "giHeToolCmd", "giHeToolKey",
+     "aoHeX", "aoHeY", "aoHeZ"]
+    + [f"aoHeJ{i}" for i in range(1, 7)] + [f"aoHeQ{i}" for i in range(1, 5)]
+    + [f"aoHeT{i}" for i in range(1, 12)] + [f"aiHeT{i}" for i in range(1, 12)]
+)
+#: The link modules that carry the guided program's requests.
+GUIDED_LINKS = ("HeSocket", "HeSerial", "HeIo")
+#: Publishing period of HeIo's timer interrupt (joints, pose, heartbeat), seconds.
+IO_PUBLISH_S = 0.1
+#: PollRate of HeRws' WaitUntil (s): how soon the program sees a PERS value the PC wrote over RWS.
+RWS_POLL_S = 0.02  # RAPID accepts 0.01; the interpreter compares float32(0.01) < 0.01 and refuses it
+#: Routines of the HeKey system module the link modules call (declared outside the program).
+KEY_ROUTINES = ("HeKeyMatches", "HeCodeMatches")
+#: Wrong keys a session (line) or the program (I/O) may send before tool writes are refused
+#: (src/handeye/drivers/controller/protocol.py keeps the same number; a test checks they agree).
+KEY_TRIES = 3
+#: HeSocket: longest receive slice between looks at the listener, and the look itself (seconds).
+SOCKET_SLICE_S = 0.5
+SOCKET_ACCEPT_POLL_S = 0.05
+
+@dataclass(frozen=True)
+class RapidModule:
+    """One rendered module."""
+
+    name: str
+    text: str
+    suffix: str = ".mod"
+
+    @property
+    def filename(self) -> str:
+        return f"{self.name}{self.suffix}"
+
+
+def _template(name: str) -> string.Template:
+    return read_template(name)
+
+
+def _ascii(text: str) -> str:
+    return "".join(ch if " " <= ch <= "~" else "?" for ch in str(text))
+
+
+def _header(station: RapidStation, *extra: str) -> str:
+    lines = [f"Generated by `handeye rapid generate` from {_ascii(station.source)}; regenerate, do not edit."]
+    lines += [_ascii(e) for e in extra]
+    return "\n".join(f"  ! {line}" for line in lines)
+
+
+def render_main(station: RapidStation, postures=None) -> RapidModule:
+    """``HeMain``: main routine, approved postures, speed. Refuses postures outside the joint limits."""
+    arr = check_postures(station.postures if postures is None else postures, station.robot,
+                         "postures to render")
+    # the PC asks for posture k (the link counts from 1); a capture writes it to the session's file k - 1
+    consts = "\n".join(f"  ! posture {k - 1} (postures/{k - 1:03d}.yaml)\n"
+                       f"  CONST jointtarget jtHePost{k} := {jointtarget_literal(row)};" for k, row in enumerate(arr, 1))
+    tool = _move_tool(station)
+    cases = "\n".join(f"    CASE {k}:\n      MoveAbsJ jtHePost{k}, vHeMove, fine, {tool};" for k in range(1, len(arr) + 1))
+    cell_setup = ""
+    if needs_cell_module(station):  # the cell block: only for a station that asks for it (HeCell.mod)
+        cell_setup = "    ! cell guards (HeCell): speed override, world zones\n    HeCellSetup;\n"
+    text = _template("HeMain.mod.tmpl").substitute(
+        header=_header(station, f"Robot {station.robot}, {len(arr)} approved postures (controller axis angles, deg)."),
+        count=len(arr), postures=consts, cases=cases, cell_setup=cell_setup,
+        speed=speeddata_literal(station.speed_tcp_mm_s, station.speed_ori_deg_s))
+    return RapidModule("HeMain", text)
+
+
+def _move_tool(station: RapidStation) -> str:
+    """The tool of the posture moves: ``tool0``, or with world zones the camera's nominal tool (the zones
+    watch the TCP of the moving tool)."""
+    return ZONE_TOOL if station.zone_tcp is not None else "tool0"
+
+
+def render_cell(station: RapidStation) -> RapidModule:
+    """``HeCell``: the speed override and the world zones (:mod:`handeye.rapid.cell`).
+
+    Raises
+    ------
+    RapidError
+        The station asks for neither.
+    """
+    if not needs_cell_module(station):
+        raise RapidError("the station sets no speed override and no world zones: HeCell is not needed")
+    return RapidModule(CELL_MODULE, render_cell_text(station, _header(station)))
+
+
+def link_fields(station: RapidStation, guided: bool = False) -> dict:
+    """The fields every link template is filled from (see :mod:`handeye.rapid.links`); ``guided``: with the
+    guided program's requests (:mod:`handeye.rapid.guided`)."""
+    keyed = station.write_key is not None  # the key itself goes into HeKey.sys only
+    fields = {**guided_link_fields(guided), "header": _header(station), "ack_timeout": format_num(station.ack_timeout_s, 3),
+              "tool": station.tool_name, "protocol_version": RAPID_PROTOCOL_VERSION, "key_tries": KEY_TRIES,
+              "idle_timeout": format_num(station.idle_timeout_s, 3)}
+    fields["session_data"] = _template("session_data.tmpl").substitute(fields).rstrip("\n")
+    fields["key_check"] = _template("key_check.tmpl" if keyed else "key_check_none.tmpl").template.rstrip("\n")
+    fields["dispatcher"] = _template("dispatcher.tmpl").substitute(fields).rstrip("\n")
+    # the line protocol over TCP: the address bound, the accept and receive slices
+    fields["bind_address"] = ("GetSysInfo(\\LanIp)" if station.controller_address == "auto"
+                              else f'"{station.controller_address}"')
+    fields["slice"] = format_num(max(SOCKET_ACCEPT_POLL_S, min(SOCKET_SLICE_S, station.idle_timeout_s / 2)), 3)
+    fields["accept_poll"] = format_num(SOCKET_ACCEPT_POLL_S, 3)
+    fields.update(pc_address=station.pc_address, port=station.port, channel=station.serial_channel)
+    # the I/O handshake: publishing period and the tool key's gate; the RWS handshake's poll rate
+    fields["publish_period"] = format_num(IO_PUBLISH_S, 3)
+    fields["tool_key_check"] = _template("key_io.tmpl" if keyed else "key_io_none.tmpl").template.rstrip("\n")
+    fields["poll"] = format_num(RWS_POLL_S, 3)
+    return fields
+
+
+def station_link(station: RapidStation, protocol: str | None = None) -> RapidLink:
+    """The link module of ``protocol`` (default: the station's) among ``station.links``.
+
+    Raises
+    ------
+    RapidError
+        No link module for that protocol.
+    """
+    protocol = protocol or station.protocol
+    if protocol not in station.links:
+        raise RapidError(f"no RAPID link module for protocol {protocol!r}; choose one of {', '.join(station.links)}")
+    return station.links[protocol]
+
+
+def render_link(station: RapidStation, protocol: str | None = None, guided: bool = False) -> RapidModule:
+    """The link module of ``protocol`` (default: the station's): its :class:`~handeye.rapid.links.RapidLink`
+    among ``station.links`` (HeSocket, HeSerial, HeIo, HeRws, or a plug-in's) filled from :func:`link_fields`
+    (``guided``: with the guided program's requests; only the built-in line and I/O links have them)."""
+    link = station_link(station, protocol)
+    if guided and link.module not in GUIDED_LINKS:
+        raise RapidError(f"no guided program over {protocol or station.protocol}: it runs over "
+                         f"{', '.join(sorted(p for p, m in LINK_MODULES.items() if m in GUIDED_LINKS))} "
+                         "(Robot Web Services guides with no program: the PC reads the joints while the operator jogs)")
+    return RapidModule(link.module, link.text(station, link_fields(station, guided)))
+
+
+def render_guide(station: RapidStation, prompt: str = "fk") -> RapidModule:
+    """``HeGuide``: the guided program's main module (:mod:`handeye.rapid.guided`), prompting with
+    ``TPReadFK`` (``fk``) or ``UIMessageBox`` (``messagebox``, RobotWare 6/7)."""
+    try:
+        fields = guide_fields(prompt)
+    except ValueError as exc:
+        raise RapidError(str(exc)) from None
+    how = "TPReadFK (S4C+, RobotWare 5-7)" if prompt == "fk" else "UIMessageBox (RobotWare 6/7)"
+    text = _template("HeGuide.mod.tmpl").substitute(
+        header=_header(station, f"Guided capture, robot {station.robot}; the operator answers with {how}."),
+        **fields)
+    return RapidModule(GUIDE_MODULE, text)
+
+
+def render_tool(station: RapidStation, cam2tool0=None, comments=()) -> RapidModule:
+    """``HeTool``: the camera's ``PERS tooldata`` (frame ``cam2tool0``, identity when None)."""
+    frame = np.eye(4) if cam2tool0 is None else np.asarray(cam2tool0, dtype=float)
+    if frame.shape != (4, 4) or not np.all(np.isfinite(frame)):
+        raise RapidError("the camera frame must be a finite 4x4 transform (cam2tool0, mm)")
+    if np.linalg.norm(frame[:3, 3]) > 1000:
+        raise RapidError("the camera frame is over 1 m from the flange: check units (mm) and the calibration")
+    literal = tooldata_literal(frame, station.tool_mass_kg, station.tool_cog_mm)
+    notes = tuple(comments) or (("Identity frame: not calibrated yet.",) if cam2tool0 is None else ())
+    text = _template("HeTool.mod.tmpl").substitute(header=_header(station, *notes), tool=station.tool_name,
+                                                   literal=literal)
+    return RapidModule("HeTool", text)
+
+
+def render_key(station: RapidStation) -> RapidModule:
+    """``HeKey.sys``: the station's write key (a secret) as a system module, checked.
+
+    Load it once on the controller; it stays loaded when the program modules are replaced. It is
+    never part of :func:`render_program`, so never of what ``capture`` writes into a session.
+
+    Raises
+    ------
+    RapidError
+        The station has no write key, or the module fails a check.
+    """
+    if station.write_key is None:
+        raise RapidError("the station has no write key: set controller.write_key in the station config")
+    text = _template("HeKey.sys.tmpl").substitute(
+        header=_header(station), key=station.write_key, code=write_key_code(station.write_key))
+    module = RapidModule("HeKey", text, suffix=".sys")
+    findings = check_program([(module.name, module.text)])
+    if findings:
+        raise RapidError("generated HeKey failed its checks: " + "; ".join(map(str, findings[:5])))
+    return module
+
+
+def render_program(station: RapidStation | None = None, postures=None, protocol: str | None = None,
+                   cam2tool0=None) -> list[RapidModule]:
+    """``[HeMain, link module, HeTool]`` (and ``HeCell`` when the station needs it) for the station
+    (default: the built-in one), checked.
+
+    Never ``HeKey``: with a write key the link module calls its routines, which the controller
+    provides once the integrator loaded ``HeKey.sys`` (:func:`render_key`).
+
+    Raises
+    ------
+    RapidError
+        Postures outside the joint limits, or a generated module failing a check.
+    """
+    station = station or default_station()
+    postures = station.postures if postures is None else postures
+    approved = check_postures(postures, station.robot, "postures to render")
+    modules = [render_main(station, approved), render_link(station, protocol), render_tool(station, cam2tool0)]
+    if needs_cell_module(station):
+        modules.append(render_cell(station))
+    findings = check_program([(m.name, m.text) for m in modules], approved=np.round(approved, 4),
+                             robot=station.robot, external=IO_SIGNALS + list(KEY_ROUTINES),
+                             move_tools=("tool0", _move_tool(station)))
+    if findings:
+        raise RapidError("generated RAPID failed its checks: " + "; ".join(map(str, findings[:5])))
+    return modules
+
+
+def render_guided_program(station: RapidStation | None = None, protocol: str | None = None, prompt: str = "fk",
+                          cam2tool0=None) -> list[RapidModule]:
+    """``[HeGuide, link module, HeTool]`` of the guided capture (``rapid generate --guided``), checked.
+
+    Raises
+    ------
+    RapidError
+        A link without the guided requests (Robot Web Services), an unknown prompt, or a failed check.
+    """
+    station = station or default_station()
+    modules = [render_guide(station, prompt), render_link(station, protocol, guided=True),
+               render_tool(station, cam2tool0)]
+    findings = check_program([(m.name, m.text) for m in modules], approved=np.zeros((0, 6)), robot=station.robot,
+                             external=IO_SIGNALS + list(GUIDED_IO_SIGNALS) + list(KEY_ROUTINES), move_tools=("tool0",))
+    if findings:
+        raise RapidError("generated guided RAPID failed its checks: " + "; ".join(map(str, findings[:5])))
+    return modules
+
+
+def write_modules(modules, directory) -> list[Path]:
+    """Write each module to ``directory/<name>.mod`` (atomically); returns the paths."""
+    folder = Path(directory)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise RapidError(f"cannot create output folder {folder}: {exc.strerror}") from None
+    paths = []
+    for module in modules:
+        if module.name == "HeKey":
+            paths.append(_write_secret(folder / module.filename, module.text))
+        else:
+            paths.append(write_text_atomic(folder / module.filename, module.text, encoding="ascii", newline="\n"))
+    return paths
+
+
+def _write_secret(path: Path, text: str) -> Path:
+    """Write ``text`` atomically, readable by the owner only from the start (HeKey.sys holds the key)."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)  # mode 0600
+    try:
+        with os.fdopen(fd, "w", encoding="ascii", newline="\n") as handle:
+            handle.write(text)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def generate_station_modules(output, config=None, protocol: str | None = None, guided: bool = False,
+                             prompt: str = "fk") -> list[Path]:
+    """Render the station's program (``config``: a station YAML path; None: the built-in station) into ``output``;
+    ``guided``: the guided capture's (:func:`render_guided_program`, prompting with ``prompt``).
+
+    With a write key in the station, ``HeKey.sys`` is written beside the program modules (not for a link
+    whose controller authorises tool writes itself, ``RapidLink.write_key`` False: HeRws).
+    """
+    station = load_station(config) if config is not None else default_station()
+    modules = (render_guided_program(station, protocol, prompt) if guided
+               else render_program(station, protocol=protocol))
+    if station.write_key is not None and station_link(station, protocol).write_key:
+        modules.append(render_key(station))
+    return write_modules(modules, output)

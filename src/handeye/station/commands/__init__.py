@@ -1,0 +1,1 @@
+"""Sub-commands of ``handeye`` (one module each; see ``src/handeye/station/cli.py``)."""

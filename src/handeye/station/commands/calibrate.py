@@ -1,0 +1,146 @@
+"""``handeye calibrate``: solve a session and print or write the camera pose."""
+
+from __future__ import annotations
+
+import argparse
+
+HELP = "solve a session for the camera pose (cam2tool0, or cam2base eye-to-hand)"
+
+#: How the help introduces each kind of method (``calibration.methods.KINDS``), and the citation its
+#: rows share (a row citing another work names it).
+_KIND_HEADINGS = {
+    "estimator": ("Estimators:", "handeye, after Deniz & Cakir (2018)"),
+    "paper": ("The paper's variants (Deniz & Cakir 2018):", "Deniz & Cakir (2018)"),
+    "classic": ("AX = XB solvers (src/handeye/calibration/classic/README.md says what each published one minimises):", None),
+}
+
+
+def methods_help(width: int = 100) -> str:
+    """The ``--method`` section of the help: every row of the methods table (a plug-in's too), by kind."""
+    import textwrap
+
+    from ...calibration.methods import DEFAULT_METHOD, METHODS, method_names
+
+    lines = [f"Methods (--method); without it the recommended default ({DEFAULT_METHOD}) runs:"]
+    for kind, (heading, shared) in _KIND_HEADINGS.items():
+        names = method_names(kind)
+        if not names:
+            continue
+        column = max(len(name) for name in names) + 4
+        lines.append(heading)
+        for name in names:
+            row = METHODS[name]
+            text = row.reference.rstrip(".") if shared is None else row.summary
+            if shared is not None and row.citation != shared:
+                text += f" ({row.citation})"
+            text = ("(default) " if name == DEFAULT_METHOD else "") + text
+            lines += textwrap.wrap(text, width, initial_indent=f"  {name:<{column - 2}}",
+                                   subsequent_indent=" " * column, break_on_hyphens=False)
+    lines.append("Other installed packages add methods through the entry-point group handeye.methods; "
+                 "they are listed above, under their kind.")
+    return "\n".join(lines) + "\n\n"
+
+
+EPILOG = """\
+Before solving, the robot and board poses are checked against the X-free invariants of AX = XB: a
+session no rigid camera mount fits is refused with the likely cause; a few gross postures that alone
+break the check (robot and camera poses swapped, one posture in another rotation convention, a posture
+of another session) are named and left out, listed with the outliers (JSON "excluded_before_solve").
+Also before solving, the session's lengths are checked: a session that looks like metres, a posture in
+another unit, a flange beyond the robot's reach or corners whose spacing is not target.square_mm
+(within 5 %) is refused with the reason. A session really written in metres is converted only
+when asked: --units m.
+
+The text report gives the pose as a RAPID tframe literal, the quality figures and each posture's
+residual. --json FILE writes the machine-readable result ('-' for standard output); its key
+"station" says where the data come from: "real", "mock" (the embedded mock station), "simulated"
+(truth.yaml beside the session) or "unknown" (imported or older sessions). Mock and simulated
+sessions are flagged in the text and the HTML report: they are not a calibration of a real robot.
+
+--report [FILE] also writes the calibration report: one self-contained HTML file (plots embedded,
+no network needed) with a PASS/FAIL verdict against the quality thresholds, the tframe literal,
+uncertainty and cross-validated accuracy, outliers, per-posture residuals, rotation-axis coverage, a
+comparison with other methods ranked by their held-out (cross-validated) error, also printed and in
+the JSON ("method_comparison"), and the repeatability of the board corners in base.
+Without FILE it is SESSION/report.html (then put --report after SESSION). The verdict uses the
+default thresholds, or those of --thresholds FILE.yaml (lines 'key: number', or a station config's
+'quality:' section; a commented example with the defaults: src/handeye/station/quality_thresholds.yaml); keys:
+  max_d_org_mm (1.0)  max_posture_residual_mm (2.0)  max_sigma_translation_mm (0.2)
+  max_sigma_rotation_deg (0.02)  min_inlier_postures (12)  max_outlier_fraction (0.2)
+  min_rotation_axis_spread_deg (10)  min_median_rotation_deg (15)
+  min_camera_offset_mm (20)  max_camera_offset_mm (500)   (eye-in-hand: camera frame's distance
+                                                          from the flange)
+d_org is eq. 22 over the postures the result kept, on every board corner (the three compact points
+when the session holds board poses only), the same for every method the report compares.
+With --report or --thresholds the JSON gains a "verdict" key. A failed verdict still exits 0 (the
+calibration itself succeeded); read "verdict.passed" in the JSON to act on it.
+
+Examples:
+  handeye calibrate my_session --method mcb --json result.json
+  handeye calibrate my_session --report                      # writes my_session/report.html
+  handeye calibrate my_session --report out.html --thresholds station_quality.yaml
+"""
+
+
+def add_parser(sub):
+    p = sub.add_parser("calibrate", help=HELP, description=HELP, epilog=methods_help() + EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("session", metavar="SESSION", help="session folder (handeye-session/1)")
+    p.add_argument("--method", metavar="NAME", help="solver (see below); default: the recommended one")
+    p.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' = stdout)")
+    p.add_argument("--quiet", action="store_true", help="no text report (with --json FILE)")
+    p.add_argument("--report", metavar="FILE", nargs="?", const="",
+                   help="write the HTML calibration report (default FILE: SESSION/report.html)")
+    p.add_argument("--thresholds", metavar="FILE.yaml", help="quality thresholds for the verdict (default: built in)")
+    p.add_argument("--units", choices=("mm", "m"), default="mm",
+                   help="length unit the session was written in (default mm, the format's; m converts on reading)")
+    return p
+
+
+def run(args) -> int:
+    import sys
+
+    from ..assessment import assess, comparison_methods
+    from ..calibrate import calibrate_session_folder, report_path_for
+    from ..output import check_output_file, write_json
+    from ..report_json import calibration_json
+    from ..report_text import calibration_summary
+
+    if args.json:  # an unwritable --json fails before any solving
+        check_output_file(args.json)
+    from ...calibration.solve import method_row
+
+    method_row(args.method)  # an unknown --method, too (the table, a plug-in's methods included)
+    wants_report = args.report is not None
+    thresholds = None
+    if args.thresholds:  # a bad thresholds file fails before any solving
+        from ..quality import load_thresholds
+
+        thresholds = load_thresholds(args.thresholds)
+    report_path = report_path_for(args.session, args.report) if wants_report else None
+    if report_path is not None and not report_path.parent.is_dir():
+        from ...calibration.errors import HandEyeError
+
+        raise HandEyeError(f"cannot write the report {report_path}: folder {report_path.parent} does not exist")
+    from ..progress import delayed_progress
+
+    with delayed_progress("calibrate") as update:  # shown only when solving takes over a second
+        outcome = calibrate_session_folder(args.session, args.method, args.units, progress=update)
+    assessment = assess(outcome, thresholds, judge=wants_report or bool(args.thresholds),
+                        methods=comparison_methods() if wants_report else ())
+    written = None
+    if wants_report:
+        from ..report import write_report
+
+        title = f"Hand-eye calibration report: {outcome.session_path.resolve().name}"
+        written = write_report(report_path, assessment, title=title)
+    if args.json:
+        write_json(args.json, calibration_json(assessment))
+    stream = sys.stderr if args.json == "-" else sys.stdout
+    if not args.quiet and args.json != "-":
+        print(calibration_summary(assessment))
+    if not args.quiet and assessment.verdict is not None:
+        if written is not None:
+            print(f"\nReport written to {written}", file=stream)
+        print(assessment.verdict.line(), file=stream)
+    return 0

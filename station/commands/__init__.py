@@ -1,1 +1,0 @@
-"""Sub-commands of ``handeye`` (one module each; see ``station/cli.py``)."""
