@@ -200,8 +200,13 @@ def test_a_broken_entry_point_is_skipped_with_a_warning(plugin, monkeypatch, cap
 
     monkeypatch.delattr(handeye_test_plugin, "CONTROLLER")
     CONTROLLERS.refresh()
-    assert CONTROLLERS.names() == BUILT_IN_CONTROLLERS
+    assert CONTROLLERS.names() == BUILT_IN_CONTROLLERS + ("loopback",)  # listed from the metadata, not loaded
+    assert "loopback" not in CONTROLLERS  # asked for: it does not load
     assert "controller protocol 'loopback' from entry point handeye_test_plugin:CONTROLLER is unusable" in caplog.text
+    assert CONTROLLERS.names() == BUILT_IN_CONTROLLERS and "loopback" in CONTROLLERS.unusable()
+    with pytest.raises(ConfigError, match="got 'loopback': the controller protocol 'loopback' of the installed package "
+                                          "handeye-test-plugin .* failed to load \\(AttributeError: "):
+        config_from_dict({"controller": {"protocol": "loopback"}, "camera": {"backend": "xb3"}})
 
 
 def test_the_plugin_protocol_gets_its_own_rapid_module(plugin, tmp_path, capsys):

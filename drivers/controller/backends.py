@@ -31,11 +31,13 @@ __all__ = ["ControllerBackend", "ControllerLink", "LinkSetting", "MockServer", "
 LinkSetting = Setting
 
 
-def link_settings() -> dict[str, tuple[LinkSetting, tuple[str, ...]]]:
-    """Every back end's link settings by key, with the back ends that declare it (registry order):
-    the keys of the config's ``controller`` section and the flags of ``handeye robot`` beyond
-    ``host`` and ``port``. Two back ends sharing a key share its description (the first one's)."""
-    return declared_settings(CONTROLLERS, "link_settings")
+def link_settings(names=None) -> dict[str, tuple[LinkSetting, tuple[str, ...]]]:
+    """The back ends' link settings by key, with the back ends that declare it (registry order): of
+    ``names`` (default: every back end loaded so far, :func:`~handeye.drivers.registry.declared_settings`,
+    so no other plug-in is imported): the keys of the config's ``controller`` section and the flags of
+    ``handeye robot`` beyond ``host`` and ``port``. Two back ends sharing a key share its description
+    (the first one's)."""
+    return declared_settings(CONTROLLERS, "link_settings", names)
 
 
 class ControllerLink:
