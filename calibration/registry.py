@@ -20,6 +20,7 @@ on. Everything that lists entries asks the registry.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import importlib.metadata
 import logging
@@ -28,11 +29,27 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import replace
 from typing import Generic, TypeVar
 
-__all__ = ["Registry", "load_target"]
+__all__ = ["Choices", "Registry", "load_target", "quiet_loads", "unusable_clause"]
 
 log = logging.getLogger(__name__)
 
 E = TypeVar("E")
+
+#: While above zero, a plug-in that does not load is not logged (its reason is kept: :meth:`Registry.unusable`):
+#: a message or a listing that says why itself (:func:`quiet_loads`).
+_QUIET = [0]
+
+
+@contextlib.contextmanager
+def quiet_loads():
+    """Within it, plug-ins that fail to load are not logged as warnings (the message being written names
+    them and why itself)."""
+    _QUIET[0] += 1
+    try:
+        yield
+    finally:
+        _QUIET[0] -= 1
+
 
 #: ``{module: thread}`` of the plug-in imports that did not finish within the time bound (shared by the
 #: registries: two entry points of one module wait on the same import).
@@ -74,6 +91,7 @@ class Registry(Mapping, Generic[E]):
         self._providers: dict[str, str] = {}  # name -> the installed package behind an entry point's entry
         self._loaded: dict[str, E] = {}  # entry points loaded so far, by name
         self._unusable: dict[str, str] = {}  # entry points that could not be loaded: name -> why
+        self._ignored: list[str] = []  # entry points left out because their name is taken: why, one line each
 
     # ------------------------------------------------------------------ filling
     def register(self, entry: E) -> E:
@@ -113,13 +131,14 @@ class Registry(Mapping, Generic[E]):
         with a warning."""
         if self._discovered is None:
             found: dict = {}
-            self._providers, self._loaded, self._unusable = {}, {}, {}
+            self._providers, self._loaded, self._unusable, self._ignored = {}, {}, {}, []
             for point in importlib.metadata.entry_points(group=self.group):
                 name = point.name.lower()
                 if name in self._registered or name in found:
-                    log.warning("warning: the %s %r of the installed package %s (entry point %s) is ignored: %s; "
-                                "rename it in that package", self.kind, name, _package(point), point.value,
-                                self._origin(name))
+                    self._ignored.append(f"the {self.kind} {name!r} of the installed package {_package(point)} "
+                                         f"(entry point {point.value}) is ignored: {self._origin(name)}; rename it "
+                                         "in that package")
+                    log.warning("warning: %s", self._ignored[-1])
                     continue
                 found[name] = point
                 self._providers[name] = f"the installed package {_package(point)} (entry point {point.value})"
@@ -149,8 +168,9 @@ class Registry(Mapping, Generic[E]):
                 except Exception as exc:  # a broken plug-in must not break the package
                     self._unusable[name] = f"{type(exc).__name__}: {exc}"
             if name in self._unusable:
-                log.warning("%s %r from entry point %s is unusable: %s", self.kind, name, point.value,
-                            self._unusable[name])
+                if not _QUIET[0]:
+                    log.warning("%s %r from entry point %s is unusable: %s", self.kind, name, point.value,
+                                self._unusable[name])
                 return None
         return self._loaded[name]
 
@@ -159,6 +179,11 @@ class Registry(Mapping, Generic[E]):
         an object of the wrong type)."""
         self._entry_points()
         return dict(self._unusable)
+
+    def ignored(self) -> tuple[str, ...]:
+        """One line for each entry point left out because handeye (or an earlier entry point) has its name."""
+        self._entry_points()
+        return tuple(self._ignored)
 
     def plugin_names(self) -> tuple[str, ...]:
         """The names of this group's entry points (read from metadata, none loaded), usable or not."""
@@ -252,7 +277,7 @@ class Registry(Mapping, Generic[E]):
         self._entry_points()
         if key not in self._unusable:
             return None
-        return (f"the {self.kind} {key!r} of {self._providers.get(key, 'an installed package')} {_as_clause(self._unusable[key])}: "
+        return (f"the {self.kind} {key!r} of {self._providers.get(key, 'an installed package')} {unusable_clause(self._unusable[key])}: "
                 "fix or uninstall that package")
 
 
@@ -294,6 +319,24 @@ class Choices:
         entry = self.registry.get(value)
         return entry is not None and (self.where is None or self.where(entry))
 
+    def left_out(self) -> dict[str, str]:
+        """``{name: why}`` of the installed plug-ins that are not choices here (each is loaded, under the time
+        bound, to know): what a command's help says it left out."""
+        out = {}
+        with quiet_loads():
+            for name in self.registry.plugin_names():
+                if name not in self:
+                    why = self.refusal(name)
+                    if why is not None:
+                        out[name] = why
+        return out
+
+    def listed(self) -> str:
+        """The choices, comma-separated, for a message (plug-ins that do not load left out without a warning:
+        :meth:`left_out` says why)."""
+        with quiet_loads():
+            return ", ".join(self)
+
     def __iter__(self) -> Iterator[str]:
         yield from self.registry.names(self.where)
         yield from self.extra
@@ -301,11 +344,14 @@ class Choices:
     def __len__(self) -> int:
         return sum(1 for _ in self)
 
+    def __getitem__(self, index):
+        return tuple(self)[index]
+
     def __bool__(self) -> bool:
         return True
 
 
-def _as_clause(reason: str) -> str:
+def unusable_clause(reason: str) -> str:
     """A load failure as a clause after the plug-in's name (``did not load within 30 s``, ``failed to load
     (ImportError: ...)``)."""
     return reason if reason.startswith("did not load") else f"failed to load ({reason})"

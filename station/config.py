@@ -61,7 +61,7 @@ from .schema import (
 )
 
 __all__ = ["EXAMPLE_FILE", "MOCK", "ConfigError", "StationConfig", "config_from_dict", "default_config", "load_config",
-           "describe_keys", "controller_protocols", "camera_backends", "mock_protocols"]
+           "describe_keys", "controller_protocols", "camera_backends", "mock_protocols", "protocol_choices", "camera_choices"]
 
 EXAMPLE_FILE = Path(__file__).with_name("example_station.yaml")
 REHEARSAL_FILE = Path(__file__).with_name("rehearsal_station.yaml")
@@ -95,7 +95,7 @@ def mock_protocols() -> tuple[str, ...]:
     return mock_protocols()
 
 
-def _protocol_choices():
+def protocol_choices():
     """What ``controller.protocol`` may be: a controller back end, or mock (checking one imports that
     plug-in only: :class:`~handeye.calibration.registry.Choices`)."""
     from ..drivers.controller.backends import CONTROLLERS
@@ -103,19 +103,19 @@ def _protocol_choices():
     return CONTROLLERS.choices(extra=(MOCK,))
 
 
-def _camera_choices():
+def camera_choices():
     """What ``camera.backend`` may be: a camera back end that is not simulated, or mock."""
     from ..drivers.camera.backends import CAMERAS
 
-    return CAMERAS.choices(lambda backend: not backend.simulated, extra=(MOCK,), lacking="is simulated (a real station needs a real camera)")
+    return CAMERAS.choices(lambda backend: not backend.simulated, extra=(MOCK,),
+                           lacking="is simulated (a real station needs a real camera)")
 
 
 def _mock_protocol_choices():
     """What ``mock.protocol`` may be: a controller back end a mock serves."""
-    from ..drivers.controller.backends import CONTROLLERS
-    from ..mocks import backends  # noqa: F401 - the mocks fill CONTROLLERS' mock fields
+    from ..mocks.backends import mock_protocol_choices
 
-    return CONTROLLERS.choices(lambda backend: backend.mock is not None, lacking="has no mock")
+    return mock_protocol_choices()
 
 
 # ---------------------------------------------------------------------------------- checks of their own
@@ -307,7 +307,7 @@ def _as_is(value, key: str, context):
 class ControllerSettings(_DeclaredByBackEnds):
     """``controller``: the robot controller's link, and the settings of the generated RAPID program."""
 
-    protocol: str = setting(MOCK, Text(_protocol_choices),
+    protocol: str = setting(MOCK, Text(protocol_choices),
                             "link protocol: a registered controller back end, or mock", required=True)
     host: str = setting("127.0.0.1", Text(what="the controller's IP address or host name"),
                         "address of the controller (or of its gateway)")
@@ -336,7 +336,7 @@ class ControllerSettings(_DeclaredByBackEnds):
 class CameraSettings(_DeclaredByBackEnds):
     """``camera``: the stereo head, and the settings its back end declares (``CameraBackend.settings``)."""
 
-    backend: str = setting(MOCK, Text(_camera_choices),
+    backend: str = setting(MOCK, Text(camera_choices),
                            "camera back end: a registered one (xb3), or mock", required=True)
     stereo_model: str | None = setting(None, Optional(Text()), "OpenCV FileStorage of the stereo pair "
                                        "(null: the nominal XB3 model)")

@@ -65,7 +65,8 @@ def text(value, key: str, choices=(), what: str = "") -> str:
     if choices and value not in choices:
         refusal = getattr(choices, "refusal", None)  # a registry's choices say why one of its names is not
         why = refusal(value) if refusal is not None else None
-        raise ConfigError(f"{key} must be one of {', '.join(choices)}; got {brief(value)}" + (f": {why}" if why else ""))
+        listed = choices.listed() if hasattr(choices, "listed") else ", ".join(choices)
+        raise ConfigError(f"{key} must be one of {listed}; got {brief(value)}" + (f": {why}" if why else ""))
     return value
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import sys
 import textwrap
+import threading
 
 import pytest
 from handeye.calibration.methods import METHODS
@@ -94,6 +95,9 @@ def hanging(tmp_path, monkeypatch):
             yield folder
         finally:
             handeye_hang_gate.OPEN.set()
+            for thread in threading.enumerate():  # the abandoned loads and solves end now
+                if thread.name.startswith("handeye-plugin-"):
+                    thread.join(2)
 
 
 @pytest.fixture(scope="module")
@@ -137,3 +141,69 @@ def test_a_hanging_camera_a_station_uses_is_named_in_one_line(hanging, tmp_path,
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
     assert "stuck" in err and f"did not load within {BOUND_S:g} s" in err, err
     assert METHODS.unusable() == {}
+
+
+# ------------------------------------------------------------------ a plug-in that cannot serve a command (issue 40.5)
+def _one_error_line(capsys, command: str) -> str:
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"handeye {command}: error: ") and "Traceback" not in err, err
+    return lines[0]
+
+
+def test_a_protocol_without_a_mock_is_refused_by_the_demo_saying_what_it_lacks(hanging, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["demo", "--protocol", "bare", "--no-report"])
+    line = _one_error_line(capsys, "demo")
+    assert info.value.code == 2 and "invalid choice: 'bare' (choose from socket, serial, modbus, rws): " in line, line
+    assert f"'bare' of the installed package {PACKAGE} (entry point {SOLVERS}:BARE) has no mock" in line, line
+    with pytest.raises(SystemExit):
+        main(["demo", "--help"])
+    help_text = capsys.readouterr().out
+    assert "Installed plug-ins left out of --protocol:" in help_text
+    assert "'bare' of the installed package" in help_text and "'frozen' of the installed package" in help_text
+    assert f"did not load within {BOUND_S:g} s" in help_text
+
+
+def test_a_protocol_without_a_rapid_module_is_refused_by_rapid_generate_saying_so(hanging, tmp_path, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["rapid", "generate", "--protocol", "bare", "-o", str(tmp_path / "out")])
+    line = _one_error_line(capsys, "rapid generate")
+    assert info.value.code == 2 and "'bare' of the installed package" in line and "has no RAPID link module" in line
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_station_whose_mock_protocol_has_no_mock_is_told_why(hanging):
+    from handeye.calibration.errors import ConfigError
+    from handeye.station.config import config_from_dict
+
+    with pytest.raises(ConfigError, match="mock.protocol must be one of .*; got 'bare': the controller protocol 'bare' of "
+                                          f"the installed package {PACKAGE} .* has no mock"):
+        config_from_dict({"controller": {"protocol": "mock"}, "camera": {"backend": "mock"}, "mock": {"protocol": "bare"}})
+
+
+def test_handeye_plugins_lists_every_plugin_with_what_it_can_do(hanging, tmp_path, capsys):
+    out = tmp_path / "plugins.json"
+    assert main(["plugins", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    for title in ("methods (entry-point group handeye.methods): 1 installed",
+                  "controller protocols (entry-point group handeye.controllers): 2 installed",
+                  "camera back ends (entry-point group handeye.cameras): 1 installed"):
+        assert title in text, text
+    assert "  sleepy: the installed package handeye-hanging-plugin" in text
+    assert "the report's method comparison (calibrate --report, demo): yes" in text
+    assert "demo --protocol, mock controller, mock.protocol: no, it has no mock" in text
+    assert "rapid generate: no, it has no RAPID link module" in text
+    assert text.count(f"did not load within {BOUND_S:g} s: fix or uninstall that package") == 2  # frozen, stuck
+    data = json.loads(out.read_text())
+    assert set(data) == {"methods", "controllers", "cameras"}
+    bare = next(row for row in data["controllers"] if row["name"] == "bare")
+    assert bare["serves"]["rapid generate"] is False and "RAPID link" in bare["lacks"]["rapid generate"]
+    assert [row["unusable"] for row in data["cameras"]] == [f"did not load within {BOUND_S:g} s"]
+
+
+def test_handeye_plugins_without_any_says_none(capsys):
+    assert main(["plugins"]) == 0
+    text = capsys.readouterr().out
+    assert "methods (entry-point group handeye.methods): none installed" in text
+    assert "camera back ends (entry-point group handeye.cameras): none installed" in text

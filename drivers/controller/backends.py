@@ -23,7 +23,7 @@ from ..registry import Backend, Registry, Setting, declared_settings, keyword_op
 from .errors import InvalidRequest
 
 __all__ = ["ControllerBackend", "ControllerLink", "LinkSetting", "MockServer", "CONTROLLERS", "DEFAULT_PROTOCOL", "RAPID_LINKS",
-           "link_settings", "register_backend", "setting_options", "standard_options", "tcp_options"]
+           "link_settings", "rapid_protocol_choices", "register_backend", "setting_options", "standard_options", "tcp_options"]
 
 
 #: A controller back end's setting (:class:`handeye.drivers.registry.Setting`: the station config's
@@ -288,6 +288,13 @@ class _RapidLinks(Mapping):
 
 #: The RAPID link module of every controller back end that has one (read from :data:`CONTROLLERS`).
 RAPID_LINKS: Mapping = _RapidLinks()
+
+
+def rapid_protocol_choices():
+    """The protocols ``rapid generate`` can write a link module for, checked one at a time (asking about one
+    imports that plug-in only); one left out says it has no RAPID link module."""
+    return CONTROLLERS.choices(lambda backend: backend.rapid_link is not None,
+                               lacking="has no RAPID link module (its ControllerBackend.rapid_link is None)")
 
 
 def register_backend(backend: ControllerBackend) -> ControllerBackend:
