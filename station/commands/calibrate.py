@@ -83,7 +83,7 @@ Examples:
 
 
 def add_parser(sub):
-    p = sub.add_parser("calibrate", help=HELP, description=HELP, epilog=methods_help() + EPILOG,
+    p = sub.add_parser("calibrate", help=HELP, description=HELP, epilog=lambda: methods_help() + EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("session", metavar="SESSION", help="session folder (handeye-session/1)")
     p.add_argument("--method", metavar="NAME", help="solver (see below); default: the recommended one")

@@ -98,16 +98,21 @@ def _server_options(parser) -> None:
 
 
 def add_parser(sub):
+    from ...mocks.backends import mock_protocol_choices
+    from .argtypes import left_out_lines, registry_choice
+
     names, lines = _protocols()
     p = sub.add_parser("mock", help=HELP, description=HELP)
     targets = p.add_subparsers(dest="mock_target", metavar="TARGET")
     controller_help = CONTROLLER_HELP.format(protocols=", ".join(names))
+    protocols = mock_protocol_choices()
     c = targets.add_parser("controller", help=controller_help, description=controller_help,
-                           epilog=CONTROLLER_EPILOG.format(protocols=lines),
+                           epilog=CONTROLLER_EPILOG.format(protocols=lines) + left_out_lines(protocols, "--protocol"),
                            formatter_class=argparse.RawDescriptionHelpFormatter)
     from ...drivers.controller.backends import DEFAULT_PROTOCOL
 
-    c.add_argument("--protocol", choices=names, default=DEFAULT_PROTOCOL, help=f"default {DEFAULT_PROTOCOL}")
+    c.add_argument("--protocol", choices=protocols, type=registry_choice(protocols), default=DEFAULT_PROTOCOL,
+                   metavar="PROTOCOL", help=f"one of the protocols above (default {DEFAULT_PROTOCOL})")
     c.add_argument("--port", type=argtypes.port, default=None, help="TCP port (defaults above; 0 = any free port)")
     c.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     c.add_argument("--config", metavar="STATION.yaml",
