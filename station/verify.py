@@ -31,6 +31,7 @@ from .capture import CaptureRun, confirm_motion, install_program, release_waitin
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
 from .runtime import StationLink
+from .station_kind import station_kind
 from .verify_plan import (TIME_BUDGET, TIME_LIMIT, TIME_TIGHTEN, TIME_TRIES, VerifyError, capture_time, cell_guard,
                           create_verify_session, order_postures, path_time, path_time_along, verify_folder)
 
@@ -222,7 +223,7 @@ def _revisit(config, link: StationLink, folder: Path, session, numbers, joints, 
     reason the check cannot go on (the link failed, the board is not seen: :class:`_Stop`)."""
     from ..drivers.errors import StationError
 
-    station = MOCK if config.is_mock or config.is_rehearsal else REAL
+    station = station_kind(config, link, session_origin(session, session.path))  # SESSION's origin too: its X is moved
     created = create_verify_session(config, session, session_dir=Path(session.path), indices=numbers, joints=joints,
                                     folder=folder, station=station)
     created.path = folder

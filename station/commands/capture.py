@@ -153,6 +153,7 @@ def run(args) -> int:
     from ..config import default_config, load_config
     from ..progress import progress_bar
     from ..runtime import MOCK_BANNER, open_station, rehearsal_banner
+    from ..station_kind import station_tag
 
     if not args.config and not args.mock:
         raise UsageError("give --config STATION.yaml for a real station or --mock for the embedded one")
@@ -164,7 +165,7 @@ def run(args) -> int:
             raise UsageError(f"--postures must be between 3 and 255; got {args.postures}")
         config = replace(config, plan=replace(config.plan, postures=args.postures))
     args.session = str(config.session_folder(args.session))  # the config's output folder, when it names one
-    tag = "MOCK " if config.is_mock or config.is_rehearsal else ""
+    tag = station_tag(config)
     lock = threading.Lock()  # the mock's simulated operator says its steps from a thread of its own
 
     def say(message: str) -> None:
