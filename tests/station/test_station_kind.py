@@ -93,3 +93,23 @@ def test_a_session_recorded_real_beside_a_mock_configuration_reads_as_mock(tmp_p
     session.extra["capture"]["config"]["camera"] = {"backend": "xb3"}
     create_session(tmp_path / "r", session)
     assert session_origin(path=tmp_path / "r") == REAL
+
+
+def test_a_real_config_over_a_link_that_is_a_mock_says_mock_on_every_line(tmp_path, capsys, monkeypatch):
+    """The config names real hardware, but the link opened is a mock (here the embedded one stands in for a
+    controller that says it is a simulation): capture re-decides once the link is open; every line says MOCK
+    and the session is a mock one."""
+    import yaml
+
+    from handeye.station import runtime
+    from handeye.station.cli import main
+
+    opened = runtime.open_station
+    monkeypatch.setattr(runtime, "open_station", lambda config, session_dir=None: opened(config, True, session_dir))
+    real = tmp_path / "real.yaml"
+    real.write_text(yaml.safe_dump({**REAL_CONFIG, "plan": {"postures": 6}}))
+    assert main(["capture", "--config", str(real), "--session", str(tmp_path / "s"), "--plan-only"]) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if line.strip()]
+    assert lines[0].startswith("MOCK: the embedded mock station's controller and camera") and "never written" in lines[0]
+    assert all(line.startswith("MOCK") for line in lines), lines
+    assert session_origin(read_session(tmp_path / "s")) == MOCK
