@@ -31,6 +31,7 @@ from .capture import CaptureRun, confirm_motion, install_program, release_waitin
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
 from .runtime import StationLink
+from .station_kind import station_kind
 from .verify_plan import (TIME_BUDGET, TIME_LIMIT, TIME_TIGHTEN, TIME_TRIES, VerifyError, capture_time, cell_guard,
                           create_verify_session, order_postures, path_time, path_time_along, verify_folder)
 
@@ -64,7 +65,12 @@ class VerifyOutcome:
         ``{"held": ToolData, "session": ToolData}`` when the controller holds another tooldata.
     update : QuickUpdate or None
     motion_s : float or None
-        Simulated robot time of the check (mock station).
+        Robot time of the check (s) by the plan's motion model (``verify_plan.path_time_along``: each
+        move synchronised, its slowest axis at full speed) from where the controller reported the arm
+        through the postures in the order visited; the same model as :attr:`capture_motion_s`, so
+        their ratio is the ratio of robot times. Never read from a mock.
+    capture_motion_s : float or None
+        The full capture's robot time by the same model (``verify_plan.capture_time``).
     """
 
     verdict: str
@@ -78,6 +84,7 @@ class VerifyOutcome:
     update: object = None
     motion_s: float | None = None
     baseline: object = None
+    capture_motion_s: float | None = None
 
 
 def check_request(config: StationConfig, session_dir: Path, postures: int):
@@ -222,7 +229,7 @@ def _revisit(config, link: StationLink, folder: Path, session, numbers, joints, 
     reason the check cannot go on (the link failed, the board is not seen: :class:`_Stop`)."""
     from ..drivers.errors import StationError
 
-    station = MOCK if config.is_mock or config.is_rehearsal else REAL
+    station = station_kind(config, link, session_origin(session, session.path))  # SESSION's origin too: its X is moved
     created = create_verify_session(config, session, session_dir=Path(session.path), indices=numbers, joints=joints,
                                     folder=folder, station=station)
     created.path = folder
@@ -259,14 +266,14 @@ def verify(config: StationConfig, session_dir, link: StationLink, postures: int 
     base = base if base is not None else session_baseline(config, session, session_dir)
     robot = load_robot(config.robot)
     tool = _tool_finding(config, link, base)
-    motion0 = link.mock.arm.motion_s if link.is_mock else None
-    numbers, joints = _chosen(config, session, base, robot, link.controller.read_joints(), postures, progress)
+    here = link.controller.read_joints()  # where the controller reports the arm: the check's path starts there
+    numbers, joints = _chosen(config, session, base, robot, here, postures, progress)
     progress(f"revisiting postures {', '.join(map(str, numbers))} of {session_dir.name}")
     folder = verify_folder(session_dir)
     captured, failure = _revisit(config, link, folder, session, numbers, joints, progress, confirm, on_posture)
-    motion = None if motion0 is None else link.mock.arm.motion_s - motion0
     outcome = VerifyOutcome(INCONCLUSIVE, failure or "", folder, numbers, len(captured or ()),
-                            tool_finding=tool, motion_s=motion, baseline=base)
+                            tool_finding=tool, motion_s=path_time_along(robot, here, joints), baseline=base,
+                            capture_motion_s=capture_time(robot, session.extra["capture"]))
     if failure is None:
         judge(outcome, folder, base, robot, level, numbers)
     if tool is not None and outcome.verdict != INCONCLUSIVE:

@@ -124,7 +124,8 @@ def outcome_json(outcome, session: str, thresholds) -> dict:
                                            "p_value": test.p_value, "level": test.level},
         "diagnosis": diag,
         "quick_update": update_json(outcome.update, thresholds),
-        "simulated_robot_time_s": outcome.motion_s,
+        "simulated_robot_time_s": outcome.motion_s,  # the plan's motion model, on every station
+        "capture_robot_time_s": outcome.capture_motion_s,
     }
 
 

@@ -78,6 +78,7 @@ def run(args) -> int:
     from ...calibration.errors import HandEyeError, UsageError
     from ..config import default_config, load_config
     from ..runtime import MOCK_BANNER, open_station, rehearsal_banner
+    from ..station_kind import station_tag
 
     if not args.config and not args.mock:
         raise UsageError("give --config STATION.yaml (the station) or --mock (the embedded mock station)")
@@ -94,13 +95,12 @@ def run(args) -> int:
     if not config.is_mock and not args.yes and not sys.stdin.isatty():
         raise HandEyeError("the check moves the robot and needs the operator's yes: run it at a terminal, or give "
                            "--yes (scripts); nothing moved")
-    tag = "MOCK " if config.is_mock or config.is_rehearsal else ""
     if config.is_mock:
         print(MOCK_BANNER, flush=True)
     elif config.is_rehearsal:
         print(rehearsal_banner(config), flush=True)
     with open_station(config, session_dir=args.against) as link:
-        verdict = _check(args, config, link, tag)
+        verdict = _check(args, config, link, station_tag(config, link))  # the link's own parts too
     return EXIT_CODES[verdict]
 
 
@@ -110,6 +110,8 @@ def _check(args, config, link, tag: str) -> str:
     from ..verify import verify
     from ..verify_history import append_record, check_record, history_path, load_history
     from ..verify_report import write_history_report
+    from ..origin import MOCK
+    from ..station_kind import station_kind
     from ..verify_result import advice, outcome_json, outcome_lines
 
     import json
@@ -126,7 +128,7 @@ def _check(args, config, link, tag: str) -> str:
     config_arg = f"--config {args.config}" if args.config and not args.mock else "--mock"
     for line in outcome_lines(data, advice(outcome, data["diagnosis"], str(args.against), config_arg)):
         say(line)
-    station = "mock" if config.is_mock else str(getattr(config, "source", "station"))
+    station = "mock" if station_kind(config, link) == MOCK else str(getattr(config, "source", "station"))
     path = history_path(args.against)
 
     def record() -> None:

@@ -174,3 +174,38 @@ def test_exit_codes_are_in_the_help(capsys):
         main(["verify", "--help"])
     out = capsys.readouterr().out
     assert "0 ok, 3 drift, 4 inconclusive" in out and "1 errors" in out
+
+
+class _RealLink:
+    """A link as a real station's holds it: the controller, the camera, the stereo model, the program's loader
+    and stop; no mock, no truth (no ``.mock`` at all)."""
+
+    is_mock = False
+    rehearsal = None
+
+    def __init__(self, link):
+        self.controller, self.camera, self.stereo_model = link.controller, link.camera, link.stereo_model
+        self.load_program, self.stop_program = link.load_program, link.stop_program
+
+
+def test_verify_over_a_link_without_a_mock_reports_the_robot_time(station):
+    """The robot time comes from the plan's motion model from where the controller reports the arm, never from
+    a mock: over a link without one the check works and says it, and it is the time the simulated arm took."""
+    from handeye.station.config import load_config
+    from handeye.station.runtime import open_station
+    from handeye.station.verify import verify
+    from handeye.station.verify_result import outcome_json
+
+    root, session, config = station
+    config = load_config(config)
+    with open_station(config, session_dir=session) as link:
+        real = _RealLink(link)
+        assert not hasattr(real, "mock")
+        arm, started = link.mock.arm, link.mock.arm.motion_s
+        outcome = verify(config, session, real, 3, confirm=lambda question: True)
+        took = (arm.motion_s - started) * arm.speed_fraction  # the simulated arm's own clock, at full axis speed
+    assert outcome.measured == 3
+    assert outcome.motion_s > 0 and outcome.motion_s == pytest.approx(took, rel=0.02)
+    assert 0 < outcome.motion_s < outcome.capture_motion_s
+    data = outcome_json(outcome, str(session), None)
+    assert data["simulated_robot_time_s"] == outcome.motion_s and data["capture_robot_time_s"] == outcome.capture_motion_s
