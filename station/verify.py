@@ -31,6 +31,7 @@ from .capture import CaptureRun, confirm_motion, install_program, release_waitin
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
 from .runtime import StationLink
+from .session_station import station_mismatch
 from .verify_plan import (TIME_BUDGET, TIME_LIMIT, TIME_TIGHTEN, TIME_TRIES, VerifyError, capture_time, cell_guard,
                           create_verify_session, order_postures, path_time, path_time_along, verify_folder)
 
@@ -81,8 +82,9 @@ class VerifyOutcome:
 
 
 def check_request(config: StationConfig, session_dir: Path, postures: int):
-    """SESSION as ``verify`` needs it, or a one-line refusal (VerifyError): a capture of this robot and
-    board with its plan on record, and K at least :data:`MIN_VERIFY_POSTURES`."""
+    """SESSION as ``verify`` needs it, or a one-line refusal (VerifyError): a capture on this station
+    (controller, camera, robot and board: ``station.session_station``) with its plan on record, and K
+    at least :data:`MIN_VERIFY_POSTURES`."""
     if postures < MIN_VERIFY_POSTURES:
         raise VerifyError(f"--postures {postures} is too few: the test and its diagnosis need at least "
                           f"{MIN_VERIFY_POSTURES} revisited postures")
@@ -93,14 +95,9 @@ def check_request(config: StationConfig, session_dir: Path, postures: int):
         raise VerifyError(f"{session_dir} was not captured by handeye capture (simulated or imported): verify revisits "
                           "the recorded postures of a capture on this station; capture one (handeye capture) and "
                           "calibrate it")
-    if (session.robot or "").lower() != config.robot.lower():
-        raise VerifyError(f"{session_dir} was captured with robot {session.robot}, the config names {config.robot}: "
-                          "verify a session of this robot")
-    if session.target is None or tuple(session.target.corners) != tuple(config.target.corners) \
-            or abs(session.target.square_mm - config.target.square_mm) > 1e-6:
-        raise VerifyError(f"{session_dir} was captured with another board than the config's "
-                          f"{config.target.corners[0]}x{config.target.corners[1]}, {config.target.square_mm:g} mm: "
-                          "verify with the board of the session")
+    mismatch = station_mismatch(session, session_dir, config)
+    if mismatch is not None:
+        raise VerifyError(mismatch)
     usable = [p for p in session.postures if p.joints_deg is not None and p.index < len(record["plan_joints_deg"])]
     if len(usable) < postures:
         raise VerifyError(f"{session_dir} holds {len(usable)} postures with joint angles; --postures {postures} asks "

@@ -174,3 +174,50 @@ def test_exit_codes_are_in_the_help(capsys):
         main(["verify", "--help"])
     out = capsys.readouterr().out
     assert "0 ok, 3 drift, 4 inconclusive" in out and "1 errors" in out
+
+def _session_copy(session, folder, **recorded):
+    """SESSION copied with its recorded station config changed (``section={key: value}``)."""
+    import shutil
+
+    import yaml
+
+    copy = folder / session.name
+    shutil.copytree(session, copy)
+    header = yaml.safe_load((copy / "session.yaml").read_text())
+    for section, values in recorded.items():
+        header["capture"]["config"][section].update(values)
+    (copy / "session.yaml").write_text(yaml.safe_dump(header, sort_keys=False))
+    return copy
+
+@pytest.mark.parametrize("recorded, config_text, says", [
+    ({}, "controller: {protocol: socket, host: 127.0.0.1, port: 9}\ncamera: {backend: xb3}\n",
+     ["another controller: mock (the embedded mock station) there, socket at 127.0.0.1 here",
+      "another camera: mock there, xb3 here"]),
+    ({"controller": {"protocol": "socket", "host": "10.0.0.5"}, "camera": {"backend": "xb3"}},
+     "controller: {protocol: socket, host: 10.0.0.6, port: 9}\ncamera: {backend: xb3}\n",
+     ["another controller: socket at 10.0.0.5 there, socket at 10.0.0.6 here"]),
+    ({"controller": {"protocol": "socket", "host": "10.0.0.5"}, "camera": {"backend": "xb3", "guid": "00b09d0100a1b2c3"}},
+     "controller: {protocol: socket, host: 10.0.0.5, port: 9}\ncamera: {backend: xb3, guid: '00b09d0100a1b2c4'}\n",
+     ["another camera: xb3 (guid 00b09d0100a1b2c3) there, xb3 (guid 00b09d0100a1b2c4) here"]),
+    ({"controller": {"protocol": "socket", "host": "10.0.0.5"}}, BASE_YAML,
+     ["another controller: socket at 10.0.0.5 there, mock (the embedded mock station) here"]),
+    ({}, BASE_YAML + "robot: IRB1410\ntarget: {corners: [9, 6], square_mm: 25}\n",
+     ["another robot: IRB1400 there, IRB1410 here", "another board: 13x8, 30 mm there, 9x6, 25 mm here"]),
+], ids=["mock-session-socket-station", "another-controller-address", "another-xb3", "socket-session-mock-station",
+        "robot-and-board"])
+def test_a_session_of_another_station_is_refused_before_anything_opens(station, tmp_path, capsys, recorded,
+                                                                      config_text, says):
+    # issue 42.4: a mock session against a socket station moved the robot and advised writing the other
+    # cell's camera; refused in one line saying what differs, with --yes too, before any link opens
+    root, session, _ = station
+    against = _session_copy(session, tmp_path, **recorded) if recorded else session
+    config = tmp_path / "station.yaml"
+    config.write_text(config_text)
+    listing = sorted(p.name for p in root.iterdir())
+    capsys.readouterr()
+    assert main(["verify", "--config", str(config), "--against", str(against), "--yes"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "captured on another station" in err and "nothing moved" in err
+    assert all(part in err for part in says), err
+    assert sorted(p.name for p in root.iterdir()) == listing and sorted(p.name for p in tmp_path.iterdir()) == \
+        sorted(["station.yaml"] + ([against.name] if recorded else []))
