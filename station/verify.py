@@ -98,11 +98,29 @@ def check_request(config: StationConfig, session_dir: Path, postures: int):
     mismatch = station_mismatch(session, session_dir, config)
     if mismatch is not None:
         raise VerifyError(mismatch)
+    _check_joints(session, session_dir)
     usable = [p for p in session.postures if p.joints_deg is not None and p.index < len(record["plan_joints_deg"])]
     if len(usable) < postures:
         raise VerifyError(f"{session_dir} holds {len(usable)} postures with joint angles; --postures {postures} asks "
                           "for more")
     return session
+
+
+def _check_joints(session, session_dir: Path) -> None:
+    """Refuse SESSION when a posture's joint angles are missing or do not reproduce its flange pose: its
+    calibration then models the robot's noise on the flange poses, the check (which revisits by joint
+    angles) on the joints, and the two cannot be compared."""
+    from ..calibration.joint_match import session_joint_mismatch
+
+    missing = [p.index for p in session.postures if p.joints_deg is None]
+    found = session_joint_mismatch(session)
+    if not missing and found is None:
+        return
+    what = found.line() if found is not None else \
+        f"postures {', '.join(map(str, missing))} hold no joint angles (joints_deg)"
+    raise VerifyError(f"{session_dir}: {what}: verify revisits postures by their joint angles and compares under "
+                      "the calibration's joint noise model; correct or remove those postures' files and calibrate "
+                      "again, or capture a new session; nothing moved")
 
 
 @dataclass(frozen=True)

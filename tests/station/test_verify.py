@@ -221,3 +221,44 @@ def test_a_session_of_another_station_is_refused_before_anything_opens(station, 
     assert all(part in err for part in says), err
     assert sorted(p.name for p in root.iterdir()) == listing and sorted(p.name for p in tmp_path.iterdir()) == \
         sorted(["station.yaml"] + ([against.name] if recorded else []))
+
+def _edit_postures(session, folder, numbers, edit):
+    """SESSION copied with ``edit(posture mapping)`` applied to the posture files ``numbers``."""
+    import yaml
+
+    copy = _session_copy(session, folder)
+    for number in numbers:
+        path = copy / "postures" / f"{number:03d}.yaml"
+        posture = yaml.safe_load(path.read_text())
+        edit(posture)
+        path.write_text(yaml.safe_dump(posture, sort_keys=False))
+    return copy
+
+def _turn_axis_1(posture):
+    posture["joints_deg"][0] += 1.0
+
+@pytest.mark.parametrize("edit, says", [
+    (_turn_axis_1, "the joint angles of postures 3, 7 (2 of 14) do not reproduce their flange poses"),
+    (lambda posture: posture.pop("joints_deg"), "postures 3, 7 hold no joint angles"),
+], ids=["joints-disagree", "joints-missing"])
+def test_joints_that_disagree_with_the_flange_poses_are_refused_before_anything_moves(station, tmp_path, capsys,
+                                                                                        edit, says):
+    # issue 42.5: 1 deg added to axis 1 in two posture files moved the robot, then "unexpected ValueError"
+    root, session, config = station
+    against = _edit_postures(session, tmp_path, (3, 7), edit)
+    capsys.readouterr()
+    assert main(["verify", "--config", config, "--against", str(against)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and says in err and "nothing moved" in err and "unexpected" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == [against.name]  # no check session, no history beside it
+
+def test_calibrate_warns_naming_the_postures_whose_joints_disagree(station, tmp_path, capsys):
+    root, session, _ = station
+    against = _edit_postures(session, tmp_path, (3, 7), _turn_axis_1)
+    out = tmp_path / "result.json"
+    capsys.readouterr()
+    assert main(["calibrate", str(against), "--json", str(out), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("handeye calibrate: warning: the joint angles of postures 3, 7 ")
+    reason = json.loads(out.read_text())["details"]["kinematics"]["reason"]
+    assert "postures 3, 7" in reason and "flange poses instead of the joints" in reason
