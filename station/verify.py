@@ -32,6 +32,7 @@ from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
 from .runtime import StationLink
 from .session_station import station_mismatch
+from .verify_tolerance import drift_size, drift_tolerance, verdict_reason
 from .verify_plan import (TIME_BUDGET, TIME_LIMIT, TIME_TIGHTEN, TIME_TRIES, VerifyError, capture_time, cell_guard,
                           create_verify_session, order_postures, path_time, path_time_along, verify_folder)
 
@@ -66,6 +67,10 @@ class VerifyOutcome:
     update : QuickUpdate or None
     motion_s : float or None
         Simulated robot time of the check (mock station).
+    tolerance : DriftTolerance or None
+        The smallest change the check acts on (``station.verify_tolerance``).
+    size : DriftSize or None
+        The detected change's size against it (None: the test found nothing).
     """
 
     verdict: str
@@ -79,6 +84,13 @@ class VerifyOutcome:
     update: object = None
     motion_s: float | None = None
     baseline: object = None
+    tolerance: object = None
+    size: object = None
+
+    @property
+    def beyond_tolerance(self) -> bool:
+        """The test found a change and it is larger than the tolerance (``station.verify_tolerance``)."""
+        return self.size is not None and self.size.beyond
 
 
 def check_request(config: StationConfig, session_dir: Path, postures: int):
@@ -281,7 +293,7 @@ def verify(config: StationConfig, session_dir, link: StationLink, postures: int 
     captured, failure = _revisit(config, link, folder, session, numbers, joints, progress, confirm, on_posture)
     motion = None if motion0 is None else link.mock.arm.motion_s - motion0
     outcome = VerifyOutcome(INCONCLUSIVE, failure or "", folder, numbers, len(captured or ()),
-                            tool_finding=tool, motion_s=motion, baseline=base)
+                            tool_finding=tool, motion_s=motion, baseline=base, tolerance=drift_tolerance(config))
     if failure is None:
         judge(outcome, folder, base, robot, level, numbers)
     if tool is not None and outcome.verdict != INCONCLUSIVE:
@@ -305,10 +317,9 @@ def judge(outcome: VerifyOutcome, folder: Path, base: SessionBaseline, robot, le
     disc = discrepancy(base.baseline, obs, problem.joints_deg)
     outcome.test = drift_test(disc, base.baseline, level)
     outcome.explanations = explain(disc, base.baseline, robot)
-    outcome.verdict = DRIFT if outcome.test.drift else OK
-    t = outcome.test
-    outcome.reason = (f"discrepancy chi2 {t.statistic:.1f} on {t.degrees} degrees of freedom, p = {t.p_value:.3g} "
-                      f"({'below' if t.drift else 'above'} the level {t.level:g})")
-    best = next((e for e in outcome.explanations if e.cause != "none"), None) if t.drift else None
+    outcome.size = drift_size(outcome.explanations, outcome.test, outcome.tolerance)
+    outcome.verdict = DRIFT if outcome.size is not None and outcome.size.beyond else OK
+    outcome.reason = verdict_reason(outcome.test, outcome.size, outcome.tolerance)
+    best = next((e for e in outcome.explanations if e.cause != "none"), None) if outcome.verdict == DRIFT else None
     if best is not None and best.cause == "camera":
         outcome.update = quick_update(base.baseline, obs, problem.joints_deg)

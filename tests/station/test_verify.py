@@ -262,3 +262,36 @@ def test_calibrate_warns_naming_the_postures_whose_joints_disagree(station, tmp_
     assert err.count("\n") == 1 and err.startswith("handeye calibrate: warning: the joint angles of postures 3, 7 ")
     reason = json.loads(out.read_text())["details"]["kinematics"]["reason"]
     assert "postures 3, 7" in reason and "flange poses instead of the joints" in reason
+
+@pytest.mark.parametrize("shift_mm, config_extra, verdict", [
+    (0.05, "", "ok"),                                   # detectable, below the default 0.2 mm
+    (0.05, "verify: {tolerance_mm: 0.03}\n", "drift"),  # the station's own tolerance
+    (0.3, "", "drift"),                                 # above the default
+], ids=["below-default", "above-station-tolerance", "above-default"])
+def test_drift_means_beyond_the_noise_and_beyond_the_tolerance(station, capsys, shift_mm, config_extra, verdict):
+    # issue 42.7: a 0.05 mm camera shift was DRIFT (chi2 in the thousands) against a calibration whose
+    # one-sigma is 0.03 mm: the output states the statistic and the size against the tolerance
+    code, data = _verify(station, f"small{shift_mm}{bool(config_extra)}", f"camera_shift_mm: [{shift_mm}, 0, 0]",
+                         config_extra=config_extra)
+    out = capsys.readouterr().out
+    assert data["verdict"] == verdict and code == {"ok": 0, "drift": 3}[verdict]
+    assert data["test"]["statistically_detectable"] is True and data["test"]["p_value"] < 0.01
+    size, tolerance = data["size"], data["tolerance"]
+    assert size["cause"] == "camera" and size["translation_mm"] == pytest.approx(shift_mm, rel=0.3)
+    assert tolerance["translation_mm"] == (0.03 if config_extra else 0.2) and tolerance["rotation_deg"] == 0.02
+    assert ("verify.tolerance_mm" in tolerance["source"]) == bool(config_extra)
+    assert data["beyond_tolerance"] is (verdict == "drift") and size["beyond_tolerance"] is (verdict == "drift")
+    assert f"chi2 {data['test']['statistic']:.1f} on 30 degrees of freedom" in data["reason"]
+    if verdict == "ok":
+        assert data["diagnosis"]["cause"] == "none" and data["quick_update"] is None
+        assert "statistically detectable" in out and "within the tolerance 0.2 mm / 0.02 deg" in out
+        assert "nothing to do" in out and "writeback" not in out
+    else:
+        assert data["diagnosis"]["cause"] == "camera" and "beyond the tolerance" in out
+
+@pytest.mark.parametrize("level", ["1e-300", "0", "0.5", "nan", "1e-7"])
+def test_a_level_outside_its_range_is_a_usage_error(station, capsys, level):
+    root, session, config = station
+    assert main(["verify", "--config", config, "--against", str(session), "--level", level]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--level must be between 1e-06 and 0.2" in err
