@@ -16,7 +16,7 @@ Sections: ``robot``, ``controller`` (the link and the generated RAPID program), 
 ``target``, ``plan`` (posture planning), ``motion``, ``tool`` (the PERS tooldata written back),
 ``capture`` (per-posture quality), ``cell`` and ``guided`` (the cell's keep-out volumes and
 carried geometry, the operator-guided capture: ``station.cell_settings``), ``quality`` (the
-verdict's thresholds, see ``station.quality``), ``output``, ``mock`` (the embedded mock station) and ``postures`` (fixed approved postures for
+verdict's thresholds, see ``station.quality``), ``verify`` (the change a check acts on), ``output``, ``mock`` (the embedded mock station) and ``postures`` (fixed approved postures for
 ``handeye rapid generate``; capture plans its own).
 """
 
@@ -415,6 +415,19 @@ class CaptureSettings:
 
 
 @dataclass(frozen=True)
+class VerifySettings:
+    """``verify``: the change ``handeye verify`` acts on (``station.verify_tolerance``). A drift must be
+    beyond the noise (the test at ``--level``) and larger than these; null: the station's quality
+    thresholds ``max_sigma_translation_mm`` / ``max_sigma_rotation_deg`` (a change smaller than the
+    uncertainty a passing calibration may have does not matter)."""
+
+    tolerance_mm: float | None = setting(None, Optional(Number(0, 100)), "smallest change that is acted on (camera "
+                                         "or board shift; null: quality max_sigma_translation_mm)", "mm")
+    tolerance_deg: float | None = setting(None, Optional(Number(0, 10)), "smallest turn that is acted on (camera, "
+                                          "board or a joint's zero; null: quality max_sigma_rotation_deg)", "deg")
+
+
+@dataclass(frozen=True)
 class FaultSettings:
     """``mock.faults``: what changed at the mock station since its calibration (``handeye verify``
     finds it); all zero: nothing."""
@@ -469,6 +482,7 @@ class StationConfig:
     capture: CaptureSettings = section(CaptureSettings, "per-posture quality")
     cell: CellSettings = section(CellSettings, "keep-out volumes, carried geometry, path checks")
     guided: GuidedSettings = section(GuidedSettings, "operator-guided capture")
+    verify: VerifySettings = section(VerifySettings, "the change handeye verify acts on")
     quality: dict = setting(None, Custom(_quality), "verdict thresholds (station/quality_thresholds.yaml)",
                             factory=dict)
     output: str | None = setting(None, Optional(Text()), "folder of new sessions: a relative capture --session goes "
@@ -535,7 +549,7 @@ class StationConfig:
         ``"<set>"`` or None, never their value."""
         out = {"robot": self.robot, "output": self.output, "quality": dict(self.quality),
                "target": {"corners": list(self.target.corners), "square_mm": self.target.square_mm}}
-        for name in ("controller", "camera", "plan", "motion", "tool", "capture", "guided", "mock"):
+        for name in ("controller", "camera", "plan", "motion", "tool", "capture", "guided", "verify", "mock"):
             settings = getattr(self, name)
             chosen = chosen_of(settings)
             section = {f.name: getattr(settings, f.name) for f in declared_fields(type(settings), chosen)}
