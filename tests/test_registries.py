@@ -69,9 +69,9 @@ def test_every_controller_back_end_carries_its_rapid_link_module():
 def test_every_list_of_back_ends_is_the_registry():
     assert _choices(["robot", "joints"]) == CONTROLLERS.names()
     assert _choices(["robot", "status"]) == CONTROLLERS.names()
-    assert _choices(["mock", "controller"]) == mock_protocols()
-    assert _choices(["demo"]) == mock_protocols()
-    assert _choices(["rapid", "generate"]) == CONTROLLERS.names()
+    assert tuple(_choices(["mock", "controller"])) == mock_protocols()
+    assert tuple(_choices(["demo"])) == mock_protocols()
+    assert tuple(_choices(["rapid", "generate"])) == CONTROLLERS.names()
     with pytest.raises(ConfigError, match="controller.protocol must be one of socket, serial, modbus, rws, mock; got 'x'"):
         config_from_dict({"controller": {"protocol": "x"}, "camera": {"backend": "xb3"}})
     with pytest.raises(ConfigError, match="camera.backend must be one of xb3, mock; got 'x'"):
@@ -200,8 +200,13 @@ def test_a_broken_entry_point_is_skipped_with_a_warning(plugin, monkeypatch, cap
 
     monkeypatch.delattr(handeye_test_plugin, "CONTROLLER")
     CONTROLLERS.refresh()
-    assert CONTROLLERS.names() == BUILT_IN_CONTROLLERS
+    assert CONTROLLERS.names() == BUILT_IN_CONTROLLERS + ("loopback",)  # listed from the metadata, not loaded
+    assert "loopback" not in CONTROLLERS  # asked for: it does not load
     assert "controller protocol 'loopback' from entry point handeye_test_plugin:CONTROLLER is unusable" in caplog.text
+    assert CONTROLLERS.names() == BUILT_IN_CONTROLLERS and "loopback" in CONTROLLERS.unusable()
+    with pytest.raises(ConfigError, match="got 'loopback': the controller protocol 'loopback' of the installed package "
+                                          "handeye-test-plugin .* failed to load \\(AttributeError: "):
+        config_from_dict({"controller": {"protocol": "loopback"}, "camera": {"backend": "xb3"}})
 
 
 def test_the_plugin_protocol_gets_its_own_rapid_module(plugin, tmp_path, capsys):

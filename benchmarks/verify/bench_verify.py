@@ -37,12 +37,14 @@ from pathlib import Path
 
 import numpy as np
 
+from handeye.calibration.kinematics import load_robot
 from handeye.calibration.transforms import rotation_error_deg
 from handeye.mocks.station import DEFAULT_MOUNT, read_state, write_state
 from handeye.station.capture import capture
 from handeye.station.config import FaultSettings, default_config
 from handeye.station.runtime import mock_state_file, open_controller_link, open_station
 from handeye.station.verify import session_baseline, verify
+from handeye.station.verify_plan import capture_time
 from handeye.station.verify_result import diagnosis
 from handeye.station.writeback import writeback
 from handeye.calibration.session import read_session
@@ -81,10 +83,11 @@ def case_faults(case: str, rng) -> tuple[FaultSettings, dict]:
 
 
 def baseline(config, folder: Path) -> tuple[object, float]:
-    """Capture, calibrate and write back the trial's baseline; its solved baseline and motion time."""
+    """Capture, calibrate and write back the trial's baseline; its solved baseline and its robot time by the
+    plan's motion model (``verify_plan.capture_time``: the model the check's ``motion_s`` is timed by)."""
     with open_station(config, session_dir=folder) as link:
         capture(config, folder, link)
-        motion = link.mock.arm.motion_s
+    motion = capture_time(load_robot(config.robot), read_session(folder).extra["capture"])
     base = session_baseline(config, read_session(folder), folder)
     with open_controller_link(config, session_dir=folder) as link:
         writeback(folder, config, base.assessment.result, link.controller, origin="mock", mock_controller=True)

@@ -83,7 +83,7 @@ def test_the_pendant_command_reads_requests_from_stdin(port, capsys, monkeypatch
 
     service, robot = port
     monkeypatch.setattr("sys.stdin", io.StringIO("JOG 0 5 0 0 0 0\n\nSTATE\n"))
-    assert main(["mock", "pendant", "--port", str(service.port)]) == 0
+    assert main(["mock", "pendant", "--port", str(service.port), "-"]) == 0
     out = capsys.readouterr().out.splitlines()
     assert len(out) == 2 and out[1].startswith("OK none"), out
     assert robot.current_joints[1] == pytest.approx(5.0)

@@ -21,7 +21,7 @@ from handeye.station.config import default_config
 from handeye.station.guided import StillWatch, guided_capture, postures_needed, what_is_missing
 from handeye.station.planning import plan_postures
 from handeye.station.quality import QualityThresholds
-from handeye.station.runtime import open_station
+from handeye.station.runtime import StationLink, open_station
 
 ROBOT = load_robot("IRB1400")
 POSTURES = 16
@@ -121,8 +121,11 @@ def test_the_session_format_and_the_resume_rules(guided_and_planned):
                               camera=replace(config.camera, backend="xb3")).as_mock()) as link:
         real = replace(config, controller=replace(config.controller, protocol="socket"),
                        camera=replace(config.camera, backend="xb3"))
-        with pytest.raises(CaptureError, match="captured on the embedded mock station"):
-            guided_capture(real, folder / "g", link, stop=stop)
+        with pytest.raises(CaptureError, match=r"captured on the mock station \(embedded, or a rehearsal\)"):
+            # the real station: its config and a link without a mock part (the socket driver, no mock camera)
+            guided_capture(real, folder / "g", StationLink(link.controller, None, link.stereo_model), stop=stop)
+        # a real config over the mock's own link is the mock station (the link's mock parts): resumed
+        assert guided_capture(real, folder / "g", link, stop=stop).already == POSTURES
 
 
 def _rotations(axes_angles):

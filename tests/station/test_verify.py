@@ -174,3 +174,160 @@ def test_exit_codes_are_in_the_help(capsys):
         main(["verify", "--help"])
     out = capsys.readouterr().out
     assert "0 ok, 3 drift, 4 inconclusive" in out and "1 errors" in out
+
+
+class _RealLink:
+    """A link as a real station's holds it: the controller, the camera, the stereo model, the program's loader
+    and stop; no mock, no truth (no ``.mock`` at all)."""
+
+    is_mock = False
+    rehearsal = None
+
+    def __init__(self, link):
+        self.controller, self.camera, self.stereo_model = link.controller, link.camera, link.stereo_model
+        self.load_program, self.stop_program = link.load_program, link.stop_program
+
+
+def test_verify_over_a_link_without_a_mock_reports_the_robot_time(station):
+    """The robot time comes from the plan's motion model from where the controller reports the arm, never from
+    a mock: over a link without one the check works and says it, and it is the time the simulated arm took."""
+    from handeye.station.config import load_config
+    from handeye.station.runtime import open_station
+    from handeye.station.verify import verify
+    from handeye.station.verify_result import outcome_json
+
+    root, session, config = station
+    config = load_config(config)
+    with open_station(config, session_dir=session) as link:
+        real = _RealLink(link)
+        assert not hasattr(real, "mock")
+        arm, started = link.mock.arm, link.mock.arm.motion_s
+        outcome = verify(config, session, real, 3, confirm=lambda question: True)
+        took = (arm.motion_s - started) * arm.speed_fraction  # the simulated arm's own clock, at full axis speed
+    assert outcome.measured == 3
+    assert outcome.motion_s > 0 and outcome.motion_s == pytest.approx(took, rel=0.02)
+    assert 0 < outcome.motion_s < outcome.capture_motion_s
+    data = outcome_json(outcome, str(session), None)
+    assert data["simulated_robot_time_s"] == outcome.motion_s and data["capture_robot_time_s"] == outcome.capture_motion_s
+
+
+def _session_copy(session, folder, **recorded):
+    """SESSION copied with its recorded station config changed (``section={key: value}``)."""
+    import shutil
+
+    import yaml
+
+    copy = folder / session.name
+    shutil.copytree(session, copy)
+    header = yaml.safe_load((copy / "session.yaml").read_text())
+    for section, values in recorded.items():
+        header["capture"]["config"][section].update(values)
+    (copy / "session.yaml").write_text(yaml.safe_dump(header, sort_keys=False))
+    return copy
+
+@pytest.mark.parametrize("recorded, config_text, says", [
+    ({}, "controller: {protocol: socket, host: 127.0.0.1, port: 9}\ncamera: {backend: xb3}\n",
+     ["another controller: mock (the embedded mock station) there, socket at 127.0.0.1 here",
+      "another camera: mock there, xb3 here"]),
+    ({"controller": {"protocol": "socket", "host": "10.0.0.5"}, "camera": {"backend": "xb3"}},
+     "controller: {protocol: socket, host: 10.0.0.6, port: 9}\ncamera: {backend: xb3}\n",
+     ["another controller: socket at 10.0.0.5 there, socket at 10.0.0.6 here"]),
+    ({"controller": {"protocol": "socket", "host": "10.0.0.5"}, "camera": {"backend": "xb3", "guid": "00b09d0100a1b2c3"}},
+     "controller: {protocol: socket, host: 10.0.0.5, port: 9}\ncamera: {backend: xb3, guid: '00b09d0100a1b2c4'}\n",
+     ["another camera: xb3 (guid 00b09d0100a1b2c3) there, xb3 (guid 00b09d0100a1b2c4) here"]),
+    ({"controller": {"protocol": "socket", "host": "10.0.0.5"}}, BASE_YAML,
+     ["another controller: socket at 10.0.0.5 there, mock (the embedded mock station) here"]),
+    ({}, BASE_YAML + "robot: IRB1410\ntarget: {corners: [9, 6], square_mm: 25}\n",
+     ["another robot: IRB1400 there, IRB1410 here", "another board: 13x8, 30 mm there, 9x6, 25 mm here"]),
+], ids=["mock-session-socket-station", "another-controller-address", "another-xb3", "socket-session-mock-station",
+        "robot-and-board"])
+def test_a_session_of_another_station_is_refused_before_anything_opens(station, tmp_path, capsys, recorded,
+                                                                      config_text, says):
+    # issue 42.4: a mock session against a socket station moved the robot and advised writing the other
+    # cell's camera; refused in one line saying what differs, with --yes too, before any link opens
+    root, session, _ = station
+    against = _session_copy(session, tmp_path, **recorded) if recorded else session
+    config = tmp_path / "station.yaml"
+    config.write_text(config_text)
+    listing = sorted(p.name for p in root.iterdir())
+    capsys.readouterr()
+    assert main(["verify", "--config", str(config), "--against", str(against), "--yes"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "captured on another station" in err and "nothing moved" in err
+    assert all(part in err for part in says), err
+    assert sorted(p.name for p in root.iterdir()) == listing and sorted(p.name for p in tmp_path.iterdir()) == \
+        sorted(["station.yaml"] + ([against.name] if recorded else []))
+
+def _edit_postures(session, folder, numbers, edit):
+    """SESSION copied with ``edit(posture mapping)`` applied to the posture files ``numbers``."""
+    import yaml
+
+    copy = _session_copy(session, folder)
+    for number in numbers:
+        path = copy / "postures" / f"{number:03d}.yaml"
+        posture = yaml.safe_load(path.read_text())
+        edit(posture)
+        path.write_text(yaml.safe_dump(posture, sort_keys=False))
+    return copy
+
+def _turn_axis_1(posture):
+    posture["joints_deg"][0] += 1.0
+
+@pytest.mark.parametrize("edit, says", [
+    (_turn_axis_1, "the joint angles of postures 3, 7 (2 of 14) do not reproduce their flange poses"),
+    (lambda posture: posture.pop("joints_deg"), "postures 3, 7 hold no joint angles"),
+], ids=["joints-disagree", "joints-missing"])
+def test_joints_that_disagree_with_the_flange_poses_are_refused_before_anything_moves(station, tmp_path, capsys,
+                                                                                        edit, says):
+    # issue 42.5: 1 deg added to axis 1 in two posture files moved the robot, then "unexpected ValueError"
+    root, session, config = station
+    against = _edit_postures(session, tmp_path, (3, 7), edit)
+    capsys.readouterr()
+    assert main(["verify", "--config", config, "--against", str(against)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and says in err and "nothing moved" in err and "unexpected" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == [against.name]  # no check session, no history beside it
+
+def test_calibrate_warns_naming_the_postures_whose_joints_disagree(station, tmp_path, capsys):
+    root, session, _ = station
+    against = _edit_postures(session, tmp_path, (3, 7), _turn_axis_1)
+    out = tmp_path / "result.json"
+    capsys.readouterr()
+    assert main(["calibrate", str(against), "--json", str(out), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("handeye calibrate: warning: the joint angles of postures 3, 7 ")
+    reason = json.loads(out.read_text())["details"]["kinematics"]["reason"]
+    assert "postures 3, 7" in reason and "flange poses instead of the joints" in reason
+
+@pytest.mark.parametrize("shift_mm, config_extra, verdict", [
+    (0.05, "", "ok"),                                   # detectable, below the default 0.2 mm
+    (0.05, "verify: {tolerance_mm: 0.03}\n", "drift"),  # the station's own tolerance
+    (0.3, "", "drift"),                                 # above the default
+], ids=["below-default", "above-station-tolerance", "above-default"])
+def test_drift_means_beyond_the_noise_and_beyond_the_tolerance(station, capsys, shift_mm, config_extra, verdict):
+    # issue 42.7: a 0.05 mm camera shift was DRIFT (chi2 in the thousands) against a calibration whose
+    # one-sigma is 0.03 mm: the output states the statistic and the size against the tolerance
+    code, data = _verify(station, f"small{shift_mm}{bool(config_extra)}", f"camera_shift_mm: [{shift_mm}, 0, 0]",
+                         config_extra=config_extra)
+    out = capsys.readouterr().out
+    assert data["verdict"] == verdict and code == {"ok": 0, "drift": 3}[verdict]
+    assert data["test"]["statistically_detectable"] is True and data["test"]["p_value"] < 0.01
+    size, tolerance = data["size"], data["tolerance"]
+    assert size["cause"] == "camera" and size["translation_mm"] == pytest.approx(shift_mm, rel=0.3)
+    assert tolerance["translation_mm"] == (0.03 if config_extra else 0.2) and tolerance["rotation_deg"] == 0.02
+    assert ("verify.tolerance_mm" in tolerance["source"]) == bool(config_extra)
+    assert data["beyond_tolerance"] is (verdict == "drift") and size["beyond_tolerance"] is (verdict == "drift")
+    assert f"chi2 {data['test']['statistic']:.1f} on 30 degrees of freedom" in data["reason"]
+    if verdict == "ok":
+        assert data["diagnosis"]["cause"] == "none" and data["quick_update"] is None
+        assert "statistically detectable" in out and "within the tolerance 0.2 mm / 0.02 deg" in out
+        assert "nothing to do" in out and "writeback" not in out
+    else:
+        assert data["diagnosis"]["cause"] == "camera" and "beyond the tolerance" in out
+
+@pytest.mark.parametrize("level", ["1e-300", "0", "0.5", "nan", "1e-7"])
+def test_a_level_outside_its_range_is_a_usage_error(station, capsys, level):
+    root, session, config = station
+    assert main(["verify", "--config", config, "--against", str(session), "--level", level]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--level must be between 1e-06 and 0.2" in err

@@ -31,6 +31,7 @@ from .quality_words import (
     usable_axes,
 )
 from .session import Session
+from .time_bound import TIME_VARIABLE, OutOfTime, call_within
 from .transforms import pose_from_transform, rigid_defect, transform_from_pose
 from .triplets import relative_motions
 
@@ -44,6 +45,8 @@ __all__ = [
     "problem_from_session",
     "check_motion",
     "calibrate",
+    "calibrate_within",
+    "bounded_for",
     "calibrate_session",
     "method_row",
     "truth_from_dict",
@@ -364,6 +367,40 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
         raise CalibrationError(f"the {method or DEFAULT_METHOD} solver failed on these data ({reason}); check the "
                                f"session's values: lengths in mm, distinct finite poses, the whole board seen") from None
     return result
+
+
+def bounded_for(method: str, function, what: str = "solve"):
+    """``function()``, under the time bound when ``method`` is another package's (an entry point's, or
+    registered in code from outside handeye: :func:`~handeye.calibration.time_bound.call_within`); handeye's
+    own methods run as they are.
+
+    Raises
+    ------
+    OutOfTime
+        Another package's method still ran after the bound (it is left running, in a daemon thread).
+    """
+    row = method_row(method)
+    if _method_provider(row) is None:
+        return function()
+    return call_within(function, f"{what}-{row.name}")
+
+
+def calibrate_within(problem: HandEyeProblem, method: str, truth: dict | None = None) -> CalibrationResult:
+    """:func:`calibrate`, another package's method under the time bound (:func:`bounded_for`): what the
+    report's comparison solves with, so a hanging plug-in is left out instead of hanging the command.
+
+    Raises
+    ------
+    CalibrationError
+        What :func:`calibrate` raises, and a plug-in's method that took longer than the bound (one line
+        naming the method, its package and the bound).
+    """
+    try:
+        return bounded_for(method, lambda: calibrate(problem, method, truth))
+    except OutOfTime as exc:
+        raise CalibrationError(_method_fault(method_row(method), f"took longer than {exc.seconds:g} s (the bound on "
+                                             f"another package's method, {TIME_VARIABLE}; it is left running in the "
+                                             "background)")) from None
 
 
 def _calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | None = None,

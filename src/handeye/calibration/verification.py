@@ -32,11 +32,14 @@ from scipy.stats import f as f_dist
 from .noise import adjoint, flange_jacobian, retract, twist_between
 from .transforms import invert_transforms
 
-__all__ = ["DEFAULT_LEVEL", "MIN_VERIFY_POSTURES", "Baseline", "Discrepancy", "DriftTest", "baseline_from_solution",
+__all__ = ["DEFAULT_LEVEL", "LEVEL_RANGE", "MIN_VERIFY_POSTURES", "Baseline", "Discrepancy", "DriftTest", "baseline_from_solution",
            "discrepancy", "drift_test", "hypothesis_jacobians"]
 
 #: Default false-alarm rate of the check.
 DEFAULT_LEVEL = 0.01
+#: The false-alarm rates a check may be asked for: below 1e-6 (about five sigma) a test passes changes
+#: of millimetres (at 1e-300 a 1 mm camera shift); above 0.2 one check in five raises a false alarm.
+LEVEL_RANGE = (1e-6, 0.2)
 #: Fewest revisited postures the check and its diagnosis need: with two, a camera move and a board move
 #: (six parameters each) are told apart only by one relative rotation; three give the joints' pattern.
 MIN_VERIFY_POSTURES = 3

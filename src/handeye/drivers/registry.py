@@ -26,7 +26,7 @@ from typing import TypeVar
 from ..calibration.registry import Registry as _Registry
 from ..calibration.registry import load_target
 
-__all__ = ["Backend", "Registry", "Setting", "declared_settings", "keyword_options", "load_target"]
+__all__ = ["Backend", "Registry", "Setting", "chosen_with_own", "declared_settings", "keyword_options", "load_target"]
 
 
 @dataclass(frozen=True)
@@ -114,16 +114,30 @@ class Setting:
         return text if self.required else f"[{text}]"
 
 
-def declared_settings(registry, attribute: str) -> dict:
-    """``{key: (Setting, names of the back ends declaring it)}`` over every back end of ``registry``
-    (registry order), from each one's ``attribute`` (a tuple of :class:`Setting`): the keys of one
-    station config section. Two back ends sharing a key share its description (the first one's)."""
+def declared_settings(registry, attribute: str, names=None) -> dict:
+    """``{key: (Setting, names of the back ends declaring it)}`` over the back ends ``names`` of
+    ``registry`` (registry order; default: those loaded, :meth:`~handeye.calibration.registry.Registry.loaded_names`:
+    handeye's own and the plug-ins asked for so far, so describing settings imports no other plug-in),
+    from each one's ``attribute`` (a tuple of :class:`Setting`): the keys of one station config section.
+    Two back ends sharing a key share its description (the first one's)."""
     out: dict = {}
-    for name in registry:
-        for setting in getattr(registry[name], attribute):
-            first, names = out.get(setting.key, (setting, ()))
-            out[setting.key] = (first, names + (name,))
+    for name in registry.loaded_names() if names is None else names:
+        backend = registry.get(name)
+        if backend is None:
+            continue
+        for setting in getattr(backend, attribute):
+            first, declaring = out.get(setting.key, (setting, ()))
+            out[setting.key] = (first, declaring + (name,))
     return out
+
+
+def chosen_with_own(registry, chosen) -> tuple[str, ...]:
+    """The names of ``registry``'s own back ends (registered in code), and ``chosen`` when it is a plug-in's
+    that loads: the back ends whose settings a station config section using ``chosen`` may hold."""
+    own = registry.names_in_code()
+    if isinstance(chosen, str) and chosen not in own and registry.get(chosen) is not None:
+        return own + (chosen,)
+    return own
 
 
 def keyword_options(settings, value_of: Callable, missing: Callable) -> dict:

@@ -11,8 +11,8 @@ from __future__ import annotations
 from ..drivers.camera.backends import CAMERAS, CameraBackend
 from ..drivers.controller.backends import CONTROLLERS, LinkSetting, MockServer
 
-__all__ = ["MOCK_SERVERS", "MOCK_CAMERA", "MockVariant", "mock_protocols", "mock_server", "mock_settings",
-           "mock_variants"]
+__all__ = ["MOCK_SERVERS", "MOCK_CAMERA", "MockVariant", "mock_protocol_choices", "mock_protocols", "mock_server",
+           "mock_settings", "mock_variants"]
 
 _HERE = __package__  # handeye.mocks
 
@@ -55,9 +55,21 @@ for _name, _server in MOCK_SERVERS.items():
 CAMERAS.register(MOCK_CAMERA)
 
 
+def _has_mock(backend) -> bool:
+    return backend.mock is not None
+
+
 def mock_protocols() -> tuple[str, ...]:
-    """The controller back ends a mock serves, in registry order (plug-ins that bring a mock included)."""
-    return CONTROLLERS.names(lambda backend: backend.mock is not None)
+    """The controller back ends a mock serves, in registry order (plug-ins that bring a mock included;
+    each plug-in is loaded, under the time bound, to know)."""
+    return CONTROLLERS.names(_has_mock)
+
+
+def mock_protocol_choices():
+    """The protocols a mock serves, checked one at a time (asking about one imports that plug-in only: the
+    demo's ``--protocol``, ``mock.protocol``); one left out says it has no mock."""
+    return CONTROLLERS.choices(_has_mock, lacking="has no mock (its ControllerBackend.mock is None), so nothing can "
+                                                  "simulate its controller")
 
 
 def mock_settings() -> dict:
@@ -79,10 +91,10 @@ def mock_server(protocol: str) -> MockServer:
     ValueError
         No registered back end of that name, or none that a mock serves.
     """
-    names = mock_protocols()
-    if str(protocol).lower() not in names:
-        raise ValueError(f"unknown mock protocol {protocol!r}; choose one of {', '.join(names)}")
-    return CONTROLLERS[protocol].mock
+    backend = CONTROLLERS.get(str(protocol).lower())  # that back end only: no other plug-in is imported
+    if backend is None or backend.mock is None:
+        raise ValueError(f"unknown mock protocol {protocol!r}; choose one of {', '.join(mock_protocols())}")
+    return backend.mock
 
 
 class MockVariant(str):

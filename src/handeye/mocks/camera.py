@@ -425,6 +425,7 @@ class MockCamera(Camera):
     """
 
     name = "mock"
+    simulated = True
 
     def __init__(self, model: StereoModel | None = None, board: PrintedBoard | None = None, target2base=None,
                  cam2base=None, options: RenderOptions | None = None, seed=None, serial: int = 7_654_321,

@@ -214,6 +214,7 @@ class CellCamera(Camera):
     """
 
     name = "mock"
+    simulated = True
 
     def __init__(self, mock_arm: str, output: str = "bgr", timeout_s: float = 5.0):
         parse_address(mock_arm)

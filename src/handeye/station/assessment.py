@@ -225,7 +225,7 @@ def comparison_results(problem: HandEyeProblem, methods=None, truth: dict | None
     failures : dict, optional
         Filled with ``{method: reason}`` of the methods left out.
     """
-    from ..calibration.solve import calibrate
+    from ..calibration.solve import calibrate_within
 
     known = dict(known or {})
     out = {}
@@ -234,7 +234,7 @@ def comparison_results(problem: HandEyeProblem, methods=None, truth: dict | None
             out[method] = known[method]
             continue
         try:
-            out[method] = calibrate(problem, method, truth)
+            out[method] = calibrate_within(problem, method, truth)
         except CalibrationError as exc:
             if failures is not None:
                 failures[method] = str(exc)
@@ -283,13 +283,17 @@ def held_out_rms_mm(problem: HandEyeProblem, chosen, result) -> float | None:
     gives that figure instead of being solved again. ``None`` when no fold could be solved.
     """
     from ..calibration.crossval import cross_validate
-    from ..calibration.solve import calibrate
+    from ..calibration.solve import bounded_for, calibrate
+    from ..calibration.time_bound import OutOfTime
 
     own = result.cross_validation
     if own and "rms_mm" in own and set(map(int, result.outliers)) == set(map(int, chosen.outliers)):
         return float(own["rms_mm"])
-    cv = cross_validate(problem, lambda training: calibrate(training, result.method).x,
-                        keep=kept_postures(problem, chosen))
+    try:  # another package's method refits under the time bound: too slow, it is ranked last
+        cv = bounded_for(result.method, lambda: cross_validate(problem, lambda training: calibrate(training, result.method).x,
+                                                               keep=kept_postures(problem, chosen)), "cross-validate")
+    except OutOfTime:
+        return None
     return cv.rms_mm if np.isfinite(cv.rms_sq_mm2).any() else None
 
 

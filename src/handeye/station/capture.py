@@ -67,6 +67,7 @@ from ..drivers.camera.triangulate import triangulate_images
 from .capture_events import CAPTURED, SKIPPED, CaptureStarted, Measured, Prompt, Verdict
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
+from .station_kind import station_kind
 from .cell_plan import cell_check
 from .planning import PlanScore, PosturePlan, plan_postures
 from .quality import config_thresholds
@@ -210,12 +211,6 @@ def _quality_problem(result, config: StationConfig) -> str | None:
     return None
 
 
-def _station_kind(config: StationConfig) -> str:
-    """``mock`` or ``real``: the station a capture runs on, as the capture record says it (a rehearsal
-    against ``handeye mock controller`` is a mock station: its session is never written to a robot)."""
-    return MOCK if config.is_mock or config.is_rehearsal else REAL
-
-
 def _session_record(session_dir: Path) -> Session | None:
     if (session_dir / "session.yaml").exists():
         return read_session(session_dir)
@@ -308,7 +303,7 @@ def plan_session(config: StationConfig, session_dir: Path, link: StationLink, pr
     for note in plan.notes:
         progress(f"plan warning: {note}")
     session = Session(setup="eye_in_hand", robot=config.robot, target=config.target, extra={"capture": {
-        "station": _station_kind(config),
+        "station": station_kind(config, link),
         "plan_joints_deg": [[round(float(v), 4) for v in row] for row in plan.joints_deg],
         "start_joints_deg": [round(float(v), 4) for v in plan.start_joints_deg],
         "plan_score": plan_score,
@@ -372,14 +367,16 @@ def repair_plan(config: StationConfig, session_dir: Path, session: Session, prog
     return path
 
 
-def resume_session(config: StationConfig, session_dir: Path, session: Session, progress) -> CaptureRun:
-    """Read the plan of a capture on disk; refuse one made on the other station (mock vs real)."""
+def resume_session(config: StationConfig, session_dir: Path, session: Session, progress,
+                   link: StationLink | None = None) -> CaptureRun:
+    """Read the plan of a capture on disk; refuse one made on the other station (mock vs real:
+    :func:`~handeye.station.station_kind.station_kind` of ``config`` and ``link``)."""
     record = session.extra["capture"]
     if record.get("mode") == "guided":
         raise CaptureError(f"{session_dir} was captured in guided mode: resume it with capture --guided, or start a new "
                            "session folder")
     recorded = session_origin(session)
-    if recorded in (MOCK, REAL) and recorded != _station_kind(config):
+    if recorded in (MOCK, REAL) and recorded != station_kind(config, link):
         raise CaptureError(f"{session_dir} was captured on the {_STATION_NAMES[recorded]}; resume it on the same "
                            f"station ({'--mock, or the rehearsal config' if recorded == MOCK else '--config STATION.yaml with the real hardware'}) "
                            "or start a new session folder")
@@ -396,7 +393,7 @@ def open_capture(config: StationConfig, session_dir: Path, link: StationLink, pr
         return plan_session(config, session_dir, link, progress)
     if "capture" not in session.extra:
         raise CaptureError(f"{session_dir} holds a session that was not made by capture; choose a new folder")
-    return resume_session(config, session_dir, session, progress)
+    return resume_session(config, session_dir, session, progress, link)
 
 
 def _session_program(config: StationConfig, plan_joints: np.ndarray, board2base, link: StationLink | None) -> list:

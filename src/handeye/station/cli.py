@@ -18,7 +18,7 @@ from ..calibration.errors import HandEyeError, UsageError
 #: Sub-commands in the order ``handeye --help`` lists them: a module name, or ``(command, module)``
 #: when the command's name cannot be a module's (``import`` is a Python keyword).
 COMMANDS = ("demo", "capture", "calibrate", "writeback", "verify", "simulate", ("import", "import_"), "triangulate", "benchmark", "robot",
-            "rapid", "cell", "mock", "stereo")
+            "rapid", "cell", "mock", "stereo", "plugins")
 
 DESCRIPTION = """\
 Hand-eye calibration of a stereo camera on an ABB robot flange (eye-in-hand) or beside the robot
@@ -43,22 +43,47 @@ class OneLineParser(argparse.ArgumentParser):
     def error(self, message):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
+    def format_help(self) -> str:
+        """The help; an ``epilog`` given as a callable is written now (one that lists plug-ins, and so loads
+        them, is written only when the help is asked for)."""
+        if callable(self.epilog):
+            self.epilog = self.epilog()
+        return super().format_help()
 
-def build_parser() -> argparse.ArgumentParser:
+
+def command_names() -> tuple[str, ...]:
+    """The sub-commands' names, in ``COMMANDS`` order."""
+    return tuple(entry if isinstance(entry, str) else entry[0] for entry in COMMANDS)
+
+
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The ``handeye`` parser; with ``only`` (a command's name), that command's sub-parser is built whole
+    and every other one is a name and its one-line help: the other commands' options (which may list
+    plug-ins, and so load them) are not built for a command that does not need them."""
     parser = OneLineParser(
         prog="handeye", description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for entry in COMMANDS:
-        name = entry if isinstance(entry, str) else entry[1]
+        command_name, name = (entry, entry) if isinstance(entry, str) else entry
         module = importlib.import_module(f"{__package__}.commands.{name}")
-        command = module.add_parser(sub)
+        if only is None or command_name == only:
+            command = module.add_parser(sub)
+        else:
+            command = sub.add_parser(command_name, help=module.HELP)
         command.set_defaults(_module=module)
     return parser
 
 
+def _command_of(argv) -> str | None:
+    """The sub-command ``argv`` names first (``None``: none, or an option first: ``handeye --help``)."""
+    words = list(sys.argv[1:] if argv is None else argv)
+    return words[0] if words and words[0] in command_names() else None
+
+
 def main(argv=None) -> int:
-    parser = build_parser()
+    command = _command_of(argv)
+    parser = build_parser(only=command)
     args = parser.parse_args(argv)
     if getattr(args, "_module", None) is None:
         parser.print_help()

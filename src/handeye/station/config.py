@@ -16,7 +16,7 @@ Sections: ``robot``, ``controller`` (the link and the generated RAPID program), 
 ``target``, ``plan`` (posture planning), ``motion``, ``tool`` (the PERS tooldata written back),
 ``capture`` (per-posture quality), ``cell`` and ``guided`` (the cell's keep-out volumes and
 carried geometry, the operator-guided capture: ``station.cell_settings``), ``quality`` (the
-verdict's thresholds, see ``station.quality``), ``output``, ``mock`` (the embedded mock station) and ``postures`` (fixed approved postures for
+verdict's thresholds, see ``station.quality``), ``verify`` (the change a check acts on), ``output``, ``mock`` (the embedded mock station) and ``postures`` (fixed approved postures for
 ``handeye rapid generate``; capture plans its own).
 """
 
@@ -49,6 +49,7 @@ from .schema import (
     Range,
     Text,
     check_section,
+    chosen_of,
     declared_fields,
     numbers,
     rule_of,
@@ -60,7 +61,7 @@ from .schema import (
 )
 
 __all__ = ["EXAMPLE_FILE", "MOCK", "ConfigError", "StationConfig", "config_from_dict", "default_config", "load_config",
-           "describe_keys", "controller_protocols", "camera_backends", "mock_protocols"]
+           "describe_keys", "controller_protocols", "camera_backends", "mock_protocols", "protocol_choices", "camera_choices"]
 
 EXAMPLE_FILE = Path(__file__).with_name("example_station.yaml")
 REHEARSAL_FILE = Path(__file__).with_name("rehearsal_station.yaml")
@@ -72,14 +73,16 @@ SEED_MAX = 2**31
 
 
 def controller_protocols() -> tuple[str, ...]:
-    """Controller link protocols of a real station: every registered controller back end."""
+    """Controller link protocols of a real station: every registered controller back end (plug-ins
+    listed from their metadata, none imported)."""
     from ..drivers.controller.backends import CONTROLLERS
 
     return CONTROLLERS.names()
 
 
 def camera_backends() -> tuple[str, ...]:
-    """Camera back ends of a real station: every registered camera back end that is not simulated."""
+    """Camera back ends of a real station: every registered camera back end that is not simulated
+    (which loads every camera plug-in, under the time bound: for listing them)."""
     from ..drivers.camera.backends import CAMERAS
 
     return CAMERAS.names(lambda backend: not backend.simulated)
@@ -90,6 +93,29 @@ def mock_protocols() -> tuple[str, ...]:
     from ..mocks.backends import mock_protocols
 
     return mock_protocols()
+
+
+def protocol_choices():
+    """What ``controller.protocol`` may be: a controller back end, or mock (checking one imports that
+    plug-in only: :class:`~handeye.calibration.registry.Choices`)."""
+    from ..drivers.controller.backends import CONTROLLERS
+
+    return CONTROLLERS.choices(extra=(MOCK,))
+
+
+def camera_choices():
+    """What ``camera.backend`` may be: a camera back end that is not simulated, or mock."""
+    from ..drivers.camera.backends import CAMERAS
+
+    return CAMERAS.choices(lambda backend: not backend.simulated, extra=(MOCK,),
+                           lacking="is simulated (a real station needs a real camera)")
+
+
+def _mock_protocol_choices():
+    """What ``mock.protocol`` may be: a controller back end a mock serves."""
+    from ..mocks.backends import mock_protocol_choices
+
+    return mock_protocol_choices()
 
 
 # ---------------------------------------------------------------------------------- checks of their own
@@ -106,18 +132,28 @@ def _write_key(value, key: str, context) -> str | None:
     return value
 
 
-def _link_settings() -> dict:
-    """``key -> (LinkSetting, back-end names)`` of every registered controller back end."""
-    from ..drivers.controller.backends import link_settings  # noqa: PLC0415
+def _link_settings(chosen=None) -> dict:
+    """``key -> (LinkSetting, back-end names)`` of the controller back ends a section on ``chosen`` may set
+    (:func:`_section_backends`)."""
+    from ..drivers.controller.backends import CONTROLLERS, link_settings  # noqa: PLC0415
 
-    return link_settings()
+    return link_settings(_section_backends(CONTROLLERS, chosen))
 
 
-def _camera_settings() -> dict:
-    """``key -> (Setting, back-end names)`` of every registered camera back end."""
-    from ..drivers.camera.backends import camera_settings  # noqa: PLC0415
+def _camera_settings(chosen=None) -> dict:
+    """``key -> (Setting, back-end names)`` of the camera back ends a section on ``chosen`` may set."""
+    from ..drivers.camera.backends import CAMERAS, camera_settings  # noqa: PLC0415
 
-    return camera_settings()
+    return camera_settings(_section_backends(CAMERAS, chosen))
+
+
+def _section_backends(registry, chosen) -> tuple[str, ...]:
+    """The back ends whose settings a section naming ``chosen`` takes: handeye's own and ``chosen``
+    (no other plug-in is imported to check or read a file); ``None`` (the schema, documenting every key):
+    every back end, plug-ins loaded under the time bound."""
+    from ..drivers.registry import chosen_with_own  # noqa: PLC0415
+
+    return registry.names() if chosen is None else chosen_with_own(registry, chosen)
 
 
 def _checked_by(check: Callable, rule) -> Callable:
@@ -167,17 +203,20 @@ class _DeclaredByBackEnds:
     declared default when the file names none); a key no back end declares is refused."""
 
     EXTRA_FIELD: ClassVar[str] = "backend_settings"
+    #: The key naming the section's back end: the keys a file may set are its settings and those of
+    #: handeye's own back ends (no other plug-in is imported to check a file).
+    CHOSEN_BY: ClassVar[str] = ""
     _WHAT: ClassVar[str] = ""
 
     @classmethod
-    def extra_settings(cls) -> tuple:
-        """The keys the registered back ends declare (:func:`declared_setting_fields`)."""
-        return declared_setting_fields(cls._declared(), _own_keys(cls))
+    def extra_settings(cls, chosen: str | None = None) -> tuple:
+        """The keys the back ends declare (:func:`declared_setting_fields`): handeye's own and ``chosen``'s."""
+        return declared_setting_fields(cls._declared(chosen), _own_keys(cls))
 
     def __getattr__(self, name: str):
         if name.startswith("_") or name == "backend_settings":
             raise AttributeError(name)
-        declared = type(self)._declared().get(name)
+        declared = type(self)._declared(self.__dict__.get(self.CHOSEN_BY, "")).get(name)
         if declared is None:
             raise AttributeError(f"no {self._WHAT} key {name!r}")
         return self.__dict__.get("backend_settings", {}).get(name, declared[0].default)
@@ -268,7 +307,7 @@ def _as_is(value, key: str, context):
 class ControllerSettings(_DeclaredByBackEnds):
     """``controller``: the robot controller's link, and the settings of the generated RAPID program."""
 
-    protocol: str = setting(MOCK, Text(lambda: controller_protocols() + (MOCK,)),
+    protocol: str = setting(MOCK, Text(protocol_choices),
                             "link protocol: a registered controller back end, or mock", required=True)
     host: str = setting("127.0.0.1", Text(what="the controller's IP address or host name"),
                         "address of the controller (or of its gateway)")
@@ -289,6 +328,7 @@ class ControllerSettings(_DeclaredByBackEnds):
     backend_settings: dict = field(default_factory=dict, hash=False, repr=False)  # may hold secrets
 
     _WHAT: ClassVar[str] = "controller"
+    CHOSEN_BY: ClassVar[str] = "protocol"
     _declared = staticmethod(_link_settings)
 
 
@@ -296,7 +336,7 @@ class ControllerSettings(_DeclaredByBackEnds):
 class CameraSettings(_DeclaredByBackEnds):
     """``camera``: the stereo head, and the settings its back end declares (``CameraBackend.settings``)."""
 
-    backend: str = setting(MOCK, Text(lambda: camera_backends() + (MOCK,)),
+    backend: str = setting(MOCK, Text(camera_choices),
                            "camera back end: a registered one (xb3), or mock", required=True)
     stereo_model: str | None = setting(None, Optional(Text()), "OpenCV FileStorage of the stereo pair "
                                        "(null: the nominal XB3 model)")
@@ -312,6 +352,7 @@ class CameraSettings(_DeclaredByBackEnds):
     backend_settings: dict = field(default_factory=dict, hash=False, repr=False)
 
     _WHAT: ClassVar[str] = "camera"
+    CHOSEN_BY: ClassVar[str] = "backend"
     _declared = staticmethod(_camera_settings)
 
     def nominal_mount_transform(self) -> np.ndarray:
@@ -374,6 +415,19 @@ class CaptureSettings:
 
 
 @dataclass(frozen=True)
+class VerifySettings:
+    """``verify``: the change ``handeye verify`` acts on (``station.verify_tolerance``). A drift must be
+    beyond the noise (the test at ``--level``) and larger than these; null: the station's quality
+    thresholds ``max_sigma_translation_mm`` / ``max_sigma_rotation_deg`` (a change smaller than the
+    uncertainty a passing calibration may have does not matter)."""
+
+    tolerance_mm: float | None = setting(None, Optional(Number(0, 100)), "smallest change that is acted on (camera "
+                                         "or board shift; null: quality max_sigma_translation_mm)", "mm")
+    tolerance_deg: float | None = setting(None, Optional(Number(0, 10)), "smallest turn that is acted on (camera, "
+                                          "board or a joint's zero; null: quality max_sigma_rotation_deg)", "deg")
+
+
+@dataclass(frozen=True)
 class FaultSettings:
     """``mock.faults``: what changed at the mock station since its calibration (``handeye verify``
     finds it); all zero: nothing."""
@@ -399,7 +453,7 @@ class FaultSettings:
 class MockSettings:
     """``mock``: the embedded mock station (``--mock``, mock back ends, the demo)."""
 
-    protocol: str = setting(DEFAULT_PROTOCOL, Text(mock_protocols), "its controller link: a back end a mock serves")
+    protocol: str = setting(DEFAULT_PROTOCOL, Text(_mock_protocol_choices), "its controller link: a back end a mock serves")
     seed: int = setting(7, Number(0, SEED_MAX, integer=True), "seeds the arm's errors and the sensor noise")
     kinematic_error_mm: float = setting(0.05, Number(0, 10), "the simulated arm's DH length errors", "mm")
     kinematic_error_deg: float = setting(0.002, Number(0, 10), "the simulated arm's DH angle errors", "deg")
@@ -428,6 +482,7 @@ class StationConfig:
     capture: CaptureSettings = section(CaptureSettings, "per-posture quality")
     cell: CellSettings = section(CellSettings, "keep-out volumes, carried geometry, path checks")
     guided: GuidedSettings = section(GuidedSettings, "operator-guided capture")
+    verify: VerifySettings = section(VerifySettings, "the change handeye verify acts on")
     quality: dict = setting(None, Custom(_quality), "verdict thresholds (src/handeye/station/quality_thresholds.yaml)",
                             factory=dict)
     output: str | None = setting(None, Optional(Text()), "folder of new sessions: a relative capture --session goes "
@@ -494,10 +549,11 @@ class StationConfig:
         ``"<set>"`` or None, never their value."""
         out = {"robot": self.robot, "output": self.output, "quality": dict(self.quality),
                "target": {"corners": list(self.target.corners), "square_mm": self.target.square_mm}}
-        for name in ("controller", "camera", "plan", "motion", "tool", "capture", "guided", "mock"):
+        for name in ("controller", "camera", "plan", "motion", "tool", "capture", "guided", "verify", "mock"):
             settings = getattr(self, name)
-            section = {f.name: getattr(settings, f.name) for f in declared_fields(type(settings))}
-            for secret in secret_fields(type(settings)):
+            chosen = chosen_of(settings)
+            section = {f.name: getattr(settings, f.name) for f in declared_fields(type(settings), chosen)}
+            for secret in secret_fields(type(settings), chosen):
                 section[secret] = None if section[secret] is None else "<set>"  # never the secret
             out[name] = _plain(section)
         out["camera"]["nominal_mount"] = pose_from_transform(self.camera.nominal_mount_transform())

@@ -116,5 +116,7 @@ def _assess(session_dir: Path, config: StationConfig, compare: bool, progress) -
              f"outliers: {result.outliers or 'none'}")
     assessment = assess(outcome, config_thresholds(config), methods=comparison_methods() if compare else (),
                         tooldata_literal=tooldata_literal(result.x, config.tool.mass_kg, config.tool.cog_mm))
+    for reason in assessment.comparison_failures.values():  # a plug-in's method that failed or took too long
+        progress(f"not compared: {reason}")
     progress(assessment.verdict.line())
     return assessment

@@ -45,6 +45,7 @@ from ..calibration.quality_words import (
 from ..calibration.session import Session, create_session, read_session
 from ..calibration.transforms import rotation_error_deg
 from .capture import (
+    _STATION_NAMES,
     CaptureError,
     PostureReport,
     grab_observer,
@@ -58,6 +59,7 @@ from .capture_events import CAPTURED, NOT_CAPTURED, TOO_CLOSE, CaptureStarted, P
 from .cell_plan import cell_check
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
+from .station_kind import station_kind
 from .quality import QualityThresholds, config_thresholds, direction_name, motion_shortfalls
 from .runtime import StationLink
 
@@ -227,11 +229,13 @@ class GuidedSummary:
         return not self.missing
 
 
-def _open_guided(config: StationConfig, session_dir: Path, progress) -> Session:
-    """The guided session: created, or read back (refused when planned, or from the other station)."""
+def _open_guided(config: StationConfig, session_dir: Path, progress, link: StationLink | None = None) -> Session:
+    """The guided session: created, or read back (refused when planned, or from the other station:
+    :func:`~handeye.station.station_kind.station_kind` of ``config`` and ``link``)."""
+    station = station_kind(config, link)
     if not (session_dir / "session.yaml").exists():
         session = Session(setup="eye_in_hand", robot=config.robot, target=config.target, extra={"capture": {
-            "station": MOCK if config.is_mock else REAL, "mode": "guided", "skipped": {}, "config": config.to_dict()}})
+            "station": station, "mode": "guided", "skipped": {}, "config": config.to_dict()}})
         create_session(session_dir, session)
         progress(f"guided capture into {session_dir}: jog the robot with the pendant; each time it rests "
                  f"{config.guided.still_s:g} s somewhere new with the board in view, the posture is captured")
@@ -242,9 +246,9 @@ def _open_guided(config: StationConfig, session_dir: Path, progress) -> Session:
         raise CaptureError(f"{session_dir} holds a {'planned capture' if record else 'session not made by capture'}: "
                            "resume it without --guided, or choose a new folder")
     recorded = session_origin(session)
-    if recorded in (MOCK, REAL) and recorded != (MOCK if config.is_mock else REAL):
-        raise CaptureError(f"{session_dir} was captured on the {'embedded mock' if recorded == MOCK else 'real'} "
-                           "station; resume it on the same station or start a new session folder")
+    if recorded in (MOCK, REAL) and recorded != station:
+        raise CaptureError(f"{session_dir} was captured on the {_STATION_NAMES[recorded]}; resume it on the same station "
+                           "or start a new session folder")
     remove_stale_temporaries(session_dir)
     progress(f"resuming the guided capture {session_dir}: {len(session.postures)} postures on disk")
     return session
@@ -261,7 +265,7 @@ class _GuidedRun:
         self.robot = load_robot(config.robot)
         self.thresholds = config_thresholds(config)
         self.view = stereo_views(link.stereo_model)[0]
-        self.session = _open_guided(config, session_dir, progress)
+        self.session = _open_guided(config, session_dir, progress, link)
         self.state = _Captured()
         for posture in self.session.postures:
             self.state.add(posture.index, posture.tool0_in_base, posture.points_mm, self.view)

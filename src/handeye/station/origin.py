@@ -7,7 +7,9 @@ so that nobody takes it for a calibration of the robot in front of them.
   or a rehearsal against ``handeye mock controller`` (``camera.mock_arm``): ``session.yaml`` says
   ``capture: {station: mock}``. Sessions captured before that key existed are
   recognised by their recorded station configuration (``capture.config.camera.backend: mock``).
-- ``real``: ``capture: {station: real}``, written by a capture on the real controller and camera.
+- ``real``: ``capture: {station: real}``, written by a capture on the real controller and camera
+  (``station.station_kind``), and no mock part in the station configuration it recorded (a record
+  that says ``real`` beside a mock camera or ``camera.mock_arm`` is ``mock``).
 - ``simulated``: ``session.yaml`` says ``origin: simulated``, or ``truth.yaml`` lies beside it
   (``handeye simulate``), and the capture record does not say otherwise.
 - ``unknown``: anything else (imported data sets, hand-written sessions).
@@ -71,7 +73,9 @@ def session_origin(session=None, path=None) -> str:
     capture = capture if isinstance(capture, dict) else {}
     station = capture.get("station")
     if isinstance(station, str) and station.strip().lower() in ("mock", "real"):
-        return station.strip().lower()
+        from .station_kind import recorded_mock_parts
+
+        return MOCK if station.strip().lower() == MOCK or recorded_mock_parts(capture) else REAL
     if extra.get("origin") == SIMULATED or (path is not None and (Path(path) / "truth.yaml").is_file()):
         return "simulated"
     config = capture.get("config")

@@ -30,10 +30,10 @@ def calibration_json(assessment: Assessment) -> dict:
             data["method_comparison_note"] = assessment.comparison_note
         if assessment.rank_note:
             data["method_rank_note"] = assessment.rank_note
-    if assessment.verdict_scope:
-        data["verdict_scope"] = assessment.verdict_scope
         if assessment.comparison_failures:
             data["method_comparison_failed"] = dict(assessment.comparison_failures)
+    if assessment.verdict_scope:
+        data["verdict_scope"] = assessment.verdict_scope
     return data
 
 

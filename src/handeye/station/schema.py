@@ -20,7 +20,7 @@ from dataclasses import dataclass, field, fields, replace
 from ..calibration.errors import ConfigError, brief
 
 __all__ = ["Rule", "Number", "Numbers", "Range", "Text", "Flag", "Optional", "Custom", "Section", "setting", "section",
-           "rule_of", "check_section", "declared_fields", "schema_keys", "secret_fields", "number", "numbers", "text"]
+           "rule_of", "check_section", "chosen_of", "declared_fields", "schema_keys", "secret_fields", "number", "numbers", "text"]
 
 #: Largest finite float: ``abs(v) <= _FLOAT_MAX`` is false for NaN, inf and integers too large for a
 #: float (where ``math.isfinite`` would raise OverflowError).
@@ -63,7 +63,10 @@ def text(value, key: str, choices=(), what: str = "") -> str:
     if not isinstance(value, str):
         raise ConfigError(f"{key} must be a text{': ' + what if what else ''}; got {brief(value)}")
     if choices and value not in choices:
-        raise ConfigError(f"{key} must be one of {', '.join(choices)}; got {brief(value)}")
+        refusal = getattr(choices, "refusal", None)  # a registry's choices say why one of its names is not
+        why = refusal(value) if refusal is not None else None
+        listed = choices.listed() if hasattr(choices, "listed") else ", ".join(choices)
+        raise ConfigError(f"{key} must be one of {listed}; got {brief(value)}" + (f": {why}" if why else ""))
     return value
 
 
@@ -187,7 +190,8 @@ class Section(Rule):
     def __call__(self, value, key, context):
         changes = check_section(self.cls, value or {}, key, context)
         own = {f.name for f in fields(self.cls)}
-        defaults = {f.name: f.default for f in declared_fields(self.cls) if f.name not in own}
+        chosen = _chosen(self.cls, value)
+        defaults = {f.name: f.default for f in declared_fields(self.cls, chosen) if f.name not in own}
         extra = {name: v for name, v in changes.items() if name in defaults and v != defaults[name]}
         changes = {name: v for name, v in changes.items() if name in own}
         if extra:
@@ -205,13 +209,21 @@ def rule_of(f) -> Rule | None:
     return f.metadata.get("rule")
 
 
-def declared_fields(cls) -> list:
+def declared_fields(cls, chosen: str | None = None) -> list:
     """The config keys of ``cls``: its :func:`setting` fields, then the keys declared elsewhere that
-    its section takes (``cls.extra_settings()``, fields made with :func:`setting` and named: the
-    controller back ends' own link settings, which their registry describes)."""
+    its section takes (``cls.extra_settings(chosen)``, fields made with :func:`setting` and named: the
+    controller back ends' own link settings, which their registry describes; ``chosen`` is the back end
+    the section names, whose keys it may hold beside those of handeye's own back ends; None: the keys of
+    every back end, for the schema's documentation)."""
     own = [f for f in fields(cls) if rule_of(f) is not None]
     extra = getattr(cls, "extra_settings", None)
-    return own + (list(extra()) if extra is not None else [])
+    return own + (list(extra(chosen)) if extra is not None else [])
+
+
+def _chosen(cls, data):
+    """The back end a section's data name (its ``cls.CHOSEN_BY`` key; "" when they name none)."""
+    key = getattr(cls, "CHOSEN_BY", "")
+    return data.get(key, "") if key and isinstance(data, dict) else ""
 
 
 def _printable(key) -> str:
@@ -229,7 +241,7 @@ def check_section(cls, data, name: str, context: dict) -> dict:
     section = data if data is not None else {}
     if not isinstance(section, dict):
         raise ConfigError(f"{name} must be a mapping of keys; got {brief(section)}")
-    rules = {f.name: rule_of(f) for f in declared_fields(cls)}
+    rules = {f.name: rule_of(f) for f in declared_fields(cls, _chosen(cls, section))}
     allowed = set(rules)
     unknown = sorted(set(section) - allowed, key=brief)
     if unknown:
@@ -247,6 +259,12 @@ def schema_keys(cls, prefix: str = ""):
             yield path, f
 
 
-def secret_fields(cls) -> tuple[str, ...]:
-    """Names of the keys of ``cls`` declared secret (:func:`declared_fields`)."""
-    return tuple(f.name for f in declared_fields(cls) if f.metadata.get("secret"))
+def secret_fields(cls, chosen: str | None = None) -> tuple[str, ...]:
+    """Names of the keys of ``cls`` declared secret (:func:`declared_fields`; ``chosen``: its back end)."""
+    return tuple(f.name for f in declared_fields(cls, chosen) if f.metadata.get("secret"))
+
+
+def chosen_of(settings) -> str:
+    """The back end a section instance names (its class's ``CHOSEN_BY`` key; "" when none)."""
+    key = getattr(type(settings), "CHOSEN_BY", "")
+    return getattr(settings, key, "") if key else ""

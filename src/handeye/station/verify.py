@@ -31,6 +31,9 @@ from .capture import CaptureRun, confirm_motion, install_program, release_waitin
 from .config import StationConfig
 from .origin import MOCK, REAL, session_origin
 from .runtime import StationLink
+from .station_kind import station_kind
+from .session_station import station_mismatch
+from .verify_tolerance import drift_size, drift_tolerance, verdict_reason
 from .verify_plan import (TIME_BUDGET, TIME_LIMIT, TIME_TIGHTEN, TIME_TRIES, VerifyError, capture_time, cell_guard,
                           create_verify_session, order_postures, path_time, path_time_along, verify_folder)
 
@@ -64,7 +67,16 @@ class VerifyOutcome:
         ``{"held": ToolData, "session": ToolData}`` when the controller holds another tooldata.
     update : QuickUpdate or None
     motion_s : float or None
-        Simulated robot time of the check (mock station).
+        Robot time of the check (s) by the plan's motion model (``verify_plan.path_time_along``: each
+        move synchronised, its slowest axis at full speed) from where the controller reported the arm
+        through the postures in the order visited; the same model as :attr:`capture_motion_s`, so
+        their ratio is the ratio of robot times. Never read from a mock.
+    capture_motion_s : float or None
+        The full capture's robot time by the same model (``verify_plan.capture_time``).
+    tolerance : DriftTolerance or None
+        The smallest change the check acts on (``station.verify_tolerance``).
+    size : DriftSize or None
+        The detected change's size against it (None: the test found nothing).
     """
 
     verdict: str
@@ -78,11 +90,20 @@ class VerifyOutcome:
     update: object = None
     motion_s: float | None = None
     baseline: object = None
+    capture_motion_s: float | None = None
+    tolerance: object = None
+    size: object = None
+
+    @property
+    def beyond_tolerance(self) -> bool:
+        """The test found a change and it is larger than the tolerance (``station.verify_tolerance``)."""
+        return self.size is not None and self.size.beyond
 
 
 def check_request(config: StationConfig, session_dir: Path, postures: int):
-    """SESSION as ``verify`` needs it, or a one-line refusal (VerifyError): a capture of this robot and
-    board with its plan on record, and K at least :data:`MIN_VERIFY_POSTURES`."""
+    """SESSION as ``verify`` needs it, or a one-line refusal (VerifyError): a capture on this station
+    (controller, camera, robot and board: ``station.session_station``) with its plan on record, and K
+    at least :data:`MIN_VERIFY_POSTURES`."""
     if postures < MIN_VERIFY_POSTURES:
         raise VerifyError(f"--postures {postures} is too few: the test and its diagnosis need at least "
                           f"{MIN_VERIFY_POSTURES} revisited postures")
@@ -93,19 +114,32 @@ def check_request(config: StationConfig, session_dir: Path, postures: int):
         raise VerifyError(f"{session_dir} was not captured by handeye capture (simulated or imported): verify revisits "
                           "the recorded postures of a capture on this station; capture one (handeye capture) and "
                           "calibrate it")
-    if (session.robot or "").lower() != config.robot.lower():
-        raise VerifyError(f"{session_dir} was captured with robot {session.robot}, the config names {config.robot}: "
-                          "verify a session of this robot")
-    if session.target is None or tuple(session.target.corners) != tuple(config.target.corners) \
-            or abs(session.target.square_mm - config.target.square_mm) > 1e-6:
-        raise VerifyError(f"{session_dir} was captured with another board than the config's "
-                          f"{config.target.corners[0]}x{config.target.corners[1]}, {config.target.square_mm:g} mm: "
-                          "verify with the board of the session")
+    mismatch = station_mismatch(session, session_dir, config)
+    if mismatch is not None:
+        raise VerifyError(mismatch)
+    _check_joints(session, session_dir)
     usable = [p for p in session.postures if p.joints_deg is not None and p.index < len(record["plan_joints_deg"])]
     if len(usable) < postures:
         raise VerifyError(f"{session_dir} holds {len(usable)} postures with joint angles; --postures {postures} asks "
                           "for more")
     return session
+
+
+def _check_joints(session, session_dir: Path) -> None:
+    """Refuse SESSION when a posture's joint angles are missing or do not reproduce its flange pose: its
+    calibration then models the robot's noise on the flange poses, the check (which revisits by joint
+    angles) on the joints, and the two cannot be compared."""
+    from ..calibration.joint_match import session_joint_mismatch
+
+    missing = [p.index for p in session.postures if p.joints_deg is None]
+    found = session_joint_mismatch(session)
+    if not missing and found is None:
+        return
+    what = found.line() if found is not None else \
+        f"postures {', '.join(map(str, missing))} hold no joint angles (joints_deg)"
+    raise VerifyError(f"{session_dir}: {what}: verify revisits postures by their joint angles and compares under "
+                      "the calibration's joint noise model; correct or remove those postures' files and calibrate "
+                      "again, or capture a new session; nothing moved")
 
 
 @dataclass(frozen=True)
@@ -222,7 +256,7 @@ def _revisit(config, link: StationLink, folder: Path, session, numbers, joints, 
     reason the check cannot go on (the link failed, the board is not seen: :class:`_Stop`)."""
     from ..drivers.errors import StationError
 
-    station = MOCK if config.is_mock or config.is_rehearsal else REAL
+    station = station_kind(config, link, session_origin(session, session.path))  # SESSION's origin too: its X is moved
     created = create_verify_session(config, session, session_dir=Path(session.path), indices=numbers, joints=joints,
                                     folder=folder, station=station)
     created.path = folder
@@ -259,14 +293,14 @@ def verify(config: StationConfig, session_dir, link: StationLink, postures: int 
     base = base if base is not None else session_baseline(config, session, session_dir)
     robot = load_robot(config.robot)
     tool = _tool_finding(config, link, base)
-    motion0 = link.mock.arm.motion_s if link.is_mock else None
-    numbers, joints = _chosen(config, session, base, robot, link.controller.read_joints(), postures, progress)
+    here = link.controller.read_joints()  # where the controller reports the arm: the check's path starts there
+    numbers, joints = _chosen(config, session, base, robot, here, postures, progress)
     progress(f"revisiting postures {', '.join(map(str, numbers))} of {session_dir.name}")
     folder = verify_folder(session_dir)
     captured, failure = _revisit(config, link, folder, session, numbers, joints, progress, confirm, on_posture)
-    motion = None if motion0 is None else link.mock.arm.motion_s - motion0
     outcome = VerifyOutcome(INCONCLUSIVE, failure or "", folder, numbers, len(captured or ()),
-                            tool_finding=tool, motion_s=motion, baseline=base)
+                            tool_finding=tool, motion_s=path_time_along(robot, here, joints), baseline=base,
+                            capture_motion_s=capture_time(robot, session.extra["capture"]), tolerance=drift_tolerance(config))
     if failure is None:
         judge(outcome, folder, base, robot, level, numbers)
     if tool is not None and outcome.verdict != INCONCLUSIVE:
@@ -290,10 +324,9 @@ def judge(outcome: VerifyOutcome, folder: Path, base: SessionBaseline, robot, le
     disc = discrepancy(base.baseline, obs, problem.joints_deg)
     outcome.test = drift_test(disc, base.baseline, level)
     outcome.explanations = explain(disc, base.baseline, robot)
-    outcome.verdict = DRIFT if outcome.test.drift else OK
-    t = outcome.test
-    outcome.reason = (f"discrepancy chi2 {t.statistic:.1f} on {t.degrees} degrees of freedom, p = {t.p_value:.3g} "
-                      f"({'below' if t.drift else 'above'} the level {t.level:g})")
-    best = next((e for e in outcome.explanations if e.cause != "none"), None) if t.drift else None
+    outcome.size = drift_size(outcome.explanations, outcome.test, outcome.tolerance)
+    outcome.verdict = DRIFT if outcome.size is not None and outcome.size.beyond else OK
+    outcome.reason = verdict_reason(outcome.test, outcome.size, outcome.tolerance)
+    best = next((e for e in outcome.explanations if e.cause != "none"), None) if outcome.verdict == DRIFT else None
     if best is not None and best.cause == "camera":
         outcome.update = quick_update(base.baseline, obs, problem.joints_deg)

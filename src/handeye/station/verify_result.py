@@ -9,6 +9,7 @@ import numpy as np
 
 from ..calibration.drift_causes import likelihood_ratio, same_effect
 from .verify import DRIFT, INCONCLUSIVE
+from .verify_tolerance import explained
 
 __all__ = ["diagnosis", "advice", "outcome_json", "outcome_lines", "update_json"]
 
@@ -28,18 +29,18 @@ def _tool_values(tool) -> dict:
 
 def diagnosis(outcome) -> dict:
     """The ``diagnosis`` of the JSON: ``cause``, ``joint``, sizes, ``alternatives`` (best first),
-    ``indistinguishable`` (explanations these data cannot tell from the cause)."""
+    ``indistinguishable`` (explanations these data cannot tell from the cause). A change the test finds
+    but within the tolerance is no cause (``none``); its size is the JSON's ``size``."""
     ranked = [e for e in outcome.explanations if e.cause != "none"]
     out = {"cause": "none", "joint": None, "translation_mm": 0.0, "rotation_deg": 0.0, "alternatives": [],
            "indistinguishable": [], "likelihood_ratio": None}
-    if outcome.test is not None and outcome.test.drift and ranked:
+    if outcome.beyond_tolerance and ranked:
         best = ranked[0]
         out.update(_explanation(best))
         out["alternatives"] = [_explanation(e, best) for e in ranked[1:]]
         out["likelihood_ratio"] = likelihood_ratio(best, ranked[1]) if len(ranked) > 1 else None
         out["indistinguishable"] = [e.name for e in same_effect(ranked, best)]
-        worst = outcome.test
-        out["explained"] = bool(best.chi2 < _chi2_limit(worst.degrees - len(best.parameters), worst.level))
+        out["explained"] = explained(best, outcome.test)
     elif outcome.explanations:
         out["alternatives"] = [_explanation(e) for e in ranked[:3]]
     if outcome.tool_finding is not None:
@@ -50,12 +51,6 @@ def diagnosis(outcome) -> dict:
                "held": _tool_values(outcome.tool_finding["held"]),
                "session": _tool_values(outcome.tool_finding["session"])}
     return out
-
-
-def _chi2_limit(dof: int, level: float) -> float:
-    from scipy.stats import chi2
-
-    return float(chi2.ppf(1.0 - level, max(dof, 1)))
 
 
 def advice(outcome, diag: dict, session: str, config_arg: str) -> list[str]:
@@ -71,6 +66,10 @@ def advice(outcome, diag: dict, session: str, config_arg: str) -> list[str]:
                      "unless a later calibration was written on purpose")
         diag = diag["board_check"]
         cause = diag["cause"]
+    if outcome.size is not None and not outcome.size.beyond:
+        return lines + [f"ok: a change is statistically detectable ({outcome.size.text()}) but within the tolerance "
+                        f"{outcome.tolerance.text()} ({outcome.tolerance.source}; verify.tolerance_mm / tolerance_deg of "
+                        "the station config set it): nothing to do; its trend shows in the history (--history)"]
     if outcome.test is None or not outcome.test.drift or cause == "none":
         return lines or ["ok: the calibration still predicts the board within its noise; nothing to do"]
     also = f" (these data cannot tell it from: {', '.join(diag['indistinguishable'])})" if diag["indistinguishable"] else ""
@@ -121,10 +120,15 @@ def outcome_json(outcome, session: str, thresholds) -> dict:
         "revisited": outcome.postures,
         "measured": outcome.measured,
         "test": None if test is None else {"statistic": test.statistic, "degrees_of_freedom": test.degrees,
-                                           "p_value": test.p_value, "level": test.level},
+                                           "p_value": test.p_value, "level": test.level,
+                                           "statistically_detectable": bool(test.drift)},
+        "tolerance": None if outcome.tolerance is None else outcome.tolerance.to_json(),
+        "size": None if outcome.size is None else outcome.size.to_json(),
+        "beyond_tolerance": None if test is None else outcome.beyond_tolerance,
         "diagnosis": diag,
         "quick_update": update_json(outcome.update, thresholds),
-        "simulated_robot_time_s": outcome.motion_s,
+        "simulated_robot_time_s": outcome.motion_s,  # the plan's motion model, on every station
+        "capture_robot_time_s": outcome.capture_motion_s,
     }
 
 

@@ -126,7 +126,8 @@ def check_session_origin(origin: str | None, mock_controller: bool) -> None:
     """Refuse a mock or simulated session's frame for a real controller (``station.origin``)."""
     if mock_controller or origin not in (MOCK, SIMULATED):
         return
-    what = "on the embedded mock station" if origin == MOCK else "by a simulation"
+    what = ("on a mock station (the embedded one, or a rehearsal against handeye mock controller)" if origin == MOCK
+            else "by a simulation")
     raise WritebackError(f"this session was made {what}: its camera frame is not your robot's; capture a session on the "
                          "real station (handeye capture --config STATION.yaml) and calibrate that one")
 

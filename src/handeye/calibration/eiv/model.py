@@ -27,15 +27,9 @@ from ..noise import (
     stereo_point_shape,
     twist_between,
 )
+from ..joint_match import joint_mismatch
 from ..problem import EYE_IN_HAND, HandEyeProblem
 from ..transforms import invert_transforms
-
-
-#: FK(joints) must match the session's flange pose this well for the joint Jacobian to be used.
-JOINT_MATCH_MM = 5.0
-
-
-JOINT_MATCH_DEG = 0.5
 
 
 @dataclass(frozen=True)
@@ -123,17 +117,20 @@ def _board_data(problem: HandEyeProblem) -> tuple[np.ndarray, np.ndarray, bool]:
     return problem.compact.points, np.asarray(problem.compact.target_points, float), False
 
 
-def _hand_components(problem: HandEyeProblem) -> tuple:
+def _hand_components(problem: HandEyeProblem, notes: dict) -> tuple:
     """Robot-side components in the hand's local frame, and the kinematic-deviation Jacobian.
 
     With joint angles and a robot model: joint noise through the flange Jacobian, and the DH
-    deviations (``noise.kinematic_jacobian``); otherwise flange rotation and translation noise.
+    deviations (``noise.kinematic_jacobian``); otherwise flange rotation and translation noise. When
+    joint angles do not reproduce the flange poses, ``notes["joint_mismatch"]`` says which postures.
     """
     n = problem.n
     tool02base = problem.hand if problem.setup == EYE_IN_HAND else invert_transforms(problem.hand)
     to_hand = np.broadcast_to(np.eye(6), (n, 6, 6)) if problem.setup == EYE_IN_HAND else -adjoint(tool02base)
     # eye-to-hand: hand = tool02base^-1, so (T ⊕ ξ)^-1 = T^-1 ⊕ (-Ad_T ξ)
-    robot = _robot_for(problem, tool02base)
+    robot, mismatch = _robot_for(problem, tool02base)
+    if mismatch is not None:
+        notes["joint_mismatch"] = mismatch.line()
     if robot is not None:
         jac = flange_jacobian(robot, problem.joints_deg)
         g = to_hand @ (jac @ np.swapaxes(jac, 1, 2)) @ np.swapaxes(to_hand, 1, 2)
@@ -155,26 +152,23 @@ def _hand_components(problem: HandEyeProblem) -> tuple:
 
 
 def _robot_for(problem: HandEyeProblem, tool02base: np.ndarray):
-    """The robot model of the problem's joints when its kinematics reproduce the flange poses."""
+    """The robot model of the problem's joints when its kinematics reproduce the flange poses, and the
+    postures whose joints do not (``joint_match.JointMismatch``; None when they all do)."""
     joints = getattr(problem, "joints_deg", None)
     robot_name = getattr(problem, "robot", None)
     if joints is None or robot_name is None:
-        return None
+        return None, None
     from ..kinematics import load_robot  # noqa: PLC0415 (only sessions with joints need it)
 
     try:
         robot = load_robot(robot_name)
     except ValueError:
-        return None
+        return None, None
     joints = np.asarray(joints, float)
     if joints.shape != (problem.n, robot.dof):
-        return None
-    fk = robot.forward_transform(joints)
-    gap = twist_between(fk, tool02base)
-    if np.max(np.linalg.norm(gap[:, :3], axis=1)) > JOINT_MATCH_MM or \
-            np.degrees(np.max(np.linalg.norm(gap[:, 3:], axis=1))) > JOINT_MATCH_DEG:
-        return None
-    return robot
+        return None, None
+    mismatch = joint_mismatch(robot, joints, tool02base, problem.posture_ids)
+    return (None, mismatch) if mismatch is not None else (robot, None)
 
 
 def observations(problem: HandEyeProblem, stereo: tuple | None = None) -> Observations:
@@ -197,8 +191,9 @@ def observations(problem: HandEyeProblem, stereo: tuple | None = None) -> Observ
         start = np.tile(np.eye(4), (n, 1, 1))
         start[:, :3, :3] = matrix_from_quaternion(fit.quaternion)
         start[:, :3, 3] = fit.translation
-    hand_comps, kin = _hand_components(problem)
-    kin_fields = {} if kin is None else {"kinematic": kin[0], "kinematic_kinds": kin[1]}
+    notes: dict = {}
+    hand_comps, kin = _hand_components(problem, notes)
+    kin_fields = {"notes": notes} if kin is None else {"kinematic": kin[0], "kinematic_kinds": kin[1], "notes": notes}
     if corners:
         f_px, baseline = stereo if stereo is not None else (None, None)
         kwargs = {} if f_px is None else {"f_px": f_px, "baseline_mm": baseline}

@@ -218,6 +218,9 @@ KINEMATIC_LR = 13.8
 
 def _kinematic_report(obs: Observations, fit: MLFit, used: bool, lr) -> dict:
     if obs.kinematic is None:
+        if "joint_mismatch" in obs.notes:
+            return {"modelled": False, "reason": f"{obs.notes['joint_mismatch']}: the robot's noise is modelled on "
+                                                 "the flange poses instead of the joints"}
         return {"modelled": False, "reason": "no joint angles with a known robot model in the session"}
     out = {"modelled": bool(used), "likelihood_ratio": None if lr is None else float(lr), "threshold": KINEMATIC_LR}
     if used:

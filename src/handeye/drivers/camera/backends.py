@@ -78,10 +78,11 @@ CAMERAS.register(CameraBackend(
                       "only XB3 on the bus (several are refused, naming their GUIDs)", check=_guid, metavar="GUID"),)))
 
 
-def camera_settings() -> dict:
-    """Every camera back end's settings by key, with the back ends that declare it (registry order):
-    the keys of the station config's ``camera`` section beyond its own."""
-    return declared_settings(CAMERAS, "settings")
+def camera_settings(names=None) -> dict:
+    """The camera back ends' settings by key, with the back ends that declare it (registry order): of
+    ``names`` (default: every back end loaded so far, so no other plug-in is imported): the keys of the
+    station config's ``camera`` section beyond its own."""
+    return declared_settings(CAMERAS, "settings", names)
 
 
 def register_backend(backend, target=None, **fields) -> CameraBackend:

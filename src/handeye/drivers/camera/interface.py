@@ -73,6 +73,9 @@ class Camera(ABC):
 
     #: Back-end name, e.g. ``"xb3"``.
     name = "camera"
+    #: True for a camera that renders a simulation (the mocks): a session it captures is never a real one
+    #: (``station.station_kind``).
+    simulated = False
 
     @abstractmethod
     def connect(self) -> None:

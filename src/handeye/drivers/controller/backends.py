@@ -23,7 +23,7 @@ from ..registry import Backend, Registry, Setting, declared_settings, keyword_op
 from .errors import InvalidRequest
 
 __all__ = ["ControllerBackend", "ControllerLink", "LinkSetting", "MockServer", "CONTROLLERS", "DEFAULT_PROTOCOL", "RAPID_LINKS",
-           "link_settings", "register_backend", "setting_options", "standard_options", "tcp_options"]
+           "link_settings", "rapid_protocol_choices", "register_backend", "setting_options", "standard_options", "tcp_options"]
 
 
 #: A controller back end's setting (:class:`handeye.drivers.registry.Setting`: the station config's
@@ -31,11 +31,13 @@ __all__ = ["ControllerBackend", "ControllerLink", "LinkSetting", "MockServer", "
 LinkSetting = Setting
 
 
-def link_settings() -> dict[str, tuple[LinkSetting, tuple[str, ...]]]:
-    """Every back end's link settings by key, with the back ends that declare it (registry order):
-    the keys of the config's ``controller`` section and the flags of ``handeye robot`` beyond
-    ``host`` and ``port``. Two back ends sharing a key share its description (the first one's)."""
-    return declared_settings(CONTROLLERS, "link_settings")
+def link_settings(names=None) -> dict[str, tuple[LinkSetting, tuple[str, ...]]]:
+    """The back ends' link settings by key, with the back ends that declare it (registry order): of
+    ``names`` (default: every back end loaded so far, :func:`~handeye.drivers.registry.declared_settings`,
+    so no other plug-in is imported): the keys of the config's ``controller`` section and the flags of
+    ``handeye robot`` beyond ``host`` and ``port``. Two back ends sharing a key share its description
+    (the first one's)."""
+    return declared_settings(CONTROLLERS, "link_settings", names)
 
 
 class ControllerLink:
@@ -286,6 +288,13 @@ class _RapidLinks(Mapping):
 
 #: The RAPID link module of every controller back end that has one (read from :data:`CONTROLLERS`).
 RAPID_LINKS: Mapping = _RapidLinks()
+
+
+def rapid_protocol_choices():
+    """The protocols ``rapid generate`` can write a link module for, checked one at a time (asking about one
+    imports that plug-in only); one left out says it has no RAPID link module."""
+    return CONTROLLERS.choices(lambda backend: backend.rapid_link is not None,
+                               lacking="has no RAPID link module (its ControllerBackend.rapid_link is None)")
 
 
 def register_backend(backend: ControllerBackend) -> ControllerBackend:

@@ -53,7 +53,11 @@ from .rws_program import RwsProgram
 from .rws_transport import RateLimiter, close_session
 from .types import ControllerInfo, FlangePose, ToolData, check_fingerprint, check_timeout
 
-__all__ = ["RwsController"]
+__all__ = ["RwsController", "SIMULATION_SYSTEM_NAME"]
+
+#: The system name a simulation answers ``GET /rw/system`` with (``handeye mock controller`` announces itself so):
+#: a controller of that name is :attr:`RwsController.simulated`.
+SIMULATION_SYSTEM_NAME = "handeye-mock"
 
 
 class RwsController(RwsHandshake, RwsProgram, RwsAccess, RwsHttp, PolledHandshake, Controller):
@@ -123,6 +127,8 @@ class RwsController(RwsHandshake, RwsProgram, RwsAccess, RwsHttp, PolledHandshak
         super().__init__(**options)
         self.generation: int | None = None
         self.robotware: str | None = None
+        #: The controller's system name (``GET /rw/system``), once connected.
+        self.system_name: str | None = None
         self._http = None
         self._connected = False
         self._requested = 0
@@ -195,6 +201,7 @@ class RwsController(RwsHandshake, RwsProgram, RwsAccess, RwsHttp, PolledHandshak
         self.generation = found
         system = self._get("/rw/system", deadline)
         self.robotware = str(system.get("rwversion") or system.get("rwversionname") or "")
+        self.system_name = str(system.get("name") or "")
         major = int(self.robotware.split(".")[0]) if self.robotware[:1].isdigit() else None
         if major is not None and (major >= 7) != (found == 2):
             raise self.protocol_error(f"{self.address} runs RobotWare {self.robotware} but answers like RWS {found}.0")
@@ -202,6 +209,11 @@ class RwsController(RwsHandshake, RwsProgram, RwsAccess, RwsHttp, PolledHandshak
             raise self.connection_error(f"{self.address} is RobotWare 7 (RWS 2.0): use HTTPS with the controller's "
                                         "certificate pinned (controller.tls_fingerprint, port 443)")
         return found
+
+    @property
+    def simulated(self) -> bool:
+        """True when the controller announced itself as a simulation (:data:`SIMULATION_SYSTEM_NAME`)."""
+        return self.system_name == SIMULATION_SYSTEM_NAME
 
     def _drop(self) -> None:
         """Forget the TCP connections; the RWS session (cookies) is kept, so mastership survives a drop."""

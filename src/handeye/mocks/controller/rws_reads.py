@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...drivers.controller.rws_client import SIMULATION_SYSTEM_NAME
 from ...rapid.interpreter.values import format_value
 from .rws_web import HttpError
 
@@ -54,7 +55,7 @@ class RwsReads:
             return [{"_type": "rap-execution", "_title": "execution",
                      "ctrlexecstate": "running" if self.running else "stopped", "cycle": "forever"}]
         if path == "/rw/system":
-            return [{"_type": "sys-system", "_title": "system", "name": "handeye-mock", "rwversion": self.robotware,
+            return [{"_type": "sys-system", "_title": "system", "name": SIMULATION_SYSTEM_NAME, "rwversion": self.robotware,
                      "rwversionname": f"RobotWare {self.robotware}", "sysid": "{mock}"}]
         if path in ("/users/rmmp", "/users/rmmp/poll"):
             return [self._rmmp_state(path)]

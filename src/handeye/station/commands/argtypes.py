@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["corners", "positive", "non_negative", "count", "whole_between", "port", "floats", "setting_value"]
+__all__ = ["registry_choice", "left_out_lines", "corners", "positive", "non_negative", "count", "whole_between", "port", "floats", "setting_value"]
 
 
 def _number(text: str, kind=float, what: str = "a number"):
@@ -95,3 +95,27 @@ def setting_value(setting):
 
     convert.__name__ = setting.key  # argparse names the type in its messages
     return convert
+
+
+def registry_choice(choices):
+    """A type for one name of a registry's :class:`~handeye.calibration.registry.Choices`: checking it loads
+    that plug-in only; a name that is not a choice is refused saying why (an installed plug-in that lacks
+    what the command needs, or did not load) and what the choices are."""
+
+    def convert(text: str) -> str:
+        if text in choices:
+            return text
+        why = choices.refusal(text)
+        raise argparse.ArgumentTypeError(f"invalid choice: {text!r} (choose from {choices.listed()})"
+                                         + (f": {why}" if why else ""))
+
+    return convert
+
+
+def left_out_lines(choices, what: str) -> str:
+    """Lines for a help text: the installed plug-ins ``choices`` leave out and why (empty when none);
+    ``what`` says what they were left out of (``--protocol``)."""
+    left = choices.left_out()
+    if not left:
+        return ""
+    return f"\nInstalled plug-ins left out of {what}:\n" + "\n".join(f"  {why}" for why in left.values()) + "\n"

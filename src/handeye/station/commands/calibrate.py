@@ -83,7 +83,7 @@ Examples:
 
 
 def add_parser(sub):
-    p = sub.add_parser("calibrate", help=HELP, description=HELP, epilog=methods_help() + EPILOG,
+    p = sub.add_parser("calibrate", help=HELP, description=HELP, epilog=lambda: methods_help() + EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("session", metavar="SESSION", help="session folder (handeye-session/1)")
     p.add_argument("--method", metavar="NAME", help="solver (see below); default: the recommended one")
@@ -126,6 +126,7 @@ def run(args) -> int:
 
     with delayed_progress("calibrate") as update:  # shown only when solving takes over a second
         outcome = calibrate_session_folder(args.session, args.method, args.units, progress=update)
+    _warn_joint_mismatch(outcome.session)
     assessment = assess(outcome, thresholds, judge=wants_report or bool(args.thresholds),
                         methods=comparison_methods() if wants_report else ())
     written = None
@@ -144,3 +145,17 @@ def run(args) -> int:
             print(f"\nReport written to {written}", file=stream)
         print(assessment.verdict.line(), file=stream)
     return 0
+
+
+def _warn_joint_mismatch(session) -> None:
+    """One warning line on stderr when postures' joint angles do not reproduce their flange poses."""
+    import sys
+
+    from ...calibration.joint_match import session_joint_mismatch
+
+    found = session_joint_mismatch(session)
+    if found is not None:
+        print(f"handeye calibrate: warning: {found.line()}: the default estimator models the robot's noise on the "
+              "flange poses instead of the joints (details.kinematics), and handeye verify refuses the session; "
+              "check those postures' files (joints_deg and tool0_in_base are one reading of the controller)",
+              file=sys.stderr)

@@ -144,8 +144,37 @@ def _confirmation(args):
     return _ask if sys.stdin is not None and sys.stdin.isatty() else None
 
 
+class _Say:
+    """Prints a message a line, each after the station's tag (``MOCK `` on a mock station:
+    ``station.station_kind``), from any thread (the mock's simulated operator speaks from its own)."""
+
+    def __init__(self, config):
+        import threading
+
+        from ..station_kind import station_tag
+
+        self.config, self.tag, self.lock = config, station_tag(config), threading.Lock()
+
+    def __call__(self, message: str) -> None:
+        with self.lock:
+            print(self.tag + message, flush=True)
+
+    def station(self, link):
+        """Decide the tag again with the open link's parts (a driver may say it talks to a simulation); a link
+        that makes a real config a mock station says so first, in one line. A context that does nothing more."""
+        import contextlib
+
+        from ..station_kind import mock_parts, station_tag
+
+        tag = station_tag(self.config, link)
+        if tag and not self.tag:
+            print(f"MOCK: {'; '.join(mock_parts(self.config, link))}: a mock station; its sessions are recorded as "
+                  "mock ones, never written to a real robot", flush=True)
+        self.tag = tag
+        return contextlib.nullcontext(link)
+
+
 def run(args) -> int:
-    import threading
     from dataclasses import replace
 
     from ...calibration.errors import UsageError
@@ -164,21 +193,15 @@ def run(args) -> int:
             raise UsageError(f"--postures must be between 3 and 255; got {args.postures}")
         config = replace(config, plan=replace(config.plan, postures=args.postures))
     args.session = str(config.session_folder(args.session))  # the config's output folder, when it names one
-    tag = "MOCK " if config.is_mock or config.is_rehearsal else ""
-    lock = threading.Lock()  # the mock's simulated operator says its steps from a thread of its own
-
-    def say(message: str) -> None:
-        with lock:
-            print(tag + message, flush=True)
-
+    say = _Say(config)
     if config.is_mock:
         print(MOCK_BANNER, flush=True)
     elif config.is_rehearsal:
         print(rehearsal_banner(config), flush=True)
     if args.guided:
         return _run_guided(config, args, say)
-    with open_station(config, session_dir=args.session) as link, _view(config, args, link, say) as view, \
-            progress_bar("capture") as update:
+    with open_station(config, session_dir=args.session) as link, say.station(link), \
+            _view(config, args, link, say) as view, progress_bar("capture") as update:
         def on_posture(report):
             say(("  ok    " if report.ok else "  SKIP  ") + report.message + f"  ({report.elapsed_s:.1f} s)")
             update(report.done, report.total, f"posture {report.index}")
@@ -207,8 +230,8 @@ def _run_guided(config, args, say) -> int:
     from ..runtime import open_station
 
     stop = threading.Event()  # the embedded mock's simulated operator sets it when done
-    with open_station(config, session_dir=args.session) as link, _view(config, args, link, say) as view, \
-            mock_operator(config, link, stop, say) as operator:
+    with open_station(config, session_dir=args.session) as link, say.station(link), \
+            _view(config, args, link, say) as view, mock_operator(config, link, stop, say) as operator:
         def on_posture(report):
             say("  ok    " + report.message)
             if operator is not None:

@@ -27,14 +27,19 @@ Examples:
 
 def add_parser(sub):
     from ...drivers.controller.backends import DEFAULT_PROTOCOL
-    from ...mocks.backends import mock_protocols
+    from ...mocks.backends import mock_protocol_choices
+    from .argtypes import left_out_lines, registry_choice
 
-    p = sub.add_parser("demo", help=HELP, description=HELP, epilog=EPILOG,
+    protocols = mock_protocol_choices()  # a name is checked when given: no plug-in is imported to build this
+    p = sub.add_parser("demo", help=HELP, description=HELP,
+                       epilog=lambda: EPILOG + f"\nProtocols a mock serves (--protocol): {protocols.listed()}\n"
+                       + left_out_lines(protocols, "--protocol"),
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--json", metavar="FILE", help="write the result as JSON ('-' = stdout)")
     p.add_argument("--session", default="handeye_demo", metavar="DIR", help="demo folder (default ./handeye_demo)")
-    p.add_argument("--protocol", choices=mock_protocols(), default=DEFAULT_PROTOCOL,
-                   help=f"controller link of the mock robot (default {DEFAULT_PROTOCOL})")
+    p.add_argument("--protocol", choices=protocols, type=registry_choice(protocols), default=DEFAULT_PROTOCOL,
+                   metavar="PROTOCOL", help=f"controller link of the mock robot: one a mock serves, listed below "
+                                            f"(default {DEFAULT_PROTOCOL}; handeye plugins says what each installed one can do)")
     p.add_argument("--postures", type=int, default=30, help="postures to plan (default 30)")
     p.add_argument("--seed", type=int, default=7, help="mock station seed: arm errors and sensor noise (default 7)")
     p.add_argument("--no-report", action="store_true", help="skip the HTML report")

@@ -65,7 +65,7 @@ deg; a jog whose path comes within the cell margin of a keep-out volume stops th
 ...), "START" continues a program stopped by Stop \\NoRegain, "KEY n" answers the pendant's prompt
 (TPReadFK function key 1-5, UIMessageBox button n), "STATE" replies the execution state (running,
 prompt, stopped, ended, error, none), the keys offered and the last pendant line. Play it with
-handeye mock pendant (nothing else to install; without REQUEST it reads one request per line from stdin):
+handeye mock pendant (nothing else to install; with - it reads one request per line from stdin):
   handeye mock controller --config station.yaml --camera-port 5021 --pendant-port 5022 &
   handeye mock pendant --port 5022 STATE
 The mock's state lives in its process: a restart resets its arm, its program and its tool data (a
@@ -98,16 +98,21 @@ def _server_options(parser) -> None:
 
 
 def add_parser(sub):
+    from ...mocks.backends import mock_protocol_choices
+    from .argtypes import left_out_lines, registry_choice
+
     names, lines = _protocols()
     p = sub.add_parser("mock", help=HELP, description=HELP)
     targets = p.add_subparsers(dest="mock_target", metavar="TARGET")
     controller_help = CONTROLLER_HELP.format(protocols=", ".join(names))
+    protocols = mock_protocol_choices()
     c = targets.add_parser("controller", help=controller_help, description=controller_help,
-                           epilog=CONTROLLER_EPILOG.format(protocols=lines),
+                           epilog=CONTROLLER_EPILOG.format(protocols=lines) + left_out_lines(protocols, "--protocol"),
                            formatter_class=argparse.RawDescriptionHelpFormatter)
     from ...drivers.controller.backends import DEFAULT_PROTOCOL
 
-    c.add_argument("--protocol", choices=names, default=DEFAULT_PROTOCOL, help=f"default {DEFAULT_PROTOCOL}")
+    c.add_argument("--protocol", choices=protocols, type=registry_choice(protocols), default=DEFAULT_PROTOCOL,
+                   metavar="PROTOCOL", help=f"one of the protocols above (default {DEFAULT_PROTOCOL})")
     c.add_argument("--port", type=argtypes.port, default=None, help="TCP port (defaults above; 0 = any free port)")
     c.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     c.add_argument("--config", metavar="STATION.yaml",
@@ -144,7 +149,7 @@ PENDANT_HELP = "send requests to a running mock controller's pendant port and pr
 
 PENDANT_EPILOG = """\
 Plays the operator of a guided capture by hand, against `handeye mock controller --pendant-port P`.
-Each REQUEST is one line to the port (quote it), its reply is printed; without REQUEST one request
+Each REQUEST is one line to the port (quote it), its reply is printed; with - instead, one request
 is read per line from stdin until end of input. Exit status 0 when every reply is OK, 1 when one is
 ERR (printed) or the port cannot be reached.
 
@@ -166,9 +171,9 @@ def _add_pendant_parser(targets) -> None:
     t = targets.add_parser("pendant", help=PENDANT_HELP, description=PENDANT_HELP, epilog=PENDANT_EPILOG,
                            formatter_class=argparse.RawDescriptionHelpFormatter)
     t.add_argument("--host", default="127.0.0.1", help="the mock's address (default 127.0.0.1)")
-    t.add_argument("--port", type=argtypes.port, required=True, help="its --pendant-port")
-    t.add_argument("requests", nargs="*", metavar="REQUEST",
-                   help='one request line each: STATE, "KEY n", "JOG j1 .. j6", START (default: stdin)')
+    t.add_argument("--port", type=argtypes.port, default=5022, help="its --pendant-port (default 5022, the port of the examples)")
+    t.add_argument("requests", nargs="+", metavar="REQUEST",
+                   help='one request line each: STATE, "KEY n", "JOG j1 .. j6", START; - reads them from stdin')
 
 
 def _run_pendant(args) -> int:
@@ -178,7 +183,7 @@ def _run_pendant(args) -> int:
     from ...calibration.errors import HandEyeError
     from ..pendant_operator import PendantClient
 
-    requests = args.requests or (line.strip() for line in sys.stdin if line.strip())
+    requests = ((line.strip() for line in sys.stdin if line.strip()) if args.requests == ["-"] else args.requests)
     try:
         client = PendantClient(f"{args.host}:{args.port}", timeout_s=10.0)
     except OSError as exc:

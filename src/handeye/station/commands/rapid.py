@@ -53,19 +53,26 @@ Example:
 
 
 def add_parser(sub):
-    from ...drivers.controller.backends import RAPID_LINKS
+    from ...drivers.controller.backends import rapid_protocol_choices
+    from .argtypes import left_out_lines, registry_choice
 
     p = sub.add_parser("rapid", help=HELP, description=HELP)
     what = p.add_subparsers(dest="rapid_command", metavar="COMMAND")
     from ..backend_help import link_module_lines
 
-    epilog = GENERATE_EPILOG.replace("{link_modules}", "\n".join(link_module_lines()))
+    protocols = rapid_protocol_choices()  # a name is checked when given: no plug-in is imported to build this
+
+    def epilog() -> str:
+        return (GENERATE_EPILOG.replace("{link_modules}", "\n".join(link_module_lines()))
+                + left_out_lines(protocols, "--protocol"))
+
     g = what.add_parser("generate", help=GENERATE_HELP, description=GENERATE_HELP, epilog=epilog,
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     g.add_argument("--config", metavar="STATION.yaml", help="station config (default: the built-in mock station)")
     g.add_argument("-o", "--output", required=True, metavar="DIR", help="folder for the .mod files (created)")
-    g.add_argument("--protocol", choices=tuple(RAPID_LINKS),
-                   help="link module to write (default: controller.protocol of the config)")
+    g.add_argument("--protocol", choices=protocols, type=registry_choice(protocols), metavar="PROTOCOL",
+                   help="link module to write: a protocol with a RAPID link module, listed below (default: "
+                        "controller.protocol of the config)")
     g.add_argument("--guided", action="store_true",
                    help="the guided capture's program (HeGuide: pendant prompts, Stop \\NoRegain, offers the posture)")
     g.add_argument("--prompt", choices=("fk", "messagebox"),

@@ -14,6 +14,12 @@ and the board measured at each is compared with where SESSION's calibration pred
 false-alarm rate (--level, default 1 %) comes from the noise the calibration estimated (camera,
 robot, the covariance of X and of the board), not from a constant.
 
+DRIFT needs both: a discrepancy beyond the noise (the test) and a change larger than the station's
+tolerance (verify.tolerance_mm / tolerance_deg of the config; by default the quality thresholds
+max_sigma_translation_mm / max_sigma_rotation_deg, 0.2 mm / 0.02 deg). A change the test detects
+but within the tolerance is OK, and the output says so with its size; the JSON keys "size",
+"tolerance", "beyond_tolerance" and test.statistically_detectable hold both.
+
 A drift is explained: camera (moved on the flange), board (moved), joint N (its zero moved),
 tooldata (the controller holds another one), with the size and how much more likely it is than the
 next explanation; explanations these data cannot tell apart are named together (a joint-1 zero
@@ -41,7 +47,8 @@ def add_parser(sub):
     p.add_argument("--mock", action="store_true", help="the embedded mock station")
     p.add_argument("--against", metavar="SESSION", required=True, help="the calibrated session to check")
     p.add_argument("--postures", metavar="K", type=int, default=5, help="postures to revisit (default 5, at least 3)")
-    p.add_argument("--level", type=float, default=0.01, help="false-alarm rate of the test (default 0.01)")
+    p.add_argument("--level", type=float, default=0.01,
+                   help="false-alarm rate of the test (default 0.01, from 1e-06 to 0.2)")
     p.add_argument("--json", metavar="FILE", help="write the outcome as JSON")
     p.add_argument("--report", metavar="FILE", nargs="?", const="",
                    help="HTML report with the history's trend (default: CHECK_FOLDER/verify_report.html)")
@@ -76,13 +83,17 @@ def run(args) -> int:
     import sys
 
     from ...calibration.errors import HandEyeError, UsageError
+    from ...calibration.verification import DEFAULT_LEVEL, LEVEL_RANGE
     from ..config import default_config, load_config
     from ..runtime import MOCK_BANNER, open_station, rehearsal_banner
+    from ..station_kind import station_tag
 
     if not args.config and not args.mock:
         raise UsageError("give --config STATION.yaml (the station) or --mock (the embedded mock station)")
-    if not 0.0 < args.level < 0.5:
-        raise UsageError(f"--level must be between 0 and 0.5; got {args.level:g}")
+    low, high = LEVEL_RANGE
+    if not low <= args.level <= high:  # NaN too
+        raise UsageError(f"--level must be between {low:g} and {high:g} (the test's false-alarm rate; default "
+                         f"{DEFAULT_LEVEL:g}); got {args.level:g}")
     config = load_config(args.config) if args.config else default_config()
     if args.mock:
         config = config.as_mock()
@@ -94,13 +105,12 @@ def run(args) -> int:
     if not config.is_mock and not args.yes and not sys.stdin.isatty():
         raise HandEyeError("the check moves the robot and needs the operator's yes: run it at a terminal, or give "
                            "--yes (scripts); nothing moved")
-    tag = "MOCK " if config.is_mock or config.is_rehearsal else ""
     if config.is_mock:
         print(MOCK_BANNER, flush=True)
     elif config.is_rehearsal:
         print(rehearsal_banner(config), flush=True)
     with open_station(config, session_dir=args.against) as link:
-        verdict = _check(args, config, link, tag)
+        verdict = _check(args, config, link, station_tag(config, link))  # the link's own parts too
     return EXIT_CODES[verdict]
 
 
@@ -110,6 +120,8 @@ def _check(args, config, link, tag: str) -> str:
     from ..verify import verify
     from ..verify_history import append_record, check_record, history_path, load_history
     from ..verify_report import write_history_report
+    from ..origin import MOCK
+    from ..station_kind import station_kind
     from ..verify_result import advice, outcome_json, outcome_lines
 
     import json
@@ -126,7 +138,7 @@ def _check(args, config, link, tag: str) -> str:
     config_arg = f"--config {args.config}" if args.config and not args.mock else "--mock"
     for line in outcome_lines(data, advice(outcome, data["diagnosis"], str(args.against), config_arg)):
         say(line)
-    station = "mock" if config.is_mock else str(getattr(config, "source", "station"))
+    station = "mock" if station_kind(config, link) == MOCK else str(getattr(config, "source", "station"))
     path = history_path(args.against)
 
     def record() -> None:

@@ -55,9 +55,10 @@ def run(args) -> int:
     from ..assessment import assess
     from ..calibrate import solve_session
     from ..config import default_config, load_config
-    from ..origin import origin_line, session_origin
+    from ..origin import MOCK, origin_line, session_origin
     from ..quality import config_thresholds
     from ..runtime import MOCK_BANNER, check_rehearsal, open_controller_link, rehearsal_banner
+    from ..station_kind import station_kind
     from ..verify_update import record_update_written, verify_check
     from ..writeback import check_session_origin, side_by_side, writeback
 
@@ -69,10 +70,9 @@ def run(args) -> int:
     session = read_session(args.session)
     origin = session_origin(session)
     session = session_in_mm(session, args.units)
-    mock_controller = config.is_mock
+    mock_controller = station_kind(config) == MOCK  # the embedded mock, or a rehearsal's standalone one
     if not args.dry_run and config.is_rehearsal:
         check_rehearsal(config)  # the controller named is the standalone mock's: a mock session may go there
-        mock_controller = True
     if not args.dry_run:
         check_session_origin(origin, mock_controller)
     if origin_line(origin):
