@@ -19,7 +19,9 @@ these rules, in order:
    rotation axis onto the robot's (axis misfit) and one translation fits (translation misfit, as a
    fraction of the motion), each within three times the best reading's value (the noise of the
    data) or under a floor (1 deg, 2 deg, 8 %), and its robot turns enough to be tested (half the
-   testable pairs of the best-turning reading). Readings that give the same session (same set-up,
+   testable pairs of the best-turning reading); and, when the best fits under the floors, its
+   misfits do not exceed the best one's posture by posture beyond the data's noise (a paired test,
+   ``noise_test``): under the floors is not yet "equally well". Readings that give the same session (same set-up,
    the same poses within the noise) count as one outcome.
 3. **Plausibility**, only where physics leaves a genuine ambiguity. Inverting both pose sets, or
    one pose set together with the set-up, fits the invariants exactly as well: what changes is
