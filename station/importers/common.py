@@ -26,6 +26,7 @@ from ...calibration.problem import SETUPS
 from ...calibration.session import MAX_LENGTH_MM, MAX_LENGTH_WORDS, MAX_POSTURE_INDEX, Posture, Session
 from ...calibration.transforms import rigid_defect
 from .head import check_log_head, read_head
+from .ambiguity import AmbiguousReading
 from .inference import METRES_BELOW, Constraints, Side, SideReading, infer
 
 __all__ = [
@@ -336,6 +337,8 @@ def _inferred_postures(where, robot_side, camera_side, constraints, labels) -> t
     it gives, each with its ``source`` label (lengths checked against the session format's limits)."""
     try:
         inference = infer(robot_side, camera_side, constraints)
+    except AmbiguousReading as exc:  # keeps what each reading would give
+        raise AmbiguousReading(f"{where}: {exc}", exc.choices) from None
     except SessionError as exc:
         raise SessionError(f"{where}: {exc}") from None
     robot_mm, camera_mm = inference.robot_mm, inference.camera_mm

@@ -50,6 +50,7 @@ import numpy as np
 
 from ...calibration.errors import SessionError
 from ...calibration.problem import SETUPS
+from .ambiguity import AmbiguousReading, choice_lines
 from .inference_table import format_table, inference_record, reading_words, table_rows
 from .readings import (
     CAMERA_POSES,
@@ -208,15 +209,16 @@ def _choose(robot: Side, camera: Side, c: Constraints, readings: list, warnings_
         return chosen, "flags", pool
     if how in ("undecided", "implausible"):
         outcomes_left = sorted({r.outcome for r in pool})
-        options = [reading_words(robot, camera, min((r for r in pool if r.outcome == k), key=badness))
-                   for k in outcomes_left[:3]]
+        best_of = sorted((min((r for r in pool if r.outcome == k), key=badness) for k in outcomes_left), key=badness)
+        options = [reading_words(robot, camera, r) for r in best_of[:3]]
         fit = "equally well" if how == "undecided" else "(none of them plausibly)"
         if len(robot.readings[0].poses) < 3:
             raise SessionError(f"only {len(robot.readings[0].poses)} posture(s): at least 3 are needed to tell the pose "
                                f"conventions from the data (and to calibrate)")
-        raise SessionError(
+        names = _flag_names(pool, robot, camera) or ["--setup"]
+        raise AmbiguousReading(
             f"the data fit {len(outcomes_left)} readings {fit} ({'; or '.join(options)}); "
-            f"pass {' or '.join(_flag_names(pool, robot, camera)) or '--setup'} to decide")
+            f"pass {' or '.join(names)} to decide", choice_lines(robot, camera, best_of, names))
     chosen = min(pool, key=lambda r: (not _declared_match(robot, camera, c, r), badness(r)))
     if flags_given and other is not None and free[0].outcome != chosen.outcome:
         warnings_.append(

@@ -84,3 +84,28 @@ def test_the_paired_test_rules_out_by_chance_at_most_its_level():
         assert not compare(best, best).worse
         mixed = best + np.array([1.0, 0.0, -1.0]) + np.abs(rng.normal(0, 0.1, (n, 3)))
         assert not compare(mixed, best).worse  # worse in one misfit, better in another: not ruled out
+
+
+def test_an_undecided_log_lists_each_reading_with_its_flags_and_mount(tmp_path, capsys):
+    """Issue 40.4f: the refusal lists, one line each, the flags that choose a reading and the camera mount
+    (translation, rotation) it gives; each line's flags, given back, import that reading."""
+    from handeye.station import cli
+
+    st = aligned_station(1, 8, "eye_in_hand", 6.0, 1.5, 4.0)  # noise swamps the Euler orders
+    paths = two_files(tmp_path / "log", st)
+    code = cli.main(["import", *map(str, paths), "-o", str(tmp_path / "s")])
+    captured = capsys.readouterr()
+    assert code == 1 and captured.err.count("\n") == 1 and "pass --euler" in captured.err
+    lines = captured.out.splitlines()
+    assert lines[0].startswith("the readings the data cannot tell apart")
+    choices = [ln.strip() for ln in lines[1:] if not ln.strip().startswith("...")]
+    assert 2 <= len(choices) <= 6
+    for k, line in enumerate(choices[:3]):
+        flags, mount = line.split(": ", 1)
+        assert mount.startswith(("camera in flange at (", "camera in base at (")) and " mm, turned " in mount
+        assert " deg about (" in mount
+        code = cli.main(["import", *map(str, paths), "-o", str(tmp_path / f"c{k}"), *flags.split()])
+        out = capsys.readouterr().out
+        assert code == 0, line
+        setup = flags.split("--setup ")[1].split()[0]
+        assert f"setup:    {setup}" in out
