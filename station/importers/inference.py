@@ -10,7 +10,9 @@ these rules, in order:
 
 1. **Flags win.** ``--euler``, ``--quaternion-order``, ``--robot-pose``, ``--camera-pose``,
    ``--setup`` and ``--units`` keep only the readings they allow; when the data contradict a flag
-   the import says so with the numbers (a warning) and still reads as told.
+   the import says so with the numbers (a warning) and still reads as told. When no reading fits
+   at all (misfits beyond the noise of any real log), flags are obeyed only if they leave one
+   reading; otherwise the import is refused with the misfit (the data cannot choose).
 2. **Invariants.** The rotation conventions are screened first by what neither ``X``, the set-up
    nor an inversion changes (``readings.screen``): the median gap between the rotation angles of
    the robot's and the camera's relative motions, and between their screw pitches. The pairs of
@@ -53,7 +55,10 @@ from ...calibration.problem import SETUPS
 from .ambiguity import AmbiguousReading, choice_lines
 from .inference_table import format_table, inference_record, reading_words, table_rows
 from .readings import (
+    AXIS_MAX_DEG,
     CAMERA_POSES,
+    GAP_MAX_DEG,
+    TRANSLATION_MAX,
     METRES_BELOW,
     ROBOT_POSES,
     SCALE,
@@ -194,6 +199,8 @@ def _choose(robot: Side, camera: Side, c: Constraints, readings: list, warnings_
             f"no reading of the poses fits a rigid camera mount (best: {reading_words(robot, camera, best)}: "
             f"{scores_words(best)}); check that robot and camera poses are paired posture by posture, or give "
             f"the conventions (--euler, --quaternion-order, --robot-pose, --camera-pose, --setup)")
+    if not any(r.consistent for r in readings):
+        _refuse_unless_pinned(robot, camera, c, readings)
     free, free_how = _decide(robot, camera, c, readings)
     allowed = [r for r in readings if _allowed(robot, camera, c, r)]
     pool, how = _decide(robot, camera, c, allowed)
@@ -225,6 +232,29 @@ def _choose(robot: Side, camera: Side, c: Constraints, readings: list, warnings_
             f"{_flags_text(robot, camera, c)}: the data point to another reading ({reading_words(robot, camera, other)}"
             f": {other.why or 'fits and is plausible'}; the reading given: {chosen.why or 'fits too'}); read as given")
     return chosen, ("flags" if flags_given and not free_decided else how), pool
+
+
+def _refuse_unless_pinned(robot: Side, camera: Side, c: Constraints, readings: list) -> None:
+    """Nothing fits a rigid mount, and flags were given: refuse unless they leave one reading (read as
+    told, with a warning); the data cannot choose among the rest (issue 40.4g: never pick silently).
+
+    Raises
+    ------
+    SessionError
+        Naming the best misfit and the flags that would pin the reading down.
+    """
+    allowed = [r for r in readings if _allowed(robot, camera, c, r)]
+    if len({(r.robot, r.camera, r.robot_pose, r.camera_pose, r.setup) for r in allowed}) <= 1:
+        return
+    best = min(allowed, key=badness)
+    left = [flag for flag, value in (("--setup", c.setup), ("--robot-pose", c.robot_pose),
+                                     ("--camera-pose", c.camera_pose)) if value is None]
+    raise SessionError(
+        f"no reading of the poses fits a rigid camera mount, with the flags given or without (best the flags allow: "
+        f"{reading_words(robot, camera, best)}: {scores_words(best)}; real logs misfit by under {GAP_MAX_DEG:g} deg, "
+        f"{AXIS_MAX_DEG:g} deg, {100 * TRANSLATION_MAX:.0f} %), so the data cannot choose among the readings the "
+        f"flags leave: check that robot and camera poses are paired posture by posture"
+        + (f", or give {', '.join(left)} too to read it exactly as told" if left else ""))
 
 
 def _decide(robot: Side, camera: Side, c: Constraints, pool: list) -> tuple[list, str]:
