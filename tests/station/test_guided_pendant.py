@@ -113,6 +113,29 @@ def test_guided_capture_with_the_pendant_program_over_every_link(cell, capsys, m
     assert any("the pendant says 'captured" in line or "the pendant says" in line for line in said)
 
 
+def test_the_pendant_loop_says_press_start_never_rest_somewhere(cell, capsys):
+    """Issue 40.6: the program's loop captures on Start; what it prints (the start, GOOD ENOUGH) says so and
+    never the joint-watching loop's "each time it rests ... s somewhere new"."""
+    if cell["protocol"] != "socket":
+        pytest.skip("the words are the loop's, the same behind every link")
+    settings = yaml.safe_load(cell["config"].read_text())  # low targets: GOOD ENOUGH after four postures
+    settings["quality"] = {"min_inlier_postures": 3, "max_outlier_fraction": 0.01, "min_rotation_axis_spread_deg": 0.1,
+                           "min_median_rotation_deg": 0.1}
+    settings["guided"] = {**settings["guided"], "min_distance_spread_mm": 0, "min_image_cells": 1}
+    config = cell["folder"] / "words.yaml"
+    config.write_text(yaml.safe_dump(settings))
+    rc, out = _guided({**cell, "config": config}, cell["folder"] / "words",
+                      PendantOperator(cell["pendant"], cell["postures"][:4]), capsys)
+    assert rc == 0, out
+    lines = out.splitlines()
+    intro = next(line for line in lines if "guided capture into" in line)
+    assert "press Capture, jog the robot to a new posture with the board in view and press Start" in intro
+    assert "Done ends the capture" in intro
+    good = next(line for line in lines if "GOOD ENOUGH:" in line)
+    assert "add more (Capture on the pendant) or press Done" in good
+    assert not any(re.search(r"\brests?\b|somewhere new|Ctrl-C", line) for line in lines), out
+
+
 def test_a_jog_into_a_keep_out_volume_is_stopped_and_the_capture_says_so(cell, capsys):
     if cell["protocol"] != "socket":
         pytest.skip("the cell check is the mock's, the same behind every link: once is enough")
@@ -213,7 +236,7 @@ def test_robot_web_services_guides_with_no_program(tmp_path):
                                         "camera": {"backend": "mock", "mock_arm": mock_arm}}))
         assert main(["capture", "--config", str(path), "--session", str(tmp_path / "plan"), "--plan-only"]) == 0
         joints = np.array(read_session(tmp_path / "plan").extra["capture"]["plan_joints_deg"], float)
-        config, stop, taken = load_config(path), threading.Event(), threading.Semaphore(0)
+        config, stop, taken, said = load_config(path), threading.Event(), threading.Semaphore(0), []
 
         def operator():
             client = PendantClient(pendant, 30)
@@ -229,9 +252,12 @@ def test_robot_web_services_guides_with_no_program(tmp_path):
         with open_station(config, session_dir=tmp_path / "g") as station_link:
             thread.start()
             summary = guided_capture(config, tmp_path / "g", station_link, on_posture=lambda report: taken.release(),
-                                     stop=stop)
+                                     stop=stop, progress=said.append)
         thread.join(30)
         assert summary.captured == [0, 1, 2]
+        assert said[0].startswith("guided capture into ") and "jog the robot with the pendant; each time it rests " \
+            "0.3 s somewhere new" in said[0]  # issue 40.6: the joint-watching loop's words, a person at the pendant
+        assert not any("press" in line or "Start" in line for line in said)
         assert not (tmp_path / "g" / "rapid").exists()  # no program: the PC only read the joints
         for posture, target in zip(read_session(tmp_path / "g").postures, joints):
             assert np.allclose(posture.joints_deg, target, atol=1e-3)
