@@ -84,8 +84,12 @@ class Missing:
     target: str
     advice: str
 
+    def shortfall(self) -> str:
+        """The word, its value and its target, without the advice (``postures 12 (needs >= 15)``)."""
+        return f"{self.word} {self.now} (needs {self.target})"
+
     def line(self) -> str:
-        return f"{self.word} {self.now} (needs {self.target}): {self.advice}"
+        return f"{self.shortfall()}: {self.advice}"
 
 
 def postures_needed(thresholds: QualityThresholds) -> int:

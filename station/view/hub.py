@@ -15,7 +15,7 @@ import json
 import threading
 import time
 
-from ..capture_events import Measured, Prompt, Verdict
+from ..capture_events import CaptureEnded, Measured, Prompt, Verdict
 from .frames import encode_side, quick_corners
 from .state import ViewState
 
@@ -92,7 +92,7 @@ class ViewHub:
         live frame may come while it measures; the camera's lock keeps the grabs apart.)"""
         with self._lock:
             now = time.monotonic()
-            if self.clients <= 0 or self.closed or now - self._frame_at < LIVE_PERIOD_S:
+            if self.clients <= 0 or self.closed or self.state.ended is not None or now - self._frame_at < LIVE_PERIOD_S:
                 return False
             return self.state.mode == "guided" or (self.waiting and now - self._waiting_since >= LIVE_AFTER_S)
 
@@ -115,6 +115,10 @@ class ViewHub:
         self._wake.set()
         self._thread.join(timeout=5.0)
         self._fold_events()
+        if self.state.ended is None:  # closed without the command's last word: an error or Ctrl-C
+            self.state.apply(CaptureEnded("the capture stopped (the terminal says why); the postures on disk stay: "
+                                          "run the same command to go on", ok=False))
+            self._publish_state()
         with self._lock:
             frame, self._frame = self._frame, None
         if frame is not None and frame[1] != LIVE:

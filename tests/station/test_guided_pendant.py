@@ -136,6 +136,19 @@ def test_the_pendant_loop_says_press_start_never_rest_somewhere(cell, capsys):
     assert not any(re.search(r"\brests?\b|somewhere new|Ctrl-C", line) for line in lines), out
 
 
+def test_done_before_any_posture_fails_saying_nothing_was_captured(cell, capsys):
+    """Issue 42.10: the operator presses Done at once: exit 1, one error line saying so and what to do."""
+    if cell["protocol"] != "socket":
+        pytest.skip("the ending is the command's, the same behind every link")
+    operator = PendantOperator(cell["pendant"], np.zeros((0, 6))).start()
+    rc = main(["capture", "--config", str(cell["config"]), "--session", str(cell["folder"] / "none"), "--guided"])
+    assert operator.join(60) and operator.error is None, operator.error
+    out, err = capsys.readouterr()
+    assert rc == 1 and "the operator pressed Done" in out
+    assert err.count("\n") == 1 and err.startswith("handeye capture: error: nothing was captured into "), err
+    assert "next: handeye calibrate" not in out
+
+
 def test_a_jog_into_a_keep_out_volume_is_stopped_and_the_capture_says_so(cell, capsys):
     if cell["protocol"] != "socket":
         pytest.skip("the cell check is the mock's, the same behind every link: once is enough")
