@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import re
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -147,6 +148,65 @@ def test_done_before_any_posture_fails_saying_nothing_was_captured(cell, capsys)
     assert rc == 1 and "the operator pressed Done" in out
     assert err.count("\n") == 1 and err.startswith("handeye capture: error: nothing was captured into "), err
     assert "next: handeye calibrate" not in out
+
+
+def _watched(monkeypatch) -> list:
+    """Every frame the live view publishes (its JSON), with a page open on its event stream (live frames
+    are grabbed only for an open page)."""
+    import json
+    import urllib.request
+
+    from handeye.station.view.hub import ViewHub
+    from handeye.station.view.server import ViewServer
+
+    frames, publish, start = [], ViewHub._publish_frame, ViewServer.start
+
+    def published(self, item, kind):
+        publish(self, item, kind)
+        frames.append(json.loads(self.frame_json))
+
+    def read(url):
+        try:
+            with urllib.request.urlopen(url.replace("/?token", "/events?token"), timeout=60) as stream:
+                for _ in stream:
+                    pass
+        except OSError:
+            pass
+
+    def started(self):
+        start(self)
+        threading.Thread(target=read, args=(self.url,), daemon=True).start()
+        return self
+
+    monkeypatch.setattr(ViewHub, "_publish_frame", published)
+    monkeypatch.setattr(ViewServer, "start", started)
+    return frames
+
+
+def test_the_live_view_of_a_pendant_capture_sees_the_board_the_capture_measures(cell, capsys, monkeypatch):
+    """Issue 40.2: during a pendant-guided capture the live frames said "no board left, no board right" and
+    drew no corners while both images showed the whole board. Every posture's frame carries the capture's
+    corners; the live frames, the arm resting at a posture that sees the whole board (the operator waits
+    before jogging), are found by the capture's detector, all their corners drawn."""
+    if cell["protocol"] != "socket":
+        pytest.skip("the view is the same behind every link")
+    frames = _watched(monkeypatch)
+    operator = PendantOperator(cell["pendant"], cell["postures"][:3], pause=lambda k: time.sleep(1.0))
+    operator.start()
+    rc = main(["capture", "--config", str(cell["config"]), "--session", str(cell["folder"] / "watched"), "--guided",
+               "--view"])
+    assert operator.join(60) and operator.error is None, operator.error
+    out = capsys.readouterr().out
+    assert rc == 0, out
+    corners = int(np.prod(yaml.safe_load(cell["config"].read_text()).get("target", {}).get("corners", (13, 8))))
+    live = [f for f in frames if f["kind"] == "live"]
+    assert len(live) >= 3, f"{len(live)} live frames while the operator rested 1 s before each posture"
+    assert all(f["found"] == [True, True] for f in live), [f["found"] for f in live]
+    assert all([len(side["corners"]) for side in f["sides"]] == [corners] * 2 for f in live)
+    measured = [f for f in frames if f["kind"] == "measured"]
+    assert sorted({f["posture"] for f in measured}) == [0, 1, 2]
+    for frame in measured:
+        assert frame["found"] == [True, True] and [len(side["corners"]) for side in frame["sides"]] == [corners] * 2
 
 
 def test_a_jog_into_a_keep_out_volume_is_stopped_and_the_capture_says_so(cell, capsys):
