@@ -218,7 +218,7 @@ def test_a_jog_into_a_keep_out_volume_is_stopped_and_the_capture_says_so(cell, c
     session = cell["folder"] / "fence"
     operator = PendantOperator(cell["pendant"], np.array([start, into, start]))  # and back out of the margin
     rc, out = _guided(cell, session, operator, capsys)
-    assert rc == 0, out
+    assert rc == 1, out  # one posture on disk: fewer than a calibration needs (issue 42.10)
     assert operator.replies[0].startswith("OK")
     assert operator.replies[1].startswith("ERR jog stopped:") and "'fence'" in operator.replies[1]
     assert operator.replies[2].startswith("OK")  # jogging out of the margin is allowed
