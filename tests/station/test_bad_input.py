@@ -302,10 +302,10 @@ ALIAS_BOMB = "a: &a [1, 2, 3, 4, 5, 6, 7, 8, 9]\n" + "".join(
     f"{c}: &{c} [{', '.join(['*' + p] * 9)}]\n" for p, c in zip("abcdefg", "bcdefgh"))
 
 
-@pytest.mark.parametrize("key, pattern", [
-    ("points_mm", r"posture 1 \(postures/001.yaml\): points_mm must have shape m x 3; got 9 x 9 x 9"),
-    ("index", r"postures/001.yaml: index must be an integer; got \[\[\[\[...\]"),
-    ("joints_deg", r"posture 1 \(postures/001.yaml\): joints_deg must have shape m; got a deeper nesting"),
+@pytest.mark.parametrize("key, pattern", [  # refused by the YAML reader's alias budget (issue 42.8)
+    ("points_mm", r"postures/001.yaml: not read as YAML: aliases expand the document beyond \d+ repeated values"),
+    ("index", r"postures/001.yaml: not read as YAML: aliases expand the document beyond \d+ repeated values"),
+    ("joints_deg", r"postures/001.yaml: not read as YAML: aliases expand the document beyond \d+ repeated values"),
 ])
 def test_a_yaml_alias_bomb_is_refused_without_being_expanded(key, pattern, session, capsys, no_hang):
     file = session / "postures" / "001.yaml"

@@ -193,3 +193,18 @@ def test_guided_over_rws_reads_the_joints_with_no_program_running(tmp_path):
     session = read_session(tmp_path / "g")
     assert [p.index for p in session.postures] == [0, 1, 2, 3]
     assert all(np.allclose(p.joints_deg, q, atol=1e-3) for p, q in zip(session.postures, poses))
+
+
+def test_the_joint_watching_loop_says_rest_somewhere_new_never_press_start(guided_and_planned):
+    """Issue 40.6: the loop that reads the joints captures when the arm rests somewhere new; what it prints
+    says that (and how to stop it), never the guided program's keys."""
+    config, _, _, messages, _, _ = guided_and_planned
+    intro = messages[0]
+    assert intro.startswith("guided capture into ")
+    assert "the simulated operator jogs the arm" in intro  # the embedded mock has no pendant
+    assert f"each time it rests {config.guided.still_s:g} s somewhere new with the board in view, the posture is " \
+           "captured" in intro
+    good = next(m for m in messages if m.startswith("GOOD ENOUGH:"))
+    assert "add more or stop (Ctrl-C)" in good
+    for word in ("Start", "press", "Done", "Capture"):  # the pendant program's words
+        assert not any(word in m for m in messages), word

@@ -386,12 +386,24 @@ def test_an_undecidable_log_is_refused_naming_the_flag(tmp_path, capsys, real_po
     truth = type("T", (), {"tool0": tool0, "target": target})
     source = write_log(tmp_path / "eth.csv", truth, invert_camera=True)
     code, out, err = run_cli(capsys, "import", source, "-o", tmp_path / "s")
-    assert code == 1 and out == "" and err.count("\n") == 1
+    assert code == 1 and err.count("\n") == 1
     assert "the data fit 2 readings equally well" in err
     assert "pass --camera-pose or --setup to decide" in err
     assert not (tmp_path / "s").exists()
+    # issue 40.4f: one line per reading, with the flags that choose it and the camera mount it gives
+    choices = out.splitlines()[1:]
+    assert len(choices) == 2 and all("--camera-pose" in c and "--setup" in c for c in choices), out
+    eih = next(c for c in choices if "--setup eye_in_hand" in c)
+    assert "--camera-pose camera_in_target" in eih and "camera in flange at (" in eih
+    assert "camera in base at (" in next(c for c in choices if "--setup eye_to_hand" in c)
     code, out, err = run_cli(capsys, "import", source, "-o", tmp_path / "s", "--setup", "eye_in_hand")
     assert code == 0 and "camera poses read as camera in target" in out and err == ""
+    from handeye.calibration.session import read_session
+    from handeye.calibration.solve import calibrate_session
+
+    x = calibrate_session(read_session(tmp_path / "s")).x  # the listed mount is the one this reading gives
+    listed = [float(v) for v in eih.split("camera in flange at (")[1].split(")")[0].split(",")]
+    assert np.linalg.norm(np.array(listed) - x[:3, 3]) < 10.0  # the linear fit: a yardstick, within mm
 
 
 @pytest.mark.parametrize("invert_robot, invert_camera", [(False, False), (False, True), (True, True), (True, False)])

@@ -162,3 +162,65 @@ def test_view_host_needs_view_and_a_foreign_address_is_named(tmp_path, capsys):
     assert "--view-host needs --view" in capsys.readouterr().err
     assert loopback("127.0.0.1") and loopback("::1") and loopback("localhost")
     assert not loopback("0.0.0.0") and not loopback("192.168.1.10")
+
+
+def _published(hub, before: int) -> dict:
+    """The next frame the hub publishes after version ``before``."""
+    import json
+
+    deadline = time.monotonic() + 10.0
+    while time.monotonic() < deadline:
+        _, _, _, version, text = hub.wait(hub.state_version, before, 0.2)
+        if version != before:
+            return json.loads(text)
+    raise AssertionError("the hub published no frame")
+
+
+def _scaled(points_px, side: dict, full_width: int) -> np.ndarray:
+    scale = side["size"][0] / full_width
+    return (np.asarray(points_px, float) + 0.5) * scale - 0.5
+
+
+def test_the_board_state_and_corners_shown_are_the_captures_own_detection(planned):
+    """Issue 40.2: for the same frame, the page's "board found" and its corners are what the capture finds:
+    a live frame through the capture's detector (not a quick search on the small copy, which said "no board"
+    while both images showed it), a measured one with the capture's own corners, a grab being measured as
+    "measuring", a frame without the board as "no board" where the capture finds none either."""
+    from dataclasses import replace as copy
+
+    from handeye.drivers.camera.errors import NoBoardInView
+    from handeye.drivers.camera.triangulate import triangulate_images
+
+    config = planned["config"]
+    measured = [e for e in planned["events"] if isinstance(e, Measured) and e.result is not None][:2]
+    hub = ViewHub(config, planned["model"]).start()
+    try:
+        for event in measured:
+            width = event.frame.left.shape[1]
+            before = hub.frame_version
+            hub.offer_live(event.frame)
+            live = _published(hub, before)
+            assert live["kind"] == "live" and live["found"] == [True, True]
+            for side, corners in zip(live["sides"], (event.result.left_px, event.result.right_px)):
+                assert np.max(np.abs(np.asarray(side["corners"]) - _scaled(corners, side, width))) < 0.05
+            before = hub.frame_version
+            hub.observe(event)
+            shown = _published(hub, before)
+            assert shown["kind"] == "measured" and shown["found"] == [True, True]
+            assert np.allclose(shown["sides"][0]["corners"], _scaled(event.result.left_px, shown["sides"][0], width),
+                               atol=0.01)
+            before = hub.frame_version
+            hub.capture_frame(event.frame)
+            grab = _published(hub, before)
+            assert grab["kind"] == "grab" and grab["found"] == [None, None] and grab["sides"][0]["corners"] is None
+        blank = copy(measured[0].frame, left=np.full_like(measured[0].frame.left, 90),
+                     right=np.full_like(measured[0].frame.right, 90))
+        with pytest.raises(NoBoardInView):
+            triangulate_images(blank.left, blank.right, board=f"{config.target.corners[0]}x{config.target.corners[1]}",
+                               square_mm=config.target.square_mm, model=planned["model"])
+        before = hub.frame_version
+        hub.offer_live(blank)
+        empty = _published(hub, before)
+        assert empty["found"] == [False, False] and empty["sides"][0]["corners"] is None
+    finally:
+        hub.close()

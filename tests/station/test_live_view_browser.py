@@ -19,6 +19,7 @@ import urllib.error
 import urllib.request
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 POSTURES = 4
@@ -89,7 +90,8 @@ def watched_capture(tmp_path_factory):
         browser.save_screenshot(str(shot))
         print(f"live view screenshot: {shot}")
         yield {"samples": samples, "session": session, "refused": refused, "shot": shot,
-               "output": "".join(lines) + process.stdout.read(), "rc": process.returncode, "final": _page(browser)}
+               "output": "".join(lines) + process.stdout.read(), "rc": process.returncode, "final": _page(browser),
+               "drawn": browser.execute_script("return (window.viewLog.drawn || []).slice();")}
     finally:
         if process.poll() is None:
             process.kill()
@@ -127,6 +129,56 @@ def test_the_image_and_the_hint_change_with_each_capture(watched_capture):
         written = next(t for t, disk, _ in samples if disk > index) * 1000.0
         assert any(posture == index and abs(t - written) < 1000.0 for t, posture, _, _ in frames), f"no image of posture {index}"
     assert any(live for _, _, live, _ in frames), "no live frame while the operator jogged"
+
+
+def _captures_detection(session: Path, index: int):
+    """Where the capture measured the corners of posture ``index`` in its left and right images (full-size px):
+    the points it triangulated from its own detection in that frame, written to the posture file, projected
+    back through the stereo model (within the rows' disagreement, < 0.1 px, of the corners it detected)."""
+    import cv2
+
+    from handeye.calibration.session import read_session
+    from handeye.station.config import default_config
+    from handeye.station.runtime import open_station
+
+    with open_station(default_config().as_mock(), session_dir=None) as link:
+        model = link.stereo_model
+    points = np.asarray(read_session(session).postures[index].points_mm, float)
+    left, _ = cv2.projectPoints(points, np.zeros(3), np.zeros(3), model.K1, model.D1)
+    rvec, _ = cv2.Rodrigues(np.asarray(model.R, float))
+    right, _ = cv2.projectPoints(points, rvec, np.asarray(model.T, float).ravel(), model.K2, model.D2)
+    return int(model.image_size[0]), left.reshape(-1, 2), right.reshape(-1, 2)
+
+
+def _on_page(corners_px, full_width: int, record: dict) -> np.ndarray:
+    """Full-size image corners in the page image's pixels."""
+    scale = record["size"][0] / full_width
+    return (np.asarray(corners_px, float) + 0.5) * scale - 0.5
+
+
+def test_the_corners_and_the_board_state_shown_are_the_captures_detection(watched_capture):
+    """Issue 40.2: what the page drew over each image (read back from the page) against the capture's own
+    detection of the same frame: every posture's frame says "board found" on both sides with the capture's
+    corners; the last live frame before it, the arm at the same rest, says so too with the same corners (the
+    page said "no board left, no board right" there while both images showed the whole board); once a running
+    calibration exists, its red crosses are drawn."""
+    drawn, session = watched_capture["drawn"], watched_capture["session"]
+    for index in range(POSTURES):
+        width, left_px, right_px = _captures_detection(session, index)
+        own = [r for r in drawn if r["kind"] == "measured" and r["posture"] == index]
+        assert own, f"posture {index}'s measured frame was never drawn"
+        for record in own:
+            assert record["info"].startswith(f"posture {index}: board found left, found right"), record["info"]
+            assert np.max(np.abs(np.asarray(record["left"]) - _on_page(left_px, width, record))) < 0.1
+            assert np.max(np.abs(np.asarray(record["right"]) - _on_page(right_px, width, record))) < 0.1
+        first = drawn.index(next(r for r in drawn if r["posture"] == index))
+        before = [r for r in drawn[:first] if r["kind"] == "live"]
+        assert before, f"no live frame drawn before posture {index}"
+        rest = before[-1]  # the arm rested there for guided.still_s before the capture grabbed
+        assert rest["info"] == "live: board found left, found right", rest["info"]
+        assert len(rest["left"]) == len(left_px) and len(rest["right"]) == len(right_px)
+        assert np.max(np.abs(np.asarray(rest["left"]) - _on_page(left_px, width, rest))) < 1.0
+    assert any(r["predicted"] > 0 for r in drawn if r["kind"] == "measured" and r["posture"] == POSTURES - 1)
 
 
 def _mock_grab_s() -> float:

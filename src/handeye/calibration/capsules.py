@@ -16,9 +16,11 @@ _TINY = 1e-12
 def point_segment_distance(p, a, b) -> np.ndarray:
     """Distance of points ``p`` from segments ``a b``, all ``(..., 3)`` broadcast together; ``(...)``."""
     p, a, b = (np.asarray(x, float) for x in (p, a, b))
-    d = b - a
-    t = np.clip(np.sum((p - a) * d, axis=-1) / np.maximum(np.sum(d * d, axis=-1), _TINY), 0.0, 1.0)
-    return np.linalg.norm(p - (a + t[..., None] * d), axis=-1)
+    d, offset = b - a, p - a
+    # dot products of the last axis by einsum: far quicker than sum over an axis of 3 on large batches
+    t = np.clip(np.einsum("...i,...i->...", offset, d) / np.maximum(np.einsum("...i,...i->...", d, d), _TINY), 0.0, 1.0)
+    away = offset - t[..., None] * d
+    return np.sqrt(np.einsum("...i,...i->...", away, away))
 
 
 def segment_distance(p0, p1, q0, q1) -> np.ndarray:

@@ -25,7 +25,7 @@ the poses' own unit.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -233,6 +233,10 @@ class InvariantFit:
         Pairs with a usable rotation.
     x, g : ndarray, shape (4, 4)
         The fitted ``X`` and ``G = mean H_i X B_i`` (a yardstick: not a calibration).
+    pair_misfits : ndarray, shape (pairs, 3)
+        Per usable pair: angle gap (deg), axis residual (deg), translation residual (the poses' unit).
+    misfit_pairs : ndarray of int, shape (pairs, 2)
+        The posture pairs of ``pair_misfits`` (for :func:`posture_medians`).
     """
 
     angle_gap_deg: float
@@ -243,6 +247,8 @@ class InvariantFit:
     pairs: int
     x: np.ndarray
     g: np.ndarray
+    pair_misfits: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    misfit_pairs: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=int))
 
     @property
     def translation_ratio(self) -> float:
@@ -290,15 +296,17 @@ def fit_hand_eye(hand, target2cam, pairs=None, min_motion_deg: float = MIN_MOTIO
     rel_a, rel_b = relative_transforms(h, b, pairs)
     va, vb = _rotvecs(rel_a), _rotvecs(rel_b)
     na, nb = np.linalg.norm(va, axis=1), np.linalg.norm(vb, axis=1)
-    gap = float(np.median(np.degrees(np.abs(na - nb))))
+    pair_gaps = np.degrees(np.abs(na - nb))
+    gap = float(np.median(pair_gaps))
     lo, hi = np.radians(min_motion_deg), np.radians(180.0 - min_motion_deg)
     ok = (na > lo) & (na < hi) & (nb > lo) & (nb < hi)
     if ok.sum() < 2:
         return _nan_fit(gap)
-    rel_a, rel_b, va, vb = rel_a[ok], rel_b[ok], va[ok], vb[ok]
+    rel_a, rel_b, va, vb, pair_gaps = rel_a[ok], rel_b[ok], va[ok], vb[ok], pair_gaps[ok]
     rx = _align(va, vb)
     axis_res = Rotation.from_matrix(np.einsum("mji,mjk->mik", rel_a[:, :3, :3] @ rx, rx @ rel_b[:, :3, :3]))
-    axis_deg = float(np.median(np.degrees(axis_res.magnitude())))
+    pair_axis = np.degrees(axis_res.magnitude())
+    axis_deg = float(np.median(pair_axis))
     lhs = (rel_a[:, :3, :3] - np.eye(3)).reshape(-1, 3)
     rhs = (rel_b[:, :3, 3] @ rx.T - rel_a[:, :3, 3]).reshape(-1)
     tx = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
@@ -315,13 +323,16 @@ def fit_hand_eye(hand, target2cam, pairs=None, min_motion_deg: float = MIN_MOTIO
     u, _, vt = np.linalg.svd(np.sum(fixed[:, :3, :3], axis=0))
     g[:3, :3] = u @ np.diag([1.0, 1.0, np.sign(np.linalg.det(u @ vt))]) @ vt
     g[:3, 3] = np.median(fixed[:, :3, 3], axis=0)
+    pair_translation = np.linalg.norm(residual, axis=1)
     return InvariantFit(
         angle_gap_deg=gap,
         axis_deg=axis_deg,
-        translation=float(np.median(np.linalg.norm(residual, axis=1))),
+        translation=float(np.median(pair_translation)),
         motion=float(np.median(np.linalg.norm(rel_a[:, :3, 3], axis=1))),
         pitch_scale=scale,
         pairs=int(ok.sum()),
         x=x,
         g=g,
+        pair_misfits=np.stack([pair_gaps, pair_axis, pair_translation], axis=1),
+        misfit_pairs=pairs[ok],
     )

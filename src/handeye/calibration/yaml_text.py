@@ -22,7 +22,7 @@ import yaml
 
 from .errors import SessionError
 
-__all__ = ["parse_yaml", "DuplicateKeyError"]
+__all__ = ["parse_yaml", "DuplicateKeyError", "AliasBombError", "ALIAS_EXPANSION_BUDGET", "expanded_size"]
 
 #: PyYAML's safe loader on libyaml when it is built in: many times faster, linear in the nesting depth
 #: and limited to 1000 levels (the pure-Python scanner is quadratic in the depth of ``[[[[...``).
@@ -40,8 +40,56 @@ class DuplicateKeyError(yaml.YAMLError):
         self.key, self.first_line, self.second_line = key, first_line, second_line
 
 
+#: Aliases may repeat at most this many values beyond those written (an alias bomb of 400 bytes
+#: expands to billions: refused from the composed node graph, before anything is built from it).
+ALIAS_EXPANSION_BUDGET = 100_000
+
+
+class AliasBombError(yaml.YAMLError):
+    """Aliases expand the document beyond :data:`ALIAS_EXPANSION_BUDGET` values."""
+
+
+def expanded_size(node, limit: int) -> tuple[int, int]:
+    """``(values the document holds once every alias is expanded, capped just past limit; distinct
+    nodes visited)``: each distinct node is counted once (memoised), so the cost is that of the text.
+
+    Parameters
+    ----------
+    node : yaml.Node
+    limit : int
+        Counting stops once the expanded size exceeds it.
+    """
+    sizes: dict = {}
+    stack = [(node, False)]
+    while stack:
+        current, done = stack.pop()
+        key = id(current)
+        if key in sizes and not done:
+            continue
+        children = []
+        if isinstance(current, yaml.MappingNode):
+            children = [n for pair in current.value for n in pair]
+        elif isinstance(current, yaml.SequenceNode):
+            children = list(current.value)
+        if not done:
+            sizes[key] = None  # in progress (YAML aliases cannot form cycles through the safe composer)
+            stack.append((current, True))
+            stack.extend((c, False) for c in children if id(c) not in sizes)
+            continue
+        sizes[key] = min(limit + 1, 1 + sum(sizes.get(id(c)) or 0 for c in children))
+    return sizes[id(node)] or 0, len(sizes)
+
+
 class _StrictLoader(_BASE_LOADER):
-    """The safe loader that refuses duplicated keys and reads ``1e30`` as a float."""
+    """The safe loader that refuses duplicated keys and alias bombs, and reads ``1e30`` as a float."""
+
+    def get_single_node(self):
+        node = super().get_single_node()
+        if node is not None:
+            size, distinct = expanded_size(node, 10**12)
+            if size > distinct + ALIAS_EXPANSION_BUDGET:
+                raise AliasBombError(f"aliases expand the document beyond {ALIAS_EXPANSION_BUDGET} repeated values")
+        return node
 
     def construct_mapping(self, node, deep=False):
         if isinstance(node, yaml.MappingNode):
@@ -94,6 +142,8 @@ def parse_yaml(text: str, source, error=SessionError, hint: str = ""):
         return yaml.load(text, Loader=_StrictLoader)
     except DuplicateKeyError as exc:
         raise error(_duplicate_message(text, source, exc)) from None
+    except AliasBombError as exc:
+        raise error(f"{source}: not read as YAML: {exc} (an alias bomb?); write the values out{hint}") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" (line {mark.line + 1})" if mark is not None else ""

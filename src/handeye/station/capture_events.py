@@ -14,6 +14,8 @@ by the capture afterwards.
   (``problem``).
 - :class:`Verdict`: what became of a posture or a rest: ``captured``, ``skipped`` (quality),
   ``not captured`` (guided: the board not measured), ``too close`` (guided: near a captured posture).
+- :class:`CaptureEnded`: the run is over, with what the command said last (``capture`` tells the
+  live view: ``LiveView.finish``); a view closed without it says the capture stopped.
 
 Posture numbers are the files' (``postures/NNN.yaml`` -> NNN), as everywhere the operator reads them.
 """
@@ -24,7 +26,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["CAPTURED", "NOT_CAPTURED", "SKIPPED", "TOO_CLOSE", "CaptureStarted", "Measured", "Prompt", "Verdict"]
+__all__ = ["CAPTURED", "NOT_CAPTURED", "SKIPPED", "TOO_CLOSE", "CaptureEnded", "CaptureStarted", "Measured", "Prompt",
+           "Verdict"]
 
 #: The words of :attr:`Verdict.word`.
 CAPTURED, SKIPPED, NOT_CAPTURED, TOO_CLOSE = "captured", "skipped", "not captured", "too close"
@@ -123,3 +126,19 @@ class Verdict:
     quality: dict = field(default_factory=dict)
     tool02base: np.ndarray | None = None
     points_mm: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class CaptureEnded:
+    """The run is over: nothing follows.
+
+    Attributes
+    ----------
+    text : str
+        What the command said last (how many postures, what to do next).
+    ok : bool
+        False when the run ended without what a calibration needs (or was stopped).
+    """
+
+    text: str
+    ok: bool = True

@@ -86,8 +86,12 @@ class Missing:
     target: str
     advice: str
 
+    def shortfall(self) -> str:
+        """The word, its value and its target, without the advice (``postures 12 (needs >= 15)``)."""
+        return f"{self.word} {self.now} (needs {self.target})"
+
     def line(self) -> str:
-        return f"{self.word} {self.now} (needs {self.target}): {self.advice}"
+        return f"{self.shortfall()}: {self.advice}"
 
 
 def postures_needed(thresholds: QualityThresholds) -> int:
@@ -229,16 +233,16 @@ class GuidedSummary:
         return not self.missing
 
 
-def _open_guided(config: StationConfig, session_dir: Path, progress, link: StationLink | None = None) -> Session:
+def _open_guided(config: StationConfig, session_dir: Path, progress, how: str, link: StationLink | None = None) -> Session:
     """The guided session: created, or read back (refused when planned, or from the other station:
-    :func:`~handeye.station.station_kind.station_kind` of ``config`` and ``link``)."""
+    :func:`~handeye.station.station_kind.station_kind` of ``config`` and ``link``); ``how``: the running
+    loop's words for how a posture is captured, said in both cases."""
     station = station_kind(config, link)
     if not (session_dir / "session.yaml").exists():
         session = Session(setup="eye_in_hand", robot=config.robot, target=config.target, extra={"capture": {
             "station": station, "mode": "guided", "skipped": {}, "config": config.to_dict()}})
         create_session(session_dir, session)
-        progress(f"guided capture into {session_dir}: jog the robot with the pendant; each time it rests "
-                 f"{config.guided.still_s:g} s somewhere new with the board in view, the posture is captured")
+        progress(f"guided capture into {session_dir}: {how}")
         return session
     session = read_session(session_dir)
     record = session.extra.get("capture")
@@ -250,7 +254,7 @@ def _open_guided(config: StationConfig, session_dir: Path, progress, link: Stati
         raise CaptureError(f"{session_dir} was captured on the {_STATION_NAMES[recorded]}; resume it on the same station "
                            "or start a new session folder")
     remove_stale_temporaries(session_dir)
-    progress(f"resuming the guided capture {session_dir}: {len(session.postures)} postures on disk")
+    progress(f"resuming the guided capture {session_dir}: {len(session.postures)} postures on disk; {how}")
     return session
 
 
@@ -265,7 +269,7 @@ class _GuidedRun:
         self.robot = load_robot(config.robot)
         self.thresholds = config_thresholds(config)
         self.view = stereo_views(link.stereo_model)[0]
-        self.session = _open_guided(config, session_dir, progress, link)
+        self.session = _open_guided(config, session_dir, progress, self.how_to_capture(), link)
         self.state = _Captured()
         for posture in self.session.postures:
             self.state.add(posture.index, posture.tool0_in_base, posture.points_mm, self.view)
@@ -274,6 +278,16 @@ class _GuidedRun:
         self.guard = cell_check(config).guard(self.robot)  # the configured volumes (the stand needs a board pose)
         self.observer(CaptureStarted("guided", str(session_dir), list(self.session.postures),
                                      dict(self.session.extra["capture"].get("skipped", {}))))
+
+    def how_to_capture(self) -> str:
+        """What the operator does for a posture to be captured, in this loop (the PC watches the joints)."""
+        who = "the simulated operator jogs the arm" if self.link.is_mock else "jog the robot with the pendant"
+        return (f"{who}; each time it rests {self.config.guided.still_s:g} s somewhere new with the board in view, "
+                "the posture is captured")
+
+    def how_to_stop(self) -> str:
+        """How the operator ends the run in this loop."""
+        return "add more or stop (Ctrl-C)"
 
     def missing(self) -> list:
         s = self.state
@@ -284,9 +298,8 @@ class _GuidedRun:
         missing = self.missing()
         if not missing:
             self.progress(f"GOOD ENOUGH: {len(self.state.tool02base)} postures meet the verdict's thresholds and the "
-                          "guided targets; add more or stop (Ctrl-C), then: handeye calibrate "
-                          f"{self.session_dir} --report")
-            self.observer(Prompt("jog", "GOOD ENOUGH: add more or stop"))
+                          f"guided targets; {self.how_to_stop()}, then: handeye calibrate {self.session_dir} --report")
+            self.observer(Prompt("jog", f"GOOD ENOUGH: {self.how_to_stop()}"))
             return
         self.progress("missing: " + "; ".join(m.line() for m in missing))
         self.observer(Prompt("jog", missing[0].advice))

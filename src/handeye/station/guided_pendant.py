@@ -72,6 +72,14 @@ def install_guided_program(config: StationConfig, session_dir: Path, link: Stati
 class _PendantRun(_GuidedRun):
     """The guided loop's state with the program's dialogue (see the module docstring)."""
 
+    def how_to_capture(self) -> str:
+        """What the operator does for a posture to be captured: the guided program's keys and Start."""
+        return ("on the pendant press Capture, jog the robot to a new posture with the board in view and press Start: "
+                "the posture where it stands is captured, or refused with the reason; Done ends the capture")
+
+    def how_to_stop(self) -> str:
+        return "add more (Capture on the pendant) or press Done"
+
     def offered(self, k: int) -> str:
         """Judge the k-th posture the operator offered; the verdict's name (``rapid.guided.VERDICTS``)."""
         g, index = self.config.guided, self.state.next_index
@@ -158,8 +166,6 @@ def pendant_guided_capture(
     if status.awaiting_ack:  # a PC that stopped while the program offered a posture: judge it now
         verdict = _judge(run, status.posture)
     asking = status.state in ("PROMPT", "JOG")  # the pendant asks already (Modbus: a PC stopped meanwhile)
-    progress("on the pendant: Capture, jog the robot to a new posture with the board in view, press Start; "
-             "Done ends the capture")
     while not stop.is_set() and len(run.state.tool02base) < config.guided.max_postures:
         if not asking:
             run.prompt(verdict)

@@ -35,7 +35,8 @@ keep-out volume), and the pendant says what to do next, then GOOD ENOUGH; Done e
 Robot Web Services no program is needed: the PC reads the joints and captures each time the arm
 rests (guided.still_s) somewhere new. Either way the command says what is still missing (postures,
 rotation-axis spread and which way to turn next, relative rotation angles, distance spread, where
-in the image the board has not been); stop with Ctrl-C, the same command resumes. With --mock
+in the image the board has not been); stop with Ctrl-C, the same command resumes. A run that ends
+with fewer than 3 postures on disk (what a calibration needs) exits 1 and says what to do. With --mock
 nobody holds a pendant: a simulated operator jogs the embedded arm (joints read, as over RWS)
 through --postures N postures around the board (lines "MOCK operator (simulated): ..."), then ends
 the run. A rehearsal (camera.mock_arm) is played through the standalone mock's --pendant-port.
@@ -47,8 +48,9 @@ the run. A rehearsal (camera.mock_arm) is played through the standalone mock's -
 the robot moves, the board position in the 3x3 image grid, the rotation axes on a sphere with the
 next turn as an arrow, the distance spread, the posture list with each posture's quality or why it
 was skipped, what is still missing, the progress, GOOD ENOUGH, and for a planned capture the plan
-with the current posture and the time left. --view-host ADDRESS binds elsewhere (another machine
-may then watch; warned). The page loads nothing from the internet.
+with the current posture and the time left; when the run is over, FINISHED (or STOPPED) with the
+last lines printed here. --view-host ADDRESS (IPv4 or IPv6, e.g. ::1) binds elsewhere (another
+machine may then watch; warned). The page loads nothing from the internet.
 
 Each posture is named by the number of its file (postures/NNN.yaml -> NNN, from 0) in these lines,
 the preview, the RAPID program's comments (the controller's jtHePost<k> is posture k - 1) and by
@@ -208,22 +210,49 @@ def run(args) -> int:
 
         summary = capture(config, args.session, link, progress=say, on_posture=on_posture, plan_only=args.plan_only,
                           confirm=_confirmation(args), observer=None if view is None else view.observer)
-    if args.plan_only:
-        say((f"next: look at {summary.preview}, then " if summary.preview is not None else "next: ")
-            + "the same command without --plan-only")
-        return 0
-    have = len(summary.captured) + len(summary.already)
-    say(f"{have} of {summary.planned} postures in {summary.session} ({len(summary.captured)} this run, "
-        f"{summary.duration_s:.0f} s)")
-    if summary.skipped:
-        say(f"skipped: {', '.join(map(str, summary.skipped))}: run capture again to retry them")
-    say(f"next: handeye calibrate {summary.session} --report")
+        if args.plan_only:
+            say((f"next: look at {summary.preview}, then " if summary.preview is not None else "next: ")
+                + "the same command without --plan-only")
+            return 0
+        have = len(summary.captured) + len(summary.already)
+        lines = [f"{have} of {summary.planned} postures in {summary.session} ({len(summary.captured)} this run, "
+                 f"{summary.duration_s:.0f} s)"]
+        if summary.skipped:
+            lines.append(f"skipped: {', '.join(map(str, summary.skipped))}: run capture again to retry them")
+        lines.append(f"next: handeye calibrate {summary.session} --report")
+        _end(lines, say, view, ok=summary.complete or have >= 3)
     return 0 if summary.complete or have >= 3 else 1
+
+
+def _end(lines: list, say, view, error: str | None = None, ok: bool | None = None) -> None:
+    """Say the run's last lines, and show them on the live view (when open) in place of the next step, with
+    ``error`` (the command's error line, said by the caller) and ``ok`` (default: no error)."""
+    for line in lines:
+        say(line)
+    if view is not None:
+        view.finish("; ".join(lines + ([error] if error else [])), error is None if ok is None else ok)
+
+
+def _guided_ending(session, captured: int, already: int, what: str) -> tuple[list, str | None]:
+    """The last lines of a guided run (``what``: what was captured and what is missing), and the error when
+    the session holds fewer postures than a calibration needs (None: enough)."""
+    from ...calibration.problem import MIN_POSTURES
+
+    total = captured + already
+    if total == 0:
+        return [what], (f"nothing was captured into {session}: no posture on disk (a calibration needs "
+                        f"{MIN_POSTURES}); show the camera the whole board, about 0.9 m away, and run the same "
+                        "command again")
+    if total < MIN_POSTURES:
+        return [what], (f"{total} posture{'s' if total != 1 else ''} on disk in {session}: a calibration needs "
+                        f"{MIN_POSTURES}; run the same command to add more")
+    return [what, f"next: handeye calibrate {session} --report"], None
 
 
 def _run_guided(config, args, say) -> int:
     import threading
 
+    from ...calibration.errors import HandEyeError
     from ..guided import guided_capture
     from ..guided_pendant import pendant_guided_capture, uses_guided_program
     from ..mock_operator import mock_operator
@@ -245,10 +274,24 @@ def _run_guided(config, args, say) -> int:
             else:
                 summary = guided_capture(config, args.session, link, progress=say, on_posture=on_posture, stop=stop,
                                          observer=observer)
+            lines, error = _guided_ending(summary.session, len(summary.captured), summary.already,
+                                          f"{len(summary.captured)} postures captured this run ({summary.already} "
+                                          "before); " + ("good enough" if summary.good_enough else "still missing: "
+                                                         + "; ".join(m.line() for m in summary.missing)))
         except KeyboardInterrupt:
-            say(f"stopped; the postures on disk stay in {args.session}: run the same command to add more")
-            return 0
-    say(f"{len(summary.captured)} postures captured this run ({summary.already} before); "
-        + ("good enough" if summary.good_enough else "still missing: " + "; ".join(m.line() for m in summary.missing)))
-    say(f"next: handeye calibrate {summary.session} --report")
+            lines, error = _guided_ending(args.session, _postures_on_disk(args.session), 0,
+                                          f"stopped; the postures on disk stay in {args.session}: run the same "
+                                          "command to add more")
+        _end(lines, say, view, error)
+    if error is not None:
+        raise HandEyeError(error)
     return 0
+
+
+def _postures_on_disk(session) -> int:
+    """How many postures the session folder holds (0 when it holds no session)."""
+    from pathlib import Path
+
+    from ...calibration.session import read_session
+
+    return len(read_session(session).postures) if (Path(session) / "session.yaml").is_file() else 0

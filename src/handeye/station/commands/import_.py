@@ -123,6 +123,7 @@ def add_parser(sub):
 
 def run(args) -> int:
     from ..import_session import ImportOptions, import_summary, import_to_session
+    from ..importers.ambiguity import AmbiguousReading
 
     options = ImportOptions(
         sources=tuple(args.sources), output=args.output, format=args.format, setup=args.setup, units=args.units,
@@ -136,7 +137,12 @@ def run(args) -> int:
             "tag_mm": args.tag_mm, "robot_rows": args.robot_rows,
         },
     )
-    outcome = import_to_session(options)
+    try:
+        outcome = import_to_session(options)
+    except AmbiguousReading as exc:  # what each reading would give, so that the user can recognise theirs
+        print("the readings the data cannot tell apart, with the flags that choose each and the camera mount it gives:")
+        print("\n".join(f"  {line}" for line in exc.choices))
+        raise
     for message in outcome.warnings:
         print(f"handeye import: warning: {message}", file=sys.stderr)
     print("\n".join(import_summary(outcome)))

@@ -26,6 +26,7 @@ from ...calibration.problem import SETUPS
 from ...calibration.session import MAX_LENGTH_MM, MAX_LENGTH_WORDS, MAX_POSTURE_INDEX, Posture, Session
 from ...calibration.transforms import rigid_defect
 from .head import check_log_head, read_head
+from .ambiguity import AmbiguousReading
 from .inference import METRES_BELOW, Constraints, Side, SideReading, infer
 
 __all__ = [
@@ -336,6 +337,8 @@ def _inferred_postures(where, robot_side, camera_side, constraints, labels) -> t
     it gives, each with its ``source`` label (lengths checked against the session format's limits)."""
     try:
         inference = infer(robot_side, camera_side, constraints)
+    except AmbiguousReading as exc:  # keeps what each reading would give
+        raise AmbiguousReading(f"{where}: {exc}", exc.choices) from None
     except SessionError as exc:
         raise SessionError(f"{where}: {exc}") from None
     robot_mm, camera_mm = inference.robot_mm, inference.camera_mm
@@ -453,8 +456,19 @@ def read_text(path) -> str:
 
 def parse_json(text: str, path):
     """``json.loads(text)``, or a one-line :class:`SessionError` naming the file (and line)."""
+    keys = [0]
+
+    def counted(pairs: list) -> dict:  # the bound is met while parsing, before a huge tree is built
+        keys[0] += len(pairs)
+        if keys[0] > MAX_JSON_KEYS:
+            raise _TooManyJsonKeys()
+        return _object_without_duplicates(pairs)
+
     try:
-        return json.loads(text, object_pairs_hook=_object_without_duplicates)
+        return json.loads(text, object_pairs_hook=counted)
+    except _TooManyJsonKeys:
+        raise SessionError(f"{path}: over {MAX_JSON_KEYS} keys: not a hand-eye log (a log of 10000 postures "
+                           f"holds a few tens of thousands); give the log itself") from None
     except _DuplicateJsonKey as exc:
         parse_yaml(text, path)  # JSON is YAML: its reader names both lines of the duplicated key
         raise SessionError(f"{path}: the key '{exc.args[0]}' is written twice in one object; JSON readers "
@@ -465,6 +479,14 @@ def parse_json(text: str, path):
         raise SessionError(f"{path}: nested too deeply to be read as JSON") from None
     except ValueError as exc:  # an integer of more than 4300 digits
         raise SessionError(f"{path}: not valid JSON: a value cannot be read ({str(exc)[:100]})") from None
+
+
+#: A hand-eye log holds a few keys per posture; a JSON with more keys than this is refused while parsing.
+MAX_JSON_KEYS = 200_000
+
+
+class _TooManyJsonKeys(ValueError):
+    """The JSON holds more than :data:`MAX_JSON_KEYS` keys."""
 
 
 class _DuplicateJsonKey(ValueError):

@@ -10,7 +10,9 @@ these rules, in order:
 
 1. **Flags win.** ``--euler``, ``--quaternion-order``, ``--robot-pose``, ``--camera-pose``,
    ``--setup`` and ``--units`` keep only the readings they allow; when the data contradict a flag
-   the import says so with the numbers (a warning) and still reads as told.
+   the import says so with the numbers (a warning) and still reads as told. When no reading fits
+   at all (misfits beyond the noise of any real log), flags are obeyed only if they leave one
+   reading; otherwise the import is refused with the misfit (the data cannot choose).
 2. **Invariants.** The rotation conventions are screened first by what neither ``X``, the set-up
    nor an inversion changes (``readings.screen``): the median gap between the rotation angles of
    the robot's and the camera's relative motions, and between their screw pitches. The pairs of
@@ -19,7 +21,9 @@ these rules, in order:
    rotation axis onto the robot's (axis misfit) and one translation fits (translation misfit, as a
    fraction of the motion), each within three times the best reading's value (the noise of the
    data) or under a floor (1 deg, 2 deg, 8 %), and its robot turns enough to be tested (half the
-   testable pairs of the best-turning reading). Readings that give the same session (same set-up,
+   testable pairs of the best-turning reading); and, when the best fits under the floors, its
+   misfits do not exceed the best one's posture by posture beyond the data's noise (a paired test,
+   ``noise_test``): under the floors is not yet "equally well". Readings that give the same session (same set-up,
    the same poses within the noise) count as one outcome.
 3. **Plausibility**, only where physics leaves a genuine ambiguity. Inverting both pose sets, or
    one pose set together with the set-up, fits the invariants exactly as well: what changes is
@@ -48,9 +52,13 @@ import numpy as np
 
 from ...calibration.errors import SessionError
 from ...calibration.problem import SETUPS
+from .ambiguity import AmbiguousReading, choice_lines
 from .inference_table import format_table, inference_record, reading_words, table_rows
 from .readings import (
+    AXIS_MAX_DEG,
     CAMERA_POSES,
+    GAP_MAX_DEG,
+    TRANSLATION_MAX,
     METRES_BELOW,
     ROBOT_POSES,
     SCALE,
@@ -191,6 +199,8 @@ def _choose(robot: Side, camera: Side, c: Constraints, readings: list, warnings_
             f"no reading of the poses fits a rigid camera mount (best: {reading_words(robot, camera, best)}: "
             f"{scores_words(best)}); check that robot and camera poses are paired posture by posture, or give "
             f"the conventions (--euler, --quaternion-order, --robot-pose, --camera-pose, --setup)")
+    if not any(r.consistent for r in readings):
+        _refuse_unless_pinned(robot, camera, c, readings)
     free, free_how = _decide(robot, camera, c, readings)
     allowed = [r for r in readings if _allowed(robot, camera, c, r)]
     pool, how = _decide(robot, camera, c, allowed)
@@ -206,21 +216,45 @@ def _choose(robot: Side, camera: Side, c: Constraints, readings: list, warnings_
         return chosen, "flags", pool
     if how in ("undecided", "implausible"):
         outcomes_left = sorted({r.outcome for r in pool})
-        options = [reading_words(robot, camera, min((r for r in pool if r.outcome == k), key=badness))
-                   for k in outcomes_left[:3]]
+        best_of = sorted((min((r for r in pool if r.outcome == k), key=badness) for k in outcomes_left), key=badness)
+        options = [reading_words(robot, camera, r) for r in best_of[:3]]
         fit = "equally well" if how == "undecided" else "(none of them plausibly)"
         if len(robot.readings[0].poses) < 3:
             raise SessionError(f"only {len(robot.readings[0].poses)} posture(s): at least 3 are needed to tell the pose "
                                f"conventions from the data (and to calibrate)")
-        raise SessionError(
+        names = _flag_names(pool, robot, camera) or ["--setup"]
+        raise AmbiguousReading(
             f"the data fit {len(outcomes_left)} readings {fit} ({'; or '.join(options)}); "
-            f"pass {' or '.join(_flag_names(pool, robot, camera)) or '--setup'} to decide")
+            f"pass {' or '.join(names)} to decide", choice_lines(robot, camera, best_of, names))
     chosen = min(pool, key=lambda r: (not _declared_match(robot, camera, c, r), badness(r)))
     if flags_given and other is not None and free[0].outcome != chosen.outcome:
         warnings_.append(
             f"{_flags_text(robot, camera, c)}: the data point to another reading ({reading_words(robot, camera, other)}"
             f": {other.why or 'fits and is plausible'}; the reading given: {chosen.why or 'fits too'}); read as given")
     return chosen, ("flags" if flags_given and not free_decided else how), pool
+
+
+def _refuse_unless_pinned(robot: Side, camera: Side, c: Constraints, readings: list) -> None:
+    """Nothing fits a rigid mount, and flags were given: refuse unless they leave one reading (read as
+    told, with a warning); the data cannot choose among the rest (issue 40.4g: never pick silently).
+
+    Raises
+    ------
+    SessionError
+        Naming the best misfit and the flags that would pin the reading down.
+    """
+    allowed = [r for r in readings if _allowed(robot, camera, c, r)]
+    if len({(r.robot, r.camera, r.robot_pose, r.camera_pose, r.setup) for r in allowed}) <= 1:
+        return
+    best = min(allowed, key=badness)
+    left = [flag for flag, value in (("--setup", c.setup), ("--robot-pose", c.robot_pose),
+                                     ("--camera-pose", c.camera_pose)) if value is None]
+    raise SessionError(
+        f"no reading of the poses fits a rigid camera mount, with the flags given or without (best the flags allow: "
+        f"{reading_words(robot, camera, best)}: {scores_words(best)}; real logs misfit by under {GAP_MAX_DEG:g} deg, "
+        f"{AXIS_MAX_DEG:g} deg, {100 * TRANSLATION_MAX:.0f} %), so the data cannot choose among the readings the "
+        f"flags leave: check that robot and camera poses are paired posture by posture"
+        + (f", or give {', '.join(left)} too to read it exactly as told" if left else ""))
 
 
 def _decide(robot: Side, camera: Side, c: Constraints, pool: list) -> tuple[list, str]:

@@ -37,6 +37,7 @@ from ...calibration.compact_points import BoardGeometry
 from ...calibration.errors import SessionError, brief
 from ...calibration.problem import SETUPS
 from ...calibration.session import MAX_CORNERS, MAX_LENGTH_MM, Session
+from .head import check_log_head, read_head
 from .common import (
     QUATERNION_ORDERS,
     quaternion_side,
@@ -99,6 +100,30 @@ def _csv_columns(names: list, quaternion_order: str | None, where: str) -> dict:
     return columns
 
 
+#: A plain CSV row (header or posture) is far shorter than this; a longer line is not a table row.
+MAX_LINE_BYTES = 64 * 1024
+
+
+def _check_header_from_head(path) -> None:
+    """Refuse, from the file's first :data:`MAX_LINE_BYTES` only, a file whose first row is longer than
+    a row can be or holds no column name (issue 42.8: a 60 MB single line took 14 s and 2 GB to refuse)."""
+    head = read_head(path, MAX_LINE_BYTES)
+    check_log_head(path, head, MAX_LINE_BYTES)
+    number = 0
+    for number, raw in enumerate(head.split(b"\n"), start=1):
+        line = raw.decode("utf-8", errors="replace")
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        if len(head) >= MAX_LINE_BYTES and number == len(head.split(b"\n")):
+            raise SessionError(f"{path}: line {number} is longer than {MAX_LINE_BYTES // 1024} KB: not a row of a "
+                               f"table; give the plain CSV (a header row, then one row per posture)")
+        names = line.replace(";", ",").replace("\t", ",").split(",")
+        if all(_number(n.strip()) is not None for n in names):
+            raise SessionError(f"{path}: line {number}: expected a header row naming the columns, e.g. "
+                               f"{','.join(CSV_COLUMNS)}")
+        return
+
+
 def read_plain_csv(path, *, setup=None, units=None, board=None, skip_invalid: bool = False,
                    quaternion_order: str | None = None, robot_pose=None, camera_pose=None) -> Session:
     """Read the plain CSV layout (module docstring) into a session (mm).
@@ -110,6 +135,7 @@ def read_plain_csv(path, *, setup=None, units=None, board=None, skip_invalid: bo
     """
     if quaternion_order is not None:
         check_quaternion_order(quaternion_order)
+    _check_header_from_head(path)
     text = read_text(path)
     lines = [(k, ln) for k, ln in enumerate(text.splitlines(), start=1) if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:

@@ -39,6 +39,12 @@ class LiveView:
     def observer(self):
         return self.hub.observe
 
+    def finish(self, text: str, ok: bool = True) -> None:
+        """The run is over: the page says ``text`` (what the command said last) in place of the next step."""
+        from ..capture_events import CaptureEnded
+
+        self.hub.observe(CaptureEnded(text, ok))
+
     def close(self) -> None:
         self.feed.close()
         self.hub.close()

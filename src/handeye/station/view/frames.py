@@ -1,9 +1,12 @@
-"""The live view's images: a stereo frame downscaled, the corners drawn, encoded as JPEG (OpenCV).
+"""The live view's images: a stereo frame downscaled and encoded as JPEG (OpenCV), and the board's corners
+in the page's pixels for the page to draw over it.
 
-The detected corners (the capture's measurement, or for a live frame a quick search on the small
-image, ``cv2.findChessboardCorners`` with ``CALIB_CB_FAST_CHECK``) are drawn as green dots with the
-board's outline and corner 0 (the target frame's origin) circled in blue; where a calibration
-predicts them, red crosses.
+The corners of a frame the capture measured are the capture's own (``TriangulationResult.left_px``,
+``right_px``); of any other frame (a live one, a grab that was not measured) they are found by the
+capture's own detector, ``drivers.camera.checkerboard.detect_board``, on the full-size image with its
+fast search (the region stage, tens of milliseconds found or not; :func:`detected_corners`): the page
+says "board found" exactly where the capture would find it, and draws the same corners. A quick search
+on the small copy (as before) missed a board whose squares shrink to a dozen pixels there.
 """
 
 from __future__ import annotations
@@ -12,63 +15,51 @@ import base64
 
 import numpy as np
 
-__all__ = ["VIEW_WIDTH_PX", "encode_side", "quick_corners"]
+__all__ = ["VIEW_WIDTH_PX", "detected_corners", "encode_image", "page_points"]
 
 #: Width of the images on the page, px (the height keeps the camera's aspect).
 VIEW_WIDTH_PX = 400
 _JPEG_QUALITY = 70
 
 
-def _small_bgr(image: np.ndarray, width: int) -> tuple[np.ndarray, float]:
+def detected_corners(image: np.ndarray, board) -> np.ndarray | None:
+    """The board's inner corners ``(m, 2)`` in ``image`` (full-size px, canonical order) as the capture's
+    detector finds them with its fast search; None when it finds none there."""
+    from ...drivers.camera.checkerboard import detect_board
+    from ...drivers.camera.errors import BoardNotFound, FrameError
+
+    try:
+        return detect_board(image, board, search="fast").corners_px
+    except (BoardNotFound, FrameError):
+        return None
+
+
+def encode_image(image: np.ndarray, width: int = VIEW_WIDTH_PX) -> tuple[str, float, tuple[int, int]]:
+    """One camera's image for the page: ``(data:image/jpeg;base64,... URL, scale, (width, height))``, the
+    scale from the image's pixels to the page's.
+
+    Parameters
+    ----------
+    image : ndarray, shape (h, w) or (h, w, 3), uint8
+    width : int
+        The page image's width, px.
+    """
     import cv2
 
     image = np.asarray(image)
     scale = width / image.shape[1]
     small = cv2.resize(image, (width, max(1, round(image.shape[0] * scale))), interpolation=cv2.INTER_AREA)
-    if small.ndim == 2:
-        small = cv2.cvtColor(small, cv2.COLOR_GRAY2BGR)
-    return small, scale
-
-
-def quick_corners(image: np.ndarray, corners: tuple, width: int = VIEW_WIDTH_PX) -> np.ndarray | None:
-    """The board's inner corners ``(m, 2)`` in the full-size image's pixels, found on a copy ``width``
-    px wide (fast; None when not found there)."""
-    import cv2
-
-    small, scale = _small_bgr(image, width)
-    gray = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
-    found, points = cv2.findChessboardCorners(gray, tuple(int(c) for c in corners),
-                                              flags=cv2.CALIB_CB_FAST_CHECK | cv2.CALIB_CB_ADAPTIVE_THRESH)
-    return points.reshape(-1, 2) / scale if found else None
-
-
-def encode_side(image: np.ndarray, corners: tuple, found_px=None, predicted_px=None,
-                width: int = VIEW_WIDTH_PX) -> str:
-    """One camera's image for the page: a ``data:image/jpeg;base64,...`` URL.
-
-    Parameters
-    ----------
-    image : ndarray, shape (h, w) or (h, w, 3), uint8
-    corners : tuple of int
-        Inner corners of the board along x and y.
-    found_px : ndarray, shape (m, 2), optional
-        Detected corners in the full-size image (px).
-    predicted_px : ndarray, shape (m, 2), optional
-        Where the calibration expects them (px).
-    """
-    import cv2
-
-    small, scale = _small_bgr(image, width)
-    if found_px is not None and len(found_px):
-        points = np.asarray(found_px, float).reshape(-1, 2) * scale
-        cv2.polylines(small, [np.round(points[[0, corners[0] - 1, -1, -corners[0]]]).astype(np.int32)], True,
-                      (0, 200, 0), 1, cv2.LINE_AA)  # the board's outline through its four outer corners
-        for u, v in points:
-            cv2.circle(small, (int(round(u)), int(round(v))), 2, (0, 200, 0), -1, cv2.LINE_AA)
-        cv2.circle(small, tuple(int(round(c)) for c in points[0]), 5, (255, 0, 0), 2, cv2.LINE_AA)  # corner 0
-    if predicted_px is not None:
-        for u, v in np.asarray(predicted_px, float).reshape(-1, 2) * scale:
-            if np.isfinite(u) and np.isfinite(v) and 0 <= u < small.shape[1] and 0 <= v < small.shape[0]:
-                cv2.drawMarker(small, (int(round(u)), int(round(v))), (0, 0, 255), cv2.MARKER_CROSS, 9, 1)
     ok, buffer = cv2.imencode(".jpg", small, [cv2.IMWRITE_JPEG_QUALITY, _JPEG_QUALITY])
-    return "data:image/jpeg;base64," + base64.b64encode(buffer.tobytes()).decode("ascii")
+    url = "data:image/jpeg;base64," + base64.b64encode(buffer.tobytes()).decode("ascii")
+    return url, scale, (int(small.shape[1]), int(small.shape[0]))
+
+
+def page_points(points_px, scale: float) -> list | None:
+    """Corners ``(m, 2)`` of the full-size image as the page's pixels (``[[u, v], ...]``, 0.01 px; points that
+    are not finite left out); None for None."""
+    if points_px is None:
+        return None
+    points = np.asarray(points_px, float).reshape(-1, 2)
+    points = points[np.all(np.isfinite(points), axis=1)]
+    # a full-size pixel centre u maps to (u + 0.5) * scale - 0.5 on the resized copy
+    return np.round((points + 0.5) * scale - 0.5, 2).tolist()

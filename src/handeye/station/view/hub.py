@@ -4,7 +4,9 @@ The capture thread calls :meth:`ViewHub.observe`: a grab (``Measured``) only rep
 frame (older ones are dropped, never queued), any other event is appended to a short list; both
 under a lock held for a few assignments, then a wake-up. Everything else happens in the hub's own
 thread: folding the events into :class:`~handeye.station.view.state.ViewState` (coverage, hint, the
-running calibration) and encoding the latest frame as JPEG, at most once per
+running calibration) and encoding the latest frame as JPEG with, per side, whether the board was
+found and its corners (the capture's own for a measured frame, its detector's for any other:
+``frames``), at most once per
 ``frame_interval_s`` (so at most ``1 / frame_interval_s`` encodings a second, however fast frames
 come). The HTTP server's clients wait in :meth:`ViewHub.wait` for a newer state or frame.
 """
@@ -15,8 +17,8 @@ import json
 import threading
 import time
 
-from ..capture_events import Measured, Prompt, Verdict
-from .frames import encode_side, quick_corners
+from ..capture_events import CaptureEnded, Measured, Prompt, Verdict
+from .frames import detected_corners, encode_image, page_points
 from .state import ViewState
 
 __all__ = ["GRAB", "LIVE", "LIVE_AFTER_S", "LIVE_PERIOD_S", "MEASURED", "ViewHub"]
@@ -24,6 +26,8 @@ __all__ = ["GRAB", "LIVE", "LIVE_AFTER_S", "LIVE_PERIOD_S", "MEASURED", "ViewHub
 #: The kinds of frame on the page: a live frame (``feed``), the capture's grab as it came, the same
 #: grab with the corners the capture measured (and the predicted ones).
 LIVE, GRAB, MEASURED = "live", "grab", "measured"
+#: The corners of a capture's grab that it is measuring: the page says "measuring", not "no board".
+MEASURING = object()
 
 #: Live frames are grabbed for the page once the capture has waited for the robot this long (s), and
 #: until it grabs again (see ``station.view.feed``): a short planned move gets none.
@@ -45,7 +49,7 @@ class ViewHub:
 
     def __init__(self, config, stereo_model, frame_interval_s: float = 0.15):
         self.state = ViewState(config, stereo_model)
-        self.corners = tuple(config.target.corners)
+        self.board = config.target
         self.frame_interval_s = frame_interval_s
         self._lock = threading.Lock()
         self._changed = threading.Condition()
@@ -92,7 +96,7 @@ class ViewHub:
         live frame may come while it measures; the camera's lock keeps the grabs apart.)"""
         with self._lock:
             now = time.monotonic()
-            if self.clients <= 0 or self.closed or now - self._frame_at < LIVE_PERIOD_S:
+            if self.clients <= 0 or self.closed or self.state.ended is not None or now - self._frame_at < LIVE_PERIOD_S:
                 return False
             return self.state.mode == "guided" or (self.waiting and now - self._waiting_since >= LIVE_AFTER_S)
 
@@ -115,6 +119,10 @@ class ViewHub:
         self._wake.set()
         self._thread.join(timeout=5.0)
         self._fold_events()
+        if self.state.ended is None:  # closed without the command's last word: an error or Ctrl-C
+            self.state.apply(CaptureEnded("the capture stopped (the terminal says why); the postures on disk stay: "
+                                          "run the same command to go on", ok=False))
+            self._publish_state()
         with self._lock:
             frame, self._frame = self._frame, None
         if frame is not None and frame[1] != LIVE:
@@ -154,20 +162,32 @@ class ViewHub:
             self._changed.notify_all()
 
     def _publish_frame(self, item, kind: str) -> None:
+        """Encode a frame and publish it with, per side, whether the board was found and its corners (the
+        capture's own when it measured this frame; else its detector's, ``frames.detected_corners``) and
+        the running calibration's predicted corners, all in the page's pixels; a capture's grab not yet
+        measured says neither (``found`` None: measuring)."""
         posture = problem = predicted = None
         if kind == MEASURED:
             frame, posture, problem = item.frame, item.posture, item.problem
-            found = [None, None] if item.result is None else [item.result.left_px, item.result.right_px]
+            found = [item.result.left_px, item.result.right_px] if item.result is not None else \
+                [detected_corners(im, self.board) for im in (frame.left, frame.right)]
             predicted = self.state.predictor.predict_px(item.tool02base)
+        elif kind == GRAB:
+            frame, found = item, [MEASURING, MEASURING]
         else:
-            frame, found = item, [quick_corners(im, self.corners) for im in (item.left, item.right)]
+            frame, found = item, [detected_corners(im, self.board) for im in (item.left, item.right)]
         if frame is not self._last_image[0]:
             self._last_image = (frame, self._last_image[1] + 1)
-        images = [encode_side(im, self.corners, f, None if predicted is None else predicted[k])
-                  for k, (im, f) in enumerate(zip((frame.left, frame.right), found))]
+        sides = []
+        for k, (image, corners) in enumerate(zip((frame.left, frame.right), found)):
+            url, scale, size = encode_image(image)
+            sides.append({"image": url, "size": size, "found": None if corners is MEASURING else corners is not None,
+                          "corners": None if corners is MEASURING else page_points(corners, scale),
+                          "predicted": None if predicted is None else page_points(predicted[k], scale)})
         data = {"seq": self.frame_version + 1, "image": self._last_image[1], "kind": kind, "live": kind == LIVE,
-                "posture": posture, "found": [f is not None for f in found], "predicted": predicted is not None,
-                "problem": problem, "left": images[0], "right": images[1]}
+                "posture": posture, "found": [side["found"] for side in sides], "predicted": predicted is not None,
+                "problem": problem, "left": sides[0]["image"], "right": sides[1]["image"], "sides": sides,
+                "pattern": list(self.board.corners)}
         text = json.dumps(data)
         with self._changed:
             self.frame_json, self.frame_version = text, self.frame_version + 1

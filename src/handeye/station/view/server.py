@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hmac
 import secrets
+import socket
 import threading
 import time
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -85,6 +86,18 @@ def _handler(server: "ViewServer"):
     return Handler
 
 
+def _server_class(host: str) -> type:
+    """``ThreadingHTTPServer`` with the address family of ``host``: IPv6 for an IPv6 address (``::1``, ``::``)
+    or a name that resolves only to one, IPv4 otherwise (OSError: a name that does not resolve)."""
+    try:
+        families = {info[0] for info in socket.getaddrinfo(host, None, type=socket.SOCK_STREAM)}
+    except socket.gaierror as exc:
+        raise OSError(f"no address for {host!r} ({exc.strerror})") from None
+    if socket.AF_INET in families or socket.AF_INET6 not in families:
+        return ThreadingHTTPServer
+    return type("ThreadingHTTPServerV6", (ThreadingHTTPServer,), {"address_family": socket.AF_INET6})
+
+
 class ViewServer:
     """The page of ``hub`` served on ``host:port`` (0: a free port), behind a random token.
 
@@ -99,7 +112,7 @@ class ViewServer:
         self.token = secrets.token_urlsafe(18)
         self.stopping = threading.Event()
         self._page = None
-        self.httpd = ThreadingHTTPServer((host, port), _handler(self))
+        self.httpd = _server_class(host)((host, port), _handler(self))
         self.httpd.daemon_threads = True
         self._thread = threading.Thread(target=self.httpd.serve_forever, name="view-server", daemon=True)
 

@@ -6,7 +6,9 @@ cells, rotation axes, distance spread), what is still missing and the hint (``st
 what_is_missing``, the same words the guided capture prints), the progress, GOOD ENOUGH, for a planned
 capture the plan seen from above and from the side with the current posture and the time left, and,
 once the postures allow a solve, the calibration (:class:`Predictor`) that predicts where the next
-frame's corners should be. It runs in the view's thread, never in the capture's.
+frame's corners should be; once the run is over (``CaptureEnded``), how it ended in place of the hint
+and the current posture (what is missing without the advice to capture more). It runs in the view's
+thread, never in the capture's.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from ...calibration.problem import MIN_POSTURES
 from ...calibration.quality_words import AXIS_SPREAD_NAME, board_distances_mm, distance_spread_mm, hand_axis_coverage, image_cells
 from ...calibration.session import Posture, Session
 from ..capture import stereo_views
-from ..capture_events import CAPTURED, SKIPPED, CaptureStarted, Prompt, Verdict
+from ..capture_events import CAPTURED, SKIPPED, CaptureEnded, CaptureStarted, Prompt, Verdict
 from ..guided import postures_needed, what_is_missing
 from ..quality import config_thresholds, direction_name
 
@@ -118,6 +120,7 @@ class ViewState:
         self.plan = None
         self.prompt = {"kind": "", "text": "waiting for the capture to start", "posture": None}
         self.last = None
+        self.ended = None  # the CaptureEnded event, once the run is over
         self.visit_times: list = []
         self._last_verdict_at = None
 
@@ -130,6 +133,9 @@ class ViewState:
             self.prompt = {"kind": event.kind, "text": event.text, "posture": event.posture}
         elif isinstance(event, Verdict):
             self._verdict(event)
+        elif isinstance(event, CaptureEnded):
+            self.ended = event
+            self.prompt = {"kind": "ended", "text": event.text, "posture": None}
 
     def _start(self, event: CaptureStarted) -> None:
         self.mode, self.session_dir = event.mode, event.session_dir
@@ -196,22 +202,30 @@ class ViewState:
             return {"count": count, "total": total, "visited": visited, "time_left_s": left}
         return {"count": count, "total": postures_needed(self.thresholds), "visited": count, "time_left_s": None}
 
+    def _hint(self, missing: list, coverage: dict) -> dict:
+        """The page's "next" box: the first thing missing and which way to turn, GOOD ENOUGH, or, once the run
+        is over, how it ended (nothing more to do at the robot)."""
+        if self.ended is not None:
+            word = "FINISHED" if self.ended.ok else "STOPPED"
+            return {"text": f"{word}: {self.ended.text}", "word": "", "axis": None, "turn": ""}
+        hint = missing[0] if missing else None
+        turn = next((m for m in missing if m.word == AXIS_SPREAD_NAME), None)  # the arrow: which way to turn next
+        return {"text": hint.advice if hint else "GOOD ENOUGH: add more or stop", "word": hint.word if hint else "",
+                "axis": coverage["weakest"] if turn is not None else None, "turn": turn.advice if turn is not None else ""}
+
     def to_json(self) -> dict:
         """The page's state (see the module docstring)."""
         missing = self.missing()
         coverage = self.coverage()
-        hint = missing[0] if missing else None
-        turn = next((m for m in missing if m.word == AXIS_SPREAD_NAME), None)  # the arrow: which way to turn next
-        plan = None if self.plan is None else {**self.plan, "current": self.prompt.get("posture"),
-                                               "done": sorted(self.postures), "skipped": sorted(
-                                                   k for k, r in self.rows.items() if r["word"] == SKIPPED)}
+        current = self.prompt.get("posture") if self.ended is None else None
+        plan = None if self.plan is None else {**self.plan, "current": current, "done": sorted(self.postures),
+                                               "skipped": sorted(k for k, r in self.rows.items() if r["word"] == SKIPPED)}
         p = self.predictor
         return {"mode": self.mode, "session": self.session_dir, "progress": self._progress(),
                 "postures": [self.rows[k] for k in sorted(self.rows)], "coverage": coverage,
-                "missing": [m.line() for m in missing], "good_enough": not missing,
-                "hint": {"text": hint.advice if hint else "GOOD ENOUGH: add more or stop", "word": hint.word if hint else "",
-                         "axis": coverage["weakest"] if turn is not None else None,
-                         "turn": turn.advice if turn is not None else ""},
+                "missing": [m.line() if self.ended is None else m.shortfall() for m in missing],
+                "good_enough": not missing, "hint": self._hint(missing, coverage),
+                "ended": None if self.ended is None else {"text": self.ended.text, "ok": self.ended.ok},
                 "prompt": self.prompt, "last": self.last, "plan": plan,
                 "calibration": {"ok": p.cam2tool0 is not None, "reason": p.reason, "method": PREDICTION_METHOD,
                                 "d_org_mm": None if p.d_org_mm is None or not np.isfinite(p.d_org_mm) else round(p.d_org_mm, 2)}}
