@@ -1,0 +1,82 @@
+"""The capsule fit (``calibration.capsule_fit``) and the mesh reader (``calibration.arm_meshes``) of issue 41."""
+
+import numpy as np
+import pytest
+
+from handeye.calibration.arm_meshes import read_ascii_stl, read_vertex_table, write_vertex_table
+from handeye.calibration.capsule_fit import capsule_volume, fit_capsule, fit_capsules, grown
+
+
+def _cylinder(centre, axis, radius, length, count=400, seed=0) -> np.ndarray:
+    """Points on a cylinder's surface and end faces, ``(count, 3)``."""
+    rng = np.random.default_rng(seed)
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    u = np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    v = np.cross(axis, u)
+    angle = rng.uniform(0, 2 * np.pi, count)
+    s = rng.uniform(-length / 2, length / 2, count)
+    rho = np.where(rng.random(count) < 0.8, radius, radius * np.sqrt(rng.random(count)))
+    s = np.where(rho < radius, np.sign(s) * length / 2, s)  # the inner points on the end faces
+    return np.asarray(centre) + s[:, None] * axis + rho[:, None] * (np.cos(angle)[:, None] * u + np.sin(angle)[:, None] * v)
+
+
+def test_one_capsule_holds_a_cylinder_tightly_along_its_axis():
+    points = _cylinder((100, -50, 300), (1, 2, 0.5), 40.0, 400.0)
+    capsule = fit_capsule(points)
+    assert capsule.contains(points).all()
+    direction = (capsule.end - capsule.start) / np.linalg.norm(capsule.end - capsule.start)
+    assert abs(direction @ (np.array([1, 2, 0.5]) / np.linalg.norm([1, 2, 0.5]))) > 0.99
+    assert 40.0 <= capsule.radius <= 60.0
+    assert capsule_volume(np.linalg.norm(capsule.end - capsule.start), capsule.radius) < 1.6 * np.pi * 40 ** 2 * 400
+
+
+def test_two_parts_get_two_capsules_and_the_same_points_the_same_capsules():
+    points = np.vstack([_cylinder((0, 0, 0), (1, 0, 0), 30, 300, seed=1), _cylinder((0, 400, 200), (0, 0, 1), 50, 200, seed=2)])
+    first, again = fit_capsules(points, 2), fit_capsules(points, 2)
+    assert sorted(len(m) for _, m in first) == [400, 400]
+    assert all(c.contains(points[m]).all() for c, m in first)
+    assert all(np.array_equal(a.start, b.start) and a.radius == b.radius for (a, _), (b, _) in zip(first, again))
+
+
+def test_a_capsule_on_a_line_keeps_its_axis_on_it():
+    points = _cylinder((0, 0, 1195), (1, 0, 0), 90, 800, seed=3)
+    capsule = fit_capsule(points, line=((0, 0, 1195), (1, 0, 0)))
+    assert np.allclose(capsule.start[1:], [0, 1195]) and np.allclose(capsule.end[1:], [0, 1195])
+    assert capsule.contains(points).all()
+
+
+def test_grown_rounds_the_ends_and_keeps_every_point_the_margin_inside():
+    points = _cylinder((10.3, 20.7, 30.1), (0, 1, 1), 25.0, 150.0, seed=4)
+    capsule = grown(fit_capsule(points), points, 10.0)
+    assert np.array_equal(capsule.start, np.round(capsule.start)) and capsule.radius == int(capsule.radius)
+    assert (capsule.distances(points) <= capsule.radius - 10.0 + 1e-9).all()
+
+
+def test_the_slack_measures_how_far_a_capsule_reaches_beyond_the_box_and_keeps_every_point_inside():
+    from handeye.calibration.capsule_fit import Capsule, _overshoot
+
+    capsule = Capsule(np.array([0.0, 0.0, 0.0]), np.array([100.0, 0.0, 0.0]), 20.0)
+    box = (np.array([-10.0, -20.0, -30.0]), np.array([100.0, 25.0, 20.0]))
+    assert _overshoot(capsule, box) == pytest.approx(10.0 + 20.0)  # 10 mm behind x -10, 20 mm beyond x 100
+    assert _overshoot(capsule, None) == 0.0
+    points = np.vstack([_cylinder((0, 0, 0), (1, 0, 0), 20, 300, seed=5), _cylinder((150, 0, 150), (0, 0, 1), 20, 300, seed=6)])
+    for c, members in fit_capsules(points, 2, slack_mm=10.0):
+        assert c.contains(points[members]).all()
+
+
+def test_the_stl_reader_takes_ascii_and_refuses_binary(tmp_path):
+    text = ("solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0.1 0 0\nvertex 0 0.1 0\nendloop\nendfacet\n"
+            "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0.1 0 0\nvertex 0 0 0.2\nendloop\nendfacet\nendsolid t\n")
+    (tmp_path / "a.stl").write_text(text)
+    assert np.allclose(read_ascii_stl(tmp_path / "a.stl", 1000.0), [[0, 0, 0], [0, 0, 200], [0, 100, 0], [100, 0, 0]])
+    (tmp_path / "b.stl").write_bytes(b"\x00" * 84)
+    with pytest.raises(ValueError, match="only ASCII STL"):
+        read_ascii_stl(tmp_path / "b.stl")
+
+
+def test_the_vertex_table_reads_back_what_was_written(tmp_path):
+    points = [np.array([[1.004, 2.0, 3.0]]), np.array([[4.0, 5.0, 6.0], [-7.5, 8.25, 9.0]])]
+    write_vertex_table(tmp_path / "v.csv", points, ["source: a test", "licence: none"])
+    back = read_vertex_table(tmp_path / "v.csv")
+    assert [len(b) for b in back] == [1, 2] and np.allclose(back[1], points[1]) and abs(back[0][0, 0] - 1.0) < 0.006
