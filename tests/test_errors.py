@@ -19,6 +19,8 @@ REPO = Path(__file__).resolve().parents[1]
 INTERNAL = {"LinkDown",
             # a key written twice, caught inside the YAML and JSON readers and turned into their one-line error
             "DuplicateKeyError", "_DuplicateJsonKey",
+            # an alias bomb and a JSON of too many keys, caught inside the same readers likewise
+            "AliasBombError", "_TooManyJsonKeys",
             # the mock RWS server's error answers (turned into HTTP responses, never raised out of it)
             "HttpError",
             # the RAPID interpreter's control flow (RETURN, RETRY, TRYNEXT, EXIT, Stop, a task asked to stop):
