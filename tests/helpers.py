@@ -125,21 +125,45 @@ def docstring_nodes(tree) -> set:
     return nodes
 
 
-def start_standalone_mock(*args: str):
-    """``handeye mock controller ARGS --camera-port ...`` in its own process, once its banner is out;
-    returns ``(process, banner text)``."""
+def start_standalone_mock(*args: str, until: str = "camera.mock_arm:"):
+    """``handeye mock controller ARGS --camera-port ...`` in its own process, once its banner is out (its
+    line holding ``until``); returns ``(process, banner text)``."""
     import subprocess
     import sys
 
     proc = subprocess.Popen([sys.executable, "-m", "handeye.station", "mock", "controller", *args],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     banner = []
-    while not any("camera.mock_arm:" in line for line in banner):
+    while not any(until in line for line in banner):
         line = proc.stdout.readline()
         if not line:
             raise AssertionError("the mock did not start: " + "".join(banner) + proc.stderr.read())
         banner.append(line)
     return proc, "".join(banner)
+
+
+def start_mock_station(protocol: str, key: str, *args: str, duration_s: float = 600, pendant: bool = False):
+    """A standalone mock controller on ``protocol`` with its camera (and, with ``pendant``, its pendant
+    port) on free ports, at ``--time-scale 0.01``; ``args`` are more of its flags (``--config FILE``).
+
+    Returns
+    -------
+    tuple
+        ``(process, link section of a station config, camera.mock_arm, pendant HOST:PORT or None)``.
+    """
+    import re
+
+    extra = ("--pendant-port", "0") if pendant else ()
+    proc, text = start_standalone_mock("--protocol", protocol, "--port", "0", "--camera-port", "0", *extra,
+                                       "--write-key", key, "--time-scale", "0.01", "--duration", f"{duration_s:g}",
+                                       *args, until="pendant:" if pendant else "camera.mock_arm:")
+    mock_arm = re.search(r"camera\.mock_arm: ([\d.]+:\d+)", text).group(1)
+    address = re.search(r"STATE on ([\d.]+:\d+)", text).group(1) if pendant else None
+    if protocol == "serial":
+        link = {"serial_url": re.search(r"(socket://[\d.]+:\d+)", text).group(1)}
+    else:
+        link = {"host": "127.0.0.1", "port": int(re.search(r"listening on 127\.0\.0\.1:(\d+)", text).group(1))}
+    return proc, link, mock_arm, address
 
 
 def stop_standalone_mock(proc) -> str:

@@ -12,7 +12,7 @@ import time
 import numpy as np
 import pytest
 import yaml
-from helpers import stop_standalone_mock
+from helpers import start_mock_station, stop_standalone_mock
 
 from handeye.calibration.session import read_session
 from handeye.station.cli import main
@@ -26,27 +26,7 @@ FENCE = {"type": "box", "name": "fence", "min_mm": [-500, 550, 0], "max_mm": [15
 
 def _start_mock(protocol: str, config):
     """`handeye mock controller --config ... --camera-port 0 --pendant-port 0` in its own process."""
-    import subprocess
-    import sys
-
-    proc = subprocess.Popen([sys.executable, "-m", "handeye.station", "mock", "controller", "--protocol", protocol,
-                             "--port", "0", "--camera-port", "0", "--pendant-port", "0", "--write-key", KEY,
-                             "--time-scale", "0.01", "--duration", "600", "--config", str(config)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    banner = []
-    while not any("pendant:" in line for line in banner):
-        line = proc.stdout.readline()
-        if not line:
-            raise AssertionError("the mock did not start: " + "".join(banner) + proc.stderr.read())
-        banner.append(line)
-    text = "".join(banner)
-    mock_arm = re.search(r"camera\.mock_arm: ([\d.]+:\d+)", text).group(1)
-    pendant = re.search(r"STATE on ([\d.]+:\d+)", text).group(1)
-    if protocol == "serial":
-        link = {"serial_url": re.search(r"(socket://[\d.]+:\d+)", text).group(1)}
-    else:
-        link = {"host": "127.0.0.1", "port": int(re.search(r"listening on 127\.0\.0\.1:(\d+)", text).group(1))}
-    return proc, link, mock_arm, pendant
+    return start_mock_station(protocol, KEY, "--config", str(config), pendant=True)
 
 
 _PLAN: dict = {}

@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pytest
 import yaml
-from helpers import stop_standalone_mock
+from helpers import start_mock_station, stop_standalone_mock
 
 from handeye.calibration.session import read_session
 from handeye.station.cli import main
@@ -36,28 +36,7 @@ CAMERA_MOVED = {"camera_shift_mm": [0.9, -0.8, 0.6], "camera_turn_deg": [0.05, -
 
 def _start_mock(protocol: str, config):
     """`handeye mock controller` with its camera and pendant ports; (process, link section, mock_arm, pendant)."""
-    import re
-    import subprocess
-    import sys
-
-    proc = subprocess.Popen([sys.executable, "-m", "handeye.station", "mock", "controller", "--protocol", protocol,
-                             "--port", "0", "--camera-port", "0", "--pendant-port", "0", "--write-key", KEY,
-                             "--time-scale", "0.01", "--duration", "900", "--config", str(config)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    banner = []
-    while not any("pendant:" in line for line in banner):
-        line = proc.stdout.readline()
-        if not line:
-            raise AssertionError("the mock did not start: " + "".join(banner) + proc.stderr.read())
-        banner.append(line)
-    text = "".join(banner)
-    mock_arm = re.search(r"camera\.mock_arm: ([\d.]+:\d+)", text).group(1)
-    pendant = re.search(r"STATE on ([\d.]+:\d+)", text).group(1)
-    if protocol == "serial":
-        link = {"serial_url": re.search(r"(socket://[\d.]+:\d+)", text).group(1)}
-    else:
-        link = {"host": "127.0.0.1", "port": int(re.search(r"listening on 127\.0\.0\.1:(\d+)", text).group(1))}
-    return proc, link, mock_arm, pendant
+    return start_mock_station(protocol, KEY, "--config", str(config), duration_s=900, pendant=True)
 
 
 def _rehearsal(folder, name: str, protocol: str, faults=None):

@@ -9,7 +9,7 @@ import re
 
 import pytest
 import yaml
-from helpers import start_standalone_mock, stop_standalone_mock
+from helpers import start_mock_station, stop_standalone_mock
 
 from handeye.calibration.errors import ConfigError
 from handeye.calibration.session import read_session
@@ -45,14 +45,7 @@ def test_silent_mixing_stays_refused(controller, camera, message):
 # ---------------------------------------------------------------------------------------- the rehearsal
 def _start_mock(protocol: str):
     """`handeye mock controller` with a camera, in its own process; returns (process, link section, mock_arm)."""
-    proc, text = start_standalone_mock("--protocol", protocol, "--port", "0", "--camera-port", "0", "--write-key", KEY,
-                                       "--time-scale", "0.01", "--duration", "600")
-    mock_arm = re.search(r"camera\.mock_arm: ([\d.]+:\d+)", text).group(1)
-    if protocol == "serial":
-        link = {"serial_url": re.search(r"(socket://[\d.]+:\d+)", text).group(1)}
-    else:
-        link = {"host": "127.0.0.1", "port": int(re.search(r"listening on 127\.0\.0\.1:(\d+)", text).group(1))}
-    return proc, link, mock_arm
+    return start_mock_station(protocol, KEY)[:3]
 
 
 def _config(tmp_path, protocol: str, link: dict, mock_arm: str, postures: int):
