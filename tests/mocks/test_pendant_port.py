@@ -111,3 +111,17 @@ def test_the_mock_controller_help_prints_its_examples_on_one_line_each(capsys):
     assert "handeye mock pendant --port 5022 STATE" in text
     assert "nc " not in text and not any(line.strip().startswith("' |") for line in text.splitlines())
     assert "restart resets" in text and "faults" in text
+
+
+def test_the_pendant_command_says_so_when_the_port_never_replies(capsys, monkeypatch):
+    """A listener that accepts and says nothing: one line, exit 1, after the reply bound."""
+    import handeye.station.commands.mock as mock_command
+    from handeye.station.cli import main
+
+    monkeypatch.setattr(mock_command, "PENDANT_REPLY_S", 0.3)
+    with socket.socket() as silent:
+        silent.bind(("127.0.0.1", 0))
+        silent.listen(1)
+        assert main(["mock", "pendant", "--port", str(silent.getsockname()[1]), "STATE"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "did not reply within 0.3 s" in err[0], err

@@ -167,6 +167,10 @@ program's --prompt messagebox: STATE shows the keys offered) ends the capture.
 """
 
 
+#: The longest wait for a pendant reply, s (a JOG replies once the arm stands still).
+PENDANT_REPLY_S = 10.0
+
+
 def _add_pendant_parser(targets) -> None:
     t = targets.add_parser("pendant", help=PENDANT_HELP, description=PENDANT_HELP, epilog=PENDANT_EPILOG,
                            formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -185,7 +189,7 @@ def _run_pendant(args) -> int:
 
     requests = ((line.strip() for line in sys.stdin if line.strip()) if args.requests == ["-"] else args.requests)
     try:
-        client = PendantClient(f"{args.host}:{args.port}", timeout_s=10.0)
+        client = PendantClient(f"{args.host}:{args.port}", timeout_s=PENDANT_REPLY_S)
     except OSError as exc:
         raise HandEyeError(f"cannot reach the pendant port {args.host}:{args.port} ({exc.strerror or exc}): "
                            "start handeye mock controller with --pendant-port, or check --port") from None
@@ -195,7 +199,10 @@ def _run_pendant(args) -> int:
             reply = client.ask(request)
             print(reply, flush=True)
             status = status or (0 if reply.startswith("OK") else 1)
-    except (OSError, ConnectionError) as exc:
+    except TimeoutError:
+        raise HandEyeError(f"the pendant port {args.host}:{args.port} did not reply within {PENDANT_REPLY_S:g} s; "
+                           "is it a mock controller's --pendant-port?") from None
+    except OSError as exc:  # ConnectionError too: the port hung up
         raise HandEyeError(f"the pendant port {args.host}:{args.port} closed the link ({exc}); "
                            "is the mock controller still running?") from None
     finally:
