@@ -144,3 +144,13 @@ def test_mock_help_names_every_protocol_a_mock_serves():
 
 def test_mock_help_says_the_rws_certificate_is_new_at_every_start():
     assert "new at every start" in " ".join(_help("mock", "controller").split())
+
+
+def test_every_repository_path_the_readme_and_the_pages_name_exists():
+    # A module or file that moves (issue 39's new rooms) must take the pages that name it along.
+    named = set()
+    for text in (README, *PAGES.values()):
+        named |= {path.rstrip(".,:;") for path in re.findall(r"(?:src/handeye|benchmarks|tests)/[\w./*-]+", text)}
+    assert len(named) > 50, len(named)
+    missing = [path for path in sorted(named) if not (list(REPO.glob(path)) if "*" in path else (REPO / path).exists())]
+    assert not missing, f"named in the README or docs/ but not in the repository: {missing}"
