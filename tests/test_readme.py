@@ -77,3 +77,27 @@ def test_mock_help_names_every_protocol_a_mock_serves():
 
 def test_mock_help_says_the_rws_certificate_is_new_at_every_start():
     assert "new at every start" in " ".join(_help("mock", "controller").split())
+
+
+def _conventions_text() -> str:
+    if not SHARED_CONVENTIONS.exists():
+        pytest.skip("../shared/conventions.md is only beside a development checkout")
+    return SHARED_CONVENTIONS.read_text(encoding="utf-8")
+
+
+def test_every_command_is_in_the_conventions_or_an_extension_the_readme_lists():
+    # issue 42 (f): `handeye plugins` (and verify, import, cell, stereo) exist beyond CONVENTIONS.md's
+    # list; they are allowed only as extensions the README names as such and lists in its table
+    from handeye.station.cli import command_names
+
+    fixed = set(re.findall(r"`handeye ([a-z]+)", _conventions_text()))
+    commands = set(command_names())
+    assert fixed <= commands, f"CONVENTIONS.md fixes commands the CLI lacks: {sorted(fixed - commands)}"
+    sentence = re.search(r"CONVENTIONS\.md fixes the\s+names of (.+?); (.+?) are this package's\s+extensions",
+                         README, re.S)
+    assert sentence, "the README does not say which commands are extensions beyond CONVENTIONS.md"
+    said_fixed, said_extra = (set(re.findall(r"`([a-z]+)`", part)) for part in sentence.groups())
+    assert said_fixed == fixed, (said_fixed, fixed)
+    assert said_extra == commands - fixed, (said_extra, commands - fixed)
+    table = set(re.findall(r"^\| `([a-z]+)[ `]", README, re.M))
+    assert commands - fixed <= table, f"extensions missing from the commands table: {sorted(commands - fixed - table)}"
