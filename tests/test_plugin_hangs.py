@@ -207,3 +207,63 @@ def test_handeye_plugins_without_any_says_none(capsys):
     text = capsys.readouterr().out
     assert "methods (entry-point group handeye.methods): none installed" in text
     assert "camera back ends (entry-point group handeye.cameras): none installed" in text
+
+
+# ------------------------------------------------------------------ robot, mock controller, --method (issue 42 c)
+def _closed_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _no_plugin_imported() -> None:
+    assert SOLVERS not in sys.modules and STUCK_LINK not in sys.modules and STUCK_CAMERA not in sys.modules
+    assert CONTROLLERS.unusable() == {} and METHODS.unusable() == {}  # not even tried
+
+
+def test_robot_with_a_builtin_protocol_never_imports_the_plugins(hanging, capsys):
+    code = main(["robot", "joints", "--protocol", "socket", "--port", str(_closed_port()), "--timeout", "0.5",
+                 "--idle-timeout", "0.5"])
+    assert code == 1 and "Traceback" not in capsys.readouterr().err  # nothing listens there
+    _no_plugin_imported()
+
+
+def test_mock_controller_with_a_builtin_protocol_never_imports_the_plugins(hanging, capsys):
+    assert main(["mock", "controller", "--protocol", "socket", "--port", "0", "--duration", "0.2"]) == 0
+    _no_plugin_imported()
+
+
+def test_robot_with_a_hanging_protocol_names_it_in_one_line(hanging, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["robot", "joints", "--protocol", "frozen", "--port", str(_closed_port())])
+    line = _one_error_line(capsys, "robot joints")
+    assert info.value.code == 2 and "'frozen' of the installed package" in line, line
+    assert f"did not load within {BOUND_S:g} s" in line, line
+    assert SOLVERS not in sys.modules  # the other plug-in is not imported for it
+
+
+def test_mock_controller_with_a_hanging_protocol_names_it_in_one_line(hanging, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["mock", "controller", "--protocol", "frozen", "--port", "0", "--duration", "0.2"])
+    line = _one_error_line(capsys, "mock controller")
+    assert info.value.code == 2 and f"'frozen' of the installed package {PACKAGE}" in line, line
+    assert f"did not load within {BOUND_S:g} s" in line, line
+
+
+@pytest.mark.parametrize("argv", [["robot", "joints", "--help"], ["mock", "controller", "--help"]])
+def test_the_help_lists_the_plugins_and_names_the_hanging_one(hanging, capsys, argv):
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    assert info.value.code == 0
+    text = capsys.readouterr().out
+    assert f"'frozen' of the installed package {PACKAGE}" in text and f"did not load within {BOUND_S:g} s" in text, text
+
+
+def test_a_users_own_plugin_method_that_hangs_is_named_in_one_line(hanging, simulated, capsys):
+    assert main(["calibrate", str(simulated), "--method", "sleepy", "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+    assert "sleepy" in err and f"from the installed package {PACKAGE}" in err, err
+    assert f"took longer than {BOUND_S:g} s" in err, err

@@ -25,6 +25,7 @@ SETUP_COMMANDS = (
     'python3 -m venv .venv && . .venv/bin/activate && pip install -q -e ".[test]" && python -m pytest -q -n auto',
 )
 SHARED_CONVENTIONS = REPO.parent / "shared" / "conventions.md"
+STATION_PAGE = (REPO / "docs" / "station.md").read_text(encoding="utf-8")
 
 
 def _help(*words: str) -> str:
@@ -154,3 +155,27 @@ def test_every_repository_path_the_readme_and_the_pages_name_exists():
     assert len(named) > 50, len(named)
     missing = [path for path in sorted(named) if not (list(REPO.glob(path)) if "*" in path else (REPO / path).exists())]
     assert not missing, f"named in the README or docs/ but not in the repository: {missing}"
+
+
+def _conventions_text() -> str:
+    if not SHARED_CONVENTIONS.exists():
+        pytest.skip("../shared/conventions.md is only beside a development checkout")
+    return SHARED_CONVENTIONS.read_text(encoding="utf-8")
+
+
+def test_every_command_is_in_the_conventions_or_an_extension_the_readme_lists():
+    # issue 42 (f): `handeye plugins` (and verify, import, cell, stereo) exist beyond CONVENTIONS.md's
+    # list; they are allowed only as extensions the README names as such and lists in its table
+    from handeye.station.cli import command_names
+
+    fixed = set(re.findall(r"`handeye ([a-z]+)", _conventions_text()))
+    commands = set(command_names())
+    assert fixed <= commands, f"CONVENTIONS.md fixes commands the CLI lacks: {sorted(fixed - commands)}"
+    sentence = re.search(r"CONVENTIONS\.md fixes the\s+names of (.+?); (.+?) are this package's\s+extensions",
+                         STATION_PAGE, re.S)
+    assert sentence, "docs/station.md does not say which commands are extensions beyond CONVENTIONS.md"
+    said_fixed, said_extra = (set(re.findall(r"`([a-z]+)`", part)) for part in sentence.groups())
+    assert said_fixed == fixed, (said_fixed, fixed)
+    assert said_extra == commands - fixed, (said_extra, commands - fixed)
+    table = set(re.findall(r"^\| `([a-z]+)[ `]", STATION_PAGE, re.M))
+    assert commands - fixed <= table, f"extensions missing from the commands table: {sorted(commands - fixed - table)}"

@@ -67,8 +67,8 @@ def test_every_controller_back_end_carries_its_rapid_link_module():
 
 
 def test_every_list_of_back_ends_is_the_registry():
-    assert _choices(["robot", "joints"]) == CONTROLLERS.names()
-    assert _choices(["robot", "status"]) == CONTROLLERS.names()
+    assert tuple(_choices(["robot", "joints"])) == CONTROLLERS.names()
+    assert tuple(_choices(["robot", "status"])) == CONTROLLERS.names()
     assert tuple(_choices(["mock", "controller"])) == mock_protocols()
     assert tuple(_choices(["demo"])) == mock_protocols()
     assert tuple(_choices(["rapid", "generate"])) == CONTROLLERS.names()
@@ -316,3 +316,17 @@ def test_the_contract_tests_run_on_the_plugin_protocol():
     summary = done.stdout.strip().splitlines()[-1]
     assert done.returncode == 0 and re.match(r"\d+ passed, \d+ deselected", summary), done.stdout[-2000:]
     assert int(summary.split()[0]) >= 10
+
+
+def test_a_command_line_naming_a_plugin_protocol_has_its_own_flags(plugin, no_leaked_threads):
+    # issue 42 (c): robot and mock controller load only the plug-in --protocol names, and then offer its flags
+    from handeye.station.cli import build_parser as build
+
+    words = ["robot", "joints", "--protocol", "loopback", "--loop-label", "cell 4"]
+    assert build(only="robot", words=words).parse_args(words).link_loop_label == "cell 4"
+    words = ["mock", "controller", "--protocol=loopback", "--loop-note", "hello"]
+    assert build(only="mock", words=words).parse_args(words).server_note == "hello"
+    CONTROLLERS.refresh()
+    with pytest.raises(SystemExit):  # a built-in protocol: the plug-in is not loaded, so neither is its flag
+        build(only="robot", words=["robot", "joints"]).parse_args(["robot", "joints", "--loop-label", "x"])
+    assert "loopback" not in CONTROLLERS.loaded_names()

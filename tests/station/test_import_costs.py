@@ -60,3 +60,27 @@ def test_a_json_of_too_many_keys_is_refused_while_it_parses(tmp_path, monkeypatc
         common.parse_json(text, "keys.json")
     assert len(seen) <= common.MAX_JSON_KEYS  # stopped at the bound, a third of the way in
     assert common.parse_json(json.dumps([{"k": i} for i in range(1000)]), "ok.json")[999] == {"k": 999}
+
+
+def test_a_json_of_too_many_keys_in_one_object_is_refused_before_it_parses(tmp_path, monkeypatch):
+    # issue 42 (d): the hook counts an object's keys only once the whole object is parsed (its pairs all
+    # built: a flat 1M-key object cost ~4 s / 524 MB); the keys are now counted on the text, no parse
+    from handeye.station.importers import common, read_any
+
+    monkeypatch.setattr(common.json, "loads", lambda *a, **k: pytest.fail("the JSON was parsed"))
+    path = tmp_path / "flat.json"
+    path.write_text(json.dumps({f"key{i}": i for i in range(common.MAX_JSON_KEYS + 1)}))
+    with pytest.raises(SessionError, match=f"over {common.MAX_JSON_KEYS} keys"):
+        read_any(path)
+
+
+def test_the_key_count_on_the_text_counts_keys_not_colons():
+    from handeye.station.importers.common import MAX_JSON_KEYS, _more_keys_than, parse_json
+
+    bound = 3
+    assert _more_keys_than('{"a:b": "c\\\\\\":", "x": [1, {"y": "z:", "w": ":"}]}', bound)  # 4 keys
+    assert not _more_keys_than('{"a:b": "c\\\\\\"::", "x": [1, {"y": "z:::"}]}', bound)  # 3 keys, 9 colons
+    times = json.dumps({"stamps": [f"12:{i % 60:02d}:00" for i in range(MAX_JSON_KEYS)]})  # 400000 colons, 1 key
+    assert not _more_keys_than(times, MAX_JSON_KEYS) and len(parse_json(times, "t.json")["stamps"]) == MAX_JSON_KEYS
+    keys = json.dumps([{"k": i} for i in range(MAX_JSON_KEYS + 1)])
+    assert _more_keys_than(keys, MAX_JSON_KEYS) and not _more_keys_than(keys, MAX_JSON_KEYS + 1)

@@ -8,6 +8,7 @@ few postures. The rates over many seeds are the benchmark's (benchmarks/verify).
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -46,11 +47,17 @@ def test_nothing_changed_is_ok_with_the_json_keys(station, capsys):
     code, data = _verify(station, "none", "")
     assert code == 0
     assert data["verdict"] == "ok" and data["postures"] == 5 and data["measured"] == 5
+    out = capsys.readouterr().out
+    # issue 42.10: the per-posture lines name SESSION's postures, as "revisiting postures ..." does
+    revisited = data["revisited"]
+    assert f"revisiting postures {', '.join(map(str, revisited))} of base" in out
+    named = [int(line.split("ok    posture ")[1].split(":")[0]) for line in out.splitlines() if "ok    posture " in line]
+    assert named == revisited and revisited != list(range(5)), out
     diag = data["diagnosis"]
     assert diag["cause"] == "none" and diag["joint"] is None
     assert {"alternatives", "translation_mm", "rotation_deg"} <= set(diag)
     assert 0.01 < data["test"]["p_value"] <= 1.0 and data["test"]["degrees_of_freedom"] == 30
-    assert "nothing to do" in capsys.readouterr().out
+    assert "nothing to do" in out
 
 def test_camera_move_is_named_with_its_size_and_the_quick_update_is_written(station, capsys):
     root, session, config = station
@@ -96,20 +103,53 @@ def test_joint6_is_named_with_the_camera_turn_it_cannot_be_told_from(station, ca
     assert "joint 6" in named and "camera" in named
     assert "cannot tell it from" in capsys.readouterr().out
 
-def test_another_tooldata_on_the_controller_is_found(station, capsys):
+def _verify_with_tool_shifted(station, name: str, shift_mm: float, config_extra: str = ""):
+    """A check while the controller holds SESSION's tooldata moved by ``shift_mm`` along x (put back after)."""
     root, session, _ = station
     path = mock_state_file(session)
     state = read_state(path)
     tool = state["tool"]
-    write_state(path, type(tool)((tool.position_mm[0] + 0.3,) + tuple(tool.position_mm[1:]), tool.quaternion_wxyz,
+    write_state(path, type(tool)((tool.position_mm[0] + shift_mm,) + tuple(tool.position_mm[1:]), tool.quaternion_wxyz,
                                  tool.mass_kg, tool.cog_mm), state["runs"])
     try:
-        code, data = _verify(station, "tool", "")
+        return _verify(station, name, "", config_extra=config_extra)
     finally:
         write_state(path, tool, read_state(path)["runs"])
+
+
+def test_another_tooldata_on_the_controller_is_found(station, capsys):
+    code, data = _verify_with_tool_shifted(station, "tool", 0.3)
     assert code == 3 and data["diagnosis"]["cause"] == "tooldata"
     assert data["diagnosis"]["board_check"]["cause"] == "none"
-    assert "holds a different tHeCamera" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "holds a different tHeCamera" in out and "restore it" in out
+    # issue 42.10: the finding's size is the tooldata's difference, not the board check's camera drift (0.000 mm)
+    diag = data["diagnosis"]
+    assert diag["translation_mm"] == pytest.approx(0.3, abs=1e-3) and diag["rotation_deg"] == pytest.approx(0, abs=1e-4)
+    assert diag["tooldata"]["beyond_tolerance"] is True
+    assert "most likely: tooldata, 0.300 mm / 0.0000 deg" in out, out
+    assert "(0.300 mm / 0.0000 deg apart; the tolerance 0.2 mm / 0.02 deg)" in out
+    assert "differs from base's by 0.300 mm / 0.0000 deg, beyond the tolerance 0.2 mm / 0.02 deg" in data["reason"]
+
+
+@pytest.mark.parametrize("shift_mm, config_extra, verdict", [
+    (0.05, "", "ok"),                                   # below the default tolerance (0.2 mm)
+    (0.05, "verify: {tolerance_mm: 0.03}\n", "drift"),  # the station's own tolerance
+], ids=["below-default", "above-station-tolerance"])
+def test_a_tooldata_difference_is_held_to_the_tolerance(station, capsys, shift_mm, config_extra, verdict):
+    # issue 42 (tooldata): a mismatch was DRIFT whatever its size; now as the camera drift, with size and tolerance
+    code, data = _verify_with_tool_shifted(station, f"tool{shift_mm}{bool(config_extra)}", shift_mm, config_extra)
+    out = capsys.readouterr().out
+    assert data["verdict"] == verdict and code == {"ok": 0, "drift": 3}[verdict], out
+    tool = data["diagnosis"]["tooldata"]
+    assert tool["translation_mm"] == pytest.approx(shift_mm, abs=1e-3) and tool["beyond_tolerance"] is (verdict == "drift")
+    tolerance = "0.03 mm / 0.02 deg" if config_extra else "0.2 mm / 0.02 deg"
+    assert f"({shift_mm:.3f} mm / 0.0000 deg apart; the tolerance {tolerance})" in out, out
+    if verdict == "ok":
+        assert data["diagnosis"]["cause"] == "none" and "restore it" not in out
+        assert "within the tolerance, nothing to write" in out and "ok: the calibration still predicts" in out
+    else:
+        assert data["diagnosis"]["cause"] == "tooldata" and "restore it" in out
 
 def test_board_out_of_view_is_inconclusive(station):
     # The camera turned and the board moved away so far that no corner is in view, no retries: an OpenCV
@@ -145,14 +185,14 @@ def test_history_lists_every_check(station, capsys):
     assert (root / "trend.html").read_text().count("data:image/png;base64,") == 1
     assert (root / "history.jsonl").read_text().splitlines() == before  # printing never rewrites it
 
-@pytest.mark.parametrize("argv, says", [
-    (["--postures", "2"], "at least 3"),
-    (["--postures", "99"], "asks for more"),
+@pytest.mark.parametrize("argv, says, code", [
+    (["--postures", "2"], "at least 3", 2),  # a usage error (issue 42.10: it exited 1)
+    (["--postures", "99"], "asks for more", 1),  # what SESSION holds
 ])
-def test_bad_requests_are_one_line_and_write_nothing(station, capsys, argv, says):
+def test_bad_requests_are_one_line_and_write_nothing(station, capsys, argv, says, code):
     root, session, config = station
     listing = sorted(p.name for p in root.iterdir())
-    assert main(["verify", "--config", config, "--against", str(session), *argv]) == 1
+    assert main(["verify", "--config", config, "--against", str(session), *argv]) == code
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and says in err and "Traceback" not in err
     assert sorted(p.name for p in root.iterdir()) == listing
@@ -331,3 +371,23 @@ def test_a_level_outside_its_range_is_a_usage_error(station, capsys, level):
     assert main(["verify", "--config", config, "--against", str(session), "--level", level]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--level must be between 1e-06 and 0.2" in err
+
+
+def test_a_link_failure_after_three_postures_counts_them(station, capsys, monkeypatch):
+    # issue 42.10: the JSON said "measured": 0 after 3 postures were measured and written
+    from handeye.drivers.errors import StationError
+    from handeye.station import capture
+
+    real, calls = capture._capture_posture, []
+
+    def fourth_fails(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 4:
+            raise StationError("the link dropped (test)")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(capture, "_capture_posture", fourth_fails)
+    code, data = _verify(station, "dropped", "")
+    assert code == 4 and data["verdict"] == "inconclusive" and "the link failed" in data["reason"]
+    assert data["measured"] == 3
+    assert len(list((Path(data["check_session"]) / "postures").glob("*.yaml"))) == 3

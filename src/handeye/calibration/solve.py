@@ -385,9 +385,11 @@ def bounded_for(method: str, function, what: str = "solve"):
     return call_within(function, f"{what}-{row.name}")
 
 
-def calibrate_within(problem: HandEyeProblem, method: str, truth: dict | None = None) -> CalibrationResult:
+def calibrate_within(problem: HandEyeProblem, method: str | None, truth: dict | None = None,
+                     progress=None) -> CalibrationResult:
     """:func:`calibrate`, another package's method under the time bound (:func:`bounded_for`): what the
-    report's comparison solves with, so a hanging plug-in is left out instead of hanging the command.
+    report's comparison and a user's own ``--method`` solve with, so a hanging plug-in is named in one line
+    instead of hanging the command (``method`` None: :data:`DEFAULT_METHOD`, handeye's own).
 
     Raises
     ------
@@ -396,7 +398,7 @@ def calibrate_within(problem: HandEyeProblem, method: str, truth: dict | None = 
         naming the method, its package and the bound).
     """
     try:
-        return bounded_for(method, lambda: calibrate(problem, method, truth))
+        return bounded_for(method or DEFAULT_METHOD, lambda: calibrate(problem, method, truth, progress))
     except OutOfTime as exc:
         raise CalibrationError(_method_fault(method_row(method), f"took longer than {exc.seconds:g} s (the bound on "
                                              f"another package's method, {TIME_VARIABLE}; it is left running in the "

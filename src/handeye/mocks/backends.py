@@ -59,9 +59,12 @@ def _has_mock(backend) -> bool:
     return backend.mock is not None
 
 
-def mock_protocols() -> tuple[str, ...]:
+def mock_protocols(loaded: bool = False) -> tuple[str, ...]:
     """The controller back ends a mock serves, in registry order (plug-ins that bring a mock included;
-    each plug-in is loaded, under the time bound, to know)."""
+    each plug-in is loaded, under the time bound, to know); with ``loaded``, of those loaded so far only
+    (handeye's own and the plug-ins a command asked for: no other plug-in is imported)."""
+    if loaded:
+        return tuple(name for name in CONTROLLERS.loaded_names() if _has_mock(CONTROLLERS[name]))
     return CONTROLLERS.names(_has_mock)
 
 
@@ -72,11 +75,12 @@ def mock_protocol_choices():
                                                   "simulate its controller")
 
 
-def mock_settings() -> dict:
+def mock_settings(loaded: bool = False) -> dict:
     """Every mock server's own options by key, with the protocols whose mock takes it (registry order):
-    the flags of ``handeye mock controller`` beyond the common ones."""
+    the flags of ``handeye mock controller`` beyond the common ones; with ``loaded``, of the protocols
+    loaded so far only (:func:`mock_protocols`)."""
     out: dict = {}
-    for name in mock_protocols():
+    for name in mock_protocols(loaded):
         for setting in CONTROLLERS[name].mock.settings():
             first, names = out.get(setting.key, (setting, ()))
             out[setting.key] = (first, names + (name,))

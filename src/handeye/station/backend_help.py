@@ -33,11 +33,19 @@ def described(name: str) -> str:
 def protocol_lines() -> list[str]:
     """Two lines per back end, registry order: ``--protocol NAME  what it talks to (its module)`` and its
     options (``ControllerBackend.usage``)."""
+    from ..calibration.registry import quiet_loads  # noqa: PLC0415
     from ..drivers.controller.backends import CONTROLLERS  # noqa: PLC0415
 
     lines = []
-    for name in CONTROLLERS:
-        lines += [f"  --protocol {name:<8} {described(name)}", f"  {'':<19} {CONTROLLERS[name].usage()}"]
+    with quiet_loads():  # a plug-in that does not load is named here, with why
+        for name in tuple(CONTROLLERS.names()):
+            if CONTROLLERS.get(name) is None:
+                lines.append(f"  --protocol {name:<8} not usable: {CONTROLLERS.why_unusable(name)}")
+                continue
+            lines += [f"  --protocol {name:<8} {described(name)}", f"  {'':<19} {CONTROLLERS[name].usage()}"]
+        lines += [f"  --protocol {name:<8} not usable: {CONTROLLERS.why_unusable(name)}"
+                  for name in CONTROLLERS.plugin_names() if name not in CONTROLLERS.names()
+                  and CONTROLLERS.why_unusable(name) and not any(f"--protocol {name} " in line for line in lines)]
     return lines
 
 

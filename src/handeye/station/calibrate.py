@@ -12,7 +12,7 @@ from pathlib import Path
 from ..calibration.plausibility import session_in_mm
 from ..calibration.problem import HandEyeProblem
 from ..calibration.session import Session, read_session, read_truth
-from ..calibration.solve import CalibrationResult, calibrate, problem_from_session, truth_from_dict
+from ..calibration.solve import CalibrationResult, calibrate_within, problem_from_session, truth_from_dict
 
 #: File name of the report inside the session folder when ``--report`` is given without a value.
 DEFAULT_REPORT_NAME = "report.html"
@@ -45,7 +45,7 @@ def solve_session(session: Session, path, method: str | None = None, truth: dict
     from .origin import session_origin
 
     problem = problem_from_session(session)
-    result = calibrate(problem, method, truth, progress)
+    result = calibrate_within(problem, method, truth, progress)  # another package's method under the time bound
     return CalibrationOutcome(Path(path), result, truth is not None, session, problem, truth,
                               session_origin(session, path) if origin is None else origin)
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import inspect
 import os
 import sys
 import warnings
@@ -56,10 +57,12 @@ def command_names() -> tuple[str, ...]:
     return tuple(entry if isinstance(entry, str) else entry[0] for entry in COMMANDS)
 
 
-def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+def build_parser(only: str | None = None, words=()) -> argparse.ArgumentParser:
     """The ``handeye`` parser; with ``only`` (a command's name), that command's sub-parser is built whole
     and every other one is a name and its one-line help: the other commands' options (which may list
-    plug-ins, and so load them) are not built for a command that does not need them."""
+    plug-ins, and so load them) are not built for a command that does not need them. ``words``, the
+    command line, goes to an ``add_parser(sub, words)`` that takes it: one that offers a plug-in's own
+    flags loads only the plug-in the line names (``--protocol X``), every one for ``--help``."""
     parser = OneLineParser(
         prog="handeye", description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter
     )
@@ -68,7 +71,9 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
         command_name, name = (entry, entry) if isinstance(entry, str) else entry
         module = importlib.import_module(f"{__package__}.commands.{name}")
         if only is None or command_name == only:
-            command = module.add_parser(sub)
+            takes_words = "words" in inspect.signature(module.add_parser).parameters
+            command = module.add_parser(sub, words=None if only is None else list(words)) if takes_words \
+                else module.add_parser(sub)
         else:
             command = sub.add_parser(command_name, help=module.HELP)
         command.set_defaults(_module=module)
@@ -83,7 +88,7 @@ def _command_of(argv) -> str | None:
 
 def main(argv=None) -> int:
     command = _command_of(argv)
-    parser = build_parser(only=command)
+    parser = build_parser(only=command, words=sys.argv[1:] if argv is None else argv)
     args = parser.parse_args(argv)
     if getattr(args, "_module", None) is None:
         parser.print_help()

@@ -33,7 +33,7 @@ from .origin import MOCK, REAL, session_origin
 from .runtime import StationLink
 from .station_kind import station_kind
 from .session_station import station_mismatch
-from .verify_tolerance import drift_size, drift_tolerance, verdict_reason
+from .verify_tolerance import drift_size, drift_tolerance, tool_difference, verdict_reason
 from .verify_plan import (TIME_BUDGET, TIME_LIMIT, TIME_TIGHTEN, TIME_TRIES, VerifyError, capture_time, cell_guard,
                           create_verify_session, order_postures, path_time, path_time_along, verify_folder)
 
@@ -64,7 +64,8 @@ class VerifyOutcome:
     explanations : list of Explanation
         Best first (empty when inconclusive).
     tool_finding : dict or None
-        ``{"held": ToolData, "session": ToolData}`` when the controller holds another tooldata.
+        ``{"held": ToolData, "session": ToolData, "difference": ToolDifference}`` when the controller holds
+        another tooldata (DRIFT only when the difference is beyond :attr:`tolerance`).
     update : QuickUpdate or None
     motion_s : float or None
         Robot time of the check (s) by the plan's motion model (``verify_plan.path_time_along``: each
@@ -177,14 +178,15 @@ def session_baseline(config: StationConfig, session, session_dir: Path) -> Sessi
 
 
 def _tool_finding(config: StationConfig, link: StationLink, base: SessionBaseline) -> dict | None:
-    """The controller's camera tooldata against SESSION's result: None when they agree to the last digit."""
+    """The controller's camera tooldata against SESSION's result: None when they agree to the last digit,
+    else ``{"held", "session", "difference"}`` (a :class:`~station.verify_tolerance.ToolDifference`)."""
     from .writeback import _same_to_last_digit, tooldata_from_result
 
     held = link.controller.read_tool()
     expected = tooldata_from_result(base.assessment.result, config)
     if _same_to_last_digit(held, expected):
         return None
-    return {"held": held, "session": expected}
+    return {"held": held, "session": expected, "difference": tool_difference(held, expected, drift_tolerance(config))}
 
 
 def _chosen(config, session, base: SessionBaseline, robot, here, count: int, progress=lambda m: None):
@@ -252,8 +254,9 @@ class _Stop:
 
 
 def _revisit(config, link: StationLink, folder: Path, session, numbers, joints, progress, confirm, on_posture):
-    """Visit the chosen postures with the capture's program and loop; returns (measured, problem) or a
-    reason the check cannot go on (the link failed, the board is not seen: :class:`_Stop`)."""
+    """Visit the chosen postures with the capture's program and loop; returns (the count of postures
+    measured, None) or (that count, the reason the check cannot go on: the link failed, the board is not
+    seen, :class:`_Stop`). ``on_posture`` receives each report named by SESSION's posture number."""
     from ..drivers.errors import StationError
 
     station = station_kind(config, link, session_origin(session, session.path))  # SESSION's origin too: its X is moved
@@ -266,14 +269,27 @@ def _revisit(config, link: StationLink, folder: Path, session, numbers, joints, 
         install_program(config, folder, run.plan_joints, link, progress, run.board2base)
         confirm_motion(config, folder, run, link, confirm, progress)
         release_waiting_posture(link.controller, run.done, progress)
-        captured, skipped = visit_postures(config, folder, run, link, on_posture, stop_when=stop)
+        captured, skipped = visit_postures(config, folder, run, link, lambda r: on_posture(_renumbered(r, numbers)),
+                                           stop_when=stop)
         if link.stop_program is not None:
             link.stop_program()
-    except StationError as exc:
-        return None, f"the link failed during the check ({exc})"
+    except StationError as exc:  # the postures measured before it are on disk (the check's own folder): they count
+        return len(list((folder / "postures").glob("[0-9]*.yaml"))), f"the link failed during the check ({exc})"
     for index, why in skipped.items():
         progress(f"posture {numbers[index]} of the session not measured: {why}")
-    return captured, stop.reason
+    return len(captured), stop.reason
+
+
+def _renumbered(report, numbers):
+    """``report`` of the check's posture ``i`` (its own session counts 0..K-1) named by SESSION's number
+    ``numbers[i]``, as the check's other lines name it (``revisiting postures 13, 11, 25``)."""
+    from dataclasses import replace
+
+    if not 0 <= report.index < len(numbers):
+        return report
+    own, theirs = f"posture {report.index}", f"posture {numbers[report.index]}"
+    message = theirs + report.message[len(own):] if report.message.startswith(own) else report.message
+    return replace(report, index=numbers[report.index], message=message)
 
 
 def verify(config: StationConfig, session_dir, link: StationLink, postures: int = 5, level: float = DEFAULT_LEVEL,
@@ -297,14 +313,17 @@ def verify(config: StationConfig, session_dir, link: StationLink, postures: int 
     numbers, joints = _chosen(config, session, base, robot, here, postures, progress)
     progress(f"revisiting postures {', '.join(map(str, numbers))} of {session_dir.name}")
     folder = verify_folder(session_dir)
-    captured, failure = _revisit(config, link, folder, session, numbers, joints, progress, confirm, on_posture)
-    outcome = VerifyOutcome(INCONCLUSIVE, failure or "", folder, numbers, len(captured or ()),
+    measured, failure = _revisit(config, link, folder, session, numbers, joints, progress, confirm, on_posture)
+    outcome = VerifyOutcome(INCONCLUSIVE, failure or "", folder, numbers, measured,
                             tool_finding=tool, motion_s=path_time_along(robot, here, joints), baseline=base,
                             capture_motion_s=capture_time(robot, session.extra["capture"]), tolerance=drift_tolerance(config))
     if failure is None:
         judge(outcome, folder, base, robot, level, numbers)
-    if tool is not None and outcome.verdict != INCONCLUSIVE:
+    if tool is not None and tool["difference"].beyond and outcome.verdict != INCONCLUSIVE:
         outcome.verdict = DRIFT
+        outcome.reason = (f"the controller's camera tooldata differs from {session_dir.name}'s by "
+                          f"{tool['difference'].text()}, beyond the tolerance {outcome.tolerance.text()}; the board "
+                          f"check: {outcome.reason}")
     return outcome
 
 

@@ -30,7 +30,10 @@ def _tool_values(tool) -> dict:
 def diagnosis(outcome) -> dict:
     """The ``diagnosis`` of the JSON: ``cause``, ``joint``, sizes, ``alternatives`` (best first),
     ``indistinguishable`` (explanations these data cannot tell from the cause). A change the test finds
-    but within the tolerance is no cause (``none``); its size is the JSON's ``size``."""
+    but within the tolerance is no cause (``none``); its size is the JSON's ``size``. A controller tooldata
+    other than SESSION's is ``tooldata`` (its difference and whether it is beyond the tolerance); it is
+    the cause, with the difference as its size and the board check's diagnosis as ``board_check``, only
+    beyond the tolerance."""
     ranked = [e for e in outcome.explanations if e.cause != "none"]
     out = {"cause": "none", "joint": None, "translation_mm": 0.0, "rotation_deg": 0.0, "alternatives": [],
            "indistinguishable": [], "likelihood_ratio": None}
@@ -43,14 +46,17 @@ def diagnosis(outcome) -> dict:
         out["explained"] = explained(best, outcome.test)
     elif outcome.explanations:
         out["alternatives"] = [_explanation(e) for e in ranked[:3]]
-    if outcome.tool_finding is not None:
-        measured = dict(out)
-        out = {"cause": "tooldata", "joint": None, "translation_mm": measured["translation_mm"],
-               "rotation_deg": measured["rotation_deg"], "alternatives": measured["alternatives"],
-               "indistinguishable": [], "likelihood_ratio": None, "board_check": measured,
-               "held": _tool_values(outcome.tool_finding["held"]),
-               "session": _tool_values(outcome.tool_finding["session"])}
-    return out
+    tool = outcome.tool_finding
+    if tool is None:
+        return out
+    found = {"held": _tool_values(tool["held"]), "session": _tool_values(tool["session"]), **tool["difference"].to_json()}
+    if not tool["difference"].beyond:  # within the tolerance: said, and no cause
+        return {**out, "tooldata": found}
+    measured = dict(out)
+    return {"cause": "tooldata", "joint": None, "translation_mm": found["translation_mm"],
+            "rotation_deg": found["rotation_deg"], "alternatives": measured["alternatives"],
+            "indistinguishable": [], "likelihood_ratio": None, "board_check": measured, "tooldata": found,
+            "held": found["held"], "session": found["session"]}
 
 
 def advice(outcome, diag: dict, session: str, config_arg: str) -> list[str]:
@@ -59,11 +65,16 @@ def advice(outcome, diag: dict, session: str, config_arg: str) -> list[str]:
         return [f"inconclusive: {outcome.reason}"]
     lines = []
     cause = diag["cause"]
+    tool = diag.get("tooldata")
+    if tool is not None:
+        held, own = tool["held"], tool["session"]
+        differs = (f"the robot holds a different tHeCamera than {session} ({_size(tool)} apart; the tolerance "
+                   f"{outcome.tolerance.text()}): held {held['position_mm']} {held['quaternion_wxyz']}, {session} "
+                   f"{own['position_mm']} {own['quaternion_wxyz']}")
+        lines.append(f"{differs}: restore it (handeye writeback {session} {config_arg}) unless a later calibration "
+                     "was written on purpose" if tool["beyond_tolerance"] else
+                     f"{differs}: within the tolerance, nothing to write")
     if cause == "tooldata":
-        lines.append(f"the robot holds a different tHeCamera than {session}: held {diag['held']['position_mm']} "
-                     f"{diag['held']['quaternion_wxyz']}, {session} {diag['session']['position_mm']} "
-                     f"{diag['session']['quaternion_wxyz']}: restore it (handeye writeback {session} {config_arg}) "
-                     "unless a later calibration was written on purpose")
         diag = diag["board_check"]
         cause = diag["cause"]
     if outcome.size is not None and not outcome.size.beyond:
@@ -71,7 +82,8 @@ def advice(outcome, diag: dict, session: str, config_arg: str) -> list[str]:
                         f"{outcome.tolerance.text()} ({outcome.tolerance.source}; verify.tolerance_mm / tolerance_deg of "
                         "the station config set it): nothing to do; its trend shows in the history (--history)"]
     if outcome.test is None or not outcome.test.drift or cause == "none":
-        return lines or ["ok: the calibration still predicts the board within its noise; nothing to do"]
+        ok = "ok: the calibration still predicts the board within its noise; nothing to do"
+        return lines if tool is not None and tool["beyond_tolerance"] else lines + [ok]
     also = f" (these data cannot tell it from: {', '.join(diag['indistinguishable'])})" if diag["indistinguishable"] else ""
     size = f"{diag['translation_mm']:.3f} mm, {diag['rotation_deg']:.4f} deg"
     if cause == "board":
@@ -147,6 +159,10 @@ def outcome_lines(data: dict, advice_lines: list[str]) -> list[str]:
         lines.append(f"quick update: camera at {np.round(q['camera_pose']['position_mm'], 3).tolist()} mm, one sigma "
                      f"{max(s['translation_mm']):.3f} mm / {max(s['rotation_deg']):.4f} deg: {q['advice']}")
     return lines + advice_lines
+
+
+def _size(d: dict) -> str:
+    return f"{d['translation_mm']:.3f} mm / {d['rotation_deg']:.4f} deg"
 
 
 def _name(e: dict) -> str:

@@ -11,15 +11,21 @@ board's shift and turn, a joint zero's turn), compared with ``verify.tolerance_m
 passing calibration may have is within what the calibration itself claims).
 
 A discrepancy that no single explanation accounts for has no size to compare: it stays DRIFT.
+
+The controller's camera tooldata is held to the same tolerance (:func:`tool_difference`): one that
+differs from SESSION's beyond the last written digit is a finding, DRIFT only when the difference
+(its translation or its rotation) is larger than the tolerance; both are stated.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
-__all__ = ["DriftSize", "DriftTolerance", "drift_size", "drift_tolerance", "explained", "verdict_reason"]
+__all__ = ["DriftSize", "DriftTolerance", "ToolDifference", "drift_size", "drift_tolerance", "explained",
+           "tool_difference", "verdict_reason"]
 
 
 @dataclass(frozen=True)
@@ -131,3 +137,40 @@ def verdict_reason(test, size: DriftSize | None, tolerance: DriftTolerance) -> s
     if size.beyond:
         return f"{detected}; {size.text()}, beyond the tolerance {tolerance.text()}"
     return f"{detected}, statistically detectable; {size.text()}, within the tolerance {tolerance.text()}: too small to act on"
+
+
+@dataclass(frozen=True)
+class ToolDifference:
+    """How far the controller's camera tooldata is from SESSION's, against the tolerance.
+
+    Attributes
+    ----------
+    translation_mm : float
+        Distance between the two tframe origins, mm.
+    rotation_deg : float
+        Angle of the rotation between the two tframe orientations, deg (0..180).
+    beyond : bool
+        Larger than the tolerance in translation or rotation.
+    """
+
+    translation_mm: float
+    rotation_deg: float
+    beyond: bool
+
+    def text(self) -> str:
+        return f"{self.translation_mm:.3f} mm / {self.rotation_deg:.4f} deg"
+
+    def to_json(self) -> dict:
+        return {"translation_mm": round(self.translation_mm, 4), "rotation_deg": round(self.rotation_deg, 5),
+                "beyond_tolerance": self.beyond}
+
+
+def tool_difference(held, expected, tolerance: DriftTolerance) -> ToolDifference:
+    """The difference between two tooldata (``position_mm`` (3,), ``quaternion_wxyz`` (4,), unit or not)
+    against ``tolerance``."""
+    translation = float(np.linalg.norm(np.subtract(held.position_mm, expected.position_mm, dtype=float)))
+    q1, q2 = (np.asarray(q, float) / np.linalg.norm(np.asarray(q, float)) for q in (held.quaternion_wxyz,
+                                                                                     expected.quaternion_wxyz))
+    rotation = float(np.degrees(2.0 * np.arccos(np.clip(abs(float(q1 @ q2)), 0.0, 1.0))))
+    beyond = translation > tolerance.translation_mm or rotation > tolerance.rotation_deg
+    return ToolDifference(translation, rotation, bool(beyond))

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 from ...drivers.controller.backends import DEFAULT_PROTOCOL, RAPID_LINKS
 from ...rapid.station import IDLE_TIMEOUT_RANGE, RapidStation, default_station, load_station
-from ..backends import mock_protocols, mock_server
+from ..backends import mock_protocol_choices, mock_server
 from . import start_mock_controller
 
 __all__ = ["MockControllerOptions", "run_mock_controller", "is_loopback", "LINK_NOTICE_S"]
@@ -125,8 +125,8 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
     from ...drivers.controller.errors import InvalidRequest
     from ...drivers.controller.types import check_write_key
 
-    if options.protocol not in mock_protocols():
-        raise InvalidRequest(f"unknown protocol {options.protocol!r}; choose one of {', '.join(mock_protocols())}")
+    if options.protocol not in mock_protocol_choices():  # that protocol's plug-in only is loaded
+        raise InvalidRequest(f"unknown protocol {options.protocol!r}; choose one of {mock_protocol_choices().listed()}")
     if not options.time_scale > 0:
         raise InvalidRequest(f"--time-scale must be > 0; got {options.time_scale}")
     station = options.station or (load_station(options.config, links=RAPID_LINKS) if options.config

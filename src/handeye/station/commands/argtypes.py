@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["registry_choice", "left_out_lines", "corners", "positive", "non_negative", "count", "whole_between", "port", "floats", "setting_value"]
+__all__ = ["registry_choice", "left_out_lines", "option_word", "load_for_flags", "corners", "positive", "non_negative", "count", "whole_between", "port", "floats", "setting_value"]
 
 
 def _number(text: str, kind=float, what: str = "a number"):
@@ -119,3 +119,31 @@ def left_out_lines(choices, what: str) -> str:
     if not left:
         return ""
     return f"\nInstalled plug-ins left out of {what}:\n" + "\n".join(f"  {why}" for why in left.values()) + "\n"
+
+
+def option_word(words, option: str) -> str | None:
+    """The value ``words`` (a command line) gives ``option`` (``--protocol X`` or ``--protocol=X``; the
+    last one wins, as argparse's): ``""`` when it gives none, ``None`` when the help is asked for (every
+    choice is then described). What a parser is built for, before it parses."""
+    words, found = list(words or ()), ""
+    if "-h" in words or "--help" in words:
+        return None
+    for i, word in enumerate(words):
+        if word == option and i + 1 < len(words):
+            found = words[i + 1]
+        elif word.startswith(option + "="):
+            found = word.split("=", 1)[1]
+    return found
+
+
+def load_for_flags(registry, wanted: str | None) -> None:
+    """Load (under the time bound, quietly: the option's check says why one fails) the plug-ins whose own
+    flags a parser must offer: the one ``wanted`` names, or every one when ``wanted`` is None (the help).
+    A name that is not a plug-in's loads nothing."""
+    from ...calibration.registry import quiet_loads
+
+    names = registry.plugin_names() if wanted is None else [wanted.lower()] if wanted else []
+    with quiet_loads():
+        for name in names:
+            if registry.is_plugin(name):
+                registry.get(name)

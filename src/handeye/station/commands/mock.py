@@ -79,35 +79,45 @@ Example:
 """
 
 
-def _protocols() -> tuple[str, str]:
-    """The protocols a mock serves (registry order) and their lines for the epilog."""
+def _protocols(loaded: bool = False) -> tuple[str, str]:
+    """The protocols a mock serves (registry order; with ``loaded``, of the back ends loaded so far only) and
+    their lines for the epilog."""
     from ...mocks.backends import mock_protocols, mock_server
 
-    names = mock_protocols()
+    names = mock_protocols(loaded)
     lines = [f"  {name:<8} {mock_server(name).help}, port {mock_server(name).default_port}" for name in names]
     return names, "\n".join(lines)
 
 
 def _server_options(parser) -> None:
-    """One flag per mock server option (``MockServer.options`` of every mock protocol, described once)."""
+    """One flag per mock server option (``MockServer.options`` of the mock protocols loaded so far: handeye's
+    own and the plug-in the command line names, described once)."""
     from ...mocks.backends import mock_settings
 
-    for key, (setting, names) in mock_settings().items():
+    for key, (setting, names) in mock_settings(loaded=True).items():
         parser.add_argument(setting.option, dest=f"server_{key}", type=argtypes.setting_value(setting), default=None,
                             metavar=setting.metavar or key.upper(), help=f"{', '.join(names)}: {setting.help}")
 
 
-def add_parser(sub):
+def add_parser(sub, words=None):
+    """``words``: the command line; only the plug-in its ``--protocol`` names is loaded (for its mock's own
+    flags), every one for ``--help`` or when None (the whole parser)."""
+    from ...drivers.controller.backends import CONTROLLERS
     from ...mocks.backends import mock_protocol_choices
-    from .argtypes import left_out_lines, registry_choice
+    from .argtypes import left_out_lines, load_for_flags, option_word, registry_choice
 
-    names, lines = _protocols()
+    wanted = None if words is None else option_word(words, "--protocol")
+    load_for_flags(CONTROLLERS, wanted)
+    names, _ = _protocols(loaded=True)
     p = sub.add_parser("mock", help=HELP, description=HELP)
     targets = p.add_subparsers(dest="mock_target", metavar="TARGET")
     controller_help = CONTROLLER_HELP.format(protocols=", ".join(names))
     protocols = mock_protocol_choices()
-    c = targets.add_parser("controller", help=controller_help, description=controller_help,
-                           epilog=CONTROLLER_EPILOG.format(protocols=lines) + left_out_lines(protocols, "--protocol"),
+
+    def epilog() -> str:  # written when the help is asked for (it lists, and so loads, every plug-in)
+        return CONTROLLER_EPILOG.format(protocols=_protocols()[1]) + left_out_lines(protocols, "--protocol")
+
+    c = targets.add_parser("controller", help=controller_help, description=controller_help, epilog=epilog,
                            formatter_class=argparse.RawDescriptionHelpFormatter)
     from ...drivers.controller.backends import DEFAULT_PROTOCOL
 

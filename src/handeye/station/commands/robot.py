@@ -16,18 +16,24 @@ prints {"joints_deg": [...], "tool0_in_base": {"position_mm": [...], "quaternion
 
 
 def _epilog() -> str:
-    """Link options of every registered back end (``station.backend_help``, from the registry), then the example."""
+    """Link options of every registered back end (``station.backend_help``, from the registry), then the example
+    (written when the help is asked for: it loads every plug-in, under the time bound)."""
     from ..backend_help import protocol_lines
 
     return "Link options (the same for every sub-command):\n" + "\n".join(protocol_lines()) + "\n\n" + EXAMPLE
 
 
 def _link_options(p, backends) -> None:
-    """``--protocol``, ``--host``, ``--port`` and one flag per back-end link setting (``link_settings()``)."""
+    """``--protocol``, ``--host``, ``--port`` and one flag per link setting of the back ends loaded so far
+    (``link_settings()``: handeye's own, and the plug-in the command line names, :func:`add_parser`)."""
     from ...drivers.controller.backends import DEFAULT_PROTOCOL, link_settings
+    from .argtypes import registry_choice
 
-    ports = ", ".join(f"{name} {backends[name].default_port}" for name in backends if backends[name].default_port)
-    p.add_argument("--protocol", choices=tuple(backends), default=DEFAULT_PROTOCOL, help=f"default {DEFAULT_PROTOCOL}")
+    ports = ", ".join(f"{name} {backends[name].default_port}" for name in backends.loaded_names()
+                      if backends[name].default_port)
+    protocols = backends.choices()  # checking the value loads that plug-in only
+    p.add_argument("--protocol", choices=protocols, type=registry_choice(protocols), default=DEFAULT_PROTOCOL,
+                   metavar="PROTOCOL", help=f"one of the protocols below (default {DEFAULT_PROTOCOL})")
     p.add_argument("--host", default="127.0.0.1", help="controller or gateway address (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=None, help=f"TCP port (default: {ports})")
     for key, (setting, names) in link_settings().items():
@@ -40,18 +46,21 @@ def _link_options(p, backends) -> None:
                         "that long plus --timeout while the controller frees itself from a silent client")
 
 
-def add_parser(sub):
+def add_parser(sub, words=None):
+    """``words``: the command line; only the plug-in its ``--protocol`` names is loaded (for its own link
+    flags), every one for ``--help`` or when None (the whole parser)."""
     from ...drivers.controller.backends import CONTROLLERS
+    from .argtypes import load_for_flags, option_word
 
-    epilog = _epilog()
-    p = sub.add_parser("robot", help=HELP, description=HELP, epilog=epilog,
+    load_for_flags(CONTROLLERS, None if words is None else option_word(words, "--protocol"))
+    p = sub.add_parser("robot", help=HELP, description=HELP, epilog=_epilog,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     what = p.add_subparsers(dest="robot_command", metavar="COMMAND")
     j = what.add_parser("joints", help="joint angles and tool0 pose", description="read CJointT and CRobT(tool0, wobj0)",
-                        epilog=epilog, formatter_class=argparse.RawDescriptionHelpFormatter)
+                        epilog=_epilog, formatter_class=argparse.RawDescriptionHelpFormatter)
     _link_options(j, CONTROLLERS)
     j.add_argument("--json", action="store_true", help="print JSON (joints_deg, tool0_in_base)")
-    s = what.add_parser("status", help="program state and current posture", epilog=epilog,
+    s = what.add_parser("status", help="program state and current posture", epilog=_epilog,
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     _link_options(s, CONTROLLERS)
     s.add_argument("--json", action="store_true", help="print JSON")

@@ -21,7 +21,8 @@ but within the tolerance is OK, and the output says so with its size; the JSON k
 "tolerance", "beyond_tolerance" and test.statistically_detectable hold both.
 
 A drift is explained: camera (moved on the flange), board (moved), joint N (its zero moved),
-tooldata (the controller holds another one), with the size and how much more likely it is than the
+tooldata (the controller holds another one: DRIFT only when it differs from SESSION's by more than
+the same tolerance; its difference and the tolerance are printed), with the size and how much more likely it is than the
 next explanation; explanations these data cannot tell apart are named together (a joint-1 zero
 shift looks like a board turn about base z, a joint-6 one like a camera turn about the flange axis).
 When the camera moved, a quick update of X is given with its uncertainty: handeye writeback
@@ -83,7 +84,7 @@ def run(args) -> int:
     import sys
 
     from ...calibration.errors import HandEyeError, UsageError
-    from ...calibration.verification import DEFAULT_LEVEL, LEVEL_RANGE
+    from ...calibration.verification import DEFAULT_LEVEL, LEVEL_RANGE, MIN_VERIFY_POSTURES
     from ..config import default_config, load_config
     from ..runtime import MOCK_BANNER, open_station, rehearsal_banner
     from ..station_kind import station_tag
@@ -94,6 +95,9 @@ def run(args) -> int:
     if not low <= args.level <= high:  # NaN too
         raise UsageError(f"--level must be between {low:g} and {high:g} (the test's false-alarm rate; default "
                          f"{DEFAULT_LEVEL:g}); got {args.level:g}")
+    if args.postures < MIN_VERIFY_POSTURES:
+        raise UsageError(f"--postures {args.postures} is too few: the test and its diagnosis need at least "
+                         f"{MIN_VERIFY_POSTURES} revisited postures")
     config = load_config(args.config) if args.config else default_config()
     if args.mock:
         config = config.as_mock()

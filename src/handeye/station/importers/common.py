@@ -13,6 +13,7 @@ to millimetres, flange in base and board in camera, and records how everything w
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -465,6 +466,8 @@ def parse_json(text: str, path):
         return _object_without_duplicates(pairs)
 
     try:
+        if _more_keys_than(text, MAX_JSON_KEYS):  # refused before any parse: no pairs built
+            raise _TooManyJsonKeys()
         return json.loads(text, object_pairs_hook=counted)
     except _TooManyJsonKeys:
         raise SessionError(f"{path}: over {MAX_JSON_KEYS} keys: not a hand-eye log (a log of 10000 postures "
@@ -483,6 +486,26 @@ def parse_json(text: str, path):
 
 #: A hand-eye log holds a few keys per posture; a JSON with more keys than this is refused while parsing.
 MAX_JSON_KEYS = 200_000
+
+
+#: A JSON string (its quotes, the characters and escapes between them), written to match in linear time.
+_JSON_STRING = re.compile(r'"[^"\\]*(?:\\.[^"\\]*)*"', re.DOTALL)
+
+
+def _more_keys_than(text: str, bound: int) -> bool:
+    """Whether a JSON text holds more than ``bound`` keys, told without parsing it: its keys are its
+    colons outside strings (each key has one, nothing else in valid JSON does). ``text.count(":")``
+    bounds them from above; only when that bound is above ``bound`` are the colons between the strings
+    counted, string by string, stopping once ``bound`` is passed (no copy, no list: constant memory)."""
+    if text.count(":") <= bound:
+        return False
+    keys, after = 0, 0
+    for string in _JSON_STRING.finditer(text):
+        keys += text.count(":", after, string.start())
+        if keys > bound:
+            return True
+        after = string.end()
+    return keys + text.count(":", after) > bound
 
 
 class _TooManyJsonKeys(ValueError):
