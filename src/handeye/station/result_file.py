@@ -181,8 +181,8 @@ def _check_current(saved: SavedResult, session_dir, method: str | None, units: s
         raise ResultError(f"{saved.path} holds the {saved.result.method} result, not {method}'s: run handeye calibrate "
                           f"{session_dir} --method {method} (then this command writes that one)")
     if saved.data.get("units", "mm") != units:
-        raise ResultError(f"{saved.path} was calibrated with --units {saved.data.get('units')}, not {units}: run "
-                          f"handeye calibrate {session_dir} --units {units}")
+        raise ResultError(f"{saved.path} was calibrated with --units {saved.data.get('units')}: give --units "
+                          f"{saved.data.get('units')} here too, or run handeye calibrate {session_dir} --units {units}")
 
 
 def refuse_stale_result(session_dir) -> None:
@@ -217,6 +217,6 @@ def current_outcome(session: Session, session_dir, method: str | None = None, un
         except OutputError as exc:
             say(f"the result was not saved ({exc})")
         return outcome
+    problem = problem_from_session(session)  # the session's own checks first (lengths that look like metres)
     _check_current(saved, session_dir, method, units)
-    return CalibrationOutcome(Path(session_dir), saved.result, False, session, problem_from_session(session), None,
-                              origin)
+    return CalibrationOutcome(Path(session_dir), saved.result, False, session, problem, None, origin)
