@@ -391,3 +391,46 @@ def test_a_link_failure_after_three_postures_counts_them(station, capsys, monkey
     assert code == 4 and data["verdict"] == "inconclusive" and "the link failed" in data["reason"]
     assert data["measured"] == 3
     assert len(list((Path(data["check_session"]) / "postures").glob("*.yaml"))) == 3
+
+
+def test_after_a_quick_update_is_written_verify_follows_it_and_never_advises_undoing_it(station, capsys):
+    # issue 42.2: verify -> DRIFT camera -> writeback of the quick update -> verify against the same session said
+    # DRIFT/tooldata and "restore it (handeye writeback SESSION ...)", putting back a tool 1 mm off
+    root, session, config = station
+    faults = "camera_shift_mm: [0.8, -0.6, 0.4]"
+    code, data = _verify(station, "moved", faults)
+    assert code == 3 and data["diagnosis"]["cause"] == "camera" and data["quick_update"]["within_thresholds"]
+    folder = data["check_session"]
+    assert main(["writeback", folder, "--config", config]) == 0
+    capsys.readouterr()
+    try:
+        code, data = _verify(station, "moved-again", faults)  # the camera stays where the update put it
+        out = capsys.readouterr().out
+        assert data["diagnosis"]["cause"] != "tooldata" and f"handeye writeback {session} " not in out
+        assert "restore it" not in out and "checking against the quick update written from" in out
+        assert code == 0 and data["verdict"] == "ok", out
+        assert data["reference"]["kind"] == "update" and data["reference"]["written_from"].endswith(
+            str(folder).split("/")[-1])
+        assert main(["verify", "--config", config, "--against", folder]) == 1  # the update's folder: where to go
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and f"verify --against {session}" in err
+    finally:
+        assert main(["writeback", str(session), "--config", config]) == 0  # SESSION's tool data back, and followed
+    code, data = _verify(station, "back", "")
+    assert code == 0 and data["reference"]["kind"] == "session"
+
+
+def test_a_result_older_than_its_postures_is_refused_before_anything_opens(station, tmp_path, capsys):
+    root, session, config = station
+    assert (session / "result.yaml").is_file()  # saved by the fixture's writeback (it had none: solved and saved)
+
+    def nudge(posture):
+        posture["points_mm"][0][0] += 0.01
+
+    against = _edit_postures(session, tmp_path, (2,), nudge)
+    capsys.readouterr()
+    assert main(["verify", "--config", config, "--against", str(against)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "is older than the session's postures" in err
+    assert f"run handeye calibrate {against}" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == [against.name]  # no check session, no history

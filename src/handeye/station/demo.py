@@ -110,10 +110,12 @@ def _assess(session_dir: Path, config: StationConfig, compare: bool, progress) -
     with the method comparison when the report is wanted."""
     from ..rapid.literals import tooldata_literal
 
+    from .result_file import save_result
+
     outcome = calibrate_session_folder(session_dir)
     result = outcome.result
     progress(f"calibrated {outcome.problem.n} postures in {result.runtime_s * 1000:.0f} ms (the default estimator), "
-             f"outliers: {result.outliers or 'none'}")
+             f"outliers: {result.outliers or 'none'}; saved in {save_result(outcome)}")
     assessment = assess(outcome, config_thresholds(config), methods=comparison_methods() if compare else (),
                         tooldata_literal=tooldata_literal(result.x, config.tool.mass_kg, config.tool.cog_mm))
     for reason in assessment.comparison_failures.values():  # a plug-in's method that failed or took too long

@@ -1,9 +1,12 @@
 """``handeye verify``: is SESSION's calibration still right, and if not, what changed?
 
-1. SESSION is checked (a capture of this robot and board, calibrated with a passing verdict) and its
-   maximum-likelihood fit is made again (``calibration.eiv``: X, the board, the noise, covariances);
-2. the controller's camera tooldata is read and compared with SESSION's result (a mismatch is a
-   finding of its own: ``tooldata``);
+1. SESSION is checked (a capture of this robot and board, its saved result ``result.yaml`` no older
+   than its postures, with a passing verdict: ``station.result_file``) and its maximum-likelihood fit
+   is made for the test's noise model (``calibration.eiv``: X, the board, the noise, covariances);
+   when the latest deliberate write-back in the history is a quick update of SESSION, its X is the
+   check's (``station.verify_reference``);
+2. the controller's camera tooldata is read and compared with that result (a mismatch is a finding
+   of its own: ``tooldata``, whose advice restores the latest write-back, never undoes one);
 3. K of SESSION's postures are chosen for diagnostic power and a short path clear of the cell
    (``station.verify_plan``), and revisited with the same RAPID program and links as ``capture``
    (``station.capture``: install, confirm, visit): the measurements are a session beside SESSION;
@@ -18,7 +21,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +36,8 @@ from .origin import MOCK, REAL, session_origin
 from .runtime import StationLink
 from .station_kind import station_kind
 from .session_station import station_mismatch
+from .result_file import refuse_stale_result
+from .verify_reference import follow
 from .verify_tolerance import drift_size, drift_tolerance, tool_difference, verdict_reason
 from .verify_plan import (TIME_BUDGET, TIME_LIMIT, TIME_TIGHTEN, TIME_TRIES, VerifyError, capture_time, cell_guard,
                           create_verify_session, order_postures, path_time, path_time_along, verify_folder)
@@ -78,6 +83,8 @@ class VerifyOutcome:
         The smallest change the check acts on (``station.verify_tolerance``).
     size : DriftSize or None
         The detected change's size against it (None: the test found nothing).
+    reference : verify_reference.Reference or None
+        What the check compared against (SESSION's result, or the quick update written after it).
     """
 
     verdict: str
@@ -94,6 +101,7 @@ class VerifyOutcome:
     capture_motion_s: float | None = None
     tolerance: object = None
     size: object = None
+    reference: object = None
 
     @property
     def beyond_tolerance(self) -> bool:
@@ -110,6 +118,10 @@ def check_request(config: StationConfig, session_dir: Path, postures: int):
                           f"{MIN_VERIFY_POSTURES} revisited postures")
     session = read_session(session_dir)
     record = session.extra.get("capture")
+    if isinstance(record, dict) and isinstance(record.get("verify_of"), dict):
+        of = record["verify_of"].get("session", "its session")
+        raise VerifyError(f"{session_dir} holds the measurements of a check of {of}, not a calibration: verify --against "
+                          f"{of} (a quick update written from this check is what that check follows)")
     if session_origin(session, session_dir) not in (MOCK, REAL) or not isinstance(record, dict) \
             or "plan_joints_deg" not in record:
         raise VerifyError(f"{session_dir} was not captured by handeye capture (simulated or imported): verify revisits "
@@ -119,6 +131,7 @@ def check_request(config: StationConfig, session_dir: Path, postures: int):
     if mismatch is not None:
         raise VerifyError(mismatch)
     _check_joints(session, session_dir)
+    refuse_stale_result(session_dir)
     usable = [p for p in session.postures if p.joints_deg is not None and p.index < len(record["plan_joints_deg"])]
     if len(usable) < postures:
         raise VerifyError(f"{session_dir} holds {len(usable)} postures with joint angles; --postures {postures} asks "
@@ -153,16 +166,20 @@ class SessionBaseline:
     problem: object
 
 
-def session_baseline(config: StationConfig, session, session_dir: Path) -> SessionBaseline:
-    """Solve SESSION with the default estimator and judge it; refuse one without a passing result."""
+def session_baseline(config: StationConfig, session, session_dir: Path, progress=lambda m: None) -> SessionBaseline:
+    """SESSION's saved result (``station.result_file``: solved and saved first when it has none) judged
+    against the config's thresholds, and its maximum-likelihood fit for the test's noise model; refuse
+    one without a passing result or whose result is older than its postures."""
     from ..calibration.eiv import solve_eiv
     from ..calibration.verification import baseline_from_solution
     from .assessment import assess
-    from .calibrate import solve_session
     from .quality import config_thresholds
+    from .result_file import ResultError, current_outcome
 
     try:
-        outcome = solve_session(session, session_dir)
+        outcome = current_outcome(session, session_dir, say=progress)
+    except ResultError:
+        raise
     except HandEyeError as exc:
         raise VerifyError(f"{session_dir} has no calibration result ({exc}): capture more postures and calibrate it "
                           "before verifying") from None
@@ -177,16 +194,17 @@ def session_baseline(config: StationConfig, session, session_dir: Path) -> Sessi
     return SessionBaseline(assessment, solution, baseline_from_solution(solution), problem)
 
 
-def _tool_finding(config: StationConfig, link: StationLink, base: SessionBaseline) -> dict | None:
-    """The controller's camera tooldata against SESSION's result: None when they agree to the last digit,
-    else ``{"held", "session", "difference"}`` (a :class:`~station.verify_tolerance.ToolDifference`)."""
+def _tool_finding(config: StationConfig, link: StationLink, base: SessionBaseline, reference) -> dict | None:
+    """The controller's camera tooldata against the result the check follows (SESSION's, or the quick update
+    written after it: ``station.verify_reference``): None when they agree to the last digit."""
     from .writeback import _same_to_last_digit, tooldata_from_result
 
     held = link.controller.read_tool()
-    expected = tooldata_from_result(base.assessment.result, config)
+    expected = tooldata_from_result(reference.result or base.assessment.result, config)
     if _same_to_last_digit(held, expected):
         return None
-    return {"held": held, "session": expected, "difference": tool_difference(held, expected, drift_tolerance(config))}
+    return {"held": held, "session": expected, "reference": reference,
+            "difference": tool_difference(held, expected, drift_tolerance(config))}
 
 
 def _chosen(config, session, base: SessionBaseline, robot, here, count: int, progress=lambda m: None):
@@ -306,9 +324,13 @@ def verify(config: StationConfig, session_dir, link: StationLink, postures: int 
     session_dir = Path(session_dir)
     session = check_request(config, session_dir, postures)
     session.path = session_dir
-    base = base if base is not None else session_baseline(config, session, session_dir)
+    reference = follow(session_dir)  # the latest deliberate write-back: SESSION's result or its quick update
+    base = base if base is not None else session_baseline(config, session, session_dir, progress)
+    if reference.line():
+        progress(reference.line())
+    base = replace(base, baseline=reference.apply(base.baseline))
     robot = load_robot(config.robot)
-    tool = _tool_finding(config, link, base)
+    tool = _tool_finding(config, link, base, reference)
     here = link.controller.read_joints()  # where the controller reports the arm: the check's path starts there
     numbers, joints = _chosen(config, session, base, robot, here, postures, progress)
     progress(f"revisiting postures {', '.join(map(str, numbers))} of {session_dir.name}")
@@ -316,7 +338,8 @@ def verify(config: StationConfig, session_dir, link: StationLink, postures: int 
     measured, failure = _revisit(config, link, folder, session, numbers, joints, progress, confirm, on_posture)
     outcome = VerifyOutcome(INCONCLUSIVE, failure or "", folder, numbers, measured,
                             tool_finding=tool, motion_s=path_time_along(robot, here, joints), baseline=base,
-                            capture_motion_s=capture_time(robot, session.extra["capture"]), tolerance=drift_tolerance(config))
+                            capture_motion_s=capture_time(robot, session.extra["capture"]), tolerance=drift_tolerance(config),
+                            reference=reference)
     if failure is None:
         judge(outcome, folder, base, robot, level, numbers)
     if tool is not None and tool["difference"].beyond and outcome.verdict != INCONCLUSIVE:

@@ -1,7 +1,8 @@
 """The history of a station's checks: ``history.jsonl`` beside the sessions, one record per check.
 
 Each ``handeye verify`` appends one JSON line (time, station, session, verdict, diagnosis, sizes);
-``handeye writeback`` of a check's quick update appends a ``writeback`` record. The file is never
+every ``handeye writeback`` (a calibration or a check's quick update) appends a ``writeback`` record
+(``station.verify_reference``: the latest is what a check follows). The file is never
 rewritten in place: an append writes the old lines and the new one to a temporary file that replaces
 the old one atomically (``calibration.files.write_text_atomic``), so a kill leaves the old history or
 the new one, never half a line; the read-add-rename holds an exclusive lock (``station.file_lock``,

@@ -67,13 +67,14 @@ def advice(outcome, diag: dict, session: str, config_arg: str) -> list[str]:
     cause = diag["cause"]
     tool = diag.get("tooldata")
     if tool is not None:
-        held, own = tool["held"], tool["session"]
-        differs = (f"the robot holds a different tHeCamera than {session} ({_size(tool)} apart; the tolerance "
-                   f"{outcome.tolerance.text()}): held {held['position_mm']} {held['quaternion_wxyz']}, {session} "
-                   f"{own['position_mm']} {own['quaternion_wxyz']}")
-        lines.append(f"{differs}: restore it (handeye writeback {session} {config_arg}) unless a later calibration "
-                     "was written on purpose" if tool["beyond_tolerance"] else
-                     f"{differs}: within the tolerance, nothing to write")
+        apart = f"{_size(tool)} apart; the tolerance {outcome.tolerance.text()}"
+        if tool["beyond_tolerance"]:
+            reference = (outcome.tool_finding or {}).get("reference")
+            lines.append(f"{_tooldata_advice(reference, tool, session, config_arg)} ({apart})")
+        else:
+            held = tool["held"]
+            lines.append(f"the robot holds a different tHeCamera than {session} ({apart}): held {held['position_mm']} "
+                         f"{held['quaternion_wxyz']}: within the tolerance, nothing to write")
     if cause == "tooldata":
         diag = diag["board_check"]
         cause = diag["cause"]
@@ -99,6 +100,36 @@ def advice(outcome, diag: dict, session: str, config_arg: str) -> list[str]:
         lines.append("no single explanation accounts for all of the discrepancy: more than one thing changed? "
                      "recalibrate")
     return lines
+
+
+def _tooldata_advice(reference, diag: dict, session: str, config_arg: str) -> str:
+    """The tooldata finding's line: restore the latest deliberate write-back, never undo one
+    (``station.verify_reference``)."""
+    held = f"held {diag['held']['position_mm']} {diag['held']['quaternion_wxyz']}"
+    kind = getattr(reference, "kind", "session")
+    if kind == "other":
+        record = reference.record
+        if _same_tool(record.get("tool"), diag["held"]):
+            return (f"the robot holds the tool data written from {record['session']} at {record.get('time', '?')} (the "
+                    f"latest write-back in the history), not {session}'s: check that calibration instead (handeye "
+                    f"verify --against {record.get('of') or record['session']} {config_arg}); nothing to restore")
+        return (f"the robot holds a tHeCamera ({held}) that neither {session} nor the latest write-back in the history "
+                f"({record['session']} at {record.get('time', '?')}) wrote: restore that one (handeye writeback "
+                f"{record['session']} {config_arg})")
+    source = reference.folder if kind == "update" else session
+    what = "the quick update written from " + source if kind == "update" else session
+    return (f"the robot holds a different tHeCamera than {what}: {held}, {what} {diag['session']['position_mm']} "
+            f"{diag['session']['quaternion_wxyz']}: restore it (handeye writeback {source} {config_arg})"
+            + ("" if kind == "update" else " unless a later calibration was written on purpose"))
+
+
+def _same_tool(tool, held: dict) -> bool:
+    """The record's tool frame equals the held one to the controller's last digit (0.001 mm, 1e-6)."""
+    try:
+        return (np.max(np.abs(np.subtract(tool["position_mm"], held["position_mm"]))) <= 1.5e-3
+                and np.max(np.abs(np.subtract(tool["quaternion_wxyz"], held["quaternion_wxyz"]))) <= 1.5e-6)
+    except (KeyError, TypeError, ValueError):
+        return False
 
 
 def update_json(update, thresholds) -> dict | None:
@@ -139,9 +170,18 @@ def outcome_json(outcome, session: str, thresholds) -> dict:
         "beyond_tolerance": None if test is None else outcome.beyond_tolerance,
         "diagnosis": diag,
         "quick_update": update_json(outcome.update, thresholds),
+        "reference": _reference_json(outcome),
         "simulated_robot_time_s": outcome.motion_s,  # the plan's motion model, on every station
         "capture_robot_time_s": outcome.capture_motion_s,
     }
+
+
+def _reference_json(outcome) -> dict:
+    """What the check compared against: ``{"kind": "session"|"update"|"other", "written_from", "written_at"}``."""
+    reference = getattr(outcome, "reference", None)
+    record = getattr(reference, "record", None) or {}
+    return {"kind": getattr(reference, "kind", "session"), "written_from": record.get("session"),
+            "written_at": record.get("time")}
 
 
 def outcome_lines(data: dict, advice_lines: list[str]) -> list[str]:

@@ -19,7 +19,7 @@ from ..calibration.solve import CalibrationResult
 from ..calibration.transforms import transform_from_pose
 from .verify_plan import VerifyError
 
-__all__ = ["UPDATE_METHOD", "record_update_written", "verify_check"]
+__all__ = ["UPDATE_METHOD", "verify_check"]
 
 #: The method name of a quick update (``writeback.yaml``, the history).
 UPDATE_METHOD = "verify-quick-update"
@@ -55,10 +55,3 @@ def verify_check(folder) -> tuple[CalibrationResult, bool, str] | None:
                  "above the quality thresholds: recapture (handeye capture) and calibrate"))
     return result, bool(update["within_thresholds"]), reason
 
-
-def record_update_written(folder, outcome) -> None:
-    """One ``writeback`` record in the history beside the sessions (a recalibration on the trend)."""
-    from .verify_history import append_record, history_path
-
-    append_record(history_path(folder), {"kind": "writeback", "session": str(folder), "what": "quick update written",
-                                         "readback_ok": bool(outcome.readback_ok)})

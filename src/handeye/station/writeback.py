@@ -146,14 +146,15 @@ def check_camera_offset(cam2tool0, config: StationConfig) -> None:
                              f"({limits.max_camera_offset_mm:g}): check the session's units and set-up; nothing was written")
 
 
-def _verdict_refusal(result: CalibrationResult, verdict_reason: str) -> str:
+def _verdict_refusal(result: CalibrationResult, verdict_reason: str, session_dir="SESSION") -> str:
     """Why a failed verdict is not written, and what to do: a method without an uncertainty (the classics)
     can never pass the precision checks, so the advice is the default method, not a better session."""
     failed = f"the calibration failed its quality verdict ({verdict_reason})"
     if result.uncertainty is None:
         return (f"{failed}; the verdict needs the camera frame's uncertainty (max_sigma_translation_mm, "
-                f"max_sigma_rotation_deg), which method {result.method} does not give: write back with the default "
-                f"method (leave out --method, or --method {DEFAULT_METHOD}), or pass --force to write it anyway")
+                f"max_sigma_rotation_deg), which method {result.method} does not give: calibrate with the default "
+                f"method (handeye calibrate {session_dir}: leave out --method, or --method {DEFAULT_METHOD}) and write "
+                "back its result, or pass --force to write it anyway")
     return f"{failed}; improve it (see the report) or pass --force to write it anyway"
 
 
@@ -237,7 +238,7 @@ def writeback(session_dir, config: StationConfig, result: CalibrationResult, con
     session_dir = Path(session_dir)
     check_session_origin(origin, mock_controller)
     if not verdict_passed and not force:
-        raise WritebackError(_verdict_refusal(result, verdict_reason))
+        raise WritebackError(_verdict_refusal(result, verdict_reason, session_dir))
     new = tooldata_from_result(result, config)
     check_camera_offset(result.x, config)
     literal = f"PERS tooldata {config.tool.name} := {tooldata_literal(result.x, new.mass_kg, new.cog_mm)};"

@@ -57,6 +57,11 @@ residual. --json FILE writes the machine-readable result ('-' for standard outpu
 (truth.yaml beside the session) or "unknown" (imported or older sessions). Mock and simulated
 sessions are flagged in the text and the HTML report: they are not a calibration of a real robot.
 
+Every solve is saved in SESSION/result.yaml (atomically): the camera pose, its uncertainty, the
+method, the code version, the time and a hash of the posture files it was solved from. handeye
+writeback and handeye verify use that result and refuse it once postures are added or changed
+(run calibrate again); a folder that cannot be written is a warning, the result above stands.
+
 --report [FILE] also writes the calibration report: one self-contained HTML file (plots embedded,
 no network needed) with a PASS/FAIL verdict against the quality thresholds, the tframe literal,
 uncertainty and cross-validated accuracy, outliers, per-posture residuals, rotation-axis coverage, a
@@ -127,6 +132,7 @@ def run(args) -> int:
     with delayed_progress("calibrate") as update:  # shown only when solving takes over a second
         outcome = calibrate_session_folder(args.session, args.method, args.units, progress=update)
     _warn_joint_mismatch(outcome.session)
+    saved = _save_result(outcome, args.units)
     assessment = assess(outcome, thresholds, judge=wants_report or bool(args.thresholds),
                         methods=comparison_methods() if wants_report else ())
     written = None
@@ -140,11 +146,29 @@ def run(args) -> int:
     stream = sys.stderr if args.json == "-" else sys.stdout
     if not args.quiet and args.json != "-":
         print(calibration_summary(assessment))
+    if not args.quiet and saved is not None:
+        print(f"\nResult saved to {saved} (handeye writeback and verify use it)", file=stream)
     if not args.quiet and assessment.verdict is not None:
         if written is not None:
             print(f"\nReport written to {written}", file=stream)
         print(assessment.verdict.line(), file=stream)
     return 0
+
+
+def _save_result(outcome, units: str):
+    """``SESSION/result.yaml`` (``station.result_file``); a folder that cannot be written is one warning
+    line on stderr: the calibration stands, writeback and verify will solve it again."""
+    import sys
+
+    from ...calibration.errors import OutputError
+    from ..result_file import save_result
+
+    try:
+        return save_result(outcome, units)
+    except OutputError as exc:
+        print(f"handeye calibrate: warning: the result was not saved ({exc}); handeye writeback and verify will "
+              "solve the session again", file=sys.stderr)
+        return None
 
 
 def _warn_joint_mismatch(session) -> None:

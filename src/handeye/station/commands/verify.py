@@ -7,7 +7,12 @@ import argparse
 HELP = "check a calibration on the station: revisit K postures, test for drift, say what changed"
 
 EPILOG = """\
-The controller's camera tooldata is read and compared with SESSION's result; then K (default 5) of
+The check is against SESSION's saved result (SESSION/result.yaml of handeye calibrate: refused when
+older than SESSION's postures; solved and saved first, saying so, when missing), or against the
+quick update written after it when that is the latest write-back in the history beside the sessions
+(the output says so; a tooldata finding never advises undoing a write-back).
+
+The controller's camera tooldata is read and compared with that result; then K (default 5) of
 SESSION's postures, chosen to tell the explanations apart (spread rotation axes and distances, the
 shortest path clear of the cell), are revisited with the same RAPID program and links as capture,
 and the board measured at each is compared with where SESSION's calibration predicts it. The test's
