@@ -2,7 +2,8 @@
 
 :func:`fit_capsule` minimises the capsule's volume ``pi r^2 L + 4/3 pi r^3`` over the two ends of its
 axis (Nelder-Mead, from the principal axis through the centroid), the radius always the largest
-distance of a point from the axis, so every point is inside at every step; on a given line (``line``:
+distance of a point from the axis, so every point is inside at every step (restarted from its best
+with a fresh simplex while that gains: the cost is a maximum, not smooth); on a given line (``line``:
 a part that turns about that line, a capsule round about it), over the two ends' places on the line.
 
 :func:`fit_capsules` splits a part into ``count`` capsules: k-means groups first (a fixed seed: the
@@ -26,6 +27,9 @@ from scipy.optimize import minimize
 from .capsules import point_segment_distance
 
 __all__ = ["Capsule", "capsule_volume", "fit_capsule", "fit_capsules", "grown"]
+
+#: Nelder-Mead runs at most, each from the last one's best with a fresh simplex.
+_RESTARTS = 8
 
 
 @dataclass(frozen=True)
@@ -100,14 +104,19 @@ def fit_capsule(points, line=None, bounds=None) -> Capsule:
 
         start = np.concatenate([centre + s.min() * direction, centre + s.max() * direction])
     scale = max(float(np.ptp(s)), 1.0)
-    simplex = np.vstack([start] + [start + 0.1 * scale * row for row in np.eye(len(start))])
     def cost(x):
         capsule = at(x)
         return _volume(capsule) + 1000.0 * math.pi * capsule.radius ** 2 * _overshoot(capsule, bounds)
 
-    fit = minimize(cost, start, method="Nelder-Mead",
-                   options={"initial_simplex": simplex, "xatol": 0.05, "fatol": 1.0, "maxiter": 4000})
-    return at(fit.x) if cost(fit.x) <= cost(start) else at(start)
+    best = start
+    for _ in range(_RESTARTS):  # the cost is not smooth (a maximum): Nelder-Mead stalls; a fresh simplex moves on
+        simplex = np.vstack([best] + [best + 0.1 * scale * row for row in np.eye(len(best))])
+        fit = minimize(cost, best, method="Nelder-Mead",
+                       options={"initial_simplex": simplex, "xatol": 0.05, "fatol": 1.0, "maxiter": 4000})
+        if cost(fit.x) >= cost(best) - 1.0:
+            break
+        best = fit.x
+    return at(best)
 
 
 def fit_capsules(points, count: int, line=None, seed: int = 0, rounds: int = 6, slack_mm=None) -> list:
