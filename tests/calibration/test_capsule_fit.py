@@ -80,3 +80,20 @@ def test_the_vertex_table_reads_back_what_was_written(tmp_path):
     write_vertex_table(tmp_path / "v.csv", points, ["source: a test", "licence: none"])
     back = read_vertex_table(tmp_path / "v.csv")
     assert [len(b) for b in back] == [1, 2] and np.allclose(back[1], points[1]) and abs(back[0][0, 0] - 1.0) < 0.006
+
+
+def test_a_facet_between_two_capsules_is_measured_between_its_corners():
+    """Two spheres of radius 20 at x = 0 and x = 100, a thin facet from one to the other at y = 15: its
+    corners are 5 mm inside, its middle (x 50, 50 mm from both centres) 30 mm outside; cover_facets grows
+    the radii until the whole facet is the margin deep."""
+    from handeye.calibration.capsule_fit import Capsule, cover_facets, facet_depths, surface_gap
+
+    spheres = [Capsule(np.zeros(3), np.zeros(3), 20.0), Capsule(np.array([100.0, 0, 0]), np.array([100.0, 0, 0]), 20.0)]
+    facet = np.array([[[0.0, 15.0, 0.0], [100.0, 15.0, 0.0], [0.0, 15.0, 0.1]]])
+    assert facet_depths(spheres[:1], facet[:, [0, 2, 2]], 5.0)[0] == pytest.approx(5.0, abs=0.01)  # corners only
+    depth = facet_depths(spheres, facet, 5.0)[0]
+    true = 20.0 - np.hypot(50.0, 15.0)  # the facet's middle
+    assert true - surface_gap(5.0) - 0.5 <= depth <= true + 0.5
+    grown_ = cover_facets(spheres, facet, 10.0, 5.0)
+    assert facet_depths(grown_, facet, 5.0)[0] >= 10.0
+    assert all(g.radius >= s.radius for g, s in zip(grown_, spheres))

@@ -135,7 +135,8 @@ def _check(tmp_path, text, *extra):
     return main(["cell", "check", "--config", str(config), str(joints), "--moves", *extra])
 
 
-#: Link 4 against link 1: the row of the issue, which is not clear.
+#: The wrist folded down onto the lower arm: the row of the issue, which is not clear (the closest pair is link 6
+#: against link 2 with the capsules fitted to the meshes, issue 41; link 4 against link 1 with the estimated ones).
 COLLIDING = "0,-30,60,0,90,0"
 
 
@@ -165,7 +166,7 @@ def test_a_header_is_a_line_without_numbers_and_the_output_names_it(tmp_path, ca
     assert _check(tmp_path, "# targets of HeCal\naxis 1,a2,a3,a4,a5,a6\n" + COLLIDING + "\n0,10,0,0,0,0\n") == 3
     out = capsys.readouterr().out
     assert "line 2 taken as a header (no number in it), not checked: 'axis 1,a2,a3,a4,a5,a6'" in out
-    assert "row 0 (line 3): NOT CLEAR: link 4 against link 1" in out
+    assert "row 0 (line 3): NOT CLEAR: link 6 against link 2" in out
     assert _check(tmp_path, COLLIDING + "\n0,10,0,0,0,0\n") == 3  # no header: none named
     assert "taken as a header" not in capsys.readouterr().out
 
@@ -174,3 +175,54 @@ def test_the_json_names_the_header_line_and_stdout_stays_json(tmp_path, capsys):
     assert _check(tmp_path, "a1,a2,a3,a4,a5,a6\n" + COLLIDING + "\n", "--json", "-") == 3
     captured = capsys.readouterr()
     assert json.loads(captured.out)["header_line"] == 1 and "taken as a header" in captured.err
+
+
+# ------------------------------------------------------------------ the capsules fitted to the meshes (issue 41)
+#: The robot file's link_bodies before issue 41: estimated from the outline, padded by 30 mm.
+ESTIMATED_BODIES = """\
+  - {name: base, link: 0, from_mm: [-90, 0, 110], to_mm: [90, 0, 110], radius_mm: 230}
+  - {name: link 1, link: 1, from_mm: [0, 0, 330], to_mm: [150, 0, 475], radius_mm: 160}
+  - {name: link 1, link: 1, from_mm: [150, -160, 475], to_mm: [150, 160, 475], radius_mm: 125}
+  - {name: link 2, link: 2, from_mm: [150, 0, 475], to_mm: [150, 0, 1075], radius_mm: 105}
+  - {name: link 3, link: 3, from_mm: [-100, 0, 1180], to_mm: [330, 0, 1180], radius_mm: 125}
+  - {name: link 3, link: 3, from_mm: [150, 0, 1195], to_mm: [670, 0, 1195], radius_mm: 75}
+"""
+#: The base's rear cable box reaches x -398 (the mesh, y +-182, z 12..64): a box 7 mm behind it.
+REAR_BOX = "{type: box, name: cable duct, min_mm: [-600, -100, 0], max_mm: [-405, 100, 300]}"
+#: Link 1's side motors reach |y| 341 (the mesh, x -82..71, z 242..395 at axis 1 = 0): a post 20 mm beside them.
+MOTOR_POST = "{type: cylinder, name: post, centre_mm: [0, 401], radius_mm: 40, z_mm: [0, 600]}"
+#: Axis 1 at 0, the wrist far in front: only the base and link 1 are near either volume.
+FACING_FRONT = [0, 0, 0, 0, 30, 0]
+
+
+def _estimated_robot(tmp_path: Path) -> Path:
+    text = (ROBOTS_DIR / "irb1400.yaml").read_text(encoding="utf-8").replace("name: IRB1400", "name: IRB1400 estimated")
+    head, rest = text.split("# fitted: begin\n", 1)
+    path = tmp_path / "estimated.yaml"
+    path.write_text(head + "# fitted: begin\n" + ESTIMATED_BODIES + "# fitted: end" + rest.split("# fitted: end", 1)[1],
+                    encoding="utf-8")
+    return path
+
+
+def _cell_check(tmp_path, robot: str, volume: str) -> int:
+    config = tmp_path / f"{robot.replace('/', '_')}.yaml"
+    config.write_text(CONFIG.replace("robot: IRB1400", f"robot: {robot}").replace(
+        "    - {type: box, name: fixture", f"    - {volume}\n    - {{type: box, name: fixture"), encoding="utf-8")
+    joints = tmp_path / "targets.csv"
+    joints.write_text(",".join(f"{v:g}" for v in FACING_FRONT) + "\n", encoding="utf-8")
+    return main(["cell", "check", "--config", str(config), str(joints)])
+
+
+def test_a_box_at_the_base_rear_is_refused_now_and_passed_the_estimated_base(tmp_path, capsys):
+    assert _cell_check(tmp_path, str(_estimated_robot(tmp_path)), REAR_BOX) == 0
+    assert "all clear" in capsys.readouterr().out
+    assert _cell_check(tmp_path, "IRB1400", REAR_BOX) == 1  # the base never moves: refused when the cell loads
+    err = capsys.readouterr().err
+    assert "'cable duct' (box, cell.keep_out)" in err and "robot's base" in err and err.count("\n") == 1, err
+
+
+def test_a_post_beside_link_1s_motors_is_refused_now_and_passed_the_estimated_link_1(tmp_path, capsys):
+    assert _cell_check(tmp_path, str(_estimated_robot(tmp_path)), MOTOR_POST) == 0
+    assert "all clear" in capsys.readouterr().out
+    assert _cell_check(tmp_path, "IRB1400", MOTOR_POST) == 3
+    assert "row 0 (line 1): NOT CLEAR: link 1 " in capsys.readouterr().out

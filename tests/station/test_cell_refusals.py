@@ -83,17 +83,24 @@ def test_plausible_cells_still_load():
 
 
 # ---------------------------------------------------------------- the base against the keep-out volumes
-#: The robot file's base capsule, written again: its axis (-90, 0, 110) - (90, 0, 110), radius 230 mm.
-BASE_END_X, BASE_AXIS_Z, BASE_RADIUS = 90.0, 110.0, 230.0
+#: The robot file's base capsules (fitted to the meshes, issue 41): how far they reach in front (+x) and behind
+#: (-x), each from a capsule's end whose y and z lie inside the boxes below (y within +-250, z within 0..800),
+#: so a box's face that far plus a gap is that gap from the base.
+BASE = [(np.asarray(b.start_mm), np.asarray(b.end_mm), b.radius_mm) for b in ROBOT.link_bodies if b.link == 0]
+FRONT = max(max(a[0], b[0]) + r for a, b, r in BASE)
+BACK = min(min(a[0], b[0]) - r for a, b, r in BASE)
+#: The capsules' end farthest to -y and its reach there (x, y - r): a vertical post's nearest point of the base.
+SIDE_X, SIDE_Y = min(((e[0], e[1] - r) for a, b, r in BASE for e in (a, b)), key=lambda e: e[1])
 
 
 def test_the_base_distance_is_the_capsule_geometry():
-    """A box beside the base, its face at x = 340: 340 - 90 - 230 = 20 mm from the capsule, to within half
-    a sample spacing below (never above); one behind, above the axis: 20 mm from the capsule's other end."""
+    """A box beside the base, its face 20 mm in front of the base capsules' reach: 20 mm from the base, to
+    within half a sample spacing below (never above); one behind: 20 mm from the capsules' rear reach."""
     from handeye.calibration.base_clearance import BASE_STEP_MM, base_clearances
 
-    beside = Box("beside", (BASE_END_X + BASE_RADIUS + 20.0, -100.0, 0.0), (900.0, 100.0, 800.0))
-    behind = Box("behind", (-900.0, -100.0, 0.0), (-BASE_END_X - BASE_RADIUS - 20.0, 100.0, 800.0))
+    assert all(abs(e[1]) < 250 and 0 < e[2] < 800 for a, b, _ in BASE for e in (a, b))
+    beside = Box("beside", (FRONT + 20.0, -250.0, 0.0), (900.0, 250.0, 800.0))
+    behind = Box("behind", (-900.0, -250.0, 0.0), (BACK - 20.0, 250.0, 800.0))
     gaps = dict((v.name, d) for v, d in base_clearances(ROBOT, [beside, behind, Floor("floor", 0.0)]))
     assert set(gaps) == {"beside", "behind"}  # the floor carries the robot: not measured
     for gap in gaps.values():
@@ -101,12 +108,12 @@ def test_the_base_distance_is_the_capsule_geometry():
 
 
 @pytest.mark.parametrize("volume, words", [
-    ({"type": "box", "name": "cabinet", "min_mm": [200, -200, 0], "max_mm": [600, 200, 900]},
+    ({"type": "box", "name": "cabinet", "min_mm": [FRONT - 120, -250, 0], "max_mm": [600, 250, 900]},
      ["the keep-out volume 'cabinet' (box, cell.keep_out) reaches 120 mm into the robot's base", "cell.margin_mm (30 mm)",
       "move or shrink the volume", "wholly at or below base z 0"]),
-    ({"type": "box", "name": "tool rack", "min_mm": [340, -100, -50], "max_mm": [700, 100, 900]},
+    ({"type": "box", "name": "tool rack", "min_mm": [FRONT + 20, -250, -50], "max_mm": [700, 250, 900]},
      ["'tool rack' (box, cell.keep_out) is 20 mm from the robot's base", "within cell.margin_mm (30 mm)"]),
-    ({"type": "cylinder", "name": "post", "centre_mm": [0, -300], "radius_mm": 50, "z_mm": [-200, 1500]},
+    ({"type": "cylinder", "name": "post", "centre_mm": [SIDE_X, SIDE_Y - 70], "radius_mm": 50, "z_mm": [-200, 1500]},
      ["'post' (cylinder, cell.keep_out) is 20 mm from the robot's base"]),
 ])
 def test_a_volume_within_the_margin_of_the_base_is_refused_at_load(volume, words):
@@ -121,12 +128,12 @@ def test_a_volume_within_the_margin_of_the_base_is_refused_at_load(volume, words
 
 def test_volumes_the_robot_stands_on_and_volumes_clear_of_the_base_load():
     """The floor, a foundation box and a pedestal cylinder wholly at or below base z 0 overlap the base's
-    envelope (it reaches 120 mm below the foot) and are accepted; so is a cabinet 40 mm from the base."""
+    envelope (it reaches below the foot) and are accepted; so is a cabinet 40 mm from the base."""
     config = config_from_dict({**MOCK, "cell": {"keep_out": [
         {"type": "floor", "name": "floor", "z_mm": -400},
         {"type": "box", "name": "foundation", "min_mm": [-600, -600, -400], "max_mm": [600, 600, 0]},
         {"type": "cylinder", "name": "pedestal", "centre_mm": [0, 0], "radius_mm": 300, "z_mm": [-400, 0]},
-        {"type": "box", "name": "cabinet", "min_mm": [BASE_END_X + BASE_RADIUS + 40, -200, 0], "max_mm": [900, 200, 700]}]}})
+        {"type": "box", "name": "cabinet", "min_mm": [FRONT + 40, -250, 0], "max_mm": [900, 250, 700]}]}})
     assert [v.name for v in config.cell.keep_out] == ["floor", "foundation", "pedestal", "cabinet"]
 
 
@@ -135,13 +142,13 @@ def test_the_planner_refuses_a_cell_built_in_code_with_a_volume_in_the_base():
     the board's stand is checked against the base too."""
     from handeye.station.cell_plan import base_problem
 
-    cell = CellModel((Floor("floor", 0.0), Box("cabinet", (200, -200, 0), (600, 200, 900))), DEFAULT_CARRIED)
+    cell = CellModel((Floor("floor", 0.0), Box("cabinet", (FRONT - 120, -250, 0), (600, 250, 900))), DEFAULT_CARRIED)
     view = invert_transforms(ROBOT.forward_transform(DEFAULT_START) @ DEFAULT_MOUNT) @ DEFAULT_BOARD
     with pytest.raises(PlanningError) as refused:
         plan_postures(ROBOT, DEFAULT_START, view, DEFAULT_MOUNT, BOARD, count=12, seed=1, cell=CellCheck(cell))
     assert str(refused.value).startswith("the keep-out volume 'cabinet' (box, cell.keep_out) reaches 120 mm into the "
                                          "robot's base")
-    stand = Box("board stand", (300, -100, 0), (500, 100, 600))  # not configured; 320 - 300 = 20 mm into the base
+    stand = Box("board stand", (FRONT - 20, -250, 0), (FRONT + 180, 250, 600))  # not configured; 20 mm into the base
     message = base_problem(ROBOT, [Floor("floor", 0.0), stand], 30.0, keep_out=(Floor("floor", 0.0),))
     assert message.startswith("the board's stand 'board stand' reaches 20 mm into the robot's base")
     assert "place the board farther" in message

@@ -98,7 +98,8 @@ def five_axis_robot(tmp_path):
     """A robot YAML with five axes (the IRB 1400 without its last wrist axis)."""
     robot = yaml.safe_load((EXAMPLE_FILE.parents[1] / "calibration" / "robots" / "irb1400.yaml").read_text())
     robot.update(name="FiveAxis", aliases=[], dh=robot["dh"][:5], joint_limits_deg=robot["joint_limits_deg"][:5],
-                 max_speed_deg_s=robot["max_speed_deg_s"][:5], bodies=robot["bodies"][:2])  # no flange: no link 6
+                 max_speed_deg_s=robot["max_speed_deg_s"][:5], bodies=robot["bodies"][:2],  # no flange: no link 6
+                 link_bodies=[b for b in robot["link_bodies"] if b["link"] <= 5])  # nor link 6's fitted capsule
     # nor a self-collision pair of link 6 (a pair naming no body of the file is refused at load)
     robot["self_collision"]["pairs"] = [pair for pair in robot["self_collision"]["pairs"] if "link 6" not in pair]
     robot.pop("home_tool0_in_base", None)

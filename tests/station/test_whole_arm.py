@@ -33,14 +33,24 @@ MARGIN, STEP = 30.0, 10.0  # the CellCheck defaults the benchmark plans with
 #: IRB 1400 standard DH (d, a, alpha deg, theta offset deg); the serial angle of axis 3 is a3 - a2.
 DH = np.array([[475, 150, -90, 0], [0, 600, 0, -90], [0, 120, -90, 0], [720, 0, 90, 0], [0, 0, -90, 0], [85, 0, 0, 180]],
               float)
-#: Capsules (name, part, start, end in base at home, radius): part 0 the base, i the link axis i turns.
+#: Capsules (name, part, start, end in base at home, radius): part 0 the base, i the link axis i turns (the
+#: robot file's link_bodies, fitted to the meshes in issue 41, then its wrist bodies between chain points).
 CAPSULES = [
-    ("base", 0, (-90, 0, 110), (90, 0, 110), 230.0),
-    ("link 1", 1, (0, 0, 330), (150, 0, 475), 160.0),
-    ("link 1", 1, (150, -160, 475), (150, 160, 475), 125.0),
-    ("link 2", 2, (150, 0, 475), (150, 0, 1075), 105.0),
-    ("link 3", 3, (-100, 0, 1180), (330, 0, 1180), 125.0),
-    ("link 3", 3, (150, 0, 1195), (670, 0, 1195), 75.0),  # the upper arm's tube, on axis 4
+    ("base", 0, (-315, 119, 96), (-43, 138, 77), 145.0),
+    ("base", 0, (-315, -116, 95), (-44, -138, 77), 145.0),
+    ("base", 0, (161, -104, 67), (163, 108, 71), 138.0),
+    ("link 1", 1, (5, -229, 313), (177, -136, 506), 153.0),
+    ("link 1", 1, (-114, 23, 291), (117, -18, 291), 204.0),
+    ("link 1", 1, (0, 230, 324), (126, 152, 441), 152.0),
+    ("link 1", 1, (129, 144, 575), (237, 143, 480), 93.0),
+    ("link 2", 2, (192, -1, 370), (75, -1, 662), 106.0),
+    ("link 2", 2, (138, 0, 1104), (233, 0, 868), 70.0),
+    ("link 3", 3, (282, -53, 1175), (135, -25, 1221), 148.0),
+    ("link 3", 3, (80, 40, 1093), (80, -40, 1093), 149.0),
+    ("link 3", 3, (-106, 0, 1195), (670, 0, 1195), 110.0),  # the upper arm's tube, on axis 4
+    ("link 4", 4, (670, 0, 1195), (824, 0, 1195), 110.0),
+    ("link 5", 5, (870, 0, 1195), (898, 0, 1195), 61.0),
+    ("link 6", 6, (955, 0, 1195), (955, 0, 1195), 36.0),
     ("link 4", 4, (150, 0, 1195), (870, 0, 1195), 70.0),
     ("link 5", 5, (870, 0, 1195), (870, 0, 1195), 75.0),
     ("link 6", 6, (870, 0, 1195), (955, 0, 1195), 45.0),
@@ -177,7 +187,7 @@ def test_the_own_kinematics_agree_with_the_robot_model():
 def test_the_tube_in_front_of_the_elbow_is_fixed_in_link_3():
     """The tube's capsule lies on axis 4 and is round about it: carried by link 4 (turned by axis 4) or by
     link 3, its axis has the same ends at every posture, whatever axis 4's angle, so it is one body of link 3."""
-    ends = np.array([(150.0, 0.0, 1195.0, 1.0), (670.0, 0.0, 1195.0, 1.0)])
+    ends = np.array([(-106.0, 0.0, 1195.0, 1.0), (670.0, 0.0, 1195.0, 1.0)])
     joints = np.random.default_rng(4).uniform(ROBOT.joint_limits_deg[:, 0], ROBOT.joint_limits_deg[:, 1], (200, 6))
     f = frames(joints)
     on_link_3 = np.einsum("nij,mj->nmi", f[:, 3] @ np.linalg.inv(HOME[3]), ends)

@@ -6,6 +6,10 @@ reading). Mesh ``i`` is drawn in the standard-DH frame ``i`` of some model (link
 model whose table differs from ours (the ARTE IRB 1410: d1 and d6 10 mm short) is corrected link by
 link, and lifts the base mesh so that its lowest point is on the mounting plane (base z 0).
 
+A capsule fit must hold the mesh's surface, not only its vertices (a long facet between two capsules:
+the lower arm's sides, 800 mm long, have vertices only at their ends): :func:`read_ascii_stl_facets`
+gives the facets as rows of vertex indices; ``calibration.capsule_fit.facet_depths`` measures them.
+
 The vertex table (:func:`write_vertex_table`, :func:`read_vertex_table`) holds the placed points as
 text: ``link,x_mm,y_mm,z_mm`` rows after ``#`` comment lines (source and licence).
 """
@@ -19,7 +23,8 @@ import numpy as np
 
 from .kinematics import RobotModel, dh_transforms
 
-__all__ = ["home_link_frames", "place_link_meshes", "read_ascii_stl", "read_vertex_table", "write_vertex_table"]
+__all__ = ["home_link_frames", "place_link_meshes", "read_ascii_stl", "read_ascii_stl_faces", "read_vertex_table",
+           "write_vertex_table"]
 
 _VERTEX = re.compile(r"^\s*vertex\s+(\S+)\s+(\S+)\s+(\S+)\s*$", re.MULTILINE)
 
@@ -37,6 +42,22 @@ def read_ascii_stl(path, scale: float = 1.0) -> np.ndarray:
     if not rows:
         raise ValueError(f"{path}: no 'vertex x y z' lines (only ASCII STL is read)")
     return np.unique(np.array(rows, float), axis=0) * float(scale)
+
+
+def read_ascii_stl_faces(path) -> np.ndarray:
+    """The facets of an ASCII STL file as rows ``(m, 3)`` of indices into :func:`read_ascii_stl`'s vertices.
+
+    Raises
+    ------
+    ValueError
+        If the file holds no ``vertex`` line, or a number of them that is not a multiple of 3.
+    """
+    text = Path(path).read_text(encoding="ascii", errors="replace")
+    rows = _VERTEX.findall(text)
+    if not rows or len(rows) % 3:
+        raise ValueError(f"{path}: expected facets of three 'vertex x y z' lines (only ASCII STL is read)")
+    _, inverse = np.unique(np.array(rows, float), axis=0, return_inverse=True)
+    return inverse.reshape(-1, 3)
 
 
 def home_link_frames(robot: RobotModel) -> np.ndarray:
@@ -80,3 +101,4 @@ def read_vertex_table(path) -> list:
     table = np.array([[float(v) for v in row.split(",")] for row in rows[1:]]).reshape(-1, 4)
     links = table[:, 0].astype(int)
     return [table[links == i, 1:] for i in range(int(links.max()) + 1 if len(links) else 0)]
+

@@ -73,6 +73,11 @@ class SceneConfig:
     aim_mm : float
         Standard deviation of the aim point around the board centre (moves the board in the image).
     seed : int
+    self_clear_mm : float, optional
+        Eye-in-hand: keep only postures whose arm and carried bodies (the camera and its bracket,
+        ``cell.DEFAULT_CARRIED``) are this far from each other (the robot file's self-collision pairs),
+        and whose joint moves from all axes at 0 and from every posture kept before stay clear of
+        touching (the mock's motion supervision). None (default): not checked.
     """
 
     postures: int = 30
@@ -85,6 +90,7 @@ class SceneConfig:
     roll_deg: float = 40.0
     aim_mm: float = 80.0
     seed: int = 0
+    self_clear_mm: float | None = None
 
 
 @dataclass(frozen=True)
@@ -183,6 +189,25 @@ def _default_geometry(config: SceneConfig):
     return x_true, target2fixed, look
 
 
+def _self_clear_veto(robot: RobotModel, margin_mm: float):
+    """``veto(joints) -> bool`` of :attr:`SceneConfig.self_clear_mm`: True keeps the posture (and remembers it)."""
+    from .cell import DEFAULT_CARRIED
+    from .clearance import CellGuard
+
+    posture = CellGuard(robot, [], DEFAULT_CARRIED, margin_mm=margin_mm)
+    moves = CellGuard(robot, [], DEFAULT_CARRIED, margin_mm=0.0, step_mm=5.0)  # as the mock supervises them
+    kept = [np.zeros(robot.dof)]
+
+    def veto(joints) -> bool:
+        if posture.posture_violation(joints) is not None:
+            return False
+        if any(moves.path_violation(start, joints) is not None for start in kept):
+            return False
+        kept.append(np.asarray(joints, float))
+        return True
+    return veto
+
+
 def make_scene(config: SceneConfig = SceneConfig()) -> Scene:
     """Sample a reachable posture set with the whole board in view (deterministic per seed).
 
@@ -201,8 +226,10 @@ def make_scene(config: SceneConfig = SceneConfig()) -> Scene:
     if config.setup == EYE_IN_HAND:
         sampling = ViewSampling(distance_mm=tuple(config.distance_mm), cone_deg=config.cone_deg,
                                 roll_deg=config.roll_deg, aim_mm=config.aim_mm)
+        veto = None if config.self_clear_mm is None else _self_clear_veto(robot, config.self_clear_mm)
         try:
-            joints = sample_eye_in_hand_postures(robot, x_true, target2fixed, corners, config.postures, rng, sampling)
+            joints = sample_eye_in_hand_postures(robot, x_true, target2fixed, corners, config.postures, rng, sampling,
+                                                 veto=veto)
         except RuntimeError as exc:
             raise RuntimeError(f"{exc} (synthetic scene)") from None
         return Scene(config, robot, x_true, target2fixed, joints, board)

@@ -2,7 +2,7 @@
 
 One PNG (``SESSION/preview.png``, and in the report): the keep-out volumes (boxes, cylinders, the
 floor, the board's stand), the board, the whole arm at the start posture (every capsule the cell and
-self-collision checks watch: the base, links 1-3 and the wrist), the path the flange will run (tool0's origin along the
+self-collision checks watch: the robot file's bodies, the base and links 1-6), the path the flange will run (tool0's origin along the
 joint-interpolated moves, from the start posture through every posture in order) and the numbered
 postures (the flange there), each by its number: its file's, ``postures/NNN.yaml`` -> NNN
 (:func:`posture_labels`), as capture, calibrate and the report name it. Two views of the base frame: from above (x, y) and from the side

@@ -1,0 +1,53 @@
+"""How deep the meshes' facets, not only their vertices, lie in the robot file's capsules (issue 41).
+
+The fit (``fit.py``) holds every vertex :data:`fit.MARGIN_MM` deep; a facet whose corners lie in different
+capsules of a link can leave their union between its corners (the lower arm's sides run 800 mm between two
+capsules). Prints per link the least depth of its facets at all axes 0 (``capsule_fit.facet_depths``, facets
+sampled every 5 mm, a lower bound) and how many facets are less than the margin deep or outside. The bodies
+move rigidly with their links, so the figures hold at every posture.
+
+Usage (from the repository root, in the project's venv):
+    python benchmarks/arm_bodies/surface.py [--meshes ../shared/reference/irb1410-arte]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import fit  # noqa: E402
+
+from handeye.calibration.arm_meshes import read_ascii_stl_faces  # noqa: E402
+from handeye.calibration.body_cover import link_capsules  # noqa: E402
+from handeye.calibration.capsule_fit import Capsule, facet_depths  # noqa: E402
+from handeye.calibration.clearance import arm_capsules  # noqa: E402
+from handeye.calibration.kinematics import load_robot  # noqa: E402
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--meshes", type=Path, default=fit.MESHES, help="folder of link0.stl .. link6.stl")
+    args = parser.parse_args(argv)
+    if not (args.meshes / "link0.stl").is_file():
+        print(f"surface.py: error: no link0.stl in {args.meshes}; give --meshes FOLDER", file=sys.stderr)
+        return 1
+    robot = load_robot("IRB1400")
+    meshes = fit.placed_meshes(robot, args.meshes)
+    faces = [read_ascii_stl_faces(args.meshes / f"link{i}.stl") for i in range(len(meshes))]
+    pivots, capsules = robot.home_pivots(), arm_capsules(robot)
+    for link, rows in enumerate(link_capsules(robot)):
+        held = [Capsule(pivots[capsules[c][1]] + capsules[c][2], pivots[capsules[c][1]] + capsules[c][3],
+                        capsules[c][4]) for c in rows]
+        depth = facet_depths(held, meshes[link][faces[link]], 5.0)
+        print(f"mesh {link}: {len(depth)} facets, least depth {depth.min():.1f} mm, "
+              f"{int(np.sum(depth < fit.MARGIN_MM))} under the {fit.MARGIN_MM:g} mm margin, {int(np.sum(depth < 0))} "
+              f"possibly outside")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
