@@ -103,4 +103,7 @@ def run(args) -> int:
     print(side_by_side(outcome.old, outcome.new))
     print(outcome.literal)
     print(tag + ("read back: identical to the last digit the controller keeps" if outcome.readback_ok else "read back: DIFFERENT"))
+    from ..plant.hooks import after_writeback  # the plant's broker, when the config has plant:
+
+    after_writeback(args, config, outcome, check is not None, reason)
     return 0
