@@ -10,6 +10,7 @@ a sequence number, or not JSON is counted in ``rejected`` and not kept.
 from __future__ import annotations
 
 import json
+import os
 import threading
 
 from .publisher import EVENT_TOPIC, STATE_TOPIC
@@ -21,8 +22,8 @@ class FleetSubscriber:
     """Subscribe to ``fleet.cells`` on ``fleet.mqtt`` and keep what arrives in ``history`` (``store.History``);
     ``on_change()`` is called after each kept event or state."""
 
-    def __init__(self, fleet, history, on_change=lambda: None):
-        self.fleet, self.history, self.on_change = fleet, history, on_change
+    def __init__(self, fleet, history, on_change=lambda: None, persistent: bool = True):
+        self.fleet, self.history, self.on_change, self.persistent = fleet, history, on_change, persistent
         self.rejected = self.duplicates = 0
         self.connected = threading.Event()
         self.client = None
@@ -32,7 +33,11 @@ class FleetSubscriber:
         from .client import connect, make_client
 
         mqtt = self.fleet.mqtt
-        self.client = make_client(mqtt, mqtt.client_id or "handeye-fleet", clean_session=False)
+        if self.persistent:  # the one fleet view the broker keeps events for
+            client_id, clean = mqtt.client_id or "handeye-fleet", False
+        else:  # a look (--json) beside it: what the history holds, and what comes meanwhile
+            client_id, clean = f"{mqtt.client_id or 'handeye-fleet'}-look-{os.getpid()}", True
+        self.client = make_client(mqtt, client_id, clean_session=clean)
         self.client.reconnect_delay_set(0.2, 2.0)
         self.client.on_message = self._message
         self.client.on_disconnect = lambda *a, **k: self.connected.clear()
