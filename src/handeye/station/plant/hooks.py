@@ -40,11 +40,12 @@ def publish_event(command: str, plant, make_event) -> None:
     """Make the event (``make_event()``), keep it in the outbox, send what waits; a fault is one warning line."""
     try:
         from .outbox import Outbox
-        from .publisher import deliver
+        from .publisher import Link, deliver
 
+        link = Link(plant, plant.publish_timeout_s).start()  # connects while the event is made and kept
         outbox = Outbox(plant.outbox_dir())
         event = outbox.add(make_event())
-        delivery = deliver(plant, outbox)
+        delivery = deliver(plant, outbox, link=link)
         if delivery.fault is not None:
             _warn(command, f"{delivery.fault}; {delivery.waiting} event(s) wait in {outbox.folder} (sent with the next "
                            f"command; this one's is #{event['seq']})")

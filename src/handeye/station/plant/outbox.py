@@ -1,12 +1,13 @@
 """The cell's outbox: events not yet acknowledged by the broker, one file each, numbered in order.
 
-A folder (``plant.outbox``) holding ``seq`` (the last sequence number given) and one
-``<seq:012d>.json`` per event waiting. :meth:`Outbox.add` gives the next number and writes the event
-under the folder's lock (``station.file_lock``: two commands at one cell never share a number), each
-file atomically (temporary file, flushed, renamed: a killed command leaves the whole event or none).
-:meth:`Outbox.pending` lists them in order; :meth:`Outbox.done` removes one once the broker has
-acknowledged it (QoS 1). A crash between the acknowledgement and the removal sends that event again:
-the fleet keeps it once, by its number (``station.plant.store``).
+A folder (``plant.outbox``) holding one ``<seq:012d>.json`` per event waiting and ``last-sent.json``,
+the last event the broker acknowledged. :meth:`Outbox.add` gives the next number (one more than the
+largest of those) and writes the event under the folder's lock (``station.file_lock``: two commands at
+one cell never share a number), atomically (temporary file, flushed to disk, renamed: a killed command
+leaves the whole event or none). :meth:`Outbox.pending` lists them in order; :meth:`Outbox.done` renames
+an acknowledged one (QoS 1) over ``last-sent.json``, so the numbers never go back, with one write to
+disk per event. A crash that loses the rename sends that event again: the fleet keeps it once, by its
+number (``station.plant.store``).
 """
 
 from __future__ import annotations
@@ -29,11 +30,15 @@ class Outbox:
         self.folder = Path(folder)
 
     def _counter(self) -> Path:
-        return self.folder / "seq"
+        return self.folder / "seq"  # its lock file only
+
+    def _last_sent(self) -> Path:
+        return self.folder / "last-sent.json"
 
     def last_seq(self) -> int:
+        """The number of the last event the broker acknowledged (0: none yet)."""
         try:
-            return int(self._counter().read_text().strip() or 0)
+            return int(json.loads(self._last_sent().read_text()).get("seq") or 0)
         except FileNotFoundError:
             return 0
 
@@ -41,10 +46,9 @@ class Outbox:
         """Give ``event`` the cell's next sequence number and keep it until delivered; returns it numbered."""
         self.folder.mkdir(parents=True, exist_ok=True)
         with exclusive_lock(self._counter()):
-            seq = max([self.last_seq()] + [n for n, _ in self.pending()]) + 1  # a file a crash left counts
+            seq = max([self.last_seq()] + [n for n, _ in self.pending()]) + 1
             event = dict(event, seq=seq)
             write_text_atomic(self.folder / f"{seq:012d}.json", json.dumps(event, sort_keys=True) + "\n")
-            write_text_atomic(self._counter(), f"{seq}\n")  # after the event: a crash between reuses no number
         return event
 
     def pending(self) -> list[tuple[int, Path]]:
@@ -61,10 +65,10 @@ class Outbox:
     def read(path: Path) -> bytes:
         return path.read_bytes()
 
-    @staticmethod
-    def done(path: Path) -> None:
+    def done(self, path: Path) -> None:
+        """``path`` was acknowledged: it becomes ``last-sent.json`` (in order: the numbers only grow)."""
         with contextlib.suppress(FileNotFoundError):
-            os.remove(path)
+            os.replace(path, self._last_sent())
 
     @contextlib.contextmanager
     def draining(self, wait_s: float):

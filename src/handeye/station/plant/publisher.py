@@ -10,10 +10,11 @@ acknowledged stays in the outbox and leaves, first, with the next command's even
 from __future__ import annotations
 
 import os
+import threading
 import time
 from dataclasses import dataclass
 
-__all__ = ["EVENT_TOPIC", "STATE_TOPIC", "Delivery", "deliver", "event_topic", "state_topic"]
+__all__ = ["EVENT_TOPIC", "STATE_TOPIC", "Delivery", "Link", "deliver", "event_topic", "state_topic"]
 
 EVENT_TOPIC, STATE_TOPIC = "handeye/event", "handeye/state"
 
@@ -35,30 +36,67 @@ class Delivery:
     fault: str | None = None
 
 
-def deliver(plant, outbox, budget_s: float | None = None) -> Delivery:
-    """Send ``outbox`` (``Outbox``) to the broker of ``plant`` (``PlantSettings``) within ``budget_s``
-    (default ``plant.publish_timeout_s``); never raises for a broker fault (``Delivery.fault``)."""
-    from .client import PlantLinkError, connect, make_client
+class Link:
+    """The connection to the broker of ``plant``, opened in a thread of its own (importing paho, TLS and the
+    broker's answer take longer than writing the event: the command does both at once); :meth:`client`
+    waits for it."""
 
-    budget = plant.publish_timeout_s if budget_s is None else budget_s
-    deadline = time.monotonic() + budget
-    with outbox.draining(budget) as ours:
-        if not ours:
-            return Delivery(0, len(outbox.pending()), "another handeye command of this cell is sending; the events wait")
-        pending = outbox.pending()
-        if not pending:
-            return Delivery(0, 0)
-        client_id = plant.mqtt.client_id or f"handeye-{plant.cell}-{os.getpid()}"
+    def __init__(self, plant, budget_s: float):
+        self.plant, self.deadline = plant, time.monotonic() + budget_s
+        self._client, self.fault = None, None
+        self._thread = threading.Thread(target=self._open, name="plant-link", daemon=True)
+
+    def start(self) -> Link:
+        self._thread.start()
+        return self
+
+    def _open(self) -> None:
+        from .client import PlantLinkError, connect, make_client
+
         try:
-            client = make_client(plant.mqtt, client_id)
-            connect(client, plant.mqtt, max(deadline - time.monotonic(), 0.05))
+            client = make_client(self.plant.mqtt, self.plant.mqtt.client_id or f"handeye-{self.plant.cell}-{os.getpid()}")
+            connect(client, self.plant.mqtt, max(self.deadline - time.monotonic(), 0.05))
+            self._client = client
         except PlantLinkError as exc:
-            return Delivery(0, len(pending), str(exc))
-        try:
-            return _send(client, plant, outbox, pending, deadline)
-        finally:
-            client.disconnect()
-            client.loop_stop()
+            self.fault = str(exc)
+        except Exception as exc:  # noqa: BLE001 (publishing never fails a command)
+            self.fault = f"{type(exc).__name__}: {exc}"
+
+    def client(self):
+        """The connected client, or None (``fault`` says why) once the budget is spent."""
+        self._thread.join(max(self.deadline - time.monotonic(), 0.0))
+        if self._thread.is_alive():
+            self.fault = f"broker {self.plant.mqtt.host}:{self.plant.mqtt.effective_port} did not answer in time"
+            return None
+        return self._client
+
+    def close(self) -> None:
+        self._thread.join(max(self.deadline - time.monotonic(), 0.0))
+        if self._client is not None:
+            self._client.disconnect()
+            self._client.loop_stop()
+            self._client = None
+
+
+def deliver(plant, outbox, budget_s: float | None = None, link: Link | None = None) -> Delivery:
+    """Send ``outbox`` (``Outbox``) to the broker of ``plant`` (``PlantSettings``) within ``budget_s``
+    (default ``plant.publish_timeout_s``), on ``link`` when one was opened already; never raises for a
+    broker fault (``Delivery.fault``)."""
+    budget = plant.publish_timeout_s if budget_s is None else budget_s
+    link = link or Link(plant, budget).start()
+    try:
+        with outbox.draining(max(link.deadline - time.monotonic(), 0.0)) as ours:
+            if not ours:
+                return Delivery(0, len(outbox.pending()), "another handeye command of this cell is sending; the events wait")
+            pending = outbox.pending()
+            if not pending:
+                return Delivery(0, 0)
+            client = link.client()
+            if client is None:
+                return Delivery(0, len(pending), link.fault)
+            return _send(client, plant, outbox, pending, link.deadline)
+    finally:
+        link.close()
 
 
 def _send(client, plant, outbox, pending, deadline: float) -> Delivery:
