@@ -189,3 +189,36 @@ def test_a_command_with_the_broker_down_still_succeeds_with_one_warning(broker, 
     assert main(["writeback", str(tmp_path / "demo" / "session"), "--config", _station_file(tmp_path, broker)]) == 0
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "handeye writeback: warning: plant: broker" in err[0] and "not reachable" in err[0]
+
+
+def test_verify_publishes_its_verdict(broker, tmp_path):
+    from handeye.station.cli import main
+
+    history = History(":memory:")
+    fleet = _fleet(broker, history)
+    assert main(["demo", "--session", str(tmp_path / "demo"), "--postures", "14", "--no-report"]) == 0
+    code = main(["verify", "--config", _station_file(tmp_path, broker, "cell02"), "--against",
+                 str(tmp_path / "demo" / "session"), "--yes", "--postures", "3"])
+    assert code in (0, 3, 4)
+    assert _wait(lambda: len(history.events(f"{PREFIX}/cell02")) == 1)
+    (event,) = history.events(f"{PREFIX}/cell02")
+    assert event["kind"] == "verify" and event["verdict"] == {0: "ok", 3: "drift", 4: "inconclusive"}[code]
+    assert event["diagnosis"]["cause"] is not None and event["session"] == "session"
+    fleet.stop()
+
+
+def test_a_broker_that_never_answers_costs_the_budget_and_one_warning(tmp_path, capsys):
+    import socket
+
+    silent = socket.socket()
+    silent.bind(("127.0.0.1", 0))
+    silent.listen(5)  # accepts the connection, never says anything
+    plant = plant_rule({"outbox": str(tmp_path / "out"), "publish_timeout_s": 0.3,
+                        "mqtt": {"host": "127.0.0.1", "port": silent.getsockname()[1], "topic_prefix": f"{PREFIX}/cell01"}},
+                       "plant", {})
+    try:
+        publish_event("calibrate", plant, lambda: _event(plant, 1))
+    finally:
+        silent.close()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "did not answer" in err[0] and len(Outbox(plant.outbox_dir()).pending()) == 1
