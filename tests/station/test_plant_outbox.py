@@ -61,3 +61,15 @@ def test_the_alarms_follow_the_events():
     assert rows["drift"]["alarms"] == ["drift: 0.700 mm (joint)"]
     assert rows["tool"]["alarms"] == ["tooldata mismatch: the controller holds another camera tooldata than the calibration"]
     assert [a.split(":")[0].split(" by")[0] for a in rows["old"]["alarms"]] == ["verify overdue", "stopped reporting"]
+
+
+def test_a_bad_plant_yaml_is_one_line_naming_the_key(tmp_path, capsys):
+    from handeye.station.cli import main
+
+    config = tmp_path / "plant.yaml"
+    for text, words in (("mqtt: {hots: x}\n", "unknown key mqtt.hots"), ("cells: a/b\n", "cells must be 5 topic levels"),
+                        ("verify_interval_h: 0\n", "verify_interval_h must be between")):
+        config.write_text(text)
+        assert main(["plant", "--config", str(config)]) == 1
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"handeye plant: error: {config}: {words}"), err

@@ -67,7 +67,10 @@ def fleet_from_dict(data, source: str = "plant.yaml") -> FleetSettings:
     """Validate ``data`` (as read from YAML) into :class:`FleetSettings` (ConfigError naming the key)."""
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: the file must hold a mapping (mqtt, cells, verify_interval_h, ...)")
-    changes = check_section(FleetSettings, data, "plant", {})
+    try:
+        changes = check_section(FleetSettings, data, "plant", {})
+    except ConfigError as exc:  # the keys as plant.yaml spells them (mqtt.port, not plant.mqtt.port)
+        raise ConfigError(f"{source}: {str(exc).replace('plant.', '')}") from None
     tls = changes.get("mqtt", BrokerSettings()).tls
     if (tls.cert is None) != (tls.key is None):
         raise ConfigError("mqtt.tls needs both cert and key for a client certificate, or neither")
