@@ -103,7 +103,7 @@ def test_a_rehearsal_config_naming_another_controller_is_refused(tmp_path, capsy
         _stop(proc)
 
 
-def test_the_shipped_rehearsal_config_is_a_rehearsal_of_the_mock_the_readme_starts():
+def test_the_shipped_rehearsal_config_is_a_rehearsal_of_the_mock_the_docs_start():
     from pathlib import Path
 
     from handeye.station.config import REHEARSAL_FILE, load_config
@@ -111,9 +111,9 @@ def test_the_shipped_rehearsal_config_is_a_rehearsal_of_the_mock_the_readme_star
     config = load_config(REHEARSAL_FILE)
     assert config.is_rehearsal and not config.is_mock
     repo = Path(__file__).resolve().parents[2]
-    readme = (repo / "README.md").read_text()
+    readme = (repo / "docs" / "rehearsal.md").read_text()
     command = re.search(r"handeye mock controller --port (\d+) --camera-port (\d+) --write-key (\S+)", readme)
-    assert command, "the README starts the mock for the rehearsal"
+    assert command, "the rehearsal page (docs/rehearsal.md) starts the mock for the rehearsal"
     port, camera_port, key = command.groups()
     assert (config.controller.port, config.camera.mock_arm) == (int(port), f"127.0.0.1:{camera_port}")
     assert config.controller.write_key == key

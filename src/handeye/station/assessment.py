@@ -336,9 +336,9 @@ def rank_note(rows: list[dict], result) -> str | None:
     if _systematic(result):
         return (head + ". The errors here are systematic (SYSTEMATIC above): a method that fits X alone can fold "
                 "them into X and predict these postures better with a camera further off. "
-                f"{chosen['method']} stays the result: in the benchmarks (README) it is the most accurate camera pose "
+                f"{chosen['method']} stays the result: in the benchmarks (docs/figures.md) it is the most accurate camera pose "
                 "in every noise regime.")
-    return (head + f". {chosen['method']} stays the result: in the benchmarks (README) it is the most accurate "
+    return (head + f". {chosen['method']} stays the result: in the benchmarks (docs/figures.md) it is the most accurate "
             "camera pose in every noise regime; compare those differences with its one-sigma.")
 
 

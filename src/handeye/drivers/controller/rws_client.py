@@ -28,7 +28,7 @@ or password) and 403 (mastership held elsewhere, RMMP missing) are :class:`Contr
 (busy) is retried with back-off within the call's budget and then a :class:`ControllerTimeout`.
 
 Tool writes are authorised by the controller's own users (the RWS account), not by the station's
-write key, which never travels over RWS (see the README's threat model).
+write key, which never travels over RWS (see the threat model, docs/security.md).
 
 Modules: ``rws_transport`` (pacing, TLS pinning), ``rws_http`` (requests, authentication, errors,
 answers, symbols), ``rws_access`` (mastership, RMMP), ``rws_codec`` (RAPID values), ``rws_handshake``

@@ -9,7 +9,7 @@ HELP = "list the installed plug-ins (methods, controller protocols, camera back 
 
 EPILOG = """\
 Other installed packages add methods, controller protocols and camera back ends through the
-entry-point groups handeye.methods, handeye.controllers and handeye.cameras (README: Extending).
+entry-point groups handeye.methods, handeye.controllers and handeye.cameras (docs/extending.md).
 For each one this lists its package, what it is, and for each command that takes one of its kind
 whether it serves it or what it lacks (a protocol without a mock is no choice of demo --protocol).
 
