@@ -95,7 +95,7 @@ def test_an_event_sent_again_after_a_crash_is_kept_once(broker, tmp_path):
 
 
 def test_a_cell_cannot_publish_under_another_cells_topic(broker, tmp_path):
-    """The ACL (tests/plant_broker.acl_text, as the README documents it): cell01's credentials on cell02's
+    """The ACL (tests/plant_broker.acl_text, as docs/plant.md documents it): cell01's credentials on cell02's
     topic are dropped by the broker; cell02's own events arrive."""
     history = History(":memory:")
     fleet = _fleet(broker, history)

@@ -8,7 +8,7 @@ HELP = "the fleet view: subscribe to the plant's broker, keep the history, show 
 
 EPILOG = """\
 Every cell whose station file has a plant: section publishes each calibrate, writeback, verify and
-quick update to the plant's MQTT broker (README, 'A plant of cells'). This command subscribes to
+quick update to the plant's MQTT broker (docs/plant.md, A plant of cells). This command subscribes to
 them (plant.yaml: the broker, its TLS and credentials, which cells, the verify interval), keeps every
 event once and in each cell's order in a SQLite history beside plant.yaml, and serves a page (the
 live view's: offline, behind a token printed here) with one row per cell: last calibration, last

@@ -80,5 +80,5 @@ def fleet_from_dict(data, source: str = "plant.yaml") -> FleetSettings:
 def load_fleet_config(path) -> FleetSettings:
     path = Path(path)
     raw = read_text_file(path, "plant configuration", ConfigError, missing=f"no plant configuration at {path}; "
-                         "see the README's section 'A plant of cells'")
+                         "see docs/plant.md (A plant of cells)")
     return replace(fleet_from_dict(parse_yaml(raw, path, ConfigError) or {}, str(path)), source=path)
