@@ -73,3 +73,15 @@ def test_a_bad_plant_yaml_is_one_line_naming_the_key(tmp_path, capsys):
         assert main(["plant", "--config", str(config)]) == 1
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith(f"handeye plant: error: {config}: {words}"), err
+
+
+def test_an_outbox_that_cannot_be_written_is_one_warning(tmp_path, capsys):
+    from handeye.station.plant.hooks import publish_event
+    from handeye.station.plant.settings import plant_rule
+
+    (tmp_path / "file").write_text("not a folder")
+    plant = plant_rule({"outbox": str(tmp_path / "file" / "out"), "publish_timeout_s": 0.2,
+                        "mqtt": {"host": "127.0.0.1", "port": 1, "topic_prefix": "a/b/c/d/e"}}, "plant", {})
+    publish_event("verify", plant, lambda: {"topic_prefix": "a/b/c/d/e"})
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("handeye verify: warning: plant: the event was not published"), err

@@ -44,7 +44,11 @@ def publish_event(command: str, plant, make_event) -> None:
 
         link = Link(plant, plant.publish_timeout_s).start()  # connects while the event is made and kept
         outbox = Outbox(plant.outbox_dir())
-        event = outbox.add(make_event())
+        try:
+            event = outbox.add(make_event())
+        except BaseException:
+            link.close()
+            raise
         delivery = deliver(plant, outbox, link=link)
         if delivery.fault is not None:
             _warn(command, f"{delivery.fault}; {delivery.waiting} event(s) wait in {outbox.folder} (sent with the next "
