@@ -40,6 +40,7 @@ from ..calibration.write_key import WRITE_KEY_PATTERN
 from ..drivers.controller.backends import DEFAULT_PROTOCOL
 from .cell_plan import base_problem
 from .cell_settings import CellSettings, GuidedSettings
+from .plant.settings import PlantSettings, plant_rule
 from .schema import (
     Custom,
     Flag,
@@ -490,6 +491,8 @@ class StationConfig:
     mock: MockSettings = section(MockSettings, "the embedded mock station")
     postures: tuple | None = setting(None, Optional(Custom(_postures)), "fixed approved postures for rapid generate "
                                      "(null: the built-in station's)", "deg")
+    plant: PlantSettings | None = setting(None, Optional(Custom(plant_rule)), "publishing calibration health to the "
+                                          "plant's MQTT broker (station/plant/settings.py; null: nothing is published)")
     source: str = "built-in mock station"
 
     @property
@@ -558,6 +561,8 @@ class StationConfig:
             out[name] = _plain(section)
         out["camera"]["nominal_mount"] = pose_from_transform(self.camera.nominal_mount_transform())
         out["cell"] = _plain(self.cell.to_dict())
+        if self.plant is not None:
+            out["plant"] = self.plant.to_dict()
         return out
 
 

@@ -112,6 +112,9 @@ def run_writeback(request: WritebackRequest, say: Callable[[str], None] = lambda
     say(outcome.literal)
     say(tag + ("read back: identical to the last digit the controller keeps" if outcome.readback_ok
                else "read back: DIFFERENT"))
+    from .plant.hooks import after_writeback  # the plant's broker, when the config has plant:
+
+    after_writeback(request, config, outcome, is_check, reason)
     return 0
 
 

@@ -152,6 +152,9 @@ def run(args) -> int:
         if written is not None:
             print(f"\nReport written to {written}", file=stream)
         print(assessment.verdict.line(), file=stream)
+    from ..plant.hooks import after_calibrate  # the plant's broker, when the session's station has plant:
+
+    after_calibrate(args, outcome, assessment)
     return 0
 
 

@@ -168,6 +168,9 @@ def _check(args, config, link, tag: str) -> str:
         write_text_atomic(outcome.folder / "verify.json", json.dumps(data, indent=1) + "\n")
     if args.report is not None:
         _after_check(report, "no report was written")
+    from ..plant.hooks import after_verify  # the plant's broker, when the config has plant:
+
+    after_verify(args, config, data)
     return outcome.verdict
 
 
