@@ -1,0 +1,131 @@
+"""The arm's kinematics in a calibration (``calibrate --kinematics``, the station's ``kinematics.identify``):
+the identification, its JSON and its words.
+
+The numbers are the calibration room's (``calibration.arm_identification``, ``calibration.standoff``);
+here they become the result's ``kinematics`` entry and the lines of the text summary.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..calibration.errors import CalibrationError
+
+__all__ = ["identify_outcome", "kinematics_json", "kinematics_lines"]
+
+
+def identify_outcome(outcome, standoff_mm: float = 750.0):
+    """The identification and the predicted stand-off error of a calibrated session.
+
+    Returns
+    -------
+    ident : ArmIdentification
+    standoff : StandoffError or None
+        None for eye-to-hand sessions (the stand-off is along a camera on the flange).
+
+    Raises
+    ------
+    CalibrationError
+        A session without joint angles of a known robot, in one line.
+    """
+    from ..calibration.arm_identification import identify_arm
+    from ..calibration.problem import EYE_IN_HAND
+    from ..calibration.standoff import predicted_standoff
+
+    problem = outcome.problem
+    if problem is None or problem.joints_deg is None or problem.robot is None:
+        raise CalibrationError("--kinematics needs the joint angles of every posture and the robot model in the "
+                               "session: capture it with the station (it records them)")
+    try:
+        ident = identify_arm(problem)
+    except ValueError as exc:
+        raise CalibrationError(str(exc)) from None
+    standoff = predicted_standoff(ident, standoff_mm=standoff_mm) if problem.setup == EYE_IN_HAND else None
+    return ident, standoff
+
+
+def _is_length(name: str) -> bool:
+    return name[0] in "ad" and not name.startswith("alpha")
+
+
+def _value(v):
+    return None if v is None or not math.isfinite(float(v)) else float(v)
+
+
+def kinematics_json(ident, standoff=None) -> dict:
+    """The result's ``kinematics`` entry.
+
+    ``joint_zero_deg`` / ``sigma_deg``: the six controller zero offsets and their one-sigmas, null where
+    not identified; ``links_mm``: the identified DH lengths (value and sigma), ``link_twists_deg`` the
+    identified DH twists; ``not_identifiable``: every parameter the data cannot see (or see too weakly),
+    with why.
+    """
+    reported = ident.reported_values()
+    names = ident.names
+    zeros = [names.index(f"zero{i}") for i in range(1, len(names) // 4 + 1)]
+    out = {
+        "joint_zero_deg": [_value(reported[j]) for j in zeros],
+        "sigma_deg": [_value(ident.sigma[j]) if ident.status[j] == "identified" else None for j in zeros],
+        "links_mm": {names[j]: {"value": float(ident.values[j]), "sigma": float(ident.sigma[j])}
+                     for j in range(len(names)) if ident.status[j] == "identified" and _is_length(names[j])},
+        "link_twists_deg": {names[j]: {"value": float(ident.values[j]), "sigma": float(ident.sigma[j])}
+                            for j in range(len(names))
+                            if ident.status[j] == "identified" and names[j].startswith("alpha")},
+        "not_identifiable": [{"parameter": names[j], "status": ident.status[j], "reason": ident.reasons[names[j]]}
+                             for j in range(len(names)) if ident.status[j] != "identified"],
+        "correlated": [{"parameters": [a, b], "correlation": c} for a, b, c in ident.correlations],
+        "camera_pose_change": _pose_change(ident),
+        "prior": {"length_mm": float(ident.prior_sigma[0]), "angle_deg": float(ident.prior_sigma[3])},
+        "postures": int(ident.keep.sum()),
+        "meaning": "deviations of the arm from its DH table, estimated with the camera and board poses: zero offsets "
+                   "of the controller axes (the axis stands this much further than its angle) and DH lengths and "
+                   "twists; one sigma; null: not identified (not_identifiable says why)",
+    }
+    if standoff is not None:
+        out["standoff_error"] = standoff.to_dict()
+    return out
+
+
+def _pose_change(ident) -> dict:
+    """How far the camera pose moved from the camera-only fit, against its one-sigma."""
+    from ..calibration.noise import twist_between
+
+    x0 = ident.camera_only.fit.x
+    delta = twist_between(x0, ident.x)
+    rot = x0[:3, :3]
+    shift = rot @ delta[:3]
+    turn = np.degrees(rot @ delta[3:])
+    cov = ident.covariance[:6, :6]
+    sigma_t = np.sqrt(np.diag(rot @ cov[:3, :3] @ rot.T))
+    sigma_r = np.degrees(np.sqrt(np.diag(rot @ cov[3:, 3:] @ rot.T)))
+    return {"translation_mm": [float(v) for v in shift], "rotation_deg": [float(v) for v in turn],
+            "sigma_translation_mm": [float(v) for v in sigma_t], "sigma_rotation_deg": [float(v) for v in sigma_r]}
+
+
+def kinematics_lines(ident, standoff=None) -> list[str]:
+    """The text summary's lines."""
+    lines = ["Arm kinematics (identified with the camera; one sigma):"]
+    for axis in range(1, len(ident.names) // 4 + 1):
+        j = ident.names.index(f"zero{axis}")
+        if ident.status[j] == "identified":
+            lines.append(f"  J{axis} zero  {ident.values[j]:+.4f} deg  ± {ident.sigma[j]:.4f}")
+        else:
+            lines.append(f"  J{axis} zero  not identifiable: {ident.reasons[ident.names[j]]}")
+    links = [f"{n} {ident.values[j]:+.3f} ± {ident.sigma[j]:.3f} mm" for j, n in enumerate(ident.names)
+             if ident.status[j] == "identified" and _is_length(n)]
+    if links:
+        lines.append("  links  " + ", ".join(links))
+    twists = [f"{n} {ident.values[j]:+.4f} ± {ident.sigma[j]:.4f} deg" for j, n in enumerate(ident.names)
+              if ident.status[j] == "identified" and n.startswith("alpha")]
+    if twists:
+        lines.append("  twists " + ", ".join(twists))
+    other = [n for j, n in enumerate(ident.names) if ident.status[j] != "identified" and not n.startswith("zero")]
+    if other:
+        lines.append("  not identifiable here: " + ", ".join(other) + " (details in the JSON's kinematics)")
+    if standoff is not None:
+        lines.append(f"  point at the {standoff.standoff_mm:g} mm stand-off (board frame, RMS over the postures): "
+                     f"{standoff.corrected_rms_mm:.3f} mm with the correction, {standoff.uncorrected_rms_mm:.3f} mm "
+                     "without")
+    return lines
