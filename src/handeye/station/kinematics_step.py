@@ -77,6 +77,7 @@ def kinematics_json(ident, standoff=None) -> dict:
                              for j in range(len(names)) if ident.status[j] != "identified"],
         "correlated": [{"parameters": [a, b], "correlation": c} for a, b, c in ident.correlations],
         "camera_pose_change": _pose_change(ident),
+        "consistent_with_zero": _zero_test(ident),
         "prior": {"length_mm": float(ident.prior_sigma[0]), "angle_deg": float(ident.prior_sigma[3])},
         "postures": int(ident.keep.sum()),
         "meaning": "deviations of the arm from its DH table, estimated with the camera and board poses: zero offsets "
@@ -86,6 +87,27 @@ def kinematics_json(ident, standoff=None) -> dict:
     if standoff is not None:
         out["standoff_error"] = standoff.to_dict()
     return out
+
+
+#: Level of the chi-square tests of the kinematics entry (offsets against zero, the camera's change).
+TEST_LEVEL = 0.01
+
+
+def _zero_test(ident) -> dict:
+    """Whether the identified offsets together are consistent with an exact arm: ``u^T Σ_uu^-1 u``
+    against the chi-square quantile (``TEST_LEVEL``, one degree of freedom per identified parameter)."""
+    from scipy.stats import chi2
+
+    ok = [i for i, j in enumerate(ident.fitted) if ident.status[j] == "identified"]
+    if not ok:
+        return {"consistent": True, "statistic": 0.0, "limit": 0.0, "parameters": 0}
+    u = ident.values[ident.fitted][ok]
+    cov = ident.covariance[12:, 12:][np.ix_(ok, ok)]
+    stat = float(u @ np.linalg.solve(cov, u))
+    limit = float(chi2.ppf(1.0 - TEST_LEVEL, len(ok)))
+    return {"consistent": stat <= limit, "statistic": stat, "limit": limit, "parameters": len(ok),
+            "meaning": "the identified offsets together against an exact arm (chi-square, 1 % level): true means the "
+                       "data show no deviation from the DH table"}
 
 
 def _pose_change(ident) -> dict:
@@ -100,8 +122,15 @@ def _pose_change(ident) -> dict:
     cov = ident.covariance[:6, :6]
     sigma_t = np.sqrt(np.diag(rot @ cov[:3, :3] @ rot.T))
     sigma_r = np.degrees(np.sqrt(np.diag(rot @ cov[3:, 3:] @ rot.T)))
+    from scipy.stats import chi2
+
+    distance = float(delta @ np.linalg.solve(cov, delta))
     return {"translation_mm": [float(v) for v in shift], "rotation_deg": [float(v) for v in turn],
-            "sigma_translation_mm": [float(v) for v in sigma_t], "sigma_rotation_deg": [float(v) for v in sigma_r]}
+            "sigma_translation_mm": [float(v) for v in sigma_t], "sigma_rotation_deg": [float(v) for v in sigma_r],
+            "mahalanobis_squared": distance, "within_uncertainty": distance <= float(chi2.ppf(1.0 - TEST_LEVEL, 6)),
+            "meaning": "the camera pose with the kinematics minus the camera-only one (tool0 axes), against the "
+                       "one-sigma of the pose with the kinematics; within_uncertainty: chi-square, 6 degrees of "
+                       "freedom, 1 % level"}
 
 
 def kinematics_lines(ident, standoff=None) -> list[str]:
