@@ -428,6 +428,15 @@ class VerifySettings:
 
 
 @dataclass(frozen=True)
+class KinematicsSettings:
+    """``kinematics``: identify the arm's joint zeros and link lengths with the camera after a capture (the
+    demo and ``calibrate --kinematics``), and the stand-off where the predicted error is stated."""
+
+    identify: bool = setting(False, Flag(), "identify the arm's kinematic deviations with the camera")
+    standoff_mm: float = setting(750.0, Number(1, 5000), "the inspection stand-off along the camera axis", "mm")
+
+
+@dataclass(frozen=True)
 class FaultSettings:
     """``mock.faults``: what changed at the mock station since its calibration (``handeye verify``
     finds it); all zero: nothing."""
@@ -521,6 +530,7 @@ class StationConfig:
     cell: CellSettings = section(CellSettings, "keep-out volumes, carried geometry, path checks")
     guided: GuidedSettings = section(GuidedSettings, "operator-guided capture")
     verify: VerifySettings = section(VerifySettings, "the change handeye verify acts on")
+    kinematics: KinematicsSettings = section(KinematicsSettings, "the arm's kinematics identified with the camera")
     quality: dict = setting(None, Custom(_quality), "verdict thresholds (src/handeye/station/quality_thresholds.yaml)",
                             factory=dict)
     output: str | None = setting(None, Optional(Text()), "folder of new sessions: a relative capture --session goes "

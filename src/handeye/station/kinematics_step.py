@@ -13,11 +13,12 @@ import numpy as np
 
 from ..calibration.errors import CalibrationError
 
-__all__ = ["identify_outcome", "kinematics_json", "kinematics_lines"]
+__all__ = ["identify_outcome", "kinematics_json", "kinematics_lines", "hidden_offsets", "demo_lines"]
 
 
 def identify_outcome(outcome, standoff_mm: float = 750.0):
-    """The identification and the predicted stand-off error of a calibrated session.
+    """The identification and the predicted stand-off error of a calibrated session (``outcome``: a
+    ``CalibrationOutcome`` or an ``Assessment``, anything with the ``problem`` solved).
 
     Returns
     -------
@@ -157,4 +158,39 @@ def kinematics_lines(ident, standoff=None) -> list[str]:
         lines.append(f"  point at the {standoff.standoff_mm:g} mm stand-off (board frame, RMS over the postures): "
                      f"{standoff.corrected_rms_mm:.3f} mm with the correction, {standoff.uncorrected_rms_mm:.3f} mm "
                      "without")
+    return lines
+
+
+def hidden_offsets(dh_deviation) -> dict:
+    """The mock arm's hidden deviations (true minus nominal DH table ``(k, 4)``) as the identification
+    names them: controller zero offsets (through the IRB 1400's coupling: serial 3 = controller 3 - 2)
+    and DH lengths."""
+    from ..calibration.kinematics import load_robot
+
+    delta = np.asarray(dh_deviation, float)
+    robot = load_robot("IRB1400") if delta.shape[0] == 6 else None
+    theta = delta[:, 3]
+    zeros = np.linalg.solve(robot.coupling, theta) if robot is not None else theta
+    links = {f"{kind}{i + 1}": float(delta[i, c]) for i in range(len(delta)) for c, kind in ((0, "d"), (1, "a"))
+             if delta[i, c] != 0}
+    return {"joint_zero_deg": [float(v) for v in zeros], "links_mm": links,
+            "twists_deg": {f"alpha{i + 1}": float(v) for i, v in enumerate(delta[:, 2]) if v != 0}}
+
+
+def demo_lines(entry: dict) -> list[str]:
+    """The demo's table: identified joint zeros (one sigma) next to the mock arm's hidden ones."""
+    hidden = entry.get("hidden") or {}
+    lines = ["", "Arm kinematics   identified (deg)         hidden (deg)"]
+    for axis in range(6):
+        value, sigma = entry["joint_zero_deg"][axis], entry["sigma_deg"][axis]
+        shown = f"{value:+.4f} ± {sigma:.4f}" if value is not None else "not identifiable"
+        true = hidden.get("joint_zero_deg", [None] * 6)[axis]
+        lines.append(f"  J{axis + 1} zero       {shown:<24s} " + ("" if true is None else f"{true:+.4f}"))
+    for name, item in entry["links_mm"].items():
+        true = hidden.get("links_mm", {}).get(name, 0.0)
+        lines.append(f"  {name:<14s} {item['value']:+.3f} ± {item['sigma']:.3f} mm{'':<6s} {true:+.3f} mm")
+    if "standoff_error" in entry:
+        s = entry["standoff_error"]
+        lines.append(f"  point at {s['standoff_mm']:g} mm: predicted {s['with_correction_rms_mm']:.3f} mm with the "
+                     f"correction, {s['without_correction_rms_mm']:.3f} mm without")
     return lines
