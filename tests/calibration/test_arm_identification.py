@@ -1,5 +1,7 @@
 """The arm's kinematic identification against a known truth (synthetic sessions of a deviated arm)."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -107,3 +109,14 @@ def test_predicted_standoff_error_matches_held_out_truth(scene):
     assert rms_with < 0.6 * rms_without
     assert 0.5 < predicted.corrected_rms_mm / rms_with < 2.0
     assert 0.7 < predicted.uncorrected_rms_mm / rms_without < 1.5
+
+
+def test_prior_comes_from_the_robot_file(tmp_path):
+    from handeye.calibration.arm_parameters import robot_prior
+
+    assert robot_prior("IRB1400") == {"length_mm": 0.5, "angle_deg": 0.1}
+    text = (Path(__file__).parents[2] / "src/handeye/calibration/robots/irb1400.yaml").read_text()
+    other = tmp_path / "arm.yaml"
+    other.write_text(text.replace("kinematic_prior: {length_mm: 0.5, angle_deg: 0.1}",
+                                  "kinematic_prior: {length_mm: 0.2, angle_deg: 0.03}"))
+    assert robot_prior(str(other)) == {"length_mm": 0.2, "angle_deg": 0.03}
