@@ -57,3 +57,11 @@ def test_without_arm_the_errors_stay_random():
 def test_bad_arm_is_one_line(arm, words):
     with pytest.raises(ConfigError, match=words):
         _config(arm)
+
+
+def test_standalone_mock_controller_takes_the_arm():
+    from handeye.mocks.controller.service import MockControllerOptions, _cell_spec
+
+    arm = ArmDeviations((0.0, 0.05, 0.0, 0.0, 0.0, 0.0), {"a2": 0.1})
+    assert _cell_spec(MockControllerOptions(arm=arm)).arm is arm
+    assert _cell_spec(MockControllerOptions()).arm is None
