@@ -84,6 +84,9 @@ def write_notes() -> None:
         with mkdocs_gen_files.open(note.as_posix(), "w") as out:
             out.write(text)
         mkdocs_gen_files.set_edit_path(note.as_posix(), Path("..", note).as_posix())
+        for picture in sorted((ROOT / note.parent).glob("*.png")) if len(note.parts) > 1 else ():
+            with mkdocs_gen_files.open((note.parent / picture.name).as_posix(), "wb") as out:
+                out.write(picture.read_bytes())  # a note's figures beside it, so its links hold
         if len(note.parts) > 1:
             inside = Path(*note.parts[1:]).as_posix()
             label = f"{note.parent.as_posix()}: {title_of(text, note.name)}"

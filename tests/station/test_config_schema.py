@@ -23,10 +23,10 @@ REAL = {"controller": {"protocol": "socket"}, "camera": {"backend": "xb3"}}
 
 
 def _documented_keys(data: dict, prefix: str = "") -> set[str]:
-    """Key paths of a station YAML: top-level keys, and down in the sections (``mock.faults.*``)."""
+    """Key paths of a station YAML: top-level keys, and down in the sections (``mock.faults.*``, ``mock.arm.*``)."""
     keys = set()
     for name, value in data.items():
-        if isinstance(value, dict) and name != "quality" and (not prefix or name == "faults"):
+        if isinstance(value, dict) and name != "quality" and (not prefix or name in ("faults", "arm")):
             keys |= _documented_keys(value, f"{prefix}{name}.")
         else:
             keys.add(prefix + name)

@@ -37,6 +37,7 @@ from ..calibration.transforms import transform_from_rotation_translation
 from ..drivers.camera.stereo import StereoModel, nominal_xb3_model
 from ..drivers.controller.backends import DEFAULT_PROTOCOL
 from ..drivers.controller.types import ToolData
+from .arm_truth import ArmDeviations, true_arm
 from .camera import MockCamera, RenderOptions
 from .controller import start_mock_controller
 from .drift import StationFaults
@@ -116,6 +117,9 @@ class MockStationSpec:
     state_file : str or None
         Where the controller keeps its PERS tool data between runs (a file beside the sessions); None:
         a fresh controller each run.
+    arm : ArmDeviations or None
+        The true arm's deviations from its DH table given explicitly (``mock.arm``,
+        :mod:`~handeye.mocks.arm_truth`); None: random ones (``kinematic_error_mm`` / ``_deg``).
     """
 
     protocol: str = DEFAULT_PROTOCOL
@@ -137,6 +141,7 @@ class MockStationSpec:
     zone_tcp_mm: tuple | None = None
     faults: StationFaults = field(default_factory=StationFaults)
     state_file: str | None = None
+    arm: ArmDeviations | None = None
 
 
 class MockStation:
@@ -260,9 +265,14 @@ def flange_camera(spec: MockStationSpec, arm: SimulatedRobot, run: int = 0) -> t
     -------
     camera : MockCamera
     truth : dict
-        ``cam2tool0``, ``board2base`` and ``true_robot``.
+        ``cam2tool0``, ``board2base``, ``true_robot`` and ``dh_deviation`` (true minus nominal DH table,
+        ``(k, 4)``).
     """
-    true_robot = perturbed_robot(load_robot(spec.robot), spec.kinematic_error_mm, spec.kinematic_error_deg, spec.seed)
+    nominal = load_robot(spec.robot)
+    if spec.arm is not None:
+        true_robot = true_arm(nominal, spec.arm)
+    else:
+        true_robot = perturbed_robot(nominal, spec.kinematic_error_mm, spec.kinematic_error_deg, spec.seed)
     faults = spec.faults
     mount = faults.mount(spec.cam2tool0)
     board2base = faults.board(spec.board2base)
@@ -273,4 +283,5 @@ def flange_camera(spec: MockStationSpec, arm: SimulatedRobot, run: int = 0) -> t
     model = spec.stereo if spec.stereo is not None else nominal_xb3_model()
     camera = MockCamera(model=model, board=PrintedBoard(spec.board), target2base=board2base,
                         cam2base=cam2base, options=spec.render, seed=spec.seed if not run else [spec.seed, run])
-    return camera, {"cam2tool0": mount, "board2base": board2base, "true_robot": true_robot}
+    return camera, {"cam2tool0": mount, "board2base": board2base, "true_robot": true_robot,
+                    "dh_deviation": true_robot.dh - nominal.dh}

@@ -19,7 +19,7 @@ from ..calibration.errors import HandEyeError, UsageError
 #: Sub-commands in the order ``handeye --help`` lists them: a module name, or ``(command, module)``
 #: when the command's name cannot be a module's (``import`` is a Python keyword).
 COMMANDS = ("demo", "capture", "calibrate", "writeback", "verify", "simulate", ("import", "import_"), "triangulate", "benchmark", "robot",
-            "rapid", "cell", "mock", "stereo", "plugins", "plant")
+            "rapid", "cell", "mock", "stereo", "plugins", "plant", "kinematics")
 
 DESCRIPTION = """\
 Hand-eye calibration of a stereo camera on an ABB robot flange (eye-in-hand) or beside the robot

@@ -429,6 +429,15 @@ class VerifySettings:
 
 
 @dataclass(frozen=True)
+class KinematicsSettings:
+    """``kinematics``: identify the arm's joint zeros and link lengths with the camera after a capture (the
+    demo and ``calibrate --kinematics``), and the stand-off where the predicted error is stated."""
+
+    identify: bool = setting(False, Flag(), "identify the arm's kinematic deviations with the camera")
+    standoff_mm: float = setting(750.0, Number(1, 5000), "the inspection stand-off along the camera axis", "mm")
+
+
+@dataclass(frozen=True)
 class FaultSettings:
     """``mock.faults``: what changed at the mock station since its calibration (``handeye verify``
     finds it); all zero: nothing."""
@@ -450,6 +459,43 @@ class FaultSettings:
         return StationFaults(**{f.name: tuple(float(v) for v in getattr(self, f.name)) for f in fields(self)})
 
 
+def _link_mm(value, key: str, context) -> dict:
+    from ..mocks.arm_truth import LINK_NAMES
+    from .schema import number as schema_number
+
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise ConfigError(f"{key} must be a mapping of DH lengths to mm, e.g. {{a2: 0.2, d4: -0.1}}; got {brief(value)}")
+    out = {}
+    for name, length in value.items():
+        if name not in LINK_NAMES:
+            raise ConfigError(f"{key}.{name} is not a DH length: use d1..d6 or a1..a6")
+        out[name] = schema_number(length, f"{key}.{name}", -10, 10)
+    return out
+
+
+@dataclass(frozen=True)
+class ArmSettings:
+    """``mock.arm``: the mock arm's true deviations from its DH table, given explicitly (a truth to compare
+    ``calibrate --kinematics`` with); both left out: random ones (``mock.kinematic_error_mm`` / ``_deg``).
+    Given, they replace the random ones. Not ``mock.faults``: this is the arm as it is, not what changed."""
+
+    joint_zero_deg: tuple | None = setting(None, Optional(Numbers(6, -10, 10)), "each axis stands this much further "
+                                           "than its controller angle (zero offsets of axes 1-6; null: random)", "deg")
+    link_mm: dict = setting(None, Custom(_link_mm), "DH length deviations by name (d1..d6, a1..a6)", "mm",
+                            factory=dict)
+
+    def model(self):
+        """The mock's :class:`~handeye.mocks.arm_truth.ArmDeviations`, or None when nothing is given."""
+        if self.joint_zero_deg is None and not self.link_mm:
+            return None
+        from ..mocks.arm_truth import ArmDeviations
+
+        zero = (0.0,) * 6 if self.joint_zero_deg is None else tuple(float(v) for v in self.joint_zero_deg)
+        return ArmDeviations(zero, dict(self.link_mm))
+
+
 @dataclass(frozen=True)
 class MockSettings:
     """``mock``: the embedded mock station (``--mock``, mock back ends, the demo)."""
@@ -460,6 +506,7 @@ class MockSettings:
     kinematic_error_deg: float = setting(0.002, Number(0, 10), "the simulated arm's DH angle errors", "deg")
     time_scale: float = setting(0.02, Number(1e-4, 10), "wall-clock seconds per simulated second of motion")
     faults: FaultSettings = section(FaultSettings, "what changed since the calibration (handeye verify)")
+    arm: ArmSettings = section(ArmSettings, "the arm's true kinematic deviations (null: random)")
 
 
 def _target(value, key: str, context) -> BoardGeometry:
@@ -484,6 +531,7 @@ class StationConfig:
     cell: CellSettings = section(CellSettings, "keep-out volumes, carried geometry, path checks")
     guided: GuidedSettings = section(GuidedSettings, "operator-guided capture")
     verify: VerifySettings = section(VerifySettings, "the change handeye verify acts on")
+    kinematics: KinematicsSettings = section(KinematicsSettings, "the arm's kinematics identified with the camera")
     quality: dict = setting(None, Custom(_quality), "verdict thresholds (src/handeye/station/quality_thresholds.yaml)",
                             factory=dict)
     output: str | None = setting(None, Optional(Text()), "folder of new sessions: a relative capture --session goes "

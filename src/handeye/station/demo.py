@@ -41,6 +41,7 @@ class DemoOptions:
     protocol: str = DEFAULT_PROTOCOL
     seed: int = 7
     report: bool = True
+    kinematics: bool = False
 
 
 def _fresh_folder(path: Path) -> None:
@@ -81,6 +82,7 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
         outcome = writeback(session_dir, config, result, link.controller, verdict_passed=verdict.passed,
                             verdict_reason=verdict.line(), progress=progress, origin=MOCK, mock_controller=True)
         truth = link.truth_cam2tool0
+        hidden = link.mock.truth["dh_deviation"] if link.mock is not None else None
     errors = {"rotation_error_deg": float(rotation_error_deg(result.x, truth)),
               "translation_error_mm": float(translation_error_mm(result.x, truth))}
     return {
@@ -102,7 +104,22 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
         "capture_s": captured_s,
         "runtime_s": result.runtime_s,
         "wall_s": time.monotonic() - started,
+        **_kinematics(assessment, config, options, hidden, progress),
     }
+
+
+def _kinematics(assessment: Assessment, config: StationConfig, options: DemoOptions, hidden, progress) -> dict:
+    """With the option (or ``kinematics.identify``): the identified arm next to the mock's hidden one."""
+    if not (options.kinematics or config.kinematics.identify):
+        return {}
+    from .kinematics_step import hidden_offsets, identify_outcome, kinematics_json
+
+    ident, standoff = identify_outcome(assessment, config.kinematics.standoff_mm)
+    progress("identified the arm's kinematics with the camera")
+    entry = kinematics_json(ident, standoff)
+    if hidden is not None:
+        entry["hidden"] = hidden_offsets(hidden)
+    return {"kinematics": entry}
 
 
 def _assess(session_dir: Path, config: StationConfig, compare: bool, progress) -> Assessment:

@@ -46,7 +46,8 @@ from .report_summary import summary_section
 __all__ = ["write_report"]
 
 
-def write_report(path_html, assessment: Assessment, title: str = "Hand-eye calibration report") -> Path:
+def write_report(path_html, assessment: Assessment, title: str = "Hand-eye calibration report",
+                 extra_sections: tuple = ()) -> Path:
     """Write the calibration report of an assessment as one self-contained HTML file.
 
     Parameters
@@ -58,6 +59,8 @@ def write_report(path_html, assessment: Assessment, title: str = "Hand-eye calib
         checks, when judged), the method comparison (when compared), the data checks, the origin (mock
         and simulated sessions get a banner saying they are not a calibration of a real robot).
     title : str
+    extra_sections : tuple of str
+        HTML sections added before the footer (the arm's kinematics, ``station.kinematics_report``).
 
     Returns
     -------
@@ -86,6 +89,7 @@ def write_report(path_html, assessment: Assessment, title: str = "Hand-eye calib
         sections.append(findings_section(a.findings, a.problem.n))
     if a.plan_preview is not None or a.plan_preview_missing is not None:
         sections.append(preview_section(a.plan_preview, a.plan_preview_missing))
+    sections += list(extra_sections)
     sections.append(FOOTER)
     document = ("<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
                 f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"><title>{escape(title)}</title>"

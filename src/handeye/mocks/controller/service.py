@@ -74,6 +74,8 @@ class MockControllerOptions:
     faults : StationFaults or None
         What changed at the station since its calibration (``mock.faults`` of the config): the camera
         renders the changed world (``mocks.drift``).
+    arm : ArmDeviations or None
+        The arm's true kinematic deviations (``mock.arm`` of the config, ``mocks.arm_truth``); None: random.
     """
 
     protocol: str = DEFAULT_PROTOCOL
@@ -93,6 +95,7 @@ class MockControllerOptions:
     cell: object = None
     signals: tuple = ()
     faults: object = None
+    arm: object = None
 
 
 def is_loopback(host: str) -> bool:
@@ -230,6 +233,8 @@ def _cell_spec(options: MockControllerOptions):
     from ..station import MockStationSpec
 
     extra = {} if options.faults is None else {"faults": options.faults}
+    if options.arm is not None:
+        extra["arm"] = options.arm
     return MockStationSpec(protocol=options.protocol, cell=options.cell, **extra)
 
 

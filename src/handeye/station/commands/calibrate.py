@@ -99,6 +99,10 @@ def add_parser(sub):
     p.add_argument("--thresholds", metavar="FILE.yaml", help="quality thresholds for the verdict (default: built in)")
     p.add_argument("--units", choices=("mm", "m"), default="mm",
                    help="length unit the session was written in (default mm, the format's; m converts on reading)")
+    p.add_argument("--kinematics", action="store_true",
+                   help="also identify the arm's joint zeros and link lengths with the camera (sessions with joints)")
+    p.add_argument("--standoff", metavar="MM", type=float, default=750.0,
+                   help="with --kinematics: the inspection stand-off along the camera axis (default 750 mm)")
     return p
 
 
@@ -113,6 +117,10 @@ def run(args) -> int:
 
     if args.json:  # an unwritable --json fails before any solving
         check_output_file(args.json)
+    if not 0 < args.standoff <= 5000:  # so does a stand-off that is no distance
+        from ...calibration.errors import UsageError
+
+        raise UsageError(f"--standoff must be more than 0 and at most 5000 mm; got {args.standoff:g}")
     from ...calibration.solve import method_row
 
     method_row(args.method)  # an unknown --method, too (the table, a plug-in's methods included)
@@ -133,6 +141,11 @@ def run(args) -> int:
         outcome = calibrate_session_folder(args.session, args.method, args.units, progress=update)
     _warn_joint_mismatch(outcome.session)
     saved = _save_result(outcome, args.units)
+    kinematics = None
+    if args.kinematics:
+        from ..kinematics_step import identify_outcome
+
+        kinematics = identify_outcome(outcome, args.standoff)
     assessment = assess(outcome, thresholds, judge=wants_report or bool(args.thresholds),
                         methods=comparison_methods() if wants_report else ())
     written = None
@@ -140,12 +153,21 @@ def run(args) -> int:
         from ..report import write_report
 
         title = f"Hand-eye calibration report: {outcome.session_path.resolve().name}"
-        written = write_report(report_path, assessment, title=title)
+        written = write_report(report_path, assessment, title=title, extra_sections=_kinematics_sections(kinematics))
     if args.json:
-        write_json(args.json, calibration_json(assessment))
+        data = calibration_json(assessment)
+        if kinematics is not None:
+            from ..kinematics_step import kinematics_json
+
+            data["kinematics"] = kinematics_json(*kinematics)
+        write_json(args.json, data)
     stream = sys.stderr if args.json == "-" else sys.stdout
     if not args.quiet and args.json != "-":
         print(calibration_summary(assessment))
+        if kinematics is not None:
+            from ..kinematics_step import kinematics_lines
+
+            print("\n" + "\n".join(kinematics_lines(*kinematics)))
     if not args.quiet and saved is not None:
         print(f"\nResult saved to {saved} (handeye writeback and verify use it)", file=stream)
     if not args.quiet and assessment.verdict is not None:
@@ -172,6 +194,16 @@ def _save_result(outcome, units: str):
         print(f"handeye calibrate: warning: the result was not saved ({exc}); handeye writeback and verify will "
               "solve the session again", file=sys.stderr)
         return None
+
+
+def _kinematics_sections(kinematics) -> tuple:
+    """The report's kinematics section (none without ``--kinematics``)."""
+    if kinematics is None:
+        return ()
+    from ..kinematics_report import kinematics_section
+    from ..kinematics_step import kinematics_lines
+
+    return (kinematics_section(*kinematics, kinematics_lines(*kinematics)),)
 
 
 def _warn_joint_mismatch(session) -> None:

@@ -43,6 +43,8 @@ def add_parser(sub):
     p.add_argument("--postures", type=int, default=30, help="postures to plan (default 30)")
     p.add_argument("--seed", type=int, default=7, help="mock station seed: arm errors and sensor noise (default 7)")
     p.add_argument("--no-report", action="store_true", help="skip the HTML report")
+    p.add_argument("--kinematics", action="store_true",
+                   help="also identify the arm's joint zeros and link lengths; prints them next to the hidden ones")
     return p
 
 
@@ -67,12 +69,17 @@ def run(args) -> int:
                 print(("  ok    " if report.ok else "  SKIP  ") + report.message, flush=True)
             update(report.done, report.total, f"posture {report.index}")
 
-        result = run_demo(DemoOptions(args.session, args.postures, args.protocol, args.seed, not args.no_report),
+        result = run_demo(DemoOptions(args.session, args.postures, args.protocol, args.seed, not args.no_report,
+                                      args.kinematics),
                           progress=say, on_posture=on_posture)
     if args.json:
         write_json(args.json, result)
     if not quiet:
         print(_summary(result))
+        if "kinematics" in result:
+            from ..kinematics_step import demo_lines
+
+            print("\n".join(demo_lines(result["kinematics"])))
     ok = (result["readback_ok"] and result["errors"]["rotation_error_deg"] <= 0.05
           and result["errors"]["translation_error_mm"] <= 0.5)
     return 0 if ok else 1

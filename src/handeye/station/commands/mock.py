@@ -242,7 +242,7 @@ def run(args) -> int:
         signals = tuple(parse_signal(text) for text in args.signal)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    station = cell = faults = None
+    station = cell = faults = arm = None
     if args.config:
         from ...drivers.controller.backends import RAPID_LINKS
         from ...rapid.station import default_station, station_from_dict
@@ -253,6 +253,7 @@ def run(args) -> int:
         station = station_from_dict(config.rapid_dict(postures), args.config, links=RAPID_LINKS)
         cell = config.cell.model()
         faults = config.mock.faults.model()  # mock.faults: what its camera sees changed
+        arm = config.mock.arm.model()  # mock.arm: the arm's true deviations (None: random)
     server_options = {name[len("server_"):]: value for name, value in vars(args).items()
                       if name.startswith("server_") and value is not None}
     options = MockControllerOptions(protocol=args.protocol, port=args.port, host=args.host, station=station,
@@ -261,6 +262,6 @@ def run(args) -> int:
                                     idle_timeout_s=args.idle_timeout, write_key=args.write_key,
                                     program=args.program, camera_port=args.camera_port, cell=cell, signals=signals,
                                     pendant_port=args.pendant_port,
-                                     faults=faults)
+                                     faults=faults, arm=arm)
     return run_mock_controller(options, announce=lambda text: print(text, flush=True),
                                warn=lambda text: print(text, file=sys.stderr, flush=True))
