@@ -119,3 +119,20 @@ def left_out_lines(choices, what: str) -> str:
     if not left:
         return ""
     return f"\nInstalled plug-ins left out of {what}:\n" + "\n".join(f"  {why}" for why in left.values()) + "\n"
+
+
+def target_spec(text: str):
+    """``--board``: ``13x8`` (checkerboard corners), ``charuco``, ``circles``, or a kind with keys
+    (``charuco:squares=14x9,square_mm=30``): :func:`~handeye.calibration.targets.parse_target_spec`."""
+    from ...calibration.errors import CalibrationError
+    from ...calibration.targets import STATION_BOARD, parse_target_spec
+
+    try:
+        board = parse_target_spec(text)
+    except CalibrationError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("--board ")) from None
+    if getattr(board, "kind", "checkerboard") == "checkerboard" and board.square_mm is None:
+        from dataclasses import replace
+
+        board = replace(board, square_mm=STATION_BOARD.square_mm)  # the station's 30 mm squares
+    return board
