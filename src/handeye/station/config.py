@@ -503,13 +503,13 @@ def _target(value, key: str, context) -> BoardGeometry:
     default = TargetSettings()
     kind = checked.get("type", "checkerboard").lower()
     if kind == "checkerboard":
-        extra = sorted(k for k in checked if k not in ("type", "corners", "square_mm"))
+        extra = sorted(k for k, v in checked.items() if k not in ("type", "corners", "square_mm") and v not in (None, False))
         if extra:
             raise ConfigError(f"{key}.{extra[0]} is a key of a charuco or circles target, not of a checkerboard")
         return BoardGeometry(checked.get("corners", default.corners), checked.get("square_mm", default.square_mm))
     from ..calibration.targets import target_from_dict
 
-    raw = {k: (list(v) if isinstance(v, tuple) else v) for k, v in (value or {}).items()}
+    raw = {k: (list(v) if isinstance(v, tuple) else v) for k, v in (value or {}).items() if v is not None}
     raw["type"] = kind
     try:
         return target_from_dict(raw)
