@@ -136,3 +136,11 @@ def target_spec(text: str):
 
         board = replace(board, square_mm=STATION_BOARD.square_mm)  # the station's 30 mm squares
     return board
+
+
+def corners_or_target(text: str):
+    """``--board`` of ``stereo calibrate``: ``13x8`` as before (a checkerboard's inner corners), or a target kind
+    (``charuco``, ``charuco:squares=10x7,...``: :func:`target_spec`)."""
+    if text.split(":")[0].lower() in ("charuco", "circles", "checkerboard"):
+        return target_spec(text)
+    return corners(text)
