@@ -41,3 +41,26 @@ def test_stereo_calibrate_takes_a_charuco_board(tmp_path, capsys):
     report = json.loads((tmp_path / "cal" / "xb3.json").read_text())
     first = next(v for v in report["views"] if v["name"] == "000")
     assert not first["used_pair"] and any("whole board" in r for r in first["reasons"])
+
+
+def test_triangulate_takes_a_charuco_board_and_writes_the_corner_ids(tmp_path, capsys):
+    from handeye.calibration.targets import STATION_CHARUCO
+    from handeye.mocks.camera import MockCamera
+
+    camera = MockCamera(board=PrintedBoard(STATION_CHARUCO), seed=5, output="gray", render_centre=False)
+    camera.renderer.band = (120.0, 240.0)
+    with camera:
+        frame = camera.grab()
+    cv2.imwrite(str(tmp_path / "l.png"), frame.left)
+    cv2.imwrite(str(tmp_path / "r.png"), frame.right)
+    code = main(["triangulate", "--left", str(tmp_path / "l.png"), "--right", str(tmp_path / "r.png"), "--board", "charuco",
+                 "--json", str(tmp_path / "t.json")])
+    assert code == 0, capsys.readouterr().err
+    data = json.loads((tmp_path / "t.json").read_text())
+    ids = np.array(data["corner_ids"])
+    assert data["board"]["type"] == "charuco" and len(ids) == len(data["points_mm"]) < 104
+    truth = frame.info["target2cam_truth"]
+    true_points = STATION_CHARUCO.grid() @ truth[:3, :3].T + truth[:3, 3]
+    assert np.sqrt(np.mean(np.sum((np.array(data["points_mm"]) - true_points[ids]) ** 2, axis=1))) < 0.6
+    col = ids % 13
+    assert not np.any((col >= 5) & (col <= 7))  # the covered columns (x 150-210 mm) are not among them
