@@ -42,18 +42,21 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[7])
     parser.add_argument("--json", help="write the rows here")
+    parser.add_argument("--only", help="run only the runs whose name starts with this (e.g. charuco)")
     args = parser.parse_args(argv)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for seed in args.seeds:
             for name, board, occlude in RUNS:
+                if args.only and not name.startswith(args.only):
+                    continue
                 row = one_run(name, board, occlude, seed, Path(tmp))
                 rows.append(row)
                 print(f"seed {seed}  {name:28s} captured {row['postures_captured']:2d} (partial {row['partial_postures']:2d}), "
                       f"corners min {row['corners_min']:3d} median {row['corners_median']:3d}; error "
                       f"{row['rotation_error_deg']:.4f} deg, {row['translation_error_mm']:.3f} mm; "
                       f"{'PASS' if row['passed'] else 'FAIL'}", flush=True)
-    for seed in args.seeds:
+    for seed in args.seeds if not args.only else ():
         by = {r["run"]: r for r in rows if r["seed"] == seed}
         base, occ = by["checkerboard"], by["charuco, 30 % occluded"]
         print(f"seed {seed}: occluded ChArUco / unoccluded checkerboard: rotation "

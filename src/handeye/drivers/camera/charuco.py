@@ -31,6 +31,9 @@ __all__ = ["CharucoDetection", "opencv_board", "detect_charuco", "detect_circles
 
 #: Largest RMS rectified row disagreement (px) of the matched corners before the pair is refused.
 MAX_ROW_DISAGREEMENT_PX = 2.0
+#: A matched corner whose rectified rows disagree by more than this (px), and this many times the median,
+#: is dropped (a refinement pulled by a marker edge in one image): a partial view is allowed, a bad corner not.
+ROW_OUTLIER_PX, ROW_OUTLIER_RATIO = 0.3, 4.0
 
 
 @functools.lru_cache(maxsize=8)
@@ -228,6 +231,10 @@ def observe_partial(left: np.ndarray, right: np.ndarray, model: StereoModel, boa
     if not np.all(rl[:, 0] - rr[:, 0] > 0):
         raise StereoMismatch("no corner in the right image lies left of its match in the left image: are the left and "
                              "right images swapped?")
+    rows = rl[:, 1] - rr[:, 1]
+    bad = np.abs(rows) > max(ROW_OUTLIER_PX, ROW_OUTLIER_RATIO * float(np.median(np.abs(rows))))
+    if bad.any() and not view_refusal(common[~bad], board):  # a corner the two images disagree on: drop it
+        common, lp, rp, rl, rr = common[~bad], lp[~bad], rp[~bad], rl[~bad], rr[~bad]
     rms = float(np.sqrt(np.mean((rl[:, 1] - rr[:, 1]) ** 2)))
     if rms > max_row_disagreement_px:
         raise StereoMismatch(f"left and right corners of the same id disagree by {rms:.1f} px (RMS) in rectified rows: the "
