@@ -263,7 +263,7 @@ def shape_eigen(shapes) -> tuple[np.ndarray, np.ndarray]:
     return np.maximum(lam, 0.0), vec
 
 
-def corner_noise(residuals, eigen, iterations: int = 30) -> CornerNoise:
+def corner_noise(residuals, eigen, iterations: int = 30, seen=None) -> CornerNoise:
     """REML-type estimate of ``(a, b)`` in ``Σ_p = a I + b S_p`` from board-fit residuals (Fisher scoring).
 
     Parameters
@@ -280,11 +280,14 @@ def corner_noise(residuals, eigen, iterations: int = 30) -> CornerNoise:
     Gaussian residuals the score of component ``k`` is ``½ sum (e_j^2 / v_j^2 - c / v_j) g_kj`` and the
     Fisher information ``½ c sum g_kj g_lj / v_j^2`` with ``g_0 = 1``, ``g_1 = λ``; ``c = (3m - 6) / 3m``
     accounts for the six pose parameters each posture's fit absorbed (REML-like), so the estimate is
-    not biased low.
+    not biased low. ``seen`` (bool ``(n, m)``, partial views of a ChArUco board) leaves the corners a
+    view did not see out of every sum; ``c`` then counts the seen corners.
     """
     e = np.asarray(residuals, dtype=float)
     lam, vec = eigen
     n, m, _ = e.shape
+    if seen is not None:
+        return _masked_corner_noise(e, lam, vec, np.asarray(seen, bool), iterations)
     dof = max(n * (3 * m - 6), 1)
     c = dof / float(n * 3 * m)
     e2 = np.einsum("nmij,nmi->nmj", vec, e) ** 2  # squared residuals in the eigenbasis
@@ -298,6 +301,32 @@ def corner_noise(residuals, eigen, iterations: int = 30) -> CornerNoise:
         v = theta[0] + theta[1] * lam
         score = 0.5 * np.einsum("knmj,nmj->k", g, e2 / v**2 - c / v)
         fisher = 0.5 * c * np.einsum("knmj,lnmj,nmj->kl", g, g, 1.0 / v**2)
+        new = np.maximum(theta + np.linalg.solve(fisher, score), VARIANCE_FLOOR)
+        done = np.all(np.abs(new - theta) <= 1e-6 * np.maximum(theta, VARIANCE_FLOOR))
+        theta = new
+        if done:
+            break
+    return CornerNoise(float(theta[0]), float(theta[1]), int(dof))
+
+
+def _masked_corner_noise(e, lam, vec, seen, iterations: int) -> CornerNoise:
+    """:func:`corner_noise` over the seen corners only (``seen`` ``(n, m)``)."""
+    count = seen.sum(axis=1)
+    dof = max(int(np.sum(np.maximum(3 * count - 6, 0))), 1)
+    total = max(3 * int(count.sum()), 1)
+    c = dof / float(total)
+    w = np.broadcast_to(seen[..., None], lam.shape).astype(float)
+    e2 = np.einsum("nmij,nmi->nmj", vec, e) ** 2 * w
+    mean_sq = float(e2.sum() / total) / c
+    scale_s = float((lam * w).sum() / total)
+    if mean_sq <= VARIANCE_FLOOR or scale_s <= 0:
+        return CornerNoise(max(mean_sq, VARIANCE_FLOOR), VARIANCE_FLOOR, int(dof))
+    theta = np.array([0.5 * mean_sq, 0.5 * mean_sq / scale_s])
+    g = np.stack([np.ones_like(lam), lam])
+    for _ in range(iterations):
+        v = theta[0] + theta[1] * lam
+        score = 0.5 * np.einsum("knmj,nmj->k", g, w * (e2 / v**2 - c / v))
+        fisher = 0.5 * c * np.einsum("knmj,lnmj,nmj->kl", g, g, w / v**2)
         new = np.maximum(theta + np.linalg.solve(fisher, score), VARIANCE_FLOOR)
         done = np.all(np.abs(new - theta) <= 1e-6 * np.maximum(theta, VARIANCE_FLOOR))
         theta = new

@@ -176,6 +176,8 @@ def _square_size(session) -> list:
     """The square-size implausibility (``board_scale.judge_square_size``), when it refuses."""
     target = session.target
     with_points = [p.points_mm for p in session.postures if p.points_mm is not None]
+    if getattr(target, "kind", "checkerboard") == "circles":
+        return []  # not a square grid: the board fit checks its spacing
     if not (target is not None and target.square_mm and len(with_points) == len(session.postures) and with_points
             and all(len(points) == target.count for points in with_points)):
         return []

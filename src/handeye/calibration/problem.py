@@ -75,6 +75,9 @@ class HandEyeProblem:
     joints_deg: np.ndarray | None = None
     robot: str | None = None
     excluded: dict = field(default_factory=dict)
+    #: ``(n, m)`` bool: which corners each posture saw (partial views of a ChArUco board; the others in
+    #: ``points_cam`` are the seen subset's rigid board fit); ``None``: every corner was seen.
+    seen: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -98,4 +101,5 @@ class HandEyeProblem:
         ids = self.posture_ids[keep]
         excluded = {i: reason for i, reason in self.excluded.items() if i in {int(k) for k in ids}}
         return HandEyeProblem(self.setup, self.hand[keep], compact, self.points_cam[keep],
-                              ids, self.target_points, dict(self.notes), joints, self.robot, excluded)
+                              ids, self.target_points, dict(self.notes), joints, self.robot, excluded,
+                              None if self.seen is None else self.seen[keep])

@@ -43,7 +43,7 @@ __all__ = [
 ]
 
 FORMAT = "handeye-session/1"
-_POSTURE_KEYS = {"index", "tool0_in_base", "joints_deg", "points_mm", "target_in_camera"}
+_POSTURE_KEYS = {"index", "tool0_in_base", "joints_deg", "points_mm", "corner_ids", "target_in_camera"}
 
 
 @dataclass
@@ -61,6 +61,9 @@ class Posture:
         Board corners in the camera frame, target index order.
     target_in_camera : ndarray, shape (4, 4) or None
         Board pose ``target2cam``.
+    corner_ids : ndarray of int, shape (m,) or None
+        The target index of each row of ``points_mm`` when the view saw part of the board (a ChArUco
+        board); ``None``: ``points_mm`` holds every corner in target index order.
     extra : dict
         Any other keys of the posture file (quality figures, image names), kept as they are.
     """
@@ -71,6 +74,7 @@ class Posture:
     points_mm: np.ndarray | None = None
     target_in_camera: np.ndarray | None = None
     extra: dict = field(default_factory=dict)
+    corner_ids: np.ndarray | None = None
 
     def to_dict(self) -> dict:
         out: dict = {"index": int(self.index)}
@@ -80,6 +84,8 @@ class Posture:
             out["joints_deg"] = [round(float(v), 9) for v in self.joints_deg]
         if self.points_mm is not None:
             out["points_mm"] = [[round(float(v), 6) for v in p] for p in np.asarray(self.points_mm)]
+        if self.corner_ids is not None:
+            out["corner_ids"] = [int(i) for i in self.corner_ids]
         if self.target_in_camera is not None:
             out["target_in_camera"] = _rounded_pose(self.target_in_camera)
         out.update(self.extra)
@@ -116,10 +122,9 @@ class Session:
         if self.robot:
             out["robot"] = self.robot
         if self.target is not None:
-            target = {"type": "checkerboard", "corners": [int(c) for c in self.target.corners]}
-            if self.target.square_mm is not None:
-                target["square_mm"] = float(self.target.square_mm)
-            out["target"] = target
+            from .targets import target_to_dict  # noqa: PLC0415 (the target registry: checkerboard, charuco, circles)
+
+            out["target"] = target_to_dict(self.target)
         out.update(self.extra)
         return out
 
@@ -296,6 +301,8 @@ def _parse_posture(data: dict, file_index: int | None) -> Posture:
         posture.joints_deg = _array(data["joints_deg"], (None,), "joints_deg", MAX_JOINT_DEG, _JOINT)
     if data.get("points_mm") is not None:
         posture.points_mm = _array(data["points_mm"], (None, 3), "points_mm", MAX_LENGTH_MM, _LENGTH)
+    if data.get("corner_ids") is not None:
+        posture.corner_ids = _corner_ids(data["corner_ids"], posture.points_mm)
     if data.get("target_in_camera") is not None:
         posture.target_in_camera = _pose(data["target_in_camera"], "target_in_camera")
     if posture.tool0_in_base is None and posture.joints_deg is None:
@@ -305,9 +312,27 @@ def _parse_posture(data: dict, file_index: int | None) -> Posture:
     return posture
 
 
+def _corner_ids(value, points) -> np.ndarray:
+    """Corner ids of a partial view: distinct whole numbers >= 0, one per row of ``points_mm``."""
+    if (not isinstance(value, list) or not all(type(i) is int and 0 <= i < MAX_CORNERS**2 for i in value)
+            or len(set(value)) != len(value)):
+        raise ValueError(f"corner_ids must be distinct whole numbers >= 0 (target indices); got {brief(value)}")
+    if points is None or len(points) != len(value):
+        raise ValueError(f"corner_ids has {len(value)} ids but points_mm {0 if points is None else len(points)} rows; "
+                         "give one id per point")
+    return np.array(value, dtype=int)
+
+
 def _parse_target(value) -> BoardGeometry | None:
     if value is None:
         return None
+    if isinstance(value, dict) and value.get("type", "checkerboard") != "checkerboard":
+        from .targets import target_from_dict  # noqa: PLC0415 (a ChArUco board or a circle grid: issue 37)
+
+        try:
+            return target_from_dict(value)
+        except ValueError as exc:
+            raise SessionError(f"session.yaml: target: {exc}") from None
     if not isinstance(value, dict) or "corners" not in value:
         raise SessionError("session.yaml: target needs corners: [along x, along y]")
     corners = value["corners"]

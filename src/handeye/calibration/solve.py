@@ -224,6 +224,8 @@ def problem_from_session(session: Session, check_units: bool = True,
         if board is None:
             raise CalibrationError(
                 "the postures hold points_mm but session.yaml has no target.corners; add the board's corner counts")
+        if _partial(session):
+            return _consistent(_partial_problem(session, hand, ids, joints), check_consistency)
         for p in postures:
             if len(p.points_mm) != board.count:
                 raise CalibrationError(
@@ -245,6 +247,30 @@ def problem_from_session(session: Session, check_units: bool = True,
     return _consistent(HandEyeProblem(session.setup, hand, compact, compact.points, ids, compact.target_points,
                                       joints_deg=joints, robot=session.robot if joints is not None else None),
                        check_consistency)
+
+
+def _partial(session: Session) -> bool:
+    """True for a session of a board that may be seen in part (ChArUco), or one whose postures name corner ids."""
+    from .targets import partial_ok  # noqa: PLC0415
+
+    return partial_ok(session.target) or any(p.corner_ids is not None for p in session.postures)
+
+
+def _partial_problem(session: Session, hand, ids, joints) -> HandEyeProblem:
+    """The problem of a session with partial views: board points by id (``partial_views.board_arrays``)."""
+    from .partial_views import board_arrays, compact_points_from_fit  # noqa: PLC0415
+
+    board = session.target
+    square = board.square_mm
+    if square is None:
+        raise CalibrationError("session.yaml: target.square_mm is needed for views of part of the board")
+    try:
+        points, seen, poses = board_arrays(session.postures, board, square)
+    except ValueError as exc:
+        raise CalibrationError(str(exc)) from None
+    compact = compact_points_from_fit(points, seen, poses, board, square)
+    return HandEyeProblem(session.setup, hand, compact, points, ids, board.grid(square), joints_deg=joints,
+                          robot=session.robot if joints is not None else None, seen=None if seen.all() else seen)
 
 
 def _session_joints(session: Session) -> np.ndarray | None:

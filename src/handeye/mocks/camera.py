@@ -144,9 +144,10 @@ class ViewRenderer:
         return block[..., 0].astype(np.float32), block[..., 1].astype(np.float32), None
 
     # ---------------------------------------------------------------- scene
-    def render(self, target2view: np.ndarray, board: PrintedBoard, options: RenderOptions, rng) -> np.ndarray:
-        """Ideal (noise-free, unblurred) image ``(h, w)`` float32 of the board seen from ``target2view``."""
-        image = self._render(target2view, board, options, rng)
+    def render(self, target2view: np.ndarray, board: PrintedBoard, options: RenderOptions, rng, band=None) -> np.ndarray:
+        """Ideal (noise-free, unblurred) image ``(h, w)`` float32 of the board seen from ``target2view``
+        (``band``: ``(u0, u1)`` mm of the board covered by an occluder, ``mocks.printed_targets``)."""
+        image = self._render(target2view, board, options, rng, band)
         if options.lighting is not None and options.lighting.vignetting:
             image *= self._vignetting(options.lighting)
         return image
@@ -157,7 +158,7 @@ class ViewRenderer:
             self._vig_key, self._vig = key, lighting.in_image(*self.size)
         return self._vig
 
-    def _render(self, target2view, board, options, rng) -> np.ndarray:
+    def _render(self, target2view, board, options, rng, band=None) -> np.ndarray:
         w, h = self.size
         image = np.empty((h, w), np.float32)
         image[:] = options.background * self._bg_ramp
@@ -180,9 +181,9 @@ class ViewRenderer:
         inv = np.linalg.inv(np.column_stack([target2view[:3, 0], target2view[:3, 1], target2view[:3, 3]]))
         xn, yn, jac = self._rays(x0, x1, y0, y1)
         u, v, front = _board_coords(inv, xn, yn)
-        labels = _labels(u, v, front, board)
+        labels = _labels(u, v, front, board, band)
         bg = options.background * self._bg_ramp[:, x0:x1]
-        levels = np.array([0.0, options.white, options.black], np.float32)
+        levels = np.array([0.0, options.white, options.black, OCCLUDER_LEVEL], np.float32)
         block = np.where(labels == 0, bg, levels[labels])
         lighting = options.lighting
         lit = lighting is not None and not lighting.is_even
@@ -213,7 +214,7 @@ class ViewRenderer:
                 gy_y, gy_x = np.gradient(yn)
                 sx = xn[ey, ex][:, None] + gx_x[ey, ex][:, None] * ox + gx_y[ey, ex][:, None] * oy
                 sy = yn[ey, ex][:, None] + gy_x[ey, ex][:, None] * ox + gy_y[ey, ex][:, None] * oy
-            sub = _labels(*_board_coords(inv, sx, sy), board)
+            sub = _labels(*_board_coords(inv, sx, sy), board, band)
             sheet = levels[sub]
             if lit:
                 sheet = sheet * gain[ey, ex][:, None] + added[ey, ex][:, None]
@@ -263,10 +264,21 @@ def _board_coords(inv: np.ndarray, xn, yn):
     return u, v, front
 
 
-def _labels(u, v, front, board: PrintedBoard) -> np.ndarray:
-    """0 = background, 1 = white paper, 2 = black square; square ``(a, b)`` (``a = floor(u / sq) + 1``,
-    ``b = floor(v / sq) + 1``) is black when ``a + b`` is even (conventions: the square between
-    corners 0, 1, nx, nx + 1 is black)."""
+#: Grey level of the occluding band of ``mock.occlude`` (a dull clamp or probe).
+OCCLUDER_LEVEL = 70.0
+
+
+def _labels(u, v, front, board: PrintedBoard, band=None) -> np.ndarray:
+    """0 = background, 1 = white paper, 2 = black square (3 = the occluder over ``band``); square ``(a, b)``
+    (``a = floor(u / sq) + 1``, ``b = floor(v / sq) + 1``) is black when ``a + b`` is even (conventions: the
+    square between corners 0, 1, nx, nx + 1 is black). A ChArUco sheet is OpenCV's print
+    (:func:`~handeye.mocks.printed_targets.printed_labels`)."""
+    if band is not None or getattr(board.geometry, "kind", "checkerboard") != "checkerboard":
+        from .printed_targets import occluded, printed_labels  # noqa: PLC0415
+
+        plain = printed_labels(u, v, front, board) if getattr(board.geometry, "kind", "") == "charuco" else \
+            _labels(u, v, front, board)
+        return occluded(plain, u, band)
     cu0, cu1, cv0, cv1 = board.checker_bounds()
     su0, su1, sv0, sv1 = board.sheet_bounds()
     sq = np.float32(board.square_mm)
@@ -337,10 +349,13 @@ class StereoRenderer:
             self._views[view] = ViewRenderer(k, d, self.model.image_size)
         return self._views[view]
 
+    #: ``(u0, u1)`` mm of the board covered by an occluder in the next renders (``mock.occlude``), or None.
+    band = None
+
     def ideal(self, target2cam: np.ndarray, view: str) -> np.ndarray:
         """Noise-free, unblurred float image of one view."""
         _, _, r, t = self.model.view(view)
-        return self._renderer(view).render(_view_pose(target2cam, r, t), self.board, self.options, self.rng)
+        return self._renderer(view).render(_view_pose(target2cam, r, t), self.board, self.options, self.rng, self.band)
 
     def planes(self, target2cam: np.ndarray, views=VIEWS, options: RenderOptions | None = None) -> dict:
         """Sensor planes (uint8; GBRG mosaics for a colour head) of ``views``."""
@@ -429,8 +444,13 @@ class MockCamera(Camera):
 
     def __init__(self, model: StereoModel | None = None, board: PrintedBoard | None = None, target2base=None,
                  cam2base=None, options: RenderOptions | None = None, seed=None, serial: int = 7_654_321,
-                 output: str = "bgr", render_centre: bool = True, frame_period_s: float = 0.0):
+                 output: str = "bgr", render_centre: bool = True, frame_period_s: float = 0.0, occlude=None):
         self.renderer = StereoRenderer(model, board, options, seed)
+        self._occlusion = None
+        if occlude is not None:  # mock.occlude: a band over the board at a share of the postures
+            from .printed_targets import OcclusionPicker  # noqa: PLC0415
+
+            self._occlusion = OcclusionPicker(occlude, self.renderer.board.geometry, seed)
         self._serial = int(serial)
         self.output = output
         self.render_centre = render_centre
@@ -492,6 +512,8 @@ class MockCamera(Camera):
                 if wait > 0:
                     time.sleep(wait)
             truth = self.target2cam()
+            if self._occlusion is not None:
+                self.renderer.band = self._occlusion.band(self._target2base @ np.linalg.inv(truth))
             packed = self.renderer.xb3_frame(truth, render_centre=self.render_centre)
             self._last = time.monotonic()
         w, h = self.model.image_size

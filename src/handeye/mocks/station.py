@@ -142,6 +142,8 @@ class MockStationSpec:
     faults: StationFaults = field(default_factory=StationFaults)
     state_file: str | None = None
     arm: ArmDeviations | None = None
+    #: ``mock.occlude``: a band over the board at a share of the postures (``mocks.printed_targets.Occlusion``).
+    occlude: object = None
 
 
 class MockStation:
@@ -282,6 +284,7 @@ def flange_camera(spec: MockStationSpec, arm: SimulatedRobot, run: int = 0) -> t
 
     model = spec.stereo if spec.stereo is not None else nominal_xb3_model()
     camera = MockCamera(model=model, board=PrintedBoard(spec.board), target2base=board2base,
-                        cam2base=cam2base, options=spec.render, seed=spec.seed if not run else [spec.seed, run])
+                        cam2base=cam2base, options=spec.render, seed=spec.seed if not run else [spec.seed, run],
+                        occlude=spec.occlude)
     return camera, {"cam2tool0": mount, "board2base": board2base, "true_robot": true_robot,
                     "dh_deviation": true_robot.dh - nominal.dh}

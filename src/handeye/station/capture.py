@@ -193,8 +193,8 @@ def measure_board(camera, model, board: BoardGeometry, timeout_s: float = 2.0):
 
 
 def _triangulate(frame, model, board: BoardGeometry):
-    return triangulate_images(frame.left, frame.right, board=f"{board.corners[0]}x{board.corners[1]}",
-                              square_mm=board.square_mm, model=model)
+    named = board if getattr(board, "kind", "checkerboard") != "checkerboard" else f"{board.corners[0]}x{board.corners[1]}"
+    return triangulate_images(frame.left, frame.right, board=named, square_mm=board.square_mm, model=model)
 
 
 def _quality_problem(result, config: StationConfig) -> str | None:
@@ -209,6 +209,17 @@ def _quality_problem(result, config: StationConfig) -> str | None:
     if not lo <= q.get("distance_mm", lo) <= hi:
         return f"board at {q['distance_mm']:.0f} mm, outside {lo:g}-{hi:g} mm"
     return None
+
+
+def _start_compact(measured, board):
+    """Compact points (and board pose) of the start posture's measurement; a partial view by its ids."""
+    if measured.corner_ids is None:
+        return compact_points_from_corners(measured.points_mm[None], board)
+    from ..calibration.partial_views import board_arrays, compact_points_from_fit
+
+    posture = Posture(index=0, points_mm=measured.points_mm, corner_ids=measured.corner_ids)
+    points, seen, poses = board_arrays([posture], board, board.square_mm)
+    return compact_points_from_fit(points, seen, poses, board, board.square_mm)
 
 
 def _session_record(session_dir: Path) -> Session | None:
@@ -235,7 +246,7 @@ def _new_plan(config: StationConfig, link: StationLink, progress) -> PosturePlan
         raise CaptureError(f"at the start posture: {exc}") from None
     except CameraError as exc:
         raise CaptureError(f"no board at the start posture ({exc}); point the camera at the board from about 0.9 m") from None
-    compact = compact_points_from_corners(measured.points_mm[None], config.target)
+    compact = _start_compact(measured, config.target)
     progress(f"board found at the start posture, {measured.quality['distance_mm']:.0f} mm away; planning "
              f"{config.plan.postures} postures ...")
     p = config.plan
@@ -687,7 +698,8 @@ def store_posture(config: StationConfig, session_dir: Path, index: int, joints, 
         cv2.imwrite(str(images / f"{index:03d}_right.png"), frame.right)
         extra["images"] = [f"images/{index:03d}_left.png", f"images/{index:03d}_right.png"]
     write_posture(session_dir, Posture(index=index, tool0_in_base=tool02base, joints_deg=joints,
-                                       points_mm=result.points_mm, extra=extra))
+                                       points_mm=result.points_mm, extra=extra,
+                                       corner_ids=getattr(result, "corner_ids", None)))
 
 
 def measurement_line(quality: dict) -> str:

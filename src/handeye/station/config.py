@@ -360,13 +360,48 @@ class CameraSettings(_DeclaredByBackEnds):
         return transform_from_pose(self.nominal_mount[0], self.nominal_mount[1])
 
 
+def _target_kinds() -> tuple:
+    from ..calibration.targets import TARGETS
+
+    return TARGETS.names()
+
+
+def _squares(value, key: str, context) -> tuple:
+    if (not isinstance(value, list) or len(value) != 2
+            or not all(isinstance(c, int) and not isinstance(c, bool) and c >= 3 for c in value)):
+        raise ConfigError(f"{key} must be two whole numbers >= 3; got {brief(value)}")
+    return tuple(value)
+
+
+def _occlude(value, key: str, context):
+    """``mock.occlude``: ``{postures: share 0..1, band: [min, max] fraction of the board}`` (``mocks.printed_targets``)."""
+    from ..mocks.printed_targets import Occlusion
+
+    if not isinstance(value, dict):
+        raise ConfigError(f"{key} must be a mapping like {{postures: 0.3, band: [0.2, 0.4]}}; got {brief(value)}")
+    unknown = sorted(set(value) - {"postures", "band"}, key=brief)
+    if unknown:
+        raise ConfigError(f"unknown key {key}.{unknown[0]}; known keys of {key}: band, postures")
+    share = Number(0, 1)(value.get("postures", 0.3), f"{key}.postures", context)
+    band = Range(0.01, 1)(value.get("band", [0.2, 0.4]), f"{key}.band", context)
+    return Occlusion(float(share), tuple(float(b) for b in band))
+
+
 @dataclass(frozen=True)
 class TargetSettings:
     """``target``: the checkerboard (kept as a :class:`BoardGeometry`)."""
 
-    type: str = setting("checkerboard", Custom(_as_is), "checkerboard (the only target; accepted as in session.yaml)")
-    corners: tuple = setting(STATION_BOARD.corners, Custom(_corners), "inner corners along x (the long side), along y")
-    square_mm: float = setting(STATION_BOARD.square_mm, Number(1, 500), "square size", "mm")
+    type: str = setting("checkerboard", Text(_target_kinds), "checkerboard, charuco or circles (the target registry; "
+                        "`board:` is the same section)")
+    corners: tuple = setting(STATION_BOARD.corners, Custom(_corners), "inner corners along x (the long side), along y "
+                             "(circles: circles per row, rows)")
+    square_mm: float = setting(STATION_BOARD.square_mm, Number(1, 500), "square size (circles: spacing in a row)", "mm")
+    squares: tuple | None = setting(None, Optional(Custom(_squares)), "charuco: squares along x, along y (corners = "
+                                    "squares - 1; give one of the two)")
+    marker_mm: float | None = setting(None, Optional(Number(0.1, 500)), "charuco: marker side (default 22)", "mm")
+    dictionary: str | None = setting(None, Optional(Text()), "charuco: OpenCV ArUco dictionary (default DICT_5X5_100)")
+    legacy: bool = setting(False, Flag(), "charuco: OpenCV's layout before 4.6 (even square rows start white)")
+    diameter_mm: float | None = setting(None, Optional(Number(0.1, 500)), "circles: circle diameter (informative)", "mm")
 
 
 @dataclass(frozen=True)
@@ -507,12 +542,27 @@ class MockSettings:
     time_scale: float = setting(0.02, Number(1e-4, 10), "wall-clock seconds per simulated second of motion")
     faults: FaultSettings = section(FaultSettings, "what changed since the calibration (handeye verify)")
     arm: ArmSettings = section(ArmSettings, "the arm's true kinematic deviations (null: random)")
+    occlude: object = setting(None, Optional(Custom(_occlude)), "a band over the board at a share of the postures "
+                              "({postures: 0.3, band: [0.2, 0.4]}; null: none)")
 
 
 def _target(value, key: str, context) -> BoardGeometry:
     checked = check_section(TargetSettings, value or {}, key, context)
     default = TargetSettings()
-    return BoardGeometry(checked.get("corners", default.corners), checked.get("square_mm", default.square_mm))
+    kind = checked.get("type", "checkerboard").lower()
+    if kind == "checkerboard":
+        extra = sorted(k for k, v in checked.items() if k not in ("type", "corners", "square_mm") and v not in (None, False))
+        if extra:
+            raise ConfigError(f"{key}.{extra[0]} is a key of a charuco or circles target, not of a checkerboard")
+        return BoardGeometry(checked.get("corners", default.corners), checked.get("square_mm", default.square_mm))
+    from ..calibration.targets import target_from_dict
+
+    raw = {k: (list(v) if isinstance(v, tuple) else v) for k, v in (value or {}).items() if v is not None}
+    raw["type"] = kind
+    try:
+        return target_from_dict(raw)
+    except ValueError as exc:
+        raise ConfigError(f"{key}: {exc}") from None
 
 
 @dataclass(frozen=True)
@@ -600,6 +650,10 @@ class StationConfig:
         ``"<set>"`` or None, never their value."""
         out = {"robot": self.robot, "output": self.output, "quality": dict(self.quality),
                "target": {"corners": list(self.target.corners), "square_mm": self.target.square_mm}}
+        if getattr(self.target, "kind", "checkerboard") != "checkerboard":
+            from ..calibration.targets import target_to_dict
+
+            out["target"] = target_to_dict(self.target)
         for name in ("controller", "camera", "plan", "motion", "tool", "capture", "guided", "verify", "mock"):
             settings = getattr(self, name)
             chosen = chosen_of(settings)
@@ -640,6 +694,10 @@ def config_from_dict(data: dict, source: str = "configuration") -> StationConfig
     """
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: the file must hold a mapping of sections")
+    if "board" in data:  # `board:` names the target section too (issue 37)
+        if "target" in data:
+            raise ConfigError("give the board in one section: board or target (the same keys), not both")
+        data = {("target" if k == "board" else k): v for k, v in data.items()}
     unknown = sorted(set(data) - set(TOP_LEVEL), key=brief)
     if unknown:
         raise ConfigError(f"unknown section {brief(unknown[0])}; known: {', '.join(sorted(TOP_LEVEL))}")

@@ -42,6 +42,10 @@ class DemoOptions:
     seed: int = 7
     report: bool = True
     kinematics: bool = False
+    #: The board (``--board``): None keeps the config's (the station's checkerboard).
+    board: object = None
+    #: ``mock.occlude`` for the run (``--occlude``), or None.
+    occlude: object = None
 
 
 def _fresh_folder(path: Path) -> None:
@@ -64,7 +68,10 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
     started = time.monotonic()
     config = config or default_config()
     config = replace(config, plan=replace(config.plan, postures=options.postures),
-                     mock=replace(config.mock, protocol=options.protocol, seed=options.seed))
+                     mock=replace(config.mock, protocol=options.protocol, seed=options.seed,
+                                  occlude=options.occlude if options.occlude is not None else config.mock.occlude))
+    if options.board is not None:
+        config = replace(config, target=options.board)
     folder = Path(options.session)
     _fresh_folder(folder)
     session_dir = folder / "session"

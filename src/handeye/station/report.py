@@ -82,6 +82,9 @@ def write_report(path_html, assessment: Assessment, title: str = "Hand-eye calib
                 f"method {escape(a.result.method)} &middot; generated {escape(now)}</div>", summary_section(a)]
     if a.verdict is not None:
         sections.append(checks_section(a.verdict))
+    from .report_corners import corners_section  # partial views (ChArUco): "" for a checkerboard session
+
+    sections += [corners_section(a.problem)] if corners_section(a.problem) else []
     sections += [residuals_section(a, fixed_frame), coverage_section(a), comparison_section(a),
                  repeatability_section(a, fixed_frame),
                  "<h2>5. Quality metrics</h2><section>" + metrics_table(a) + "</section>"]

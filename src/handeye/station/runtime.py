@@ -100,7 +100,7 @@ def mock_spec(config: StationConfig, state_file=None):
                            kinematic_error_deg=m.kinematic_error_deg, time_scale=m.time_scale, seed=m.seed,
                            idle_timeout_s=config.controller.idle_timeout_s, write_key=config.controller.write_key,
                            cell=config.cell.model(), zone_tcp_mm=zone_tcp, faults=m.faults.model(), arm=m.arm.model(),
-                           state_file=None if state_file is None else str(state_file))
+                           state_file=None if state_file is None else str(state_file), occlude=m.occlude)
 
 
 #: What every output says when the embedded mock station is in use.

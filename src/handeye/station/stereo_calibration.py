@@ -213,12 +213,30 @@ def _detect(image, board, what: str):
     from ..drivers.camera.checkerboard import detect_board
     from ..drivers.camera.errors import BoardNotFound
 
+    if getattr(board, "kind", "checkerboard") == "charuco":
+        return _detect_charuco_whole(image, board, what)
     try:
         det = detect_board(image, board, what=what)
     except BoardNotFound as exc:
         return None, str(exc)
     if det.off_grid:
         return None, det.off_grid_message(what)
+    return det.corners_px, ""
+
+
+def _detect_charuco_whole(image, board, what: str):
+    """``(corners or None, note)`` of a ChArUco board for calibration: OpenCV's corners by id when it saw the
+    whole board (the calibration takes whole views; a view of part of it is left out, saying so)."""
+    from ..drivers.camera.charuco import detect_charuco
+    from ..drivers.camera.errors import BoardNotFound
+
+    try:
+        det = detect_charuco(image, board, what)
+    except BoardNotFound as exc:
+        return None, str(exc)
+    if len(det.ids) < board.count:
+        return None, (f"{len(det.ids)} of the ChArUco board's {board.count} corners in the {what}: stereo calibrate "
+                      "uses views of the whole board")
     return det.corners_px, ""
 
 

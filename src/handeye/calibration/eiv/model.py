@@ -199,11 +199,17 @@ def observations(problem: HandEyeProblem, stereo: tuple | None = None) -> Observ
         kwargs = {} if f_px is None else {"f_px": f_px, "baseline_mm": baseline}
         shapes = stereo_point_shape(pts, **kwargs)
         eigen = shape_eigen(shapes)
-        fit = fit_board_poses(pts, model, start, iterations=2)  # unweighted first: residuals for the components
-        noise = corner_noise(fit.residuals, eigen)
-        fit = fit_board_poses(pts, model, fit.target2cam, inverse_covariances(noise, eigen), iterations=1)
-        noise = corner_noise(fit.residuals, eigen)
-        fit = fit_board_poses(pts, model, fit.target2cam, inverse_covariances(noise, eigen), iterations=1)
+        seen = getattr(problem, "seen", None)  # partial views (ChArUco): the unseen corners weigh nothing
+        mask = None if seen is None else np.asarray(seen, float)[..., None, None]
+
+        def weights(w):
+            return w if mask is None else w * mask
+
+        fit = fit_board_poses(pts, model, start, None if mask is None else weights(np.eye(3)), iterations=2)
+        noise = corner_noise(fit.residuals, eigen, seen=seen)  # unweighted first: residuals for the components
+        fit = fit_board_poses(pts, model, fit.target2cam, weights(inverse_covariances(noise, eigen)), iterations=1)
+        noise = corner_noise(fit.residuals, eigen, seen=seen)
+        fit = fit_board_poses(pts, model, fit.target2cam, weights(inverse_covariances(noise, eigen)), iterations=1)
         cov = noise.covariances(shapes)
         board_cov = np.linalg.inv(fit.information)
         return Observations(problem.hand, fit.target2cam, board_cov, hand_comps, "corners", noise, pts, model, cov,

@@ -46,7 +46,7 @@ printed pattern, its contrast); this one detects, refines, checks and triangulat
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -98,7 +98,7 @@ def as_board(board, square_mm: float | None = None) -> BoardGeometry:
     """
     if isinstance(board, BoardGeometry):
         if square_mm is not None and board.square_mm != square_mm:
-            return BoardGeometry(board.corners, float(square_mm))
+            return replace(board, square_mm=float(square_mm))  # a ChArUco board or circle grid stays one
         return board
     if isinstance(board, str):
         parts = board.lower().replace("×", "x").split("x")
@@ -435,6 +435,10 @@ def observe_board(left: np.ndarray, right: np.ndarray, model: StereoModel, board
             f"images are {size[0]}x{size[1]} but the stereo model is for {model.image_size[0]}x{model.image_size[1]}: "
             f"use the stereo file of this camera and resolution"
         )
+    if getattr(board, "kind", "checkerboard") != "checkerboard":  # ChArUco or circles: by id (issue 37)
+        from .charuco import observe_partial  # noqa: PLC0415
+
+        return observe_partial(left, right, model, board, max_row_disagreement_px=max_row_disagreement_px)
     det_left = detect_board(left, board, what="left image")
     det_right = detect_board(right, board, what="right image")
     for det, name in ((det_left, "left image"), (det_right, "right image")):

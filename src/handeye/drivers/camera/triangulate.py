@@ -67,14 +67,22 @@ class TriangulationResult:
     source: str
     left_px: np.ndarray = field(repr=False, default=None)
     right_px: np.ndarray = field(repr=False, default=None)
+    #: Target index of each row of ``points_mm`` for a board seen by id (ChArUco, circles); None: a checkerboard.
+    corner_ids: np.ndarray | None = field(repr=False, default=None)
 
     def to_json(self) -> dict:
         """The JSON of ``handeye triangulate --json`` (conventions.md keys first)."""
         board = {"corners": [int(c) for c in self.board.corners]}
         if self.board.square_mm is not None:
             board["square_mm"] = float(self.board.square_mm)
+        if self.corner_ids is not None:
+            from ...calibration.targets import target_to_dict  # noqa: PLC0415
+
+            board = target_to_dict(self.board)
+        ids = {} if self.corner_ids is None else {"corner_ids": [int(i) for i in self.corner_ids]}
         return {
             "points_mm": [[round(float(v), 6) for v in p] for p in self.points_mm],
+            **ids,
             "runtime_s": float(self.runtime_s),
             "quality": self.quality,
             "board": board,
@@ -125,7 +133,7 @@ def _result(obs, board: BoardGeometry, model: StereoModel, source: str, start: f
                 f"{board.square_mm:g} mm (more than {100 * SQUARE_TOLERANCE:.0f} % off): check the square size "
                 "(--square-mm, target.square_mm) and that the stereo model's T is in mm")
     return TriangulationResult(obs.points_mm, quality, runtime, board, model.name, source,
-                               obs.left.corners_px, obs.right.corners_px)
+                               obs.left.corners_px, obs.right.corners_px, getattr(obs, "corner_ids", None))
 
 
 def triangulate_images(left: np.ndarray, right: np.ndarray, board=STATION_BOARD.corners, square_mm: float | None = None,

@@ -147,3 +147,28 @@ def load_for_flags(registry, wanted: str | None) -> None:
         for name in names:
             if registry.is_plugin(name):
                 registry.get(name)
+
+
+def target_spec(text: str):
+    """``--board``: ``13x8`` (checkerboard corners), ``charuco``, ``circles``, or a kind with keys
+    (``charuco:squares=14x9,square_mm=30``): :func:`~handeye.calibration.targets.parse_target_spec`."""
+    from ...calibration.errors import CalibrationError
+    from ...calibration.targets import STATION_BOARD, parse_target_spec
+
+    try:
+        board = parse_target_spec(text)
+    except CalibrationError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("--board ")) from None
+    if getattr(board, "kind", "checkerboard") == "checkerboard" and board.square_mm is None:
+        from dataclasses import replace
+
+        board = replace(board, square_mm=STATION_BOARD.square_mm)  # the station's 30 mm squares
+    return board
+
+
+def corners_or_target(text: str):
+    """``--board`` of ``stereo calibrate``: ``13x8`` as before (a checkerboard's inner corners), or a target kind
+    (``charuco``, ``charuco:squares=10x7,...``: :func:`target_spec`)."""
+    if text.split(":")[0].lower() in ("charuco", "circles", "checkerboard"):
+        return target_spec(text)
+    return corners(text)

@@ -28,6 +28,7 @@ Examples:
 def add_parser(sub):
     from ...drivers.controller.backends import DEFAULT_PROTOCOL
     from ...mocks.backends import mock_protocol_choices
+    from . import argtypes
     from .argtypes import left_out_lines, registry_choice
 
     protocols = mock_protocol_choices()  # a name is checked when given: no plug-in is imported to build this
@@ -42,6 +43,11 @@ def add_parser(sub):
                                             f"(default {DEFAULT_PROTOCOL}; handeye plugins says what each installed one can do)")
     p.add_argument("--postures", type=int, default=30, help="postures to plan (default 30)")
     p.add_argument("--seed", type=int, default=7, help="mock station seed: arm errors and sensor noise (default 7)")
+    p.add_argument("--board", metavar="TARGET", type=argtypes.target_spec, default=None,
+                   help="the board: checkerboard (default), charuco, circles, or one with keys "
+                        "(charuco:squares=14x9,square_mm=30,marker_mm=22,dictionary=DICT_5X5_100)")
+    p.add_argument("--occlude", metavar="SHARE", type=float, default=None,
+                   help="cover a band over 20-40 %% of the board at this share of the postures (0..1; mock.occlude)")
     p.add_argument("--no-report", action="store_true", help="skip the HTML report")
     p.add_argument("--kinematics", action="store_true",
                    help="also identify the arm's joint zeros and link lengths; prints them next to the hidden ones")
@@ -56,6 +62,13 @@ def run(args) -> int:
 
     if not 3 <= args.postures <= 255:
         raise UsageError(f"--postures must be between 3 and 255; got {args.postures}")
+    if args.occlude is not None and not 0 <= args.occlude <= 1:
+        raise UsageError(f"--occlude must be a share of the postures between 0 and 1; got {args.occlude}")
+    occlude = None
+    if args.occlude is not None:
+        from ...mocks.printed_targets import Occlusion
+
+        occlude = Occlusion(args.occlude)
     if args.json:  # an unwritable --json fails before the run
         check_output_file(args.json)
     from ..runtime import MOCK_BANNER
@@ -70,7 +83,7 @@ def run(args) -> int:
             update(report.done, report.total, f"posture {report.index}")
 
         result = run_demo(DemoOptions(args.session, args.postures, args.protocol, args.seed, not args.no_report,
-                                      args.kinematics),
+                                      args.kinematics, getattr(args, "board", None), occlude),
                           progress=say, on_posture=on_posture)
     if args.json:
         write_json(args.json, result)

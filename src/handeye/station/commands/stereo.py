@@ -105,8 +105,9 @@ def add_parser(sub):
     src.add_argument("--left", metavar="'GLOB'", help="left images (quoted glob pattern)")
     src.add_argument("--right", metavar="'GLOB'", help="right images (quoted glob pattern)")
     src.add_argument("--camera", metavar="BACKEND", help="live capture from a camera back end (xb3, mock)")
-    c.add_argument("--board", metavar="NXxNY", type=argtypes.corners, default=STATION_CORNERS,
-                   help="inner corners, long side first (default {}x{})".format(*STATION_CORNERS))
+    c.add_argument("--board", metavar="NXxNY", type=argtypes.corners_or_target, default=STATION_CORNERS,
+                   help="inner corners, long side first (default {}x{}), or charuco[:keys] (whole views only)".format(
+                       *STATION_CORNERS))
     c.add_argument("--square-mm", metavar="MM", type=argtypes.positive, default=STATION_SQUARE_MM,
                    help=f"square size in mm (default {STATION_SQUARE_MM:g}): sets the scale of T")
     c.add_argument("-o", "--output", metavar="STEREO.yaml", required=True, help="stereo model to write")
@@ -146,7 +147,7 @@ def _calibrate(args) -> int:
     if bool(args.left) != bool(args.right):
         raise UsageError("give both --left and --right patterns")
     config = StereoCalibrationConfig(
-        output=Path(args.output), board=as_board(args.board, args.square_mm),
+        output=Path(args.output), board=_stereo_board(args.board, args.square_mm),
         images=Path(args.images) if args.images else None, left=args.left, right=args.right, camera=args.camera,
         pairs=args.pairs, max_grabs=args.max_grabs, save_images=Path(args.save_images) if args.save_images else None,
         swap=args.swap, distortion=args.distortion, refine=not args.no_refine,
@@ -229,3 +230,15 @@ def run(args) -> int:
         return _triclops(args)
     args._stereo_parser.print_help()
     return 2
+
+
+def _stereo_board(board, square_mm):
+    """The board of ``stereo calibrate``: a ChArUco description keeps its own square size unless
+    ``--square-mm`` says otherwise (its default is the checkerboard's)."""
+    from ...calibration.compact_points import BoardGeometry
+    from ...calibration.station_board import STATION_SQUARE_MM
+    from ...drivers.camera.checkerboard import as_board
+
+    if isinstance(board, BoardGeometry) and square_mm == STATION_SQUARE_MM:
+        return board
+    return as_board(board, square_mm)

@@ -47,8 +47,9 @@ def add_parser(sub):
     p.add_argument("--right", metavar="R.png", help="right image (camera 2)")
     p.add_argument("--xb3-raw", metavar="FRAME", help="raw XB3 frame (3-sensor RGB8 layout)")
     p.add_argument("--stereo", metavar="STEREO.yaml", help="stereo model (default: nominal XB3 wide pair)")
-    p.add_argument("--board", metavar="NXxNY", type=argtypes.corners, default=STATION_CORNERS,
-                   help="inner corners, long side first (default {}x{})".format(*STATION_CORNERS))
+    p.add_argument("--board", metavar="NXxNY", type=argtypes.corners_or_target, default=STATION_CORNERS,
+                   help="inner corners, long side first (default {}x{}), or charuco[:keys] / circles (corners by id)".format(
+                       *STATION_CORNERS))
     p.add_argument("--square-mm", metavar="MM", type=argtypes.positive, default=30.0,
                    help="square size in mm (default 30); corners measured more than 5%% apart from it are refused")
     p.add_argument("--mono", action="store_true", help="--xb3-raw frame of a mono head (planes are grey, not Bayer)")
@@ -60,8 +61,12 @@ def run(args) -> int:
     from ...drivers.camera.triangulate import triangulate_files
     from ..output import write_json
 
+    from .stereo import _stereo_board
+
+    board = _stereo_board(args.board, args.square_mm) if not isinstance(args.board, tuple) else args.board
     result = triangulate_files(left=args.left, right=args.right, xb3_raw=args.xb3_raw, stereo=args.stereo,
-                               board=args.board, square_mm=args.square_mm, colour=not args.mono)
+                               board=board, square_mm=board.square_mm if not isinstance(board, tuple) else args.square_mm,
+                               colour=not args.mono)
     if args.json:
         write_json(args.json, result.to_json())
     if args.json != "-":

@@ -29,6 +29,11 @@ def detected_corners(image: np.ndarray, board) -> np.ndarray | None:
     from ...drivers.camera.errors import BoardNotFound, FrameError
 
     try:
+        if getattr(board, "kind", "checkerboard") != "checkerboard":  # ChArUco: the corners seen (issue 37)
+            from ...drivers.camera.charuco import detect_charuco, detect_circles
+
+            found = detect_circles if board.kind == "circles" else detect_charuco
+            return found(image, board).corners_px
         return detect_board(image, board, search="fast").corners_px
     except (BoardNotFound, FrameError):
         return None

@@ -1,0 +1,102 @@
+"""What the mock camera renders besides the checkerboard (issue 37): ChArUco sheets and occluded views.
+
+ChArUco: OpenCV draws the board (``cv2.aruco.CharucoBoard.generateImage``, markers from its own
+dictionaries) at :data:`PX_PER_MM` pixels per mm; the renderer reads that print where a pixel's ray meets
+the board plane (its sub-samples on edges too), so the markers and squares are OpenCV's own. OpenCV's
+board has its origin at the outer corner of the first square and corner ``(col, row)`` at
+``((col + 1) s, (row + 1) s)``; the target frame's origin is corner 0, hence the shift by one square.
+
+Occlusion (``mock: {occlude: {postures: 0.3, band: [0.2, 0.4]}}``): a share of the postures sees a grey
+band (a clamp, the probe) across the board covering a drawn 20-40 % of its length, at a drawn place.
+Which views are occluded is fixed by the order in which the camera first sees each camera pose: the
+first (the start posture) never, then evenly spread (``floor(k p) > floor((k - 1) p)``), so 30 % of 30
+postures are exactly 9, and the same posture revisited is occluded the same way.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+__all__ = ["PX_PER_MM", "Occlusion", "charuco_print", "printed_labels", "occluded", "OcclusionPicker"]
+
+#: Resolution of the ChArUco print the renderer samples (pixels per mm).
+PX_PER_MM = 8.0
+#: Label of the occluding band (0 background, 1 white, 2 black).
+OCCLUDER = 3
+
+
+@dataclass(frozen=True)
+class Occlusion:
+    """``mock.occlude``: the share of postures partly covered and the band's width range (fractions of the board)."""
+
+    postures: float = 0.3
+    band: tuple = (0.2, 0.4)
+
+
+@functools.lru_cache(maxsize=4)
+def _print(squares, square_mm, marker_mm, dictionary, legacy, px_per_mm) -> np.ndarray:
+    from ..drivers.camera.charuco import _opencv_board
+
+    board = _opencv_board(squares, square_mm, marker_mm, dictionary, legacy)
+    size = (int(round(squares[0] * square_mm * px_per_mm)), int(round(squares[1] * square_mm * px_per_mm)))
+    return board.generateImage(size, marginSize=0, borderBits=1)
+
+
+def charuco_print(geometry, px_per_mm: float = PX_PER_MM) -> np.ndarray:
+    """OpenCV's image ``(h, w)`` uint8 of a :class:`~handeye.calibration.targets.CharucoBoard` (squares only)."""
+    return _print(tuple(geometry.squares), float(geometry.square_mm), float(geometry.marker_mm), geometry.dictionary,
+                  bool(geometry.legacy), float(px_per_mm))
+
+
+def printed_labels(u, v, front, board) -> np.ndarray:
+    """Labels (0 background, 1 white, 2 black) of a ChArUco sheet at board coordinates ``(u, v)`` mm."""
+    image = charuco_print(board.geometry)
+    su0, su1, sv0, sv1 = board.sheet_bounds()
+    sq = float(board.square_mm)
+    on_sheet = front & (u >= su0) & (u <= su1) & (v >= sv0) & (v <= sv1)
+    h, w = image.shape
+    col = np.floor((u + sq) * PX_PER_MM).astype(np.int64)
+    row = np.floor((v + sq) * PX_PER_MM).astype(np.int64)
+    inside = (col >= 0) & (col < w) & (row >= 0) & (row < h)
+    black = inside & (image[np.clip(row, 0, h - 1), np.clip(col, 0, w - 1)] < 128)
+    return on_sheet.astype(np.uint8) + (black & on_sheet).astype(np.uint8)
+
+
+def occluded(labels: np.ndarray, u, band) -> np.ndarray:
+    """``labels`` with the band ``(u0, u1)`` (mm along the board's x) covered by the occluder."""
+    if band is None:
+        return labels
+    cover = (u >= band[0]) & (u < band[1]) & (labels > 0)
+    return np.where(cover, np.uint8(OCCLUDER), labels).astype(np.uint8)
+
+
+class OcclusionPicker:
+    """Which camera poses see the band, and where (see the module docstring)."""
+
+    def __init__(self, occlusion: Occlusion, board, seed):
+        self.occlusion = occlusion
+        self.board = board
+        self.seed = 0 if seed is None else seed
+        self._seen: dict = {}
+
+    def band(self, cam2base: np.ndarray):
+        """``(u0, u1)`` mm of the band this camera pose sees, or None."""
+        key = tuple(np.round(np.asarray(cam2base, float)[:3, 3], 0).tolist())
+        if key not in self._seen:
+            k = len(self._seen)
+            p = float(self.occlusion.postures)
+            hit = k > 0 and np.floor(k * p) > np.floor((k - 1) * p)
+            self._seen[key] = self._draw(k) if hit else None
+        return self._seen[key]
+
+    def _draw(self, k: int):
+        rng = np.random.default_rng([*np.atleast_1d(self.seed).tolist(), 37, k])
+        nx = int(self.board.corners[0])
+        length = (nx + 1) * float(self.board.square_mm)  # the squares' extent along x
+        width = rng.uniform(*self.occlusion.band) * length
+        start = -float(self.board.square_mm) + rng.uniform(0.0, length - width)
+        return float(start), float(start + width)
