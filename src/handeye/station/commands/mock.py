@@ -185,7 +185,7 @@ def _run_pendant(args) -> int:
     import sys
 
     from ...calibration.errors import HandEyeError
-    from ..pendant_operator import PendantClient
+    from ..pendant_client import PendantClient
 
     requests = ((line.strip() for line in sys.stdin if line.strip()) if args.requests == ["-"] else args.requests)
     try:
