@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from handeye.calibration.errors import ConfigError, HandEyeError
+from handeye.base.errors import ConfigError, HandEyeError
 from handeye.drivers import errors as E
 from handeye.drivers.controller import open_controller
 from handeye.drivers.controller.backends import CONTROLLERS
@@ -49,8 +49,8 @@ def test_one_config_error_for_every_configuration():
     from handeye.drivers.controller.modbus_map import load_register_map
     from handeye.rapid.errors import StationConfigError
     from handeye.rapid.station import station_from_dict
-    from handeye.station.config import ConfigError as StationConfigErrorOfTheStation
-    from handeye.station.config import config_from_dict
+    from handeye.station.config.station import ConfigError as StationConfigErrorOfTheStation
+    from handeye.station.config.station import config_from_dict
 
     assert StationConfigError is ConfigError is StationConfigErrorOfTheStation is E.ConfigError
     for bad in (lambda: config_from_dict({"camrea": {}}), lambda: station_from_dict({"controller": {"port": 0}}),

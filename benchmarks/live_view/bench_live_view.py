@@ -29,8 +29,8 @@ import urllib.request
 from dataclasses import replace
 from pathlib import Path
 
-from handeye.station.capture import capture
-from handeye.station.config import default_config
+from handeye.station.capture.loop import capture
+from handeye.station.config.station import default_config
 from handeye.station.runtime import open_station
 from handeye.station.view import live_view
 

@@ -22,14 +22,14 @@ from pathlib import Path
 
 import numpy as np
 
-from handeye.calibration.kinematics import load_robot
+from handeye.robot.kinematics import load_robot
 from handeye.calibration.session import read_session
 from handeye.mocks.station import DEFAULT_START
-from handeye.station.capture import capture
-from handeye.station.config import default_config
+from handeye.station.capture.loop import capture
+from handeye.station.config.station import default_config
 from handeye.station.runtime import open_station
-from handeye.station.verify import _chosen, session_baseline
-from handeye.station.verify_plan import capture_time, path_time_along
+from handeye.station.verify.check import _chosen, session_baseline
+from handeye.station.verify.plan import capture_time, path_time_along
 
 
 def one_seed(seed: int) -> dict:

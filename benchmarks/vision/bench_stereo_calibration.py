@@ -42,14 +42,14 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration.compact_points import BoardGeometry, board_corners
+from handeye.geometry.board import BoardGeometry, board_corners
 from handeye.drivers.camera.board_pattern import canonical_orderings, pattern_score
 from handeye.drivers.camera.checkerboard import observe_board
 from handeye.drivers.camera.stereo import StereoModel, load_stereo_model
-from handeye.drivers.camera.stereo_calibration import calibrate_stereo
+from handeye.drivers.camera.stereo_fit import calibrate_stereo
 from handeye.mocks.camera import StereoRenderer, hard_options
 from handeye.mocks.world import PrintedBoard, sample_board_views
-from handeye.station.stereo_calibration import StereoCalibrationConfig, detect_pairs, find_pairs, run_stereo_calibration
+from handeye.station.stereo_from_pairs import StereoCalibrationConfig, detect_pairs, find_pairs, run_stereo_calibration
 
 BOARD = PrintedBoard(BoardGeometry((9, 6), 30.0), 20.0)
 OBJ = board_corners(BOARD.corners, BOARD.square_mm).astype(np.float32)

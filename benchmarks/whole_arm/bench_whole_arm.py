@@ -22,13 +22,13 @@ import statistics
 import sys
 import time
 
-from handeye.calibration.cell import DEFAULT_CARRIED, Box, CellModel, Cylinder, Floor
-from handeye.calibration.compact_points import BoardGeometry
-from handeye.calibration.kinematics import load_robot
-from handeye.calibration.transforms import invert_transforms
+from handeye.robot.cell import DEFAULT_CARRIED, Box, CellModel, Cylinder, Floor
+from handeye.geometry.board import BoardGeometry
+from handeye.robot.kinematics import load_robot
+from handeye.geometry.transforms import invert_transforms
 from handeye.mocks.station import DEFAULT_BOARD, DEFAULT_MOUNT, DEFAULT_START
-from handeye.station.cell_plan import CellCheck
-from handeye.station.planning import plan_postures
+from handeye.station.cell.plan import CellCheck
+from handeye.station.capture.planning import plan_postures
 
 TARGET_S = 10.0
 BOARD = BoardGeometry((13, 8), 30.0)

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from handeye.calibration.arm_meshes import read_ascii_stl, read_vertex_table, write_vertex_table
-from handeye.calibration.capsule_fit import capsule_volume, fit_capsule, fit_capsules, grown
+from handeye.robot.arm_meshes import read_ascii_stl, read_vertex_table, write_vertex_table
+from handeye.robot.capsule_fit import capsule_volume, fit_capsule, fit_capsules, grown
 
 
 def _cylinder(centre, axis, radius, length, count=400, seed=0) -> np.ndarray:
@@ -54,7 +54,7 @@ def test_grown_rounds_the_ends_and_keeps_every_point_the_margin_inside():
 
 
 def test_the_slack_measures_how_far_a_capsule_reaches_beyond_the_box_and_keeps_every_point_inside():
-    from handeye.calibration.capsule_fit import Capsule, _overshoot
+    from handeye.robot.capsule_fit import Capsule, _overshoot
 
     capsule = Capsule(np.array([0.0, 0.0, 0.0]), np.array([100.0, 0.0, 0.0]), 20.0)
     box = (np.array([-10.0, -20.0, -30.0]), np.array([100.0, 25.0, 20.0]))

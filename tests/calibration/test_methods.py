@@ -9,7 +9,7 @@ import pytest
 
 from handeye.calibration import classic, solve
 from handeye.calibration.classic import CLASSIC_METHODS
-from handeye.calibration.errors import CalibrationError
+from handeye.base.errors import CalibrationError
 from handeye.calibration.methods import (
     KINDS,
     METHODS,

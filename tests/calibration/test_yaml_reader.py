@@ -9,11 +9,11 @@ from pathlib import Path
 
 import pytest
 
-from handeye.calibration.errors import SessionError
-from handeye.calibration.files import parse_yaml
+from handeye.base.errors import SessionError
+from handeye.base.files import parse_yaml
 from handeye.calibration.session import read_session
 from handeye.station.cli import main
-from handeye.station.config import EXAMPLE_FILE, ConfigError, load_config
+from handeye.station.config.station import EXAMPLE_FILE, ConfigError, load_config
 from handeye.station.importers.common import parse_json
 
 BLOCKING_BOX = "cell:\n  volumes:\n    - {type: box, min_mm: [600, -300, 0], max_mm: [900, 300, 800]}\n"

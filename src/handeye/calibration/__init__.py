@@ -8,14 +8,14 @@ It runs on numpy and scipy alone. The names below load on first use (importing t
 
 Methods are the rows of :data:`METHODS` (``handeye.calibration.methods``; another package adds one
 through the entry-point group ``handeye.methods``, :func:`method_names` lists them all); robots are
-the YAML files of ``calibration/robots`` (:func:`load_robot`).
+the YAML files of ``robot/robots`` (:func:`load_robot`).
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .lazy import lazy_exports
+from ..base.lazy import lazy_exports
 
 _EXPORTS = {
     "calibrate": "solve",
@@ -54,12 +54,12 @@ __all__ = list(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 
 if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
-    from .compact_points import BoardGeometry  # noqa: F401
-    from .errors import CalibrationError, ConfigError, HandEyeError, OutputError, SessionError  # noqa: F401
-    from .kinematics import RobotModel, known_robots, load_robot  # noqa: F401
+    from ..geometry.board import BoardGeometry  # noqa: F401
+    from ..base.errors import CalibrationError, ConfigError, HandEyeError, OutputError, SessionError  # noqa: F401
+    from ..robot.kinematics import RobotModel, known_robots, load_robot  # noqa: F401
     from .methods import DEFAULT_METHOD, METHODS, Method, method_names, register_method  # noqa: F401
     from .metrics import d_back, d_org  # noqa: F401
     from .problem import EYE_IN_HAND, EYE_TO_HAND, HandEyeProblem  # noqa: F401
     from .session import Posture, Session, create_session, read_session, write_posture  # noqa: F401
     from .solve import ALL_METHODS, CalibrationResult, calibrate, calibrate_session, problem_from_session  # noqa: F401
-    from .transforms import pose_from_transform, transform_from_pose  # noqa: F401
+    from ..geometry.transforms import pose_from_transform, transform_from_pose  # noqa: F401

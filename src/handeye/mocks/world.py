@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..calibration.compact_points import STATION_BOARD, BoardGeometry
-from ..calibration.views import look_at
+from ..geometry.board import STATION_BOARD, BoardGeometry
+from ..robot.views import look_at
 
 __all__ = ["PrintedBoard", "Lighting", "BoardOperator", "look_at", "board_view", "sample_board_views", "sheet_in_view",
            "hard_lighting"]

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ..calibration.lazy import lazy_exports
+from ..base.lazy import lazy_exports
 
 _EXPORTS = {
     "RapidLink": "links",

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ..calibration.lazy import lazy_exports
+from ..base.lazy import lazy_exports
 
 _EXPORTS = {
     "StationConfig": "config",
@@ -36,9 +36,9 @@ __all__ = list(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 
 if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
-    from .capture import CaptureError  # noqa: F401
+    from .capture.loop import CaptureError  # noqa: F401
     from .cli import main  # noqa: F401
-    from .config import ConfigError, StationConfig, config_from_dict, default_config, load_config  # noqa: F401
+    from .config.station import ConfigError, StationConfig, config_from_dict, default_config, load_config  # noqa: F401
     from .demo import DemoOptions, run_demo  # noqa: F401
     from .runtime import StationLink, open_controller_link, open_station  # noqa: F401
     from .writeback import WritebackError  # noqa: F401

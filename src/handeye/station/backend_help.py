@@ -1,7 +1,7 @@
 """The controller back ends' help lines, written from their registry entries
 (:data:`handeye.drivers.controller.backends.CONTROLLERS`): what each talks to, its RAPID link
 module and its command-line options, for ``handeye robot --help`` and ``handeye rapid generate
---help`` (and the example station file, :mod:`handeye.station.example_config`). A back end added in
+--help`` (and the example station file, :mod:`handeye.station.config.example`). A back end added in
 code or by a plug-in's entry point shows up in them as a built-in one does; none is written by hand.
 """
 

@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.errors import CalibrationError, HandEyeError
-from ..calibration.files import make_folder, write_text_atomic
+from ..base.errors import CalibrationError, HandEyeError
+from ..base.files import make_folder, write_text_atomic
 from ..calibration.metrics import d_back, d_org, errors_against_truth, fixed_points
 from ..calibration.methods import DEFAULT_METHOD, METHODS, get_method, method_names
 from ..calibration.solve import calibrate, problem_from_session

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.compact_points import BoardGeometry
+from ..geometry.board import BoardGeometry
 from ..calibration.diagnostics import diagnose
-from ..calibration.errors import CalibrationError, SessionError, SessionUsageError, brief
+from ..base.errors import CalibrationError, SessionError, SessionUsageError, brief
 from ..calibration.invariants import bounded_pairs, pairs_used
 from ..calibration.session import Session, create_session, write_postures
 from .importers import read_any

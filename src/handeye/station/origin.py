@@ -35,7 +35,7 @@ _BANNERS = {
 
 def _header(path) -> dict:
     """``session.yaml`` of a folder as a mapping ({} when missing or unreadable)."""
-    from ..calibration.session import parse_yaml
+    from ..base.files import parse_yaml
 
     try:
         data = parse_yaml((Path(path) / "session.yaml").read_text(), Path(path) / "session.yaml", ValueError)
@@ -73,7 +73,7 @@ def session_origin(session=None, path=None) -> str:
     capture = capture if isinstance(capture, dict) else {}
     station = capture.get("station")
     if isinstance(station, str) and station.strip().lower() in ("mock", "real"):
-        from .station_kind import recorded_mock_parts
+        from .config.station_kind import recorded_mock_parts
 
         return MOCK if station.strip().lower() == MOCK or recorded_mock_parts(capture) else REAL
     if extra.get("origin") == SIMULATED or (path is not None and (Path(path) / "truth.yaml").is_file()):

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .config import StationConfig
+from .config.station import StationConfig
 
 
 @dataclass
@@ -136,7 +136,7 @@ def check_rehearsal(config: StationConfig) -> dict:
     CameraError
         No rehearsal camera answers at ``camera.mock_arm``.
     """
-    from ..calibration.errors import ConfigError
+    from ..base.errors import ConfigError
     from ..mocks.cell import cell_info
 
     from ..drivers.controller.backends import CONTROLLERS

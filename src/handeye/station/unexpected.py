@@ -1,6 +1,6 @@
 """One line for an exception no part of handeye expected: whose code raised it and what to do.
 
-The commands report what goes wrong as :class:`~handeye.calibration.errors.HandEyeError`, one line
+The commands report what goes wrong as :class:`~handeye.base.errors.HandEyeError`, one line
 each. What escapes them is a fault in code: an installed plug-in's (a controller, camera or method
 registered through a ``handeye.*`` entry point) or handeye's own. :func:`unexpected_error_line` names
 which, from the traceback's frames (the innermost frame of a plug-in's modules blames that plug-in's
@@ -17,8 +17,8 @@ import time
 import traceback
 from pathlib import Path
 
-from ..calibration.errors import HandEyeError, exception_line
-from ..calibration.files import write_text_atomic
+from ..base.errors import HandEyeError, exception_line
+from ..base.files import write_text_atomic
 
 __all__ = ["DEBUG_VARIABLE", "plugin_packages", "unexpected_error_line"]
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...calibration.transforms import transform_from_pose
+from ...geometry.transforms import transform_from_pose
 from ...rapid.interpreter import MotionBinding, RapidFatalError
 from ..robot import ZoneViolation
 

@@ -98,7 +98,7 @@ def setting_value(setting):
 
 
 def registry_choice(choices):
-    """A type for one name of a registry's :class:`~handeye.calibration.registry.Choices`: checking it loads
+    """A type for one name of a registry's :class:`~handeye.base.registry.Choices`: checking it loads
     that plug-in only; a name that is not a choice is refused saying why (an installed plug-in that lacks
     what the command needs, or did not load) and what the choices are."""
 

@@ -100,11 +100,11 @@ def add_parser(sub):
 def run(args) -> int:
     import sys
 
-    from ..assessment import assess, comparison_methods
+    from ..report.assessment import assess, comparison_methods
     from ..calibrate import calibrate_session_folder, report_path_for
     from ..output import check_output_file, write_json
-    from ..report_json import calibration_json
-    from ..report_text import calibration_summary
+    from ..report.as_json import calibration_json
+    from ..report.text import calibration_summary
 
     if args.json:  # an unwritable --json fails before any solving
         check_output_file(args.json)
@@ -114,12 +114,12 @@ def run(args) -> int:
     wants_report = args.report is not None
     thresholds = None
     if args.thresholds:  # a bad thresholds file fails before any solving
-        from ..quality import load_thresholds
+        from ..report.quality import load_thresholds
 
         thresholds = load_thresholds(args.thresholds)
     report_path = report_path_for(args.session, args.report) if wants_report else None
     if report_path is not None and not report_path.parent.is_dir():
-        from ...calibration.errors import HandEyeError
+        from ...base.errors import HandEyeError
 
         raise HandEyeError(f"cannot write the report {report_path}: folder {report_path.parent} does not exist")
     from ..progress import delayed_progress
@@ -131,7 +131,7 @@ def run(args) -> int:
                         methods=comparison_methods() if wants_report else ())
     written = None
     if wants_report:
-        from ..report import write_report
+        from ..report.document import write_report
 
         title = f"Hand-eye calibration report: {outcome.session_path.resolve().name}"
         written = write_report(report_path, assessment, title=title)

@@ -47,7 +47,7 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from ...calibration.errors import UsageError
+    from ...base.errors import UsageError
     from ..demo import DemoOptions, run_demo
     from ..output import check_output_file, write_json
     from ..progress import progress_bar

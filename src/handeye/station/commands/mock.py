@@ -184,8 +184,8 @@ def _run_pendant(args) -> int:
     """Sends each request to the pendant port and prints the reply; 1 when a reply is ERR."""
     import sys
 
-    from ...calibration.errors import HandEyeError
-    from ..pendant_client import PendantClient
+    from ...base.errors import HandEyeError
+    from ..guided.pendant_client import PendantClient
 
     requests = ((line.strip() for line in sys.stdin if line.strip()) if args.requests == ["-"] else args.requests)
     try:
@@ -218,7 +218,7 @@ def run(args) -> int:
         return 2
     import sys
 
-    from ...calibration.errors import UsageError
+    from ...base.errors import UsageError
     from ...mocks.controller.service import MockControllerOptions, run_mock_controller
     from ...rapid.station import IDLE_TIMEOUT_RANGE
 
@@ -236,7 +236,7 @@ def run(args) -> int:
     if args.config:
         from ...drivers.controller.backends import RAPID_LINKS
         from ...rapid.station import default_station, station_from_dict
-        from ..config import load_config
+        from ..config.station import load_config
 
         config = load_config(args.config)
         postures = config.postures if config.postures is not None else default_station().postures

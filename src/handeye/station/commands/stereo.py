@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from ...calibration.station_board import STATION_CORNERS, STATION_SQUARE_MM
+from ...geometry.station_board import STATION_CORNERS, STATION_SQUARE_MM
 from . import argtypes
 
 HELP = "calibrate the stereo head from checkerboard pairs, or read its factory (Triclops) calibration"
@@ -135,10 +135,10 @@ def add_parser(sub):
 def _calibrate(args) -> int:
     from pathlib import Path
 
-    from ...calibration.errors import UsageError
+    from ...base.errors import UsageError
     from ...drivers.camera.checkerboard import as_board
     from ..progress import progress_bar
-    from ..stereo_calibration import StereoCalibrationConfig, run_stereo_calibration
+    from ..stereo_from_pairs import StereoCalibrationConfig, run_stereo_calibration
 
     sources = sum(bool(x) for x in (args.images, args.left or args.right, args.camera))
     if sources != 1:
@@ -211,7 +211,7 @@ def _triclops(args) -> int:
     from pathlib import Path
 
     from ...drivers.camera.triclops import read_triclops_model
-    from ..stereo_calibration import write_stereo_file
+    from ..stereo_from_pairs import write_stereo_file
 
     model = read_triclops_model(args.file, size=args.size)
     path = write_stereo_file(Path(args.output), model, {"source": model.name})

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ...calibration.station_board import STATION_CORNERS
+from ...geometry.station_board import STATION_CORNERS
 from . import argtypes
 
 HELP = "board corners in mm (camera frame) from a stereo image pair or a raw XB3 frame"

@@ -49,17 +49,17 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from ...calibration.errors import UsageError
+    from ...base.errors import UsageError
     from ...calibration.plausibility import session_in_mm
     from ...calibration.session import read_session
-    from ..assessment import assess
+    from ..report.assessment import assess
     from ..calibrate import solve_session
-    from ..config import default_config, load_config
+    from ..config.station import default_config, load_config
     from ..origin import MOCK, origin_line, session_origin
-    from ..quality import config_thresholds
+    from ..report.quality import config_thresholds
     from ..runtime import MOCK_BANNER, check_rehearsal, open_controller_link, rehearsal_banner
-    from ..station_kind import station_kind
-    from ..verify_update import record_update_written, verify_check
+    from ..config.station_kind import station_kind
+    from ..verify.update import record_update_written, verify_check
     from ..writeback import check_session_origin, side_by_side, writeback
 
     if not args.dry_run and not args.config and not args.mock:

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from ...calibration.errors import SessionError, SessionUsageError
+from ...base.errors import SessionError, SessionUsageError
 from ...calibration.session import Session
 from .easy_handeye import looks_like_easy_handeye, read_easy_handeye
 from .head import head_text as _head

@@ -50,7 +50,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...calibration.errors import SessionError
+from ...base.errors import SessionError
 from ...calibration.problem import SETUPS
 from .ambiguity import AmbiguousReading, choice_lines
 from .inference_table import format_table, inference_record, reading_words, table_rows

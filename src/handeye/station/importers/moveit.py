@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...calibration.errors import SessionError
+from ...base.errors import SessionError
 from ...calibration.session import Session
 from .common import Dropped, EntryErrors, build_session, parse_json, read_text, rigid_transform
 

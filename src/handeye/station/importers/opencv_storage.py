@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...calibration.errors import SessionError
+from ...base.errors import SessionError
 from ...calibration.session import Session
 from .common import Dropped, EntryErrors, build_session, read_text, rigid_transform
 from .head import head_text

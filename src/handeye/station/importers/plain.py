@@ -33,8 +33,8 @@ import csv
 
 import numpy as np
 
-from ...calibration.compact_points import BoardGeometry
-from ...calibration.errors import SessionError, brief
+from ...geometry.board import BoardGeometry
+from ...base.errors import SessionError, brief
 from ...calibration.problem import SETUPS
 from ...calibration.session import MAX_CORNERS, MAX_LENGTH_MM, Session
 from .head import check_log_head, read_head

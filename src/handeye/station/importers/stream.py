@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ...calibration.errors import SessionError, brief
+from ...base.errors import SessionError, brief
 from ...calibration.session import Session
 from ..csv_values import is_header, parse_value, value_problem
 from .common import (

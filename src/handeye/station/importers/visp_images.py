@@ -21,9 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...calibration.compact_points import BoardGeometry, board_corners
-from ...calibration.errors import SessionError
-from ...calibration.files import check_regular_file, read_file_bytes, read_text_file
+from ...geometry.board import BoardGeometry, board_corners
+from ...base.errors import SessionError
+from ...base.files import check_regular_file, read_file_bytes, read_text_file
 from ...calibration.session import MAX_CORNERS, MAX_LENGTH_MM
 
 __all__ = ["IMAGE_PATTERN", "CameraIntrinsics", "read_visp_camera", "read_chessboard_data", "find_images",

@@ -41,7 +41,7 @@ class LiveView:
 
     def finish(self, text: str, ok: bool = True) -> None:
         """The run is over: the page says ``text`` (what the command said last) in place of the next step."""
-        from ..capture_events import CaptureEnded
+        from ..capture.events import CaptureEnded
 
         self.hub.observe(CaptureEnded(text, ok))
 

@@ -17,7 +17,7 @@ import json
 import threading
 import time
 
-from ..capture_events import CaptureEnded, Measured, Prompt, Verdict
+from ..capture.events import CaptureEnded, Measured, Prompt, Verdict
 from .frames import detected_corners, encode_image, page_points
 from .state import ViewState
 

@@ -17,15 +17,15 @@ import time
 
 import numpy as np
 
-from ...calibration.errors import HandEyeError
-from ...calibration.kinematics import load_robot
+from ...base.errors import HandEyeError
+from ...robot.kinematics import load_robot
 from ...calibration.problem import MIN_POSTURES
 from ...calibration.quality_words import AXIS_SPREAD_NAME, board_distances_mm, distance_spread_mm, hand_axis_coverage, image_cells
 from ...calibration.session import Posture, Session
-from ..capture import stereo_views
-from ..capture_events import CAPTURED, SKIPPED, CaptureEnded, CaptureStarted, Prompt, Verdict
-from ..guided import postures_needed, what_is_missing
-from ..quality import config_thresholds, direction_name
+from ..capture.loop import stereo_views
+from ..capture.events import CAPTURED, SKIPPED, CaptureEnded, CaptureStarted, Prompt, Verdict
+from ..guided.capture import postures_needed, what_is_missing
+from ..report.quality import config_thresholds, direction_name
 
 __all__ = ["PREDICTION_METHOD", "Predictor", "ViewState"]
 

@@ -1,0 +1,1 @@
+"""Rotations, rigid transforms and the checkerboard's description (numpy and scipy)."""
