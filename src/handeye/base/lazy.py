@@ -21,7 +21,8 @@ def lazy_exports(package: str, exports: dict[str, str]):
     package : str
         The package's ``__name__``.
     exports : dict
-        Public name -> module (relative to ``package``, e.g. ``"controller.interface"``) defining it.
+        Public name -> module defining it: relative to ``package`` (``"controller.interface"``), or
+        absolute (``"handeye.base.errors"``) for a name another room defines.
 
     Returns
     -------
@@ -37,7 +38,7 @@ def lazy_exports(package: str, exports: dict[str, str]):
         module = exports.get(name)
         if module is None:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
-        value = getattr(importlib.import_module(f"{package}.{module}"), name)
+        value = getattr(importlib.import_module(module if module.startswith("handeye.") else f"{package}.{module}"), name)
         setattr(sys.modules[package], name, value)  # the next look-up is a plain attribute
         return value
 

@@ -18,15 +18,15 @@ from typing import TYPE_CHECKING
 from ..base.lazy import lazy_exports
 
 _EXPORTS = {
-    "StationConfig": "config",
-    "ConfigError": "config",
-    "load_config": "config",
-    "default_config": "config",
-    "config_from_dict": "config",
+    "StationConfig": "config.station",
+    "ConfigError": "config.station",
+    "load_config": "config.station",
+    "default_config": "config.station",
+    "config_from_dict": "config.station",
     "StationLink": "runtime",
     "open_station": "runtime",
     "open_controller_link": "runtime",
-    "CaptureError": "capture",
+    "CaptureError": "capture.loop",
     "WritebackError": "writeback",
     "run_demo": "demo",
     "DemoOptions": "demo",
