@@ -30,6 +30,7 @@ import numpy as np
 import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "controller"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))  # the scripted operator (tests/pendant_operator.py)
 from mock_process import mock_controller  # noqa: E402
 
 from handeye.calibration.session import read_session  # noqa: E402

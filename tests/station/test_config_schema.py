@@ -89,7 +89,7 @@ def test_secrets_are_masked_from_their_declaration():
 @pytest.fixture
 def five_axis_robot(tmp_path):
     """A robot YAML with five axes (the IRB 1400 without its last wrist axis)."""
-    robot = yaml.safe_load((EXAMPLE_FILE.parents[1] / "robot" / "robots" / "irb1400.yaml").read_text())
+    robot = yaml.safe_load((EXAMPLE_FILE.parents[2] / "robot" / "robots" / "irb1400.yaml").read_text())
     robot.update(name="FiveAxis", aliases=[], dh=robot["dh"][:5], joint_limits_deg=robot["joint_limits_deg"][:5],
                  max_speed_deg_s=robot["max_speed_deg_s"][:5], bodies=robot["bodies"][:2])  # no flange: no link 6
     # nor a self-collision pair of link 6 (a pair naming no body of the file is refused at load)

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry.board import STATION_BOARD, BoardGeometry, board_corners
-from ..geometry.transforms import transform_from_rotation_translation
+from ..geometry import STATION_BOARD, BoardGeometry, board_corners
+from ..geometry import transform_from_rotation_translation
 
 __all__ = ["STATION_BOARD", "BoardGeometry", "CompactPoints", "board_corners", "compact_points_from_corners", "compact_points_from_poses"]
 

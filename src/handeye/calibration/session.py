@@ -21,11 +21,11 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from ..geometry.board import BoardGeometry
-from ..base.errors import SessionError, brief
-from ..base.files import make_folder, parse_yaml, read_text_file, write_failure, write_text_atomic, write_texts_atomic
+from ..geometry import BoardGeometry
+from ..base import SessionError, brief
+from ..base import make_folder, parse_yaml, read_text_file, write_failure, write_text_atomic, write_texts_atomic
 from .problem import SETUPS
-from ..geometry.transforms import pose_from_transform, transform_from_pose
+from ..geometry import pose_from_transform, transform_from_pose
 
 __all__ = [
     "FORMAT",

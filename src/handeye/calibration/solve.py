@@ -12,9 +12,9 @@ import numpy as np
 
 from .compact_points import compact_points_from_corners, compact_points_from_poses
 from .consistency import consistent_majority
-from ..base.errors import CalibrationError, HandEyeError, brief, exception_line
+from ..base import CalibrationError, HandEyeError, brief, exception_line
 from .invariants import bounded_pairs
-from ..robot.kinematics import load_robot
+from ..robot import load_robot
 from .methods import DEFAULT_METHOD, METHODS, Method, get_method, method_names
 from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points
 from .paper import solve_paper, truth_board_points
@@ -31,8 +31,8 @@ from .quality_words import (
     usable_axes,
 )
 from .session import Session
-from ..base.time_bound import TIME_VARIABLE, OutOfTime, call_within
-from ..geometry.transforms import pose_from_transform, rigid_defect, transform_from_pose
+from ..base import TIME_VARIABLE, OutOfTime, call_within
+from ..geometry import pose_from_transform, rigid_defect, transform_from_pose
 from .triplets import relative_motions
 
 __all__ = [

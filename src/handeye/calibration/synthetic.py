@@ -21,12 +21,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..geometry.board import STATION_BOARD, BoardGeometry, board_corners
-from ..robot.kinematics import RobotModel, inverse_kinematics, load_robot
-from ..robot.views import NOMINAL_XB3_LEFT, ViewSampling, board_visible, ik_from_standard_seeds, look_at, sample_eye_in_hand_postures
+from ..geometry import STATION_BOARD, BoardGeometry, board_corners
+from ..robot import RobotModel, inverse_kinematics, load_robot
+from ..robot import NOMINAL_XB3_LEFT, ViewSampling, board_visible, ik_from_standard_seeds, look_at, sample_eye_in_hand_postures
 from .problem import EYE_IN_HAND, SETUPS
 from .session import Posture, Session
-from ..geometry.transforms import invert_transforms, pose_from_transform, transform_from_rotation_translation
+from ..geometry import invert_transforms, pose_from_transform, transform_from_rotation_translation
 
 __all__ = [
     "SceneConfig",

@@ -21,7 +21,7 @@ is no copy of the tree per back end. The controller-flavoured names of the kinds
 
 from __future__ import annotations
 
-from ..base.errors import ConfigError, HandEyeError, with_backend
+from ..base import ConfigError, HandEyeError, with_backend
 
 __all__ = [
     "StationError",

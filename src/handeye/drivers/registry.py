@@ -23,8 +23,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TypeVar
 
-from ..base.registry import Registry as _Registry
-from ..base.registry import load_target
+from ..base import Registry as _Registry
+from ..base import load_target
 
 __all__ = ["Backend", "Registry", "Setting", "chosen_with_own", "declared_settings", "keyword_options", "load_target"]
 

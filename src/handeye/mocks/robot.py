@@ -29,11 +29,11 @@ from typing import Callable
 
 import numpy as np
 
-from ..robot.cell import DEFAULT_CARRIED
-from ..robot.clearance import CellGuard
-from ..base.errors import HandEyeError
-from ..robot.kinematics import RobotModel, load_robot
-from ..drivers.controller.types import FlangePose, ToolData
+from ..robot import DEFAULT_CARRIED
+from ..robot import CellGuard
+from ..base import HandEyeError
+from ..robot import RobotModel, load_robot
+from ..drivers import FlangePose, ToolData
 
 __all__ = ["SimulatedRobot", "DEFAULT_TOOL", "SELF_ONLY", "ZoneViolation", "self_guard"]
 

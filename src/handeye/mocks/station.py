@@ -28,15 +28,15 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..robot.cell import CellModel
-from ..robot.clearance import CellGuard
+from ..robot import CellModel
+from ..robot import CellGuard
 from .robot import self_guard
-from ..geometry.board import STATION_BOARD, BoardGeometry
-from ..robot.kinematics import RobotModel, load_robot
-from ..geometry.transforms import transform_from_rotation_translation
-from ..drivers.camera.stereo import StereoModel, nominal_xb3_model
-from ..drivers.controller.backends import DEFAULT_PROTOCOL
-from ..drivers.controller.types import ToolData
+from ..geometry import STATION_BOARD, BoardGeometry
+from ..robot import RobotModel, load_robot
+from ..geometry import transform_from_rotation_translation
+from ..drivers import StereoModel, nominal_xb3_model
+from ..drivers import DEFAULT_PROTOCOL
+from ..drivers import ToolData
 from .camera import MockCamera, RenderOptions
 from .controller import start_mock_controller
 from .drift import StationFaults
@@ -241,7 +241,7 @@ def write_state(path, tool: ToolData, runs: int) -> None:
     """Keep the controller's PERS tool data and its run count in ``path`` (written atomically)."""
     import json
 
-    from ..base.files import write_text_atomic
+    from ..base import write_text_atomic
 
     value = {"position_mm": list(tool.position_mm), "quaternion_wxyz": list(tool.quaternion_wxyz),
              "mass_kg": tool.mass_kg, "cog_mm": list(tool.cog_mm)}

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..geometry.transforms import transform_from_pose
+from ..geometry import transform_from_pose
 from .errors import ConfigError
 from .literals import POSITION_DECIMALS, format_num, tooldata_literal
 

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ..geometry.rotations import canonical_quaternions, quaternion_from_matrix
+from ..geometry import canonical_quaternions, quaternion_from_matrix
 
 __all__ = [
     "POSITION_DECIMALS",

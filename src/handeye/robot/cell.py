@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry.board import BoardGeometry
+from ..geometry import BoardGeometry
 
 __all__ = [
     "DEFAULT_CARRIED",

@@ -22,16 +22,9 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from ..base.files import parse_yaml, read_text_file
-from ..geometry.rotations import (
-    canonical_quaternions,
-    matrix_from_quaternion,
-    quaternion_from_axis_angle,
-    quaternion_from_matrix,
-    quaternion_multiply,
-    rotate_vectors,
-)
-from ..geometry.transforms import transform_from_rotation_translation
+from ..base import parse_yaml, read_text_file
+from ..geometry import canonical_quaternions, matrix_from_quaternion, quaternion_from_axis_angle, quaternion_from_matrix, quaternion_multiply, rotate_vectors
+from ..geometry import transform_from_rotation_translation
 
 __all__ = [
     "FrameBody",

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from .kinematics import RobotModel, inverse_kinematics
-from ..geometry.transforms import invert_transforms, transform_from_rotation_translation
+from ..geometry import invert_transforms, transform_from_rotation_translation
 
 __all__ = [
     "PinholeView",

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ..base.lazy import lazy_exports
+from ..base import lazy_exports
 
 _EXPORTS = {
     "StationConfig": "config.station",

@@ -9,10 +9,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..calibration.plausibility import session_in_mm
-from ..calibration.problem import HandEyeProblem
-from ..calibration.session import Session, read_session, read_truth
-from ..calibration.solve import CalibrationResult, calibrate, problem_from_session, truth_from_dict
+from ..calibration import session_in_mm
+from ..calibration import HandEyeProblem
+from ..calibration import Session, read_session, read_truth
+from ..calibration import CalibrationResult, calibrate, problem_from_session, truth_from_dict
 
 #: File name of the report inside the session folder when ``--report`` is given without a value.
 DEFAULT_REPORT_NAME = "report.html"

@@ -13,7 +13,7 @@ import os
 import sys
 import warnings
 
-from ..base.errors import HandEyeError, UsageError
+from ..base import HandEyeError, UsageError
 
 #: Sub-commands in the order ``handeye --help`` lists them: a module name, or ``(command, module)``
 #: when the command's name cannot be a module's (``import`` is a Python keyword).

@@ -14,10 +14,10 @@ import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from ..base.errors import HandEyeError
-from ..base.files import make_folder, write_failure, write_text_atomic
-from ..geometry.transforms import pose_from_transform, rotation_error_deg, translation_error_mm
-from ..drivers.controller.backends import DEFAULT_PROTOCOL
+from ..base import HandEyeError
+from ..base import make_folder, write_failure, write_text_atomic
+from ..geometry import pose_from_transform, rotation_error_deg, translation_error_mm
+from ..drivers import DEFAULT_PROTOCOL
 from .report.assessment import Assessment, assess, comparison_methods
 from .calibrate import calibrate_session_folder
 from .capture.loop import capture
@@ -108,7 +108,7 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
 def _assess(session_dir: Path, config: StationConfig, compare: bool, progress) -> Assessment:
     """Calibrate the captured session (the default estimator) and assess it against the config's thresholds,
     with the method comparison when the report is wanted."""
-    from ..rapid.literals import tooldata_literal
+    from ..rapid import tooldata_literal
 
     outcome = calibrate_session_folder(session_dir)
     result = outcome.result

@@ -35,7 +35,7 @@ _BANNERS = {
 
 def _header(path) -> dict:
     """``session.yaml`` of a folder as a mapping ({} when missing or unreadable)."""
-    from ..base.files import parse_yaml
+    from ..base import parse_yaml
 
     try:
         data = parse_yaml((Path(path) / "session.yaml").read_text(), Path(path) / "session.yaml", ValueError)

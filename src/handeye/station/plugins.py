@@ -79,10 +79,10 @@ def _camera_line(backend) -> str:
 
 def plugin_groups() -> tuple[PluginGroup, ...]:
     """The kinds of plug-in, each with the commands that take one (imports the registries, no plug-in)."""
-    from ..calibration.methods import METHODS
-    from ..drivers.camera.backends import CAMERAS
-    from ..drivers.controller.backends import CONTROLLERS, rapid_protocol_choices
-    from ..mocks.backends import mock_protocol_choices
+    from ..calibration import METHODS
+    from ..drivers import CAMERAS
+    from ..drivers import CONTROLLERS, rapid_protocol_choices
+    from ..mocks import mock_protocol_choices
     from .config.station import camera_choices, protocol_choices
 
     return (
@@ -104,7 +104,7 @@ def plugin_groups() -> tuple[PluginGroup, ...]:
 
 def installed_plugins() -> list[tuple[PluginGroup, list[PluginRow]]]:
     """Every installed plug-in, by group (each loaded under the time bound to know what it can do)."""
-    from ..base.registry import quiet_loads
+    from ..base import quiet_loads
 
     out = []
     with quiet_loads():  # the rows say why a plug-in did not load
@@ -127,7 +127,7 @@ def installed_plugins() -> list[tuple[PluginGroup, list[PluginRow]]]:
 
 def plugin_lines(groups: list[tuple[PluginGroup, list[PluginRow]]]) -> list[str]:
     """The text ``handeye plugins`` prints."""
-    from ..base.registry import unusable_clause
+    from ..base import unusable_clause
 
     lines = []
     for group, rows in groups:

@@ -35,9 +35,9 @@ from typing import Callable
 
 import numpy as np
 
-from ..geometry.board import BoardGeometry
-from ..base.errors import HandEyeError, OutputError, UsageError
-from ..base.files import make_folder, write_failure, write_text_atomic
+from ..geometry import BoardGeometry
+from ..base import HandEyeError, OutputError, UsageError
+from ..base import make_folder, write_failure, write_text_atomic
 
 __all__ = ["StereoCalibrationConfig", "StereoCalibrationRun", "find_pairs", "detect_pairs", "capture_live",
            "run_stereo_calibration", "write_stereo_file", "IMAGE_SUFFIXES"]
@@ -210,8 +210,8 @@ def find_pairs(images=None, left=None, right=None, swap: bool = False) -> list[t
 
 def _detect(image, board, what: str):
     """``(corners or None, note)`` of one image for calibration (corners off the grid leave it out)."""
-    from ..drivers.camera.checkerboard import detect_board
-    from ..drivers.camera.errors import BoardNotFound
+    from ..drivers import detect_board
+    from ..drivers import BoardNotFound
 
     try:
         det = detect_board(image, board, what=what)
@@ -251,8 +251,8 @@ def detect_pairs(pairs, board: BoardGeometry, update: Callable | None = None) ->
         pairs shows a board of ``board``'s size (a wrong ``--board``: refused before the other pairs
         are searched, which takes seconds an image when the board is not found).
     """
-    from ..drivers.camera.stereo_fit import ViewCorners
-    from ..drivers.camera.triangulate import decode_image, read_image_bytes
+    from ..drivers import ViewCorners
+    from ..drivers import decode_image, read_image_bytes
 
     views, size = [], None
     for k, (name, lpath, rpath) in enumerate(pairs):
@@ -280,7 +280,7 @@ def detect_pairs(pairs, board: BoardGeometry, update: Callable | None = None) ->
 
 
 def _pose_guess(corners, board, model):
-    from ..drivers.camera.checkerboard import board_pose_from_corners
+    from ..drivers import board_pose_from_corners
 
     try:
         return board_pose_from_corners(corners, board, model.K1)[0]
@@ -291,8 +291,8 @@ def _pose_guess(corners, board, model):
 def _detect_both(left, right, board) -> dict:
     """``{"left": corners or None, "right": corners or None}`` with the live loop's quick search
     (a board with corners off its grid counts as not found)."""
-    from ..drivers.camera.checkerboard import detect_board
-    from ..drivers.camera.errors import BoardNotFound
+    from ..drivers import detect_board
+    from ..drivers import BoardNotFound
 
     found = {}
     for side, image in (("left", left), ("right", right)):
@@ -343,9 +343,9 @@ def capture_live(camera, config: StereoCalibrationConfig, say: Callable = print,
     coverage : Coverage
         The live coverage (board poses from the nominal XB3 model: enough for the tilt classes).
     """
-    from ..drivers.camera.coverage import Coverage
-    from ..drivers.camera.stereo import nominal_xb3_model
-    from ..drivers.camera.stereo_fit import ViewCorners
+    from ..drivers import Coverage
+    from ..drivers import nominal_xb3_model
+    from ..drivers import ViewCorners
 
     follow = follow or (lambda hint: None)
     views, coverage, model, last, size, hint = [], None, None, None, None, None
@@ -422,7 +422,7 @@ def _write_bytes(path: Path, data: bytes) -> Path:
 def write_stereo_file(path, model, extra: dict | None = None) -> Path:
     """Write the stereo model as OpenCV FileStorage YAML (the keys of ``load_stereo_model``, plus
     ``extra`` numbers and strings after them), atomically."""
-    from ..drivers.camera.stereo import save_stereo_model
+    from ..drivers import save_stereo_model
 
     path = Path(path)
     folder = make_folder(path.parent)
@@ -435,8 +435,8 @@ def write_stereo_file(path, model, extra: dict | None = None) -> Path:
 def _check_factory(path) -> None:
     """Read the factory file before any work: a bad file is refused at once (a file without the image
     size is read again with the images' size after the capture)."""
-    from ..drivers.camera.errors import StereoModelError
-    from ..drivers.camera.triclops import read_triclops_model
+    from ..drivers import StereoModelError
+    from ..drivers import read_triclops_model
 
     try:
         read_triclops_model(path)
@@ -446,7 +446,7 @@ def _check_factory(path) -> None:
 
 
 def _factory_comparison(path, calibration) -> dict:
-    from ..drivers.camera.triclops import read_triclops_model
+    from ..drivers import read_triclops_model
 
     factory = read_triclops_model(path, size=calibration.model.image_size)
     m = calibration.model
@@ -465,7 +465,7 @@ def _factory_comparison(path, calibration) -> dict:
 def _coverage(views, result, size):
     """The coverage map's data: where the corners of each view were used (and, drawn in red, where the
     board was found but the view left out)."""
-    from ..drivers.camera.coverage import Coverage
+    from ..drivers import Coverage
 
     coverage = Coverage(size)
     for v, report in zip(views, result.views):
@@ -498,8 +498,8 @@ def run_stereo_calibration(config: StereoCalibrationConfig, *, say: Callable = p
     HandEyeError
         One line: bad input, a calibration that cannot be made, a file that cannot be written.
     """
-    from ..drivers.camera.coverage import coverage_map
-    from ..drivers.camera.stereo_fit import calibrate_stereo
+    from ..drivers import coverage_map
+    from ..drivers import calibrate_stereo
 
     progress = progress or _no_progress
     for target in (config.output, config.report_path, config.coverage_path):
@@ -510,7 +510,7 @@ def run_stereo_calibration(config: StereoCalibrationConfig, *, say: Callable = p
     seconds = {}
     start = time.perf_counter()
     if config.camera or camera is not None:
-        from ..drivers.camera import open_camera
+        from ..drivers import open_camera
 
         own = camera is None
         cam = open_camera(config.camera) if own else camera

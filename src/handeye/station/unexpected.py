@@ -17,8 +17,8 @@ import time
 import traceback
 from pathlib import Path
 
-from ..base.errors import HandEyeError, exception_line
-from ..base.files import write_text_atomic
+from ..base import HandEyeError, exception_line
+from ..base import write_text_atomic
 
 __all__ = ["DEBUG_VARIABLE", "plugin_packages", "unexpected_error_line"]
 
@@ -29,9 +29,9 @@ DEBUG_VARIABLE = "HANDEYE_DEBUG"
 def plugin_packages() -> dict[str, str]:
     """``{top-level module: installed package}`` of every plug-in of every handeye registry (methods,
     controllers, cameras), read from the entry points whether or not they load."""
-    from ..calibration.methods import METHODS
-    from ..drivers.camera.backends import CAMERAS
-    from ..drivers.controller.backends import CONTROLLERS
+    from ..calibration import METHODS
+    from ..drivers import CAMERAS
+    from ..drivers import CONTROLLERS
 
     owners: dict[str, str] = {}
     for registry in (METHODS, CONTROLLERS, CAMERAS):

@@ -27,14 +27,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..base.errors import HandEyeError, OutputError
-from ..base.files import parse_yaml, read_text_file
-from ..calibration.methods import DEFAULT_METHOD
-from ..calibration.problem import EYE_IN_HAND
-from ..calibration.session import write_yaml_atomic
-from ..calibration.solve import CalibrationResult
-from ..drivers.controller.types import ToolData, check_tooldata
-from ..rapid.literals import POSITION_DECIMALS, QUATERNION_DECIMALS, tooldata_literal
+from ..base import HandEyeError, OutputError
+from ..base import parse_yaml, read_text_file
+from ..calibration import DEFAULT_METHOD
+from ..calibration import EYE_IN_HAND
+from ..calibration import write_yaml_atomic
+from ..calibration import CalibrationResult
+from ..drivers import ToolData, check_tooldata
+from ..rapid import POSITION_DECIMALS, QUATERNION_DECIMALS, tooldata_literal
 from .config.station import StationConfig
 from .origin import MOCK, SIMULATED
 
@@ -98,7 +98,7 @@ def tooldata_from_result(result: CalibrationResult, config: StationConfig) -> To
     """
     if result.setup != EYE_IN_HAND:
         raise WritebackError("only an eye-in-hand calibration (camera on the flange) becomes tooldata")
-    from ..drivers.errors import ControllerError
+    from ..drivers import ControllerError
 
     try:
         tool = check_tooldata(ToolData.from_transform(result.x, config.tool.mass_kg, config.tool.cog_mm))
@@ -245,8 +245,8 @@ def writeback(session_dir, config: StationConfig, result: CalibrationResult, con
         return WritebackOutcome(literal, new, dry_run=True)
     if controller is None:
         raise WritebackError("no controller to write to (give --config or --mock, or use --dry-run)")
-    from ..drivers.controller.errors import (ControllerConnectionError, ControllerRefused, ControllerTimeout,
-                                             InvalidRequest, ProtocolError)
+    from ..drivers import ControllerConnectionError, ControllerRefused, ControllerTimeout, InvalidRequest
+    from ..drivers import ProtocolError
 
     old = controller.read_tool()
     previous = None

@@ -36,12 +36,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ...base.errors import CalibrationError
+from ...base import CalibrationError
 from ..problem import MIN_POSTURES
 from ..invariants import relative_transforms
 from ..quality_words import MIN_AXIS_DIVERGENCE_DEG, rotation_axis_divergence_deg
-from ...geometry.rotations import quaternion_from_matrix, skew
-from ...geometry.transforms import transform_from_rotation_translation
+from ...geometry import quaternion_from_matrix, skew
+from ...geometry import transform_from_rotation_translation
 
 __all__ = [
     "MIN_POSTURES",

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from ...geometry.board import BoardGeometry, board_corners
+from ...geometry import BoardGeometry, board_corners
 from .errors import CameraError, StereoModelError
 from .pnp import pose_from_rvec
 from .stereo import StereoModel

@@ -19,9 +19,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ...geometry.board import STATION_BOARD, BoardGeometry
-from ...base.files import read_file_bytes
-from ...geometry.board_scale import SQUARE_TOLERANCE
+from ...geometry import STATION_BOARD, BoardGeometry
+from ...base import read_file_bytes
+from ...geometry import SQUARE_TOLERANCE
 from .checkerboard import as_board, observe_board
 from .decode import decode_xb3_frame, frame_bytes
 from .errors import FrameError, FrameUsageError, SquareSizeMismatch

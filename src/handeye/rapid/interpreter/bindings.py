@@ -119,7 +119,7 @@ class MotionBinding:
 
     def model(self):
         """The arm's kinematics (:class:`~handeye.robot.kinematics.RobotModel`)."""
-        from ...robot.kinematics import load_robot
+        from ...robot import load_robot
 
         return load_robot("IRB1400")
 

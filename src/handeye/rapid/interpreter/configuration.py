@@ -30,7 +30,7 @@ import numpy as np
 
 from scipy.spatial.transform import Rotation
 
-from ...robot.kinematics import RobotModel
+from ...robot import RobotModel
 from .errors import RapidFatalError
 
 __all__ = ["confdata", "solve_robtarget", "solutions", "nearest", "follow"]

@@ -47,17 +47,18 @@ from pathlib import Path
 
 import numpy as np
 
-from ...geometry.board import BoardGeometry
-from ...calibration.compact_points import compact_points_from_corners
-from ...base.errors import HandEyeError
-from ...base.files import remove_stale_temporaries
-from ...robot.kinematics import load_robot
-from ...calibration.quality_words import MAX_AXIS_SPREAD_DEG
-from ...calibration.session import Posture, Session, create_session, read_session, write_posture, write_yaml_atomic
-from ...geometry.transforms import pose_from_transform, rotation_error_deg, transform_from_pose, translation_error_mm
-from ...robot.views import PinholeView, ViewSampling
-from ...drivers.camera.errors import CameraError, NoBoardInView, SquareSizeMismatch
-from ...drivers.camera.triangulate import triangulate_images
+from ...geometry import BoardGeometry
+from ...calibration import compact_points_from_corners
+from ...base import HandEyeError
+from ...base import remove_stale_temporaries
+from ...robot import load_robot
+from ...calibration import MAX_AXIS_SPREAD_DEG
+from ...calibration import Posture, Session, create_session, read_session, write_posture, write_yaml_atomic
+from ...geometry import pose_from_transform, rotation_error_deg, transform_from_pose, translation_error_mm
+from ...robot import PinholeView, ViewSampling
+from ...drivers import CameraError
+from ...drivers import NoBoardInView, SquareSizeMismatch
+from ...drivers import triangulate_images
 from .events import CAPTURED, SKIPPED, CaptureStarted, Measured, Prompt, Verdict
 from ..config.station import StationConfig
 from ..origin import MOCK, REAL, session_origin
@@ -392,9 +393,9 @@ def open_capture(config: StationConfig, session_dir: Path, link: StationLink, pr
 
 def _session_program(config: StationConfig, plan_joints: np.ndarray, board2base, link: StationLink | None) -> list:
     """The RAPID modules of the plan (``rapid.generate.RapidModule``), as :func:`write_program` writes them."""
-    from ...drivers.controller.backends import RAPID_LINKS
-    from ...rapid.generate import render_program
-    from ...rapid.station import station_from_dict
+    from ...drivers import RAPID_LINKS
+    from ...rapid import render_program
+    from ...rapid import station_from_dict
 
     data = config.rapid_dict(plan_joints, board2base)
     if link is not None and link.is_mock and data["controller"]["write_key"] is None:
@@ -420,7 +421,7 @@ def write_program(config: StationConfig, session_dir: Path, plan_joints: np.ndar
     Written once: modules on disk are never rewritten. A folder a kill left half written (some modules
     missing, those present as this config generates them) is completed; one whose modules differ is
     refused (CaptureError naming them)."""
-    from ...rapid.generate import write_modules
+    from ...rapid import write_modules
 
     rapid_dir = session_dir / "rapid"
     modules = _session_program(config, plan_joints, board2base, link)

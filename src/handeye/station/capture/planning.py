@@ -28,14 +28,14 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ...geometry.board import BoardGeometry, board_corners
-from ...base.errors import HandEyeError
-from ...robot.kinematics import RobotModel
-from ...calibration.quality_words import hand_axis_coverage
-from ...calibration.solve import calibrate, problem_from_session
-from ...calibration.synthetic import NoiseConfig, Scene, SceneConfig, sample_session
-from ...geometry.transforms import invert_transforms
-from ...robot.views import NOMINAL_XB3, ViewSampling, sample_eye_in_hand_postures
+from ...geometry import BoardGeometry, board_corners
+from ...base import HandEyeError
+from ...robot import RobotModel
+from ...calibration import hand_axis_coverage
+from ...calibration import calibrate, problem_from_session
+from ...calibration import NoiseConfig, Scene, SceneConfig, sample_session
+from ...geometry import invert_transforms
+from ...robot import NOMINAL_XB3, ViewSampling, sample_eye_in_hand_postures
 from ..cell.plan import CellCheck, PostureVeto, Rejections, base_problem, board_problem, clear_route, start_problem
 from ..report.quality import QualityThresholds, motion_shortfalls
 

@@ -17,9 +17,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...robot.clearance import CellGuard
-from ...base.errors import HandEyeError
-from ...robot.kinematics import RobotModel
+from ...robot import CellGuard
+from ...base import HandEyeError
+from ...robot import RobotModel
 from ..csv_values import is_header, parse_value, value_problem
 
 __all__ = ["CellCheckResult", "JointRows", "check_joints", "read_joints_csv"]

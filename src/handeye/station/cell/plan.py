@@ -21,11 +21,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...robot.base_clearance import base_clearances, base_envelope
-from ...robot.cell import CellModel
-from ...robot.clearance import CellGuard
-from ...geometry.board import BoardGeometry, board_corners
-from ...robot.kinematics import RobotModel
+from ...robot import base_clearances, base_envelope
+from ...robot import CellModel
+from ...robot import CellGuard
+from ...geometry import BoardGeometry, board_corners
+from ...robot import RobotModel
 
 __all__ = ["CellCheck", "PostureVeto", "Rejections", "base_problem", "board_problem", "cell_check", "clear_route",
            "start_problem", "view_points"]

@@ -19,9 +19,9 @@ import io
 
 import numpy as np
 
-from ...robot.cell import Box, Cylinder, Floor
-from ...robot.clearance import CellGuard
-from ...robot.kinematics import RobotModel
+from ...robot import Box, Cylinder, Floor
+from ...robot import CellGuard
+from ...robot import RobotModel
 from ..capture.planning import PosturePlan
 
 __all__ = ["plan_preview_figure", "plan_preview_png", "posture_labels", "write_preview"]
@@ -91,7 +91,7 @@ def _draw_arm(ax, segments: np.ndarray, radii, h: int, v: int) -> None:
 
 def _arm_at(robot: RobotModel, guard, joints) -> tuple[np.ndarray, list]:
     """The capsules' axes ``(B, 2, 3)`` at ``joints`` and their radii (the guard's, or the robot's alone)."""
-    from ...robot.clearance import arm_capsules
+    from ...robot import arm_capsules
 
     guard = guard if guard is not None else CellGuard(robot, [], self_collision=False)
     return guard.capsule_segments(joints)[0], [c[4] for c in arm_capsules(robot)]
@@ -240,6 +240,6 @@ def plan_preview_figure(robot: RobotModel, plan: PosturePlan):
 
 def write_preview(path, robot: RobotModel, plan: PosturePlan):
     """Write :func:`plan_preview_png` to ``path`` atomically; returns the path."""
-    from ...base.files import write_bytes_atomic
+    from ...base import write_bytes_atomic
 
     return write_bytes_atomic(path, plan_preview_png(robot, plan))

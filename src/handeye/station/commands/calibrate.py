@@ -19,7 +19,7 @@ def methods_help(width: int = 100) -> str:
     """The ``--method`` section of the help: every row of the methods table (a plug-in's too), by kind."""
     import textwrap
 
-    from ...calibration.methods import DEFAULT_METHOD, METHODS, method_names
+    from ...calibration import DEFAULT_METHOD, METHODS, method_names
 
     lines = [f"Methods (--method); without it the recommended default ({DEFAULT_METHOD}) runs:"]
     for kind, (heading, shared) in _KIND_HEADINGS.items():
@@ -108,7 +108,7 @@ def run(args) -> int:
 
     if args.json:  # an unwritable --json fails before any solving
         check_output_file(args.json)
-    from ...calibration.solve import method_row
+    from ...calibration import method_row
 
     method_row(args.method)  # an unknown --method, too (the table, a plug-in's methods included)
     wants_report = args.report is not None
@@ -119,7 +119,7 @@ def run(args) -> int:
         thresholds = load_thresholds(args.thresholds)
     report_path = report_path_for(args.session, args.report) if wants_report else None
     if report_path is not None and not report_path.parent.is_dir():
-        from ...base.errors import HandEyeError
+        from ...base import HandEyeError
 
         raise HandEyeError(f"cannot write the report {report_path}: folder {report_path.parent} does not exist")
     from ..progress import delayed_progress
@@ -151,7 +151,7 @@ def _warn_joint_mismatch(session) -> None:
     """One warning line on stderr when postures' joint angles do not reproduce their flange poses."""
     import sys
 
-    from ...calibration.joint_match import session_joint_mismatch
+    from ...calibration import session_joint_mismatch
 
     found = session_joint_mismatch(session)
     if found is not None:

@@ -107,7 +107,7 @@ def _view(config, args, link, say):
     """The live view's context (``station.view.live_view``) with --view, else one that yields None."""
     import contextlib
 
-    from ...base.errors import HandEyeError, UsageError
+    from ...base import HandEyeError, UsageError
 
     if not args.view:
         if args.view_host:
@@ -179,7 +179,7 @@ class _Say:
 def run(args) -> int:
     from dataclasses import replace
 
-    from ...base.errors import UsageError
+    from ...base import UsageError
     from ..capture.loop import capture
     from ..config.station import default_config, load_config
     from ..progress import progress_bar
@@ -236,7 +236,7 @@ def _end(lines: list, say, view, error: str | None = None, ok: bool | None = Non
 def _guided_ending(session, captured: int, already: int, what: str) -> tuple[list, str | None]:
     """The last lines of a guided run (``what``: what was captured and what is missing), and the error when
     the session holds fewer postures than a calibration needs (None: enough)."""
-    from ...calibration.problem import MIN_POSTURES
+    from ...calibration import MIN_POSTURES
 
     total = captured + already
     if total == 0:
@@ -252,7 +252,7 @@ def _guided_ending(session, captured: int, already: int, what: str) -> tuple[lis
 def _run_guided(config, args, say) -> int:
     import threading
 
-    from ...base.errors import HandEyeError
+    from ...base import HandEyeError
     from ..guided.capture import guided_capture
     from ..guided.pendant import pendant_guided_capture, uses_guided_program
     from ..guided.operator import mock_operator
@@ -292,6 +292,6 @@ def _postures_on_disk(session) -> int:
     """How many postures the session folder holds (0 when it holds no session)."""
     from pathlib import Path
 
-    from ...calibration.session import read_session
+    from ...calibration import read_session
 
     return len(read_session(session).postures) if (Path(session) / "session.yaml").is_file() else 0

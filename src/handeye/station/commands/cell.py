@@ -48,8 +48,8 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from ...base.errors import UsageError
-    from ...robot.kinematics import load_robot
+    from ...base import UsageError
+    from ...robot import load_robot
     from ..cell.plan import cell_check
     from ..cell.check import check_joints, read_joints_csv
     from ..config.station import default_config, load_config

@@ -26,8 +26,8 @@ Examples:
 
 
 def add_parser(sub):
-    from ...drivers.controller.backends import DEFAULT_PROTOCOL
-    from ...mocks.backends import mock_protocol_choices
+    from ...drivers import DEFAULT_PROTOCOL
+    from ...mocks import mock_protocol_choices
     from .argtypes import left_out_lines, registry_choice
 
     protocols = mock_protocol_choices()  # a name is checked when given: no plug-in is imported to build this
@@ -47,7 +47,7 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from ...base.errors import UsageError
+    from ...base import UsageError
     from ..demo import DemoOptions, run_demo
     from ..output import check_output_file, write_json
     from ..progress import progress_bar

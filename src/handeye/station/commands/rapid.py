@@ -53,7 +53,7 @@ Example:
 
 
 def add_parser(sub):
-    from ...drivers.controller.backends import rapid_protocol_choices
+    from ...drivers import rapid_protocol_choices
     from .argtypes import left_out_lines, registry_choice
 
     p = sub.add_parser("rapid", help=HELP, description=HELP)
@@ -85,10 +85,10 @@ def run(args) -> int:
     if getattr(args, "rapid_command", None) != "generate":
         args._rapid_parser.print_help()
         return 2
-    from ...drivers.controller.backends import RAPID_LINKS
-    from ...base.errors import UsageError
-    from ...rapid.generate import render_guided_program, render_key, render_program, station_link, write_modules
-    from ...rapid.station import default_station, station_from_dict
+    from ...drivers import RAPID_LINKS
+    from ...base import UsageError
+    from ...rapid import render_guided_program, render_key, render_program, station_link, write_modules
+    from ...rapid import default_station, station_from_dict
     from ..config.station import load_config
 
     if args.prompt and not args.guided:

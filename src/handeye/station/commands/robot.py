@@ -24,7 +24,7 @@ def _epilog() -> str:
 
 def _link_options(p, backends) -> None:
     """``--protocol``, ``--host``, ``--port`` and one flag per back-end link setting (``link_settings()``)."""
-    from ...drivers.controller.backends import DEFAULT_PROTOCOL, link_settings
+    from ...drivers import DEFAULT_PROTOCOL, link_settings
 
     ports = ", ".join(f"{name} {backends[name].default_port}" for name in backends if backends[name].default_port)
     p.add_argument("--protocol", choices=tuple(backends), default=DEFAULT_PROTOCOL, help=f"default {DEFAULT_PROTOCOL}")
@@ -41,7 +41,7 @@ def _link_options(p, backends) -> None:
 
 
 def add_parser(sub):
-    from ...drivers.controller.backends import CONTROLLERS
+    from ...drivers import CONTROLLERS
 
     epilog = _epilog()
     p = sub.add_parser("robot", help=HELP, description=HELP, epilog=epilog,
@@ -61,7 +61,7 @@ def add_parser(sub):
 
 def _options(args) -> dict:
     """``open_controller`` options: where the controller is, as the back end's registry entry builds them."""
-    from ...drivers.controller.backends import CONTROLLERS, ControllerLink
+    from ...drivers import CONTROLLERS, ControllerLink
 
     settings = {name[len("link_"):]: value for name, value in vars(args).items() if name.startswith("link_")}
     link = ControllerLink(host=args.host, port=args.port, **settings)
@@ -75,7 +75,8 @@ def run(args) -> int:
         return 2
     import json
 
-    from ...drivers.controller import open_controller, read_robot_state
+    from ...drivers import open_controller
+    from ...drivers import read_robot_state
 
     with open_controller(args.protocol, **_options(args)) as controller:
         if args.robot_command == "joints":

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from ...geometry.station_board import STATION_CORNERS, STATION_SQUARE_MM
+from ...geometry import STATION_CORNERS, STATION_SQUARE_MM
 from . import argtypes
 
 HELP = "calibrate the stereo head from checkerboard pairs, or read its factory (Triclops) calibration"
@@ -135,8 +135,8 @@ def add_parser(sub):
 def _calibrate(args) -> int:
     from pathlib import Path
 
-    from ...base.errors import UsageError
-    from ...drivers.camera.checkerboard import as_board
+    from ...base import UsageError
+    from ...drivers import as_board
     from ..progress import progress_bar
     from ..stereo_from_pairs import StereoCalibrationConfig, run_stereo_calibration
 
@@ -168,8 +168,8 @@ def _calibrate(args) -> int:
 
 
 def _mock_camera(config, seed):
-    from ...drivers.camera import open_camera
-    from ...mocks.world import BoardOperator, PrintedBoard
+    from ...drivers import open_camera
+    from ...mocks import BoardOperator, PrintedBoard
 
     board = PrintedBoard(config.board, margin_mm=max(15.0, 0.8 * config.board.square_mm))
     camera = open_camera("mock", board=board, seed=seed, output="gray", render_centre=False)
@@ -210,7 +210,7 @@ def _print_summary(run, say) -> None:
 def _triclops(args) -> int:
     from pathlib import Path
 
-    from ...drivers.camera.triclops import read_triclops_model
+    from ...drivers import read_triclops_model
     from ..stereo_from_pairs import write_stereo_file
 
     model = read_triclops_model(args.file, size=args.size)

@@ -82,8 +82,8 @@ def run(args) -> int:
 
     import sys
 
-    from ...base.errors import HandEyeError, UsageError
-    from ...calibration.verification import DEFAULT_LEVEL, LEVEL_RANGE
+    from ...base import HandEyeError, UsageError
+    from ...calibration import DEFAULT_LEVEL, LEVEL_RANGE
     from ..config.station import default_config, load_config
     from ..runtime import MOCK_BANNER, open_station, rehearsal_banner
     from ..config.station_kind import station_tag
@@ -115,7 +115,7 @@ def run(args) -> int:
 
 
 def _check(args, config, link, tag: str) -> str:
-    from ...base.files import write_text_atomic
+    from ...base import write_text_atomic
     from ..report.quality import config_thresholds
     from ..verify.check import verify
     from ..verify.history import append_record, check_record, history_path, load_history
@@ -167,7 +167,7 @@ def _after_check(step, what: str) -> None:
     check's verdict (its exit status) stands."""
     import sys
 
-    from ...base.errors import HandEyeError
+    from ...base import HandEyeError
 
     try:
         step()

@@ -49,9 +49,9 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from ...base.errors import UsageError
-    from ...calibration.plausibility import session_in_mm
-    from ...calibration.session import read_session
+    from ...base import UsageError
+    from ...calibration import session_in_mm
+    from ...calibration import read_session
     from ..report.assessment import assess
     from ..calibrate import solve_session
     from ..config.station import default_config, load_config

@@ -13,9 +13,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ...robot.cell import DEFAULT_CARRIED, Box, CellModel, Cylinder, Floor, Sphere
-from ...base.errors import ConfigError, brief
-from ...rapid.guided import PROMPTS
+from ...robot import DEFAULT_CARRIED, Box, CellModel, Cylinder, Floor, Sphere
+from ...base import ConfigError, brief
+from ...rapid import PROMPTS
 from .schema import Custom, Flag, Number, Optional, Text, number, numbers, setting, text
 
 __all__ = ["CellSettings", "GuidedSettings", "DEFAULT_CARRIED", "DEFAULT_KEEP_OUT"]

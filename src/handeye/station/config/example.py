@@ -47,7 +47,7 @@ def _commented(head: str, comment: str) -> list[str]:
 
 def _backend_lines(name: str, settings: dict, written: set) -> list[str]:
     """A back end's heading and the link settings it declares first."""
-    from ...drivers.controller.backends import CONTROLLERS  # noqa: PLC0415
+    from ...drivers import CONTROLLERS  # noqa: PLC0415
 
     backend = CONTROLLERS[name]
     link = link_module(name)
@@ -73,7 +73,7 @@ def controller_lines(names=None) -> list[str]:
     names : sequence of str, optional
         The back ends to describe, in order; default: those registered in code (the package's own).
     """
-    from ...drivers.controller.backends import CONTROLLERS, DEFAULT_PROTOCOL, link_settings  # noqa: PLC0415
+    from ...drivers import CONTROLLERS, DEFAULT_PROTOCOL, link_settings  # noqa: PLC0415
     from .station import MOCK  # noqa: PLC0415
 
     names = CONTROLLERS.names_in_code() if names is None else tuple(names)

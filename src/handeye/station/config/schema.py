@@ -17,7 +17,7 @@ import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields, replace
 
-from ...base.errors import ConfigError, brief
+from ...base import ConfigError, brief
 
 __all__ = ["Rule", "Number", "Numbers", "Range", "Text", "Flag", "Optional", "Custom", "Section", "setting", "section",
            "rule_of", "check_section", "chosen_of", "declared_fields", "schema_keys", "secret_fields", "number", "numbers", "text"]

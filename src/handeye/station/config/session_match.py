@@ -37,7 +37,7 @@ def _controller_differs(recorded: dict, config: StationConfig) -> bool:
 
 def _camera_keys(backend: str) -> list[str]:
     """The non-secret settings the camera back end ``backend`` declares (``guid`` of the XB3)."""
-    from ...drivers.camera.backends import camera_settings  # noqa: PLC0415
+    from ...drivers import camera_settings  # noqa: PLC0415
 
     return [key for key, (setting, names) in camera_settings().items()
             if backend in names and not getattr(setting, "secret", False)]

@@ -30,14 +30,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ...geometry.board import STATION_BOARD, BoardGeometry
-from ...base.errors import ConfigError, HandEyeError, brief
-from ...base.files import read_text_file
-from ...robot.kinematics import load_robot
-from ...base.files import parse_yaml
-from ...geometry.transforms import pose_from_transform, transform_from_pose
-from ...base.write_key import WRITE_KEY_PATTERN
-from ...drivers.controller.backends import DEFAULT_PROTOCOL
+from ...geometry import STATION_BOARD, BoardGeometry
+from ...base import ConfigError, HandEyeError, brief
+from ...base import read_text_file
+from ...robot import load_robot
+from ...base import parse_yaml
+from ...geometry import pose_from_transform, transform_from_pose
+from ...base import WRITE_KEY_PATTERN
+from ...drivers import DEFAULT_PROTOCOL
 from ..cell.plan import base_problem
 from .cell import CellSettings, GuidedSettings
 from .schema import (
@@ -75,7 +75,7 @@ SEED_MAX = 2**31
 def controller_protocols() -> tuple[str, ...]:
     """Controller link protocols of a real station: every registered controller back end (plug-ins
     listed from their metadata, none imported)."""
-    from ...drivers.controller.backends import CONTROLLERS
+    from ...drivers import CONTROLLERS
 
     return CONTROLLERS.names()
 
@@ -83,14 +83,14 @@ def controller_protocols() -> tuple[str, ...]:
 def camera_backends() -> tuple[str, ...]:
     """Camera back ends of a real station: every registered camera back end that is not simulated
     (which loads every camera plug-in, under the time bound: for listing them)."""
-    from ...drivers.camera.backends import CAMERAS
+    from ...drivers import CAMERAS
 
     return CAMERAS.names(lambda backend: not backend.simulated)
 
 
 def mock_protocols() -> tuple[str, ...]:
     """Controller links the embedded mock station can speak: the back ends a mock serves."""
-    from ...mocks.backends import mock_protocols
+    from ...mocks import mock_protocols
 
     return mock_protocols()
 
@@ -98,14 +98,14 @@ def mock_protocols() -> tuple[str, ...]:
 def protocol_choices():
     """What ``controller.protocol`` may be: a controller back end, or mock (checking one imports that
     plug-in only: :class:`~handeye.base.registry.Choices`)."""
-    from ...drivers.controller.backends import CONTROLLERS
+    from ...drivers import CONTROLLERS
 
     return CONTROLLERS.choices(extra=(MOCK,))
 
 
 def camera_choices():
     """What ``camera.backend`` may be: a camera back end that is not simulated, or mock."""
-    from ...drivers.camera.backends import CAMERAS
+    from ...drivers import CAMERAS
 
     return CAMERAS.choices(lambda backend: not backend.simulated, extra=(MOCK,),
                            lacking="is simulated (a real station needs a real camera)")
@@ -113,7 +113,7 @@ def camera_choices():
 
 def _mock_protocol_choices():
     """What ``mock.protocol`` may be: a controller back end a mock serves."""
-    from ...mocks.backends import mock_protocol_choices
+    from ...mocks import mock_protocol_choices
 
     return mock_protocol_choices()
 
@@ -135,14 +135,14 @@ def _write_key(value, key: str, context) -> str | None:
 def _link_settings(chosen=None) -> dict:
     """``key -> (LinkSetting, back-end names)`` of the controller back ends a section on ``chosen`` may set
     (:func:`_section_backends`)."""
-    from ...drivers.controller.backends import CONTROLLERS, link_settings  # noqa: PLC0415
+    from ...drivers import CONTROLLERS, link_settings  # noqa: PLC0415
 
     return link_settings(_section_backends(CONTROLLERS, chosen))
 
 
 def _camera_settings(chosen=None) -> dict:
     """``key -> (Setting, back-end names)`` of the camera back ends a section on ``chosen`` may set."""
-    from ...drivers.camera.backends import CAMERAS, camera_settings  # noqa: PLC0415
+    from ...drivers import CAMERAS, camera_settings  # noqa: PLC0415
 
     return camera_settings(_section_backends(CAMERAS, chosen))
 
@@ -151,7 +151,7 @@ def _section_backends(registry, chosen) -> tuple[str, ...]:
     """The back ends whose settings a section naming ``chosen`` takes: handeye's own and ``chosen``
     (no other plug-in is imported to check or read a file); ``None`` (the schema, documenting every key):
     every back end, plug-ins loaded under the time bound."""
-    from ...drivers.registry import chosen_with_own  # noqa: PLC0415
+    from ...drivers import chosen_with_own  # noqa: PLC0415
 
     return registry.names() if chosen is None else chosen_with_own(registry, chosen)
 
@@ -444,7 +444,7 @@ class FaultSettings:
 
     def model(self):
         """The mock's :class:`~handeye.mocks.drift.StationFaults`."""
-        from ...mocks.drift import StationFaults
+        from ...mocks import StationFaults
 
         return StationFaults(**{f.name: tuple(float(v) for v in getattr(self, f.name)) for f in fields(self)})
 

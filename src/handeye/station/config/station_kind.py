@@ -30,7 +30,7 @@ __all__ = ["hardware_mock_parts", "mock_parts", "recorded_mock_parts", "station_
 
 def _simulated_camera(backend: str) -> bool:
     """True for ``mock`` and for any camera back end registered as simulated."""
-    from ...drivers.camera.backends import CAMERAS
+    from ...drivers import CAMERAS
 
     if backend == MOCK:
         return True

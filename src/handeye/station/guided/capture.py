@@ -32,11 +32,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ...base.files import remove_stale_temporaries
-from ...robot.kinematics import load_robot
-from ...calibration.quality_words import IMAGE_CELL_NAMES, MEDIAN_ANGLE_NAME, board_distances_mm, distance_spread_mm, hand_axis_coverage, image_cells
-from ...calibration.session import Session, create_session, read_session
-from ...geometry.transforms import rotation_error_deg
+from ...base import remove_stale_temporaries
+from ...robot import load_robot
+from ...calibration import IMAGE_CELL_NAMES, MEDIAN_ANGLE_NAME, board_distances_mm, distance_spread_mm, hand_axis_coverage, image_cells
+from ...calibration import Session, create_session, read_session
+from ...geometry import rotation_error_deg
 from ..capture.loop import (
     _STATION_NAMES,
     CaptureError,

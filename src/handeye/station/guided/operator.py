@@ -22,9 +22,9 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from ...base.errors import HandEyeError
-from ...robot.kinematics import load_robot
-from ...geometry.transforms import invert_transforms
+from ...base import HandEyeError
+from ...robot import load_robot
+from ...geometry import invert_transforms
 from ..cell.plan import cell_check
 from ..config.station import StationConfig
 from ..capture.planning import plan_postures

@@ -20,7 +20,7 @@ import threading
 from collections.abc import Callable
 from pathlib import Path
 
-from ...rapid.guided import VERDICT_CODES, hint_code_for, hint_text, verdict_text
+from ...rapid import VERDICT_CODES, hint_code_for, hint_text, verdict_text
 from ..capture.loop import CaptureError, PostureReport, grab_observer, measure_with_retries, read_flange
 from ..capture.events import NOT_CAPTURED, TOO_CLOSE, Prompt
 from ..config.station import StationConfig
@@ -34,8 +34,8 @@ def uses_guided_program(config: StationConfig, link: StationLink) -> bool:
     """Whether ``capture --guided`` runs the guided RAPID program: over a line (socket or serial) and over Modbus (the
     links whose program the operator cannot jog beside); not over Robot Web Services (the PC reads the
     joints with no program) nor on the embedded mock (its simulated operator jogs beside the program)."""
-    from ...rapid.generate import GUIDED_LINKS
-    from ...rapid.links import LINK_MODULES
+    from ...rapid import GUIDED_LINKS
+    from ...rapid import LINK_MODULES
 
     return not link.is_mock and LINK_MODULES.get(config.link_protocol) in GUIDED_LINKS
 
@@ -48,9 +48,9 @@ def hint_of(missing) -> int:
 def install_guided_program(config: StationConfig, session_dir: Path, link: StationLink, progress) -> Path:
     """Write the guided program into ``SESSION/rapid`` (once), load it where the station can, and wait until
     the controller runs it (a program with no posture)."""
-    from ...drivers.controller.backends import RAPID_LINKS
-    from ...rapid.generate import render_guided_program, write_modules
-    from ...rapid.station import default_station, station_from_dict
+    from ...drivers import RAPID_LINKS
+    from ...rapid import render_guided_program, write_modules
+    from ...rapid import default_station, station_from_dict
     from ..capture.loop import _wait_for_program
 
     rapid_dir = session_dir / "rapid"

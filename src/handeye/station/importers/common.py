@@ -19,12 +19,12 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ...geometry.board import BoardGeometry
-from ...base.errors import SessionError, brief
-from ...base.files import parse_yaml, read_text_file
-from ...calibration.problem import SETUPS
-from ...calibration.session import MAX_LENGTH_MM, MAX_LENGTH_WORDS, MAX_POSTURE_INDEX, Posture, Session
-from ...geometry.transforms import rigid_defect
+from ...geometry import BoardGeometry
+from ...base import SessionError, brief
+from ...base import parse_yaml, read_text_file
+from ...calibration import SETUPS
+from ...calibration import MAX_LENGTH_MM, MAX_LENGTH_WORDS, MAX_POSTURE_INDEX, Posture, Session
+from ...geometry import rigid_defect
 from .head import check_log_head, read_head
 from .ambiguity import AmbiguousReading
 from .inference import METRES_BELOW, Constraints, Side, SideReading, infer

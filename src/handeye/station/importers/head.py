@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ...base.errors import SessionError
-from ...base.files import HEAD_BYTES, binary_offset, check_regular_file, read_file_bytes
+from ...base import SessionError
+from ...base import HEAD_BYTES, binary_offset, check_regular_file, read_file_bytes
 
 __all__ = ["read_head", "check_log_head", "head_text"]
 

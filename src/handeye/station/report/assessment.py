@@ -20,12 +20,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ...base.errors import CalibrationError, HandEyeError
-from ...calibration.methods import comparison_methods
-from ...calibration.metrics import fixed_points
-from ...calibration.problem import EYE_IN_HAND, HandEyeProblem
-from ...calibration.quality_words import AxisCoverage, DOrg, kept_postures, result_d_org
-from ...geometry.transforms import rotation_error_deg
+from ...base import CalibrationError, HandEyeError
+from ...calibration import comparison_methods
+from ...calibration import fixed_points
+from ...calibration import EYE_IN_HAND, HandEyeProblem
+from ...calibration import AxisCoverage, DOrg, kept_postures, result_d_org
+from ...geometry import rotation_error_deg
 from ..calibrate import CalibrationOutcome
 from .quality import QualityFigures, QualityThresholds, Verdict, quality_figures, verdict
 
@@ -179,7 +179,7 @@ def assess(outcome: CalibrationOutcome, thresholds: QualityThresholds | None = N
 def _plan_preview(session_path, session=None) -> tuple[bytes | None, str | None]:
     """The capture plan's preview PNG of the session folder, when there is one; else, for a session
     planned by capture (its record holds ``plan_joints_deg``), why it is not shown."""
-    from ...base.files import read_file_bytes
+    from ...base import read_file_bytes
 
     path = Path(session_path) / "preview.png" if session_path is not None else None
     planned = session is not None and "plan_joints_deg" in session.extra.get("capture", {})
@@ -196,8 +196,8 @@ def _plan_preview(session_path, session=None) -> tuple[bytes | None, str | None]
 
 def _findings(problem: HandEyeProblem) -> list | None:
     """The data checks on the poses (``calibration.diagnostics.diagnose``), ``None`` if they fail."""
-    from ...calibration.diagnostics import diagnose
-    from ...calibration.problem import hand_poses
+    from ...calibration import diagnose
+    from ...calibration import hand_poses
 
     try:
         tool0 = hand_poses(problem.hand, problem.setup)  # the map is its own inverse for either set-up
@@ -225,7 +225,7 @@ def comparison_results(problem: HandEyeProblem, methods=None, truth: dict | None
     failures : dict, optional
         Filled with ``{method: reason}`` of the methods left out.
     """
-    from ...calibration.solve import calibrate_within
+    from ...calibration import calibrate_within
 
     known = dict(known or {})
     out = {}
@@ -282,9 +282,9 @@ def held_out_rms_mm(problem: HandEyeProblem, chosen, result) -> float | None:
     ``ml`` default: the same folds and definition, its refits keeping the full fit's noise levels)
     gives that figure instead of being solved again. ``None`` when no fold could be solved.
     """
-    from ...calibration.crossval import cross_validate
-    from ...calibration.solve import bounded_for, calibrate
-    from ...base.time_bound import OutOfTime
+    from ...calibration import cross_validate
+    from ...calibration import bounded_for, calibrate
+    from ...base import OutOfTime
 
     own = result.cross_validation
     if own and "rms_mm" in own and set(map(int, result.outliers)) == set(map(int, chosen.outliers)):

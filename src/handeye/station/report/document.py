@@ -26,9 +26,9 @@ from __future__ import annotations
 import datetime as _dt
 from pathlib import Path
 
-from ...base.errors import HandEyeError
-from ...calibration.problem import EYE_IN_HAND
-from ...base.files import write_text_atomic
+from ...base import HandEyeError
+from ...calibration import EYE_IN_HAND
+from ...base import write_text_atomic
 from .assessment import Assessment
 from .html import CSS, FOOTER, escape
 from .sections import (

@@ -13,8 +13,8 @@ import io
 
 import numpy as np
 
-from ...calibration.problem import HandEyeProblem
-from ...calibration.quality_words import D_ORG_ALL_NAME, AxisCoverage
+from ...calibration import HandEyeProblem
+from ...calibration import D_ORG_ALL_NAME, AxisCoverage
 
 __all__ = ["BLUE", "RED", "ORANGE", "GREY", "new_figure", "to_png", "style_axes", "plot_residuals", "plot_axis_coverage",
            "plot_method_comparison", "method_comparison_figure", "plot_repeatability", "plot_point_rms"]

@@ -34,9 +34,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...base.errors import HandEyeError, brief
-from ...calibration.problem import EYE_IN_HAND, HandEyeProblem
-from ...calibration.quality_words import (
+from ...base import HandEyeError, brief
+from ...calibration import EYE_IN_HAND, HandEyeProblem
+from ...calibration import (
     AXIS_SPREAD_NAME,
     MAX_AXIS_SPREAD_DEG,
     MEDIAN_ANGLE_NAME,
@@ -213,7 +213,7 @@ def load_thresholds(path) -> QualityThresholds:
     ThresholdError
         File missing or unreadable, not YAML, or a bad key or value (see :meth:`QualityThresholds.from_dict`).
     """
-    from ...base.files import parse_yaml, read_text_file
+    from ...base import parse_yaml, read_text_file
 
     path = Path(path)
     text = read_text_file(path, "thresholds file", ThresholdError, missing=f"thresholds file not found: {path}")

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...calibration.invariants import bounded_pairs, pairs_used
-from ...calibration.quality_words import D_ORG_ALL_NAME, METRIC_MEANINGS, hand_frame
+from ...calibration import bounded_pairs, pairs_used
+from ...calibration import D_ORG_ALL_NAME, METRIC_MEANINGS, hand_frame
 from .assessment import Assessment
 from .quality import CHECK_LABELS, Verdict, direction_name, format_check_value
 from .figures import plot_axis_coverage, plot_method_comparison, plot_point_rms, plot_repeatability, plot_residuals

@@ -7,9 +7,9 @@ from __future__ import annotations
 
 from scipy.spatial.transform import Rotation
 
-from ...calibration.problem import EYE_IN_HAND
-from ...calibration.quality_words import D_ORG_ALL_NAME
-from ...rapid.literals import pose_literal, rounded_pose
+from ...calibration import EYE_IN_HAND
+from ...calibration import D_ORG_ALL_NAME
+from ...rapid import pose_literal, rounded_pose
 from .assessment import Assessment
 from ..origin import origin_banner
 from .quality import Verdict

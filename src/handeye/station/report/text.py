@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ...calibration.invariants import pairs_used
-from ...calibration.quality_words import D_ORG_ALL_NAME, METRIC_MEANINGS
-from ...rapid.literals import pose_literal, rounded_pose
+from ...calibration import pairs_used
+from ...calibration import D_ORG_ALL_NAME, METRIC_MEANINGS
+from ...rapid import pose_literal, rounded_pose
 from .assessment import Assessment
 from ..origin import origin_banner
 

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...calibration.diagnostics import find_unit_problems
-from ...calibration.problem import HandEyeProblem, hand_poses
+from ...calibration import find_unit_problems
+from ...calibration import HandEyeProblem, hand_poses
 
 __all__ = ["UnitsAdvice", "units_advice"]
 

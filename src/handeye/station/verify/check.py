@@ -23,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ...base.errors import HandEyeError
-from ...robot.kinematics import load_robot
-from ...calibration.session import read_session
-from ...calibration.verification import DEFAULT_LEVEL, MIN_VERIFY_POSTURES
+from ...base import HandEyeError
+from ...robot import load_robot
+from ...calibration import read_session
+from ...calibration import DEFAULT_LEVEL, MIN_VERIFY_POSTURES
 from ..capture.loop import CaptureRun, confirm_motion, install_program, release_waiting_posture, visit_postures
 from ..config.station import StationConfig
 from ..origin import MOCK, REAL, session_origin
@@ -141,7 +141,7 @@ def _check_joints(session, session_dir: Path) -> None:
     """Refuse SESSION when a posture's joint angles are missing or do not reproduce its flange pose: its
     calibration then models the robot's noise on the flange poses, the check (which revisits by joint
     angles) on the joints, and the two cannot be compared."""
-    from ...calibration.joint_match import session_joint_mismatch
+    from ...calibration import session_joint_mismatch
 
     missing = [p.index for p in session.postures if p.joints_deg is None]
     found = session_joint_mismatch(session)
@@ -166,8 +166,8 @@ class SessionBaseline:
 
 def session_baseline(config: StationConfig, session, session_dir: Path) -> SessionBaseline:
     """Solve SESSION with the default estimator and judge it; refuse one without a passing result."""
-    from ...calibration.eiv import solve_eiv
-    from ...calibration.verification import baseline_from_solution
+    from ...calibration import solve_eiv
+    from ...calibration import baseline_from_solution
     from ..report.assessment import assess
     from ..calibrate import solve_session
     from ..report.quality import config_thresholds
@@ -209,7 +209,7 @@ def _chosen(config, session, base: SessionBaseline, robot, here, count: int, pro
     When no choice fits (a short session: K of its few postures are more than a fifth of its path),
     the shortest one tried is taken and ``progress`` says so.
     """
-    from ...calibration.verify_postures import informative_postures
+    from ...calibration import informative_postures
 
     record = session.extra["capture"]
     plan = np.array(record["plan_joints_deg"], float)
@@ -266,7 +266,7 @@ class _Stop:
 def _revisit(config, link: StationLink, folder: Path, session, numbers, joints, progress, confirm, on_posture):
     """Visit the chosen postures with the capture's program and loop; returns (measured, problem) or a
     reason the check cannot go on (the link failed, the board is not seen: :class:`_Stop`)."""
-    from ...drivers.errors import StationError
+    from ...drivers import StationError
 
     station = station_kind(config, link, session_origin(session, session.path))  # SESSION's origin too: its X is moved
     created = create_verify_session(config, session, session_dir=Path(session.path), indices=numbers, joints=joints,
@@ -322,10 +322,10 @@ def verify(config: StationConfig, session_dir, link: StationLink, postures: int 
 
 def judge(outcome: VerifyOutcome, folder: Path, base: SessionBaseline, robot, level: float, numbers) -> None:
     """The test, the explanations and the quick update on the check's measurements (into ``outcome``)."""
-    from ...calibration.drift_causes import explain, quick_update
-    from ...calibration.eiv import observations
-    from ...calibration.solve import problem_from_session
-    from ...calibration.verification import discrepancy, drift_test
+    from ...calibration import explain, quick_update
+    from ...calibration import observations
+    from ...calibration import problem_from_session
+    from ...calibration import discrepancy, drift_test
 
     if outcome.measured < MIN_VERIFY_POSTURES:
         outcome.reason = (f"{outcome.measured} of {len(numbers)} postures measured (the board was not seen at the "

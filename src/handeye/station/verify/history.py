@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
 
-from ...base.errors import OutputError
-from ...base.files import read_text_file, write_text_atomic
+from ...base import OutputError
+from ...base import read_text_file, write_text_atomic
 from .file_lock import exclusive_lock
 
 __all__ = ["HISTORY_FILE", "History", "append_record", "history_path", "load_history", "read_history", "history_lines",

@@ -6,7 +6,7 @@ import base64
 import html
 from pathlib import Path
 
-from ...base.files import write_text_atomic
+from ...base import write_text_atomic
 from .history import history_lines, trend_png
 
 __all__ = ["write_history_report"]

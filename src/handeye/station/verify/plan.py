@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...base.errors import HandEyeError
-from ...calibration.session import Session, create_session
-from ...geometry.transforms import transform_from_pose
+from ...base import HandEyeError
+from ...calibration import Session, create_session
+from ...geometry import transform_from_pose
 from ..cell.plan import cell_check
 from ..config.station import StationConfig
 

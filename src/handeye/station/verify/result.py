@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...calibration.drift_causes import likelihood_ratio, same_effect
+from ...calibration import likelihood_ratio, same_effect
 from .check import DRIFT, INCONCLUSIVE
 from .tolerance import explained
 
@@ -93,7 +93,7 @@ def update_json(update, thresholds) -> dict | None:
     """The quick update's entry: the new camera pose, its one-sigma values, and whether they pass."""
     if update is None:
         return None
-    from ...geometry.transforms import pose_from_transform
+    from ...geometry import pose_from_transform
 
     passed = bool(np.max(update.sigma_translation_mm) <= thresholds.max_sigma_translation_mm
                   and np.max(update.sigma_rotation_deg) <= thresholds.max_sigma_rotation_deg)

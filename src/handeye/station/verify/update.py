@@ -12,11 +12,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ...base.errors import OutputError
-from ...base.files import read_text_file
-from ...calibration.problem import EYE_IN_HAND
-from ...calibration.solve import CalibrationResult
-from ...geometry.transforms import transform_from_pose
+from ...base import OutputError
+from ...base import read_text_file
+from ...calibration import EYE_IN_HAND
+from ...calibration import CalibrationResult
+from ...geometry import transform_from_pose
 from .plan import VerifyError
 
 __all__ = ["UPDATE_METHOD", "record_update_written", "verify_check"]

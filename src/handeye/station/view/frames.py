@@ -25,8 +25,8 @@ _JPEG_QUALITY = 70
 def detected_corners(image: np.ndarray, board) -> np.ndarray | None:
     """The board's inner corners ``(m, 2)`` in ``image`` (full-size px, canonical order) as the capture's
     detector finds them with its fast search; None when it finds none there."""
-    from ...drivers.camera.checkerboard import detect_board
-    from ...drivers.camera.errors import BoardNotFound, FrameError
+    from ...drivers import detect_board
+    from ...drivers import BoardNotFound, FrameError
 
     try:
         return detect_board(image, board, search="fast").corners_px

@@ -17,11 +17,11 @@ import time
 
 import numpy as np
 
-from ...base.errors import HandEyeError
-from ...robot.kinematics import load_robot
-from ...calibration.problem import MIN_POSTURES
-from ...calibration.quality_words import AXIS_SPREAD_NAME, board_distances_mm, distance_spread_mm, hand_axis_coverage, image_cells
-from ...calibration.session import Posture, Session
+from ...base import HandEyeError
+from ...robot import load_robot
+from ...calibration import MIN_POSTURES
+from ...calibration import AXIS_SPREAD_NAME, board_distances_mm, distance_spread_mm, hand_axis_coverage, image_cells
+from ...calibration import Posture, Session
 from ..capture.loop import stereo_views
 from ..capture.events import CAPTURED, SKIPPED, CaptureEnded, CaptureStarted, Prompt, Verdict
 from ..guided.capture import postures_needed, what_is_missing
@@ -53,8 +53,8 @@ class Predictor:
 
     def update(self, postures: list) -> None:
         """Solve again with ``postures`` (``calibration.session.Posture``, flange pose and corners)."""
-        from ...calibration.metrics import fixed_points
-        from ...calibration.solve import calibrate, problem_from_session
+        from ...calibration import fixed_points
+        from ...calibration import calibrate, problem_from_session
 
         if len(postures) < MIN_POSTURES:
             self.cam2tool0, self.reason = None, f"a calibration needs {MIN_POSTURES} postures ({len(postures)} so far)"
