@@ -68,7 +68,7 @@ def test_every_back_end_raises_the_shared_kind_with_its_name(protocol):
 
 
 def _exception_classes():
-    for room in ("calibration", "drivers", "rapid", "mocks", "station"):
+    for room in ("base", "geometry", "robot", "calibration", "drivers", "rapid", "mocks", "station"):
         for path in sorted((REPO / "src" / "handeye" / room).rglob("*.py")):
             if path.name in ("__init__.py", "__main__.py"):
                 continue

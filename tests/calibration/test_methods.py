@@ -27,7 +27,7 @@ from helpers import problem as make_problem
 
 CONVENTIONS = ("mc", "mcr", "mct", "mcb", "mco", "tsai", "park", "horaud", "andreff", "daniilidis", "chou", "lu",
                "liang")
-ROOMS = ("calibration", "drivers", "station", "rapid", "mocks")
+ROOMS = ("base", "geometry", "robot", "calibration", "drivers", "station", "rapid", "mocks")
 
 
 @pytest.fixture

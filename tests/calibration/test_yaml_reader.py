@@ -105,7 +105,7 @@ def test_a_json_log_with_a_duplicated_key_is_refused_with_both_lines():
 
 def test_the_shipped_yaml_files_have_no_duplicated_keys():
     repo = Path(__file__).resolve().parents[2]
-    files = [p for room in ("calibration", "drivers", "station", "rapid", "mocks") for p in (repo / "src" / "handeye" / room).rglob("*.yaml")]
+    files = [p for room in ("base", "geometry", "robot", "calibration", "drivers", "station", "rapid", "mocks") for p in (repo / "src" / "handeye" / room).rglob("*.yaml")]
     assert len(files) >= 5
     for path in files:
         parse_yaml(path.read_text(encoding="utf-8"), path)

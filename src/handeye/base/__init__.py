@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 from .lazy import lazy_exports
 
 _EXPORTS = {
+    "alias_module": "deprecation",
     "CalibrationError": "errors",
     "ConfigError": "errors",
     "HandEyeError": "errors",
@@ -52,6 +53,7 @@ __all__ = list(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 
 if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
+    from .deprecation import alias_module  # noqa: F401
     from .errors import CalibrationError, ConfigError, HandEyeError, OutputError, SessionError, SessionUsageError, UsageError, brief, exception_line, with_backend  # noqa: F401
     from .files import HEAD_BYTES, binary_offset, check_regular_file, make_folder, parse_yaml, read_file_bytes, read_text_file, remove_stale_temporaries, write_bytes_atomic, write_failure, write_text_atomic, write_texts_atomic  # noqa: F401
     from .lazy import lazy_exports  # noqa: F401

@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING
 from ..base import lazy_exports
 
 _EXPORTS = {
+    "Setting": "registry",
+    "SocketController": "controller.socket_client",
     "CONTROLLERS": "controller.backends",
     "ControllerBackend": "controller.backends",
     "CAMERAS": "camera.backends",
@@ -81,6 +83,8 @@ __all__ = list(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 
 if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
+    from .registry import Setting  # noqa: F401
+    from .controller.socket_client import SocketController  # noqa: F401
     from .camera.backends import CAMERAS, CameraBackend, camera_settings  # noqa: F401
     from .camera.checkerboard import as_board, board_pose_from_corners, detect_board  # noqa: F401
     from .camera.coverage import Coverage, coverage_map, tilt_class  # noqa: F401

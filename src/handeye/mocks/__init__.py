@@ -20,6 +20,7 @@ from ..base import lazy_exports
 from . import backends as _backends  # noqa: F401  (registers the mocks)
 
 _EXPORTS = {
+    "SocketControllerServer": "controller.line_server",
     "mock_protocols": "backends",
     "mock_server": "backends",
     "start_mock_controller": "controller",
@@ -42,6 +43,7 @@ __all__ = list(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 
 if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
+    from .controller.line_server import SocketControllerServer  # noqa: F401
     from .backends import mock_protocol_choices, mock_protocols, mock_server, mock_settings  # noqa: F401
     from .camera import MockCamera, RenderOptions  # noqa: F401
     from .cell import cell_info  # noqa: F401
