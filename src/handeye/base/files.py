@@ -91,7 +91,7 @@ def _read_failure(exc: OSError, what: str, path, error, missing: str | None) -> 
     return error(f"cannot read {_describe(what, path)}: {(exc.strerror or str(exc)).lower()}")
 
 
-def check_regular_file(path, what: str = "file", error=SessionError, *, missing: str | None = None,
+def check_regular_file(path, what: str = "file", error: type[Exception] = SessionError, *, missing: str | None = None,
                        max_bytes: int | None = MAX_FILE_BYTES) -> os.stat_result:
     """Refuse anything but an existing regular file of at most ``max_bytes`` (``None``: no limit).
 
@@ -137,7 +137,7 @@ def _check_stat(info: os.stat_result, what: str, path, error, max_bytes: int | N
                     f"refused: is it the right file?")
 
 
-def read_file_bytes(path, what: str = "file", error=SessionError, *, missing: str | None = None,
+def read_file_bytes(path, what: str = "file", error: type[Exception] = SessionError, *, missing: str | None = None,
                     max_bytes: int | None = MAX_FILE_BYTES, head: int | None = None) -> bytes:
     """The bytes of a regular file (all of them, or the first ``head``), or a one-line ``error``.
 
@@ -191,7 +191,7 @@ def _text_problem(data: bytes, complete: bool) -> str | None:
     return None
 
 
-def read_text_file(path, what: str = "file", error=SessionError, *, missing: str | None = None,
+def read_text_file(path, what: str = "file", error: type[Exception] = SessionError, *, missing: str | None = None,
                    max_bytes: int | None = MAX_FILE_BYTES) -> str:
     """The UTF-8 text of a regular file (a leading byte-order mark dropped), or a one-line ``error``.
 

@@ -27,7 +27,7 @@ import logging
 import threading
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import replace
-from typing import Generic, TypeVar
+from typing import Any, Generic, TypeVar, cast
 
 __all__ = ["Choices", "Registry", "load_target", "quiet_loads", "unusable_clause"]
 
@@ -98,8 +98,8 @@ class Registry(Mapping, Generic[E]):
         """Add ``entry`` (or replace the one of the same name); returns it."""
         if not isinstance(entry, self.entry_type):
             raise TypeError(f"a {self.kind} is registered as a {self.entry_type.__name__}; got {type(entry).__name__}")
-        entry = replace(entry, name=entry.name.lower())
-        self._registered[entry.name] = entry
+        entry = replace(cast(Any, entry), name=cast(Any, entry).name.lower())
+        self._registered[cast(Any, entry).name] = entry
         return entry
 
     def unregister(self, name: str) -> None:
@@ -108,7 +108,7 @@ class Registry(Mapping, Generic[E]):
 
     def update(self, name: str, **changes) -> E:
         """Change some fields of a registered entry (``mock=...`` from the mocks); returns it."""
-        return self.register(replace(self[name], **changes))
+        return self.register(replace(cast(Any, self[name]), **changes))
 
     def refresh(self) -> None:
         """Forget the entry points read so far: the next question reads them again (new installs)."""
@@ -161,7 +161,7 @@ class Registry(Mapping, Generic[E]):
             else:
                 try:
                     entry = self._describe(name, call_within(point.load, f"load-{self.group}-{name}"))
-                    self._loaded[name] = entry if entry.name == name else replace(entry, name=name)
+                    self._loaded[name] = entry if cast(Any, entry).name == name else replace(cast(Any, entry), name=name)
                 except OutOfTime as exc:
                     _HANGING[module] = exc.thread
                     self._unusable[name] = f"did not load within {exc.seconds:g} s"
@@ -219,7 +219,7 @@ class Registry(Mapping, Generic[E]):
     def _describe(self, name: str, obj) -> E:
         """The entry an entry point's object stands for (here: the object itself, of ``entry_type``)."""
         if isinstance(obj, self.entry_type):
-            return replace(obj, name=obj.name.lower())
+            return replace(cast(Any, obj), name=cast(Any, obj).name.lower())
         raise TypeError(f"an entry point of {self.group} must name a {self.entry_type.__name__}; got {type(obj).__name__}")
 
     # ------------------------------------------------------------------ asking

@@ -26,7 +26,7 @@ __all__ = ["parse_yaml", "DuplicateKeyError", "AliasBombError", "ALIAS_EXPANSION
 
 #: PyYAML's safe loader on libyaml when it is built in: many times faster, linear in the nesting depth
 #: and limited to 1000 levels (the pure-Python scanner is quadratic in the depth of ``[[[[...``).
-_BASE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+_BASE_LOADER: type[yaml.SafeLoader] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 #: Floats YAML 1.1 misses: an exponent without a dot (``1e30``) or without a sign (``2.5e3``).
 _EXPONENT_FLOAT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$")
@@ -115,7 +115,7 @@ def _refuse_duplicate_keys(loader, node) -> None:
             continue
 
 
-def parse_yaml(text: str, source, error=SessionError, hint: str = ""):
+def parse_yaml(text: str, source, error: type[Exception] = SessionError, hint: str = ""):
     """The YAML document in ``text``; text that cannot be loaded raises ``error`` naming ``source``.
 
     Parameters

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 from scipy.cluster.vq import kmeans2
@@ -132,7 +133,7 @@ def fit_capsules(points, count: int, line=None, seed: int = 0, rounds: int = 6, 
     bounds = None if slack_mm is None else (points.min(axis=0) - slack_mm, points.max(axis=0) + slack_mm)
     if count <= 1:
         return [(fit_capsule(points, line, bounds), np.arange(len(points)))]
-    _, labels = kmeans2(points, count, seed=seed, minit="++")
+    _, labels = kmeans2(points, count, seed=seed, minit="++")  # pyright: ignore[reportCallIssue]  (scipy: seed)
     best, best_volume = None, np.inf
     for _ in range(rounds + 1):
         groups = [np.flatnonzero(labels == c) for c in range(count) if np.any(labels == c)]
@@ -145,7 +146,7 @@ def fit_capsules(points, count: int, line=None, seed: int = 0, rounds: int = 6, 
         if np.array_equal(new, labels):
             break
         labels = new
-    return best
+    return cast(list, best)  # (never None: the first round always fits)
 
 
 def grown(capsule: Capsule, points, margin_mm: float) -> Capsule:

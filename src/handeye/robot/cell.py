@@ -20,6 +20,7 @@ Frames as in conventions.md: ``base``, ``tool0``, ``target``; lengths in mm.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -248,7 +249,7 @@ def board_stand(board2base, board: BoardGeometry, margin_mm: float, depth_mm: fl
     """
     frame = np.asarray(board2base, float)
     cols, rows = board.corners
-    s = board.square_mm
+    s = cast(float, board.square_mm)  # a stand is built for a board of known squares
     low = (-s - margin_mm, -s - margin_mm, -margin_mm)
     high = (cols * s + margin_mm, rows * s + margin_mm, depth_mm)
     plate = Box(name, low, high, tuple(tuple(float(v) for v in row) for row in frame))

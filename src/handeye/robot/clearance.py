@@ -381,7 +381,7 @@ class CellGuard:
             evaluated = self._evaluate(starts[rows] + at[:, None] * (ends[rows] - starts[rows]))
             cell, own = evaluated[0], evaluated[3]
             for r in np.flatnonzero(np.minimum(cell, own) < self.margin_mm):
-                out[rows[r]] = self._closest(evaluated, r, at[r])
+                out[rows[r]] = self._closest(evaluated, int(r), at[r])
                 active[rows[r]] = False
             done = active[rows] & (at >= 1.0)
             active[rows[done]] = False

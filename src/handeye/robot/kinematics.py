@@ -469,7 +469,7 @@ def inverse_kinematics(
         return ((moved[1:] - moved[0]) / step[:, None]).T
 
     seed = np.clip(np.asarray(seed_deg, dtype=float), low + 1e-9, high - 1e-9)
-    fit = least_squares(residuals, seed, jac=jacobian, bounds=(low, high), x_scale=1.0, xtol=1e-12, ftol=1e-12,
+    fit = least_squares(residuals, seed, jac=jacobian, bounds=(low, high), x_scale=1.0, xtol=1e-12, ftol=1e-12,  # pyright: ignore[reportArgumentType]
                         gtol=1e-12, max_nfev=100)
     r = residuals(fit.x)
     pos_err = float(np.linalg.norm(r[:3]))
