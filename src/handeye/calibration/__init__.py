@@ -1,4 +1,4 @@
-"""The numeric core: sessions on disk, the calibration methods, kinematics, rotations and metrics.
+"""The hand-eye numbers: sessions on disk, the calibration methods, their checks and metrics.
 
 It runs on numpy and scipy alone. The names below load on first use (importing the package is cheap)::
 

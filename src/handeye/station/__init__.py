@@ -1,8 +1,8 @@
 """The station: its configuration, opening its hardware (real or the embedded mock), guided
 capture, write-back of the calibrated tooldata, the demo, and the ``handeye`` command.
 
-Every command of ``handeye`` is a library call here (``station.capture.capture``,
-``station.writeback.writeback`` ...; the modules keep their own names). Names load on first use
+Every command of ``handeye`` is a library call here (``station.capture.loop.capture``,
+``station.writeback.writeback`` ...; grouped by flow: ``config``, ``capture``, ``guided``, ``cell``, ``report``, ``verify``). Names load on first use
 (``handeye --help`` stays fast)::
 
     from handeye.station import load_config, open_station
