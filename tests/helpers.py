@@ -106,7 +106,7 @@ def flipped_board(prob, k: int):
 
 
 def assessed(problem, result, session_path="s", origin=None, **options):
-    """``station.assessment.assess`` of a result solved in the test (no session folder needed; the
+    """``station.report.assessment.assess`` of a result solved in the test (no session folder needed; the
     origin is read from ``session_path`` when not given)."""
     from handeye.station.report.assessment import assess
     from handeye.station.calibrate import CalibrationOutcome

@@ -20,7 +20,7 @@ OLD = {"handeye.calibration.registry": "handeye.base.registry", "handeye.calibra
 def _aliases():
     for path in sorted(PACKAGE.rglob("*.py")):
         text = path.read_text()
-        if "handeye-rooms-shim" in text:
+        if "handeye-rooms-shim" in text and "alias_module(__name__, " in text:
             new = text.split('alias_module(__name__, "')[1].split('"')[0]
             yield ".".join(("handeye", *path.relative_to(PACKAGE).with_suffix("").parts)), new
 

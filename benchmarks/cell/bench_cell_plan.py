@@ -1,6 +1,6 @@
 """Planning time with the cell checks: 30 postures around the mock station's board, per cell.
 
-Each run plans from the embedded mock station's start view (``station.planning.plan_postures``, the
+Each run plans from the embedded mock station's start view (``station.capture.planning.plan_postures``, the
 capture's own planner): drawing the postures, the cell's veto, the shortest-motion order repaired
 so every move is clear, and the plan's score (five simulated calibrations). Cells: none (the
 planner before the cell checks), the built-in station's (the floor and the board's stand), the

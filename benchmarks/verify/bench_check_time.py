@@ -1,7 +1,7 @@
 """A check's robot time against the full capture's, over many seeds, without running the checks.
 
 Per seed: a 30-posture baseline captured and solved on the embedded mock station (as
-``bench_verify.py``), then only the posture choice of ``handeye verify`` (``station.verify._chosen``,
+``bench_verify.py``), then only the posture choice of ``handeye verify`` (``station.verify.check._chosen``,
 K = 5) from where the mock arm stands at power-up; the ratio is the chosen path's time (from there
 through the postures in their visiting order, synchronised moves) over the capture's
 (``verify_plan.capture_time``), which is what the mock arm records for both. One process.

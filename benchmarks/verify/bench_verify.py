@@ -1,10 +1,10 @@
 """``handeye verify`` on the embedded mock station: false alarms, detection, diagnosis, quick update.
 
 Per trial (a fresh seed: new arm errors, sensor noise and plan), one baseline is captured (30
-postures, ``station.capture``), calibrated and written back to the mock controller (its PERS tool
+postures, ``station.capture.loop``), calibrated and written back to the mock controller (its PERS tool
 data kept in the state file beside the session, as the CLI does); then every case disturbs the
 station through ``mock.faults`` (or, for ``tooldata``, the controller's tool data) and runs
-``station.verify.verify`` with K = 5 over the mock's socket link:
+``station.verify.check.verify`` with K = 5 over the mock's socket link:
 
 - ``none``: nothing changed (drift is a false alarm);
 - ``camera_shift`` 0.5 mm (random direction), ``camera_turn`` 0.05 deg (random axis);

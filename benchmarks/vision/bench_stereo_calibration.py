@@ -11,7 +11,7 @@ R = 1.3 deg, T = (-240.5, 1.2, -0.8) mm), a 9x6-corner board with 30 mm squares 
 tilted up to 45 deg, up to 300 px off centre, made hard the way real images are
 (``mocks.camera.hard_options``: blur, uneven light, glare or shadow, noise, JPEG). Then:
 
-- **ours**: ``station.stereo_calibration.run_stereo_calibration`` on the folder, exactly what
+- **ours**: ``station.stereo_from_pairs.run_stereo_calibration`` on the folder, exactly what
   ``handeye stereo calibrate --images DIR --board 9x6 --square-mm 30 -o s.yaml`` does (files written);
 - **plain OpenCV**: ``findChessboardCorners`` (default flags) + ``cornerSubPix`` (11x11), the grid put
   in the canonical order by the printed pattern (OpenCV leaves the start corner open), then

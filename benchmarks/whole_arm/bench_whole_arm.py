@@ -4,7 +4,7 @@ The cell: the floor, a cabinet beside the robot's base where the upper arm swing
 axis 1), a post the upper arm passes, and the board's stand (from the board's pose). Every link of the arm
 (base, links 1-3 and the wrist) and what the flange carries are checked against every
 volume, and the robot file's self-collision pairs (the camera against link 3, ...), by the
-capture's own planner (``station.planning.plan_postures``): drawing, veto, the moves' conservative
+capture's own planner (``station.capture.planning.plan_postures``): drawing, veto, the moves' conservative
 advancement, the order repaired, the score (five simulated calibrations). The figure is the median
 wall-clock time (``time.perf_counter``) of ``--runs`` plans (seeds 0, 1, ...).
 

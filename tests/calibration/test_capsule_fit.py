@@ -1,4 +1,4 @@
-"""The capsule fit (``calibration.capsule_fit``) and the mesh reader (``calibration.arm_meshes``) of issue 41."""
+"""The capsule fit (``robot.capsule_fit``) and the mesh reader (``robot.arm_meshes``) of issue 41."""
 
 import numpy as np
 import pytest

@@ -6,6 +6,8 @@ name), so ``from handeye.calibration.registry import Registry`` and a monkeypatc
 reach the very objects of :mod:`handeye.base.registry`.
 """
 
+# handeye-rooms-shim: the codemod leaves this file (its docstring names an old path on purpose)
+
 from __future__ import annotations
 
 import importlib

@@ -13,7 +13,7 @@ path takes any link or what the flange carries into one of its volumes, or into 
 (the robot file's self-collision pairs), is refused before the arm moves (:class:`ZoneViolation`), as
 a real cell's world zones, or a real arm's crash, would stop it. Without a cell the arm still
 refuses self-collision (:func:`self_guard`, the default). The
-flange pose comes from the kinematics model (``calibration.kinematics``: the parallel-arm coupling
+flange pose comes from the kinematics model (``robot.kinematics``: the parallel-arm coupling
 of axes 2 and 3 included). ``time_scale`` shrinks wall-clock motion time for tests (0.01 = 100x).
 
 Thread-safe: the controller servers move the robot from their threads while a test or the station

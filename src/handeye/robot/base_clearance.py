@@ -53,7 +53,7 @@ def base_clearances(robot: RobotModel, volumes) -> list:
     ----------
     robot : RobotModel
     volumes : sequence
-        Keep-out volumes in base (``calibration.cell``).
+        Keep-out volumes in base (``robot.cell``).
 
     Returns
     -------

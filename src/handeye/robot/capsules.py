@@ -1,7 +1,7 @@
 """Distances between capsules: the closest points of two segments, and of a point and a segment, vectorised.
 
 A capsule is a segment with a radius; two capsules are apart by the distance of their segments minus
-both radii (negative: they overlap). Used by the self-collision check (``calibration.clearance``).
+both radii (negative: they overlap). Used by the self-collision check (``robot.clearance``).
 """
 
 from __future__ import annotations

@@ -5,16 +5,16 @@ What moves is covered by spheres, never smaller than the body (the check errs on
 - each capsule of the robot model: the wrist's (:attr:`RobotModel.bodies`: links 4-6 of the IRB 1400)
   and the rest of the arm's (:attr:`RobotModel.link_bodies`: the base, links 1-3): spheres along its
   axis spaced ``s = r``, each of radius ``sqrt(r^2 + (s/2)^2)`` (1.12 r). The base never moves: it is
-  left out of the keep-out check at every posture (``calibration.base_clearance`` checks it once, when the
+  left out of the keep-out check at every posture (``robot.base_clearance`` checks it once, when the
   cell is loaded) and kept in the self-collision check;
 - each box the flange carries (tool0): a grid of cells at most :data:`CELL_MM` wide, one sphere per
   cell of radius half the cell's diagonal (at most 0.87 x :data:`CELL_MM` beyond a face);
 - each carried sphere: itself.
 
 The clearance of a configuration is the least ``signed distance of a sphere's centre - its radius``
-over the spheres and the keep-out volumes (``calibration.cell``), and the least distance between the
+over the spheres and the keep-out volumes (``robot.cell``), and the least distance between the
 pairs of bodies the robot file lists (:attr:`RobotModel.self_pairs`; ``carried`` = every body the
-flange carries): capsule against capsule by their segments' distance (``calibration.capsules``) minus
+flange carries): capsule against capsule by their segments' distance (``robot.capsules``) minus
 both radii, a carried sphere against a capsule by its centre's distance from the segment minus both
 radii. Both must be at least ``margin_mm``.
 
@@ -176,7 +176,7 @@ class CellGuard:
         Its capsules (:func:`arm_capsules`: the wrist and the rest of the arm) are watched, and its
         self-collision pairs (:attr:`RobotModel.self_pairs`).
     volumes : sequence
-        Keep-out volumes in base (``calibration.cell``: Box, Cylinder, Floor).
+        Keep-out volumes in base (``robot.cell``: Box, Cylinder, Floor).
     carried : sequence
         Boxes and spheres the flange carries, in tool0.
     margin_mm : float

@@ -77,7 +77,7 @@ def dh_transforms(dh_table, theta_rad) -> np.ndarray:
 
 @dataclass(frozen=True)
 class LinkBody:
-    """A capsule around part of the arm, for the cell checks (``calibration.clearance``).
+    """A capsule around part of the arm, for the cell checks (``robot.clearance``).
 
     Attributes
     ----------

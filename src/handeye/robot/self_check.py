@@ -3,7 +3,7 @@
 The robot file lists the pairs by name (``self_collision.pairs``, :attr:`RobotModel.self_pairs`); the
 word ``carried`` stands for every body the flange carries (the camera, its bracket, a cable loop).
 
-- two capsules are apart by the distance of their axes (``calibration.capsules``) minus both radii;
+- two capsules are apart by the distance of their axes (``robot.capsules``) minus both radii;
 - a carried sphere and a capsule by the distance of its centre from the capsule's axis minus both radii;
 - a carried box and a capsule: the capsule's axis is taken into tool0 and sampled at most
   :data:`AXIS_STEP_MM` apart; the box's signed distance (1-Lipschitz) at the samples, minus the radius

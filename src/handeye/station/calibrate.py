@@ -1,6 +1,6 @@
 """Calibrate a session folder (the library side of ``handeye calibrate``): read, validate, solve.
 
-What comes after the solve (verdict, method comparison, figures) is ``station.assessment``; how it is
+What comes after the solve (verdict, method comparison, figures) is ``station.report.assessment``; how it is
 shown is the presenters' (``report_text``, ``report_json``, ``report``).
 """
 
@@ -24,7 +24,7 @@ class CalibrationOutcome:
 
     ``origin`` is where the data were captured: ``mock``, ``real``, ``simulated`` or ``unknown``
     (``station.origin.session_origin``); the text summary, the report and the JSON key ``station`` show
-    it. ``None`` means "not looked up": ``station.assessment.assess`` reads it from the folder
+    it. ``None`` means "not looked up": ``station.report.assessment.assess`` reads it from the folder
     ``session_path``.
     """
 

@@ -8,7 +8,7 @@ so that nobody takes it for a calibration of the robot in front of them.
   ``capture: {station: mock}``. Sessions captured before that key existed are
   recognised by their recorded station configuration (``capture.config.camera.backend: mock``).
 - ``real``: ``capture: {station: real}``, written by a capture on the real controller and camera
-  (``station.station_kind``), and no mock part in the station configuration it recorded (a record
+  (``station.config.station_kind``), and no mock part in the station configuration it recorded (a record
   that says ``real`` beside a mock camera or ``camera.mock_arm`` is ``mock``).
 - ``simulated``: ``session.yaml`` says ``origin: simulated``, or ``truth.yaml`` lies beside it
   (``handeye simulate``), and the capture record does not say otherwise.

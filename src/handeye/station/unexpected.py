@@ -80,7 +80,7 @@ def _short(filename: str) -> str:
 
 def _save_traceback(exc: BaseException, command: str) -> str | None:
     """Writes the whole traceback to a file in the temporary folder (as every file is written:
-    ``calibration.files.write_text_atomic``); its path, or None when it cannot be written."""
+    ``base.files.write_text_atomic``); its path, or None when it cannot be written."""
     text = f"handeye {command}\n" + "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
     path = Path(tempfile.gettempdir()) / f"handeye-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}.traceback.txt"
     try:

@@ -1,7 +1,7 @@
 """What a capture loop tells an observer (the live view, ``station.view``), one small event per step.
 
-The planned capture (``station.capture.capture``) and the guided capture
-(``station.guided.guided_capture``) take an optional ``observer``: a callable that receives these
+The planned capture (``station.capture.loop.capture``) and the guided capture
+(``station.guided.capture.guided_capture``) take an optional ``observer``: a callable that receives these
 events from the capture thread, in order. An observer must return at once (keep a reference, signal
 a thread of its own): the capture does not wait for it. The arrays an event carries are not changed
 by the capture afterwards.

@@ -26,7 +26,7 @@ rebuilt is named in one line.
   posture, plans and scores the postures and creates the session with its capture record
   (``capture.station: mock|real``); :func:`resume_session` reads that record back and refuses to
   resume a session of the other station. A new plan keeps clear of the cell (``cell`` of the
-  station config, ``station.cell_plan``), and its preview (``station.preview``) is written to
+  station config, ``station.cell.plan``), and its preview (``station.cell.preview``) is written to
   ``SESSION/preview.png`` (before ``session.yaml``; a resumed plan without it gets it drawn again,
   :func:`repair_plan`);
 - program (:func:`install_program`): the RAPID modules written once into ``SESSION/rapid``, loaded
@@ -217,7 +217,7 @@ def _write_header(session_dir: Path, session: Session) -> None:
 
 
 def _new_plan(config: StationConfig, link: StationLink, progress) -> PosturePlan:
-    """Measure the board at the start posture and plan the postures around it (``station.planning``)."""
+    """Measure the board at the start posture and plan the postures around it (``station.capture.planning``)."""
     robot = load_robot(config.robot)
     here = link.controller.read_joints()
     start = np.asarray(config.plan.start_joints_deg, float) if config.plan.start_joints_deg is not None else here
@@ -473,7 +473,7 @@ def visit_postures(config: StationConfig, session_dir: Path, run: CaptureRun, li
 
     Returns the posture numbers (the files' ``NNN``) captured in this run and ``{number: reason}`` of those
     skipped. The controller is asked for posture ``index + 1`` (its program counts from 1). ``observer``
-    receives the ``station.capture_events`` of each posture (Prompt, Measured per grab, Verdict).
+    receives the ``station.capture.events`` of each posture (Prompt, Measured per grab, Verdict).
     ``stop_when(report)``, when given, ends the loop after a posture for which it is true (a check that
     can no longer reach its minimum); a posture whose grab sees no board at all is then not grabbed again.
     """
@@ -547,7 +547,7 @@ def capture(
         (the operator's yes). Without it a real station refuses to move; the embedded mock moves
         without asking and says so.
     observer : callable, optional
-        Receives the ``station.capture_events`` from the capture thread (the live view): CaptureStarted
+        Receives the ``station.capture.events`` from the capture thread (the live view): CaptureStarted
         once the session is open, then per posture Prompt, Measured (each grab) and Verdict.
 
     Raises

@@ -4,12 +4,12 @@ From a start posture where the camera sees the board, the planner knows roughly 
 (the start measurement carried into the base frame through the nominal camera mount). It then:
 
 1. draws view points on a cone around the board normal at a usable distance, rolled about the optical
-   axis and aimed so the board appears all over the image (``calibration.views``), turns each into
+   axis and aimed so the board appears all over the image (``robot.views``), turns each into
    a posture by inverse kinematics from the start configuration, and keeps those inside the joint
    limits with a margin from which every camera of the head sees the whole board;
 2. orders them for short motions: nearest neighbour by synchronised motion time (the slowest axis,
    from the axis speeds), then 2-opt;
-3. with a cell (``station.cell_plan``): refuses a start posture inside (or within the margin of) a
+3. with a cell (``station.cell.plan``): refuses a start posture inside (or within the margin of) a
    keep-out volume, vetoes postures closer than the margin to the cell while drawing them, and
    repairs the order so every move, sampled along the joint-interpolated path ``MoveAbsJ`` runs,
    keeps the margin: blocked moves are avoided by the order, postures at blocked moves replaced by new
@@ -289,7 +289,7 @@ def _draw(robot, cam2tool0, board2base, corners, count, rng, sampling, views, st
 
 def _draw_clear_of_cell(robot, cam2tool0, board2base, board, corners, count, rng, sampling, views, start, max_attempts,
                         cell: CellCheck, thresholds: QualityThresholds) -> tuple[np.ndarray, Rejections]:
-    """Postures and their order clear of the cell (``station.cell_plan``), at least the verdict's
+    """Postures and their order clear of the cell (``station.cell.plan``), at least the verdict's
     ``min_inlier_postures`` of them, and why the others were rejected."""
     guard = cell.guard(robot, board2base, board)
     problem = (board_problem(cell.model, board2base, board, sampling.distance_mm, sampling.cone_deg)

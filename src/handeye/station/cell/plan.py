@@ -1,6 +1,6 @@
 """Plans that keep clear of the cell: the check of a station, postures vetoed, the visiting order repaired.
 
-The planner (``station.planning``) asks three things of this module:
+The planner (``station.capture.planning``) asks three things of this module:
 
 - :class:`CellCheck`: how plans are checked (the cell's geometry, the margin, the path sampling, the
   TCP of the world zones) and the :class:`~handeye.robot.clearance.CellGuard` for a board pose;
@@ -75,7 +75,7 @@ def cell_check(config) -> CellCheck:
 
 @dataclass
 class Rejections:
-    """Why postures and moves were rejected: ``reason -> count`` (``calibration.clearance.Violation.reason``)."""
+    """Why postures and moves were rejected: ``reason -> count`` (``robot.clearance.Violation.reason``)."""
 
     postures: Counter = field(default_factory=Counter)
     moves: Counter = field(default_factory=Counter)
@@ -98,7 +98,7 @@ class Rejections:
 
 
 class PostureVeto:
-    """The sampler's vetoes (``calibration.views.sample_eye_in_hand_postures``): a posture closer than the
+    """The sampler's vetoes (``robot.views.sample_eye_in_hand_postures``): a posture closer than the
     margin to the cell is refused and its reason counted; :meth:`pose` tests what the flange carries on
     the flange pose alone, before the inverse kinematics, :meth:`__call__` the whole posture."""
 
@@ -171,7 +171,7 @@ def board_problem(model: CellModel, board2base, board: BoardGeometry, distance_m
 
 def base_problem(robot: RobotModel, volumes, margin_mm: float, keep_out=None) -> str | None:
     """Why the cell cannot be planned in because a keep-out volume comes within the margin of the robot's
-    base, which never moves (``calibration.base_clearance``; volumes wholly at or below the mounting plane,
+    base, which never moves (``robot.base_clearance``; volumes wholly at or below the mounting plane,
     base z 0, carry the robot and are left out), or None. The nearest such volume is named.
 
     Parameters

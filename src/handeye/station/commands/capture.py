@@ -148,7 +148,7 @@ def _confirmation(args):
 
 class _Say:
     """Prints a message a line, each after the station's tag (``MOCK `` on a mock station:
-    ``station.station_kind``), from any thread (the mock's simulated operator speaks from its own)."""
+    ``station.config.station_kind``), from any thread (the mock's simulated operator speaks from its own)."""
 
     def __init__(self, config):
         import threading

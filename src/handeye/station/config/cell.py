@@ -6,7 +6,7 @@ measured board pose), the margin and path sampling of the checks, and whether th
 guards the volumes with ABB world zones. ``guided`` sets the operator-guided capture (``capture
 --guided``): when the arm counts as still, when a posture counts as new, and the targets beyond the
 verdict's thresholds. Each key is a :func:`~handeye.station.config.schema.setting` with its rule; the
-geometry itself is ``calibration.cell``.
+geometry itself is ``robot.cell``.
 """
 
 from __future__ import annotations
@@ -159,7 +159,7 @@ class CellSettings:
                                 "keep-out volumes as world zones on the camera's TCP")
 
     def model(self) -> CellModel:
-        """The cell's geometry (``calibration.cell``)."""
+        """The cell's geometry (``robot.cell``)."""
         return CellModel(self.keep_out, self.carried, self.stand_margin_mm, self.stand_depth_mm)
 
     def to_dict(self) -> dict:

@@ -15,8 +15,8 @@ included. ``src/handeye/station/config/example_station.yaml`` documents every ke
 Sections: ``robot``, ``controller`` (the link and the generated RAPID program), ``camera``,
 ``target``, ``plan`` (posture planning), ``motion``, ``tool`` (the PERS tooldata written back),
 ``capture`` (per-posture quality), ``cell`` and ``guided`` (the cell's keep-out volumes and
-carried geometry, the operator-guided capture: ``station.cell_settings``), ``quality`` (the
-verdict's thresholds, see ``station.quality``), ``verify`` (the change a check acts on), ``output``, ``mock`` (the embedded mock station) and ``postures`` (fixed approved postures for
+carried geometry, the operator-guided capture: ``station.config.cell``), ``quality`` (the
+verdict's thresholds, see ``station.report.quality``), ``verify`` (the change a check acts on), ``output``, ``mock`` (the embedded mock station) and ``postures`` (fixed approved postures for
 ``handeye rapid generate``; capture plans its own).
 """
 
@@ -416,7 +416,7 @@ class CaptureSettings:
 
 @dataclass(frozen=True)
 class VerifySettings:
-    """``verify``: the change ``handeye verify`` acts on (``station.verify_tolerance``). A drift must be
+    """``verify``: the change ``handeye verify`` acts on (``station.verify.tolerance``). A drift must be
     beyond the noise (the test at ``--level``) and larger than these; null: the station's quality
     thresholds ``max_sigma_translation_mm`` / ``max_sigma_rotation_deg`` (a change smaller than the
     uncertainty a passing calibration may have does not matter)."""
@@ -631,7 +631,7 @@ def _check_hardware_named(data: dict, config: StationConfig) -> None:
 
 def _check_cell(config: StationConfig) -> None:
     """The cell's keys that depend on each other: the path step within the margin, the keep-out volumes
-    clear of the robot's base (it never moves: ``station.cell_plan.base_problem``), and the carried
+    clear of the robot's base (it never moves: ``station.cell.plan.base_problem``), and the carried
     geometry where the camera is mounted."""
     cell = config.cell
     if cell.path_step_mm > cell.margin_mm:

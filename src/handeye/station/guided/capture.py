@@ -9,7 +9,7 @@ rests within ``cell.margin_mm`` of a keep-out volume: the PC does not move it, t
 checked against the kinematics, the board grabbed, triangulated and judged (retried), the posture
 file written atomically. After every posture it says what is still missing (:func:`what_is_missing`)
 in the quality words of ``calibration.quality_words`` and what to do next, and says when the set is
-good enough for the verdict's thresholds (``station.quality.QualityThresholds``) and the guided
+good enough for the verdict's thresholds (``station.report.quality.QualityThresholds``) and the guided
 targets; the operator may go on or stop (Ctrl-C; the session is whole at any moment).
 
 The session is the planned capture's format (``capture.mode: guided`` in its record, no plan);
@@ -18,7 +18,7 @@ numbered after them; a session of the other station (mock / real) or of the plan
 refused. The controller needs only to answer joints and pose reads: the PC never asks it to move.
 This loop watches the joints (Robot Web Services, the embedded mock); over a line or Modbus, where the
 controller does not jog beside a running program, :mod:`handeye.station.guided.pendant` runs the guided
-RAPID program instead, with the same session, words and events (``station.capture_events``).
+RAPID program instead, with the same session, words and events (``station.capture.events``).
 """
 
 from __future__ import annotations
@@ -369,7 +369,7 @@ def guided_capture(
     clock : callable
         Monotonic seconds (the still time is measured on it).
     observer : callable, optional
-        Receives the ``station.capture_events`` from the capture thread (the live view): CaptureStarted,
+        Receives the ``station.capture.events`` from the capture thread (the live view): CaptureStarted,
         a Prompt (``jog``) with the next hint after each change, Measured (each grab) and Verdict.
 
     Raises

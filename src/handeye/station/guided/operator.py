@@ -3,7 +3,7 @@
 The guided capture watches an arm the operator jogs with the pendant; the embedded mock station has
 no pendant, so on its own the guided capture would wait forever. :class:`MockOperator` plays the
 operator: it plans postures around the board as an operator who knows the cell would choose them
-(``station.planning``, clear of the cell's volumes, ``plan.postures`` of them: ``--postures``),
+(``station.capture.planning``, clear of the cell's volumes, ``plan.postures`` of them: ``--postures``),
 jogs the simulated arm to each in turn, rests there until the guided capture has taken it (or
 :data:`PATIENCE_S` more have passed), says each step on a line of its own, and when the list is done
 ends the run (``stop``), as the operator's Ctrl-C would. The guided capture itself is the same code

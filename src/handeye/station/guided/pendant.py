@@ -146,7 +146,7 @@ def pendant_guided_capture(
     config, session_dir, link, progress, on_posture, stop
         As :func:`handeye.station.guided.capture.guided_capture`.
     observer : callable, optional
-        Receives the ``station.capture_events`` (the live view): CaptureStarted, a Prompt (``jog``) with
+        Receives the ``station.capture.events`` (the live view): CaptureStarted, a Prompt (``jog``) with
         the pendant's verdict and hint, Measured (each grab) and Verdict, as in ``guided_capture``.
     wait_s : float
         How long one wait for the operator lasts before ``stop`` is looked at again, s.

@@ -448,7 +448,7 @@ def build_session(
 
 def read_text(path) -> str:
     """The UTF-8 text of ``path``, or a one-line :class:`SessionError` (missing, a folder, a named pipe,
-    unreadable, over 64 MB, not UTF-8; see ``calibration.files.read_text_file``; empty, binary, or
+    unreadable, over 64 MB, not UTF-8; see ``base.files.read_text_file``; empty, binary, or
     without a number in its first 64 KB: ``head.check_log_head``, before the file is read whole)."""
     check_log_head(path, read_head(path))
     return read_text_file(Path(path), "input file", SessionError, missing=f"{path}: no such file")

@@ -1,4 +1,4 @@
-"""The JSON of ``handeye calibrate --json``: a presenter of ``station.assessment.Assessment``.
+"""The JSON of ``handeye calibrate --json``: a presenter of ``station.report.assessment.Assessment``.
 
 The result's own keys (conventions.md, ``CalibrationResult.to_json``), plus ``station`` (where the
 data come from: ``real``, ``mock``, ``simulated`` or ``unknown``), when the assessment holds a

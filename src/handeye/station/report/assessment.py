@@ -2,7 +2,7 @@
 
 ``solve -> assess -> presenters``. :func:`assess` takes a solved session (``station.calibrate``) and
 computes, in one place, all the figures any output shows: the quality words of the result
-(``calibration.quality_words`` through ``station.quality.quality_figures``: d_org, rotation-axis
+(``calibration.quality_words`` through ``station.report.quality.quality_figures``: d_org, rotation-axis
 coverage, the units advice), the verdict against the thresholds, the method comparison (the only
 other solves), the data checks made before solving, the origin of the data and the repeatability of
 the board points. The presenters (``report_text`` for the terminal, ``report_json`` for ``--json``,
@@ -78,7 +78,7 @@ class Assessment:
     tooldata_literal : str or None
         The full RAPID tooldata literal, when the tool's load is known (station configuration).
     plan_preview : bytes or None
-        The capture plan's preview (``SESSION/preview.png``, ``station.preview``), when the session has one.
+        The capture plan's preview (``SESSION/preview.png``, ``station.cell.preview``), when the session has one.
     plan_preview_missing : str or None
         Why a planned capture's preview is not shown (its file is missing or unreadable), so the report
         says so instead of dropping the section; None when shown or when the session had no plan.
@@ -128,7 +128,7 @@ class Assessment:
 
     @property
     def units(self):
-        """The units advice (``station.units_advice.UnitsAdvice``), or ``None``."""
+        """The units advice (``station.report.units_advice.UnitsAdvice``), or ``None``."""
         return self.figures.units
 
 

@@ -13,7 +13,7 @@ the capture plan's preview of the cell when the session holds one (``SESSION/pre
 d_org is everywhere the one of ``calibration.quality_words.result_d_org``, and the header says which
 postures and points it is computed over.
 
-A presenter of ``station.assessment.Assessment``: every figure and table shows what the assessment
+A presenter of ``station.report.assessment.Assessment``: every figure and table shows what the assessment
 holds (the verdict, the quality words, the method comparison, the repeatability); nothing here solves.
 
 Modules: ``report_figures`` (the plots), ``report_html`` (CSS, escaping, embedded images),
@@ -54,7 +54,7 @@ def write_report(path_html, assessment: Assessment, title: str = "Hand-eye calib
     path_html : str or Path
         The file to write (written atomically; its folder must exist).
     assessment : Assessment
-        From ``station.assessment.assess``: the result, its verdict (the PASS/FAIL banner and the
+        From ``station.report.assessment.assess``: the result, its verdict (the PASS/FAIL banner and the
         checks, when judged), the method comparison (when compared), the data checks, the origin (mock
         and simulated sessions get a banner saying they are not a calibration of a real robot).
     title : str

@@ -346,7 +346,7 @@ class QualityFigures:
         Rotation-axis coverage of the kept postures (spread, least exercised direction, angles).
     units : UnitsAdvice or None
         What to tell the operator when the poses' lengths do not look like millimetres
-        (``station.units_advice``); ``None`` when they do.
+        (``station.report.units_advice``); ``None`` when they do.
     """
 
     d_org: DOrg
@@ -379,7 +379,7 @@ def verdict(result, problem: HandEyeProblem, thresholds: QualityThresholds | Non
     thresholds : QualityThresholds, optional
         Defaults when omitted.
     figures : QualityFigures, optional
-        The result's quality words when already computed (``station.assessment`` does); computed
+        The result's quality words when already computed (``station.report.assessment`` does); computed
         here when omitted.
 
     Returns
@@ -387,7 +387,7 @@ def verdict(result, problem: HandEyeProblem, thresholds: QualityThresholds | Non
     Verdict
         ``passed`` and one :class:`Check` per threshold, in the order of :class:`QualityThresholds`
         (the camera-offset pair eye-in-hand only). When the poses' lengths do not look like millimetres
-        (``station.units_advice``) every failed check's advice, and the verdict's ``cause``, say which
+        (``station.report.units_advice``) every failed check's advice, and the verdict's ``cause``, say which
         units to fix instead of what to re-capture.
     """
     t = thresholds or QualityThresholds()

@@ -1,5 +1,5 @@
 """The plain-text calibration summary an engineer reads at the station: a presenter of
-``station.assessment.Assessment``. It formats what the assessment holds (the pose written as a
+``station.report.assessment.Assessment``. It formats what the assessment holds (the pose written as a
 literal, quaternion and Euler angles) and never solves or judges."""
 
 from __future__ import annotations

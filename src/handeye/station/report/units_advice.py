@@ -1,6 +1,6 @@
 """What to tell the operator when a session's lengths are not in millimetres.
 
-The verdict (``station.quality``) is the second line of defence against lengths in the wrong unit:
+The verdict (``station.report.quality``) is the second line of defence against lengths in the wrong unit:
 a session refused before solving never reaches it, but one that gets through must not come back with
 advice to "re-capture postures" when the fix is the units. :func:`units_advice` reads the unit
 findings of ``calibration.diagnostics.find_unit_problems`` on a problem's poses and turns them into

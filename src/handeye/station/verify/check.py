@@ -5,13 +5,13 @@
 2. the controller's camera tooldata is read and compared with SESSION's result (a mismatch is a
    finding of its own: ``tooldata``);
 3. K of SESSION's postures are chosen for diagnostic power and a short path clear of the cell
-   (``station.verify_plan``), and revisited with the same RAPID program and links as ``capture``
-   (``station.capture``: install, confirm, visit): the measurements are a session beside SESSION;
+   (``station.verify.plan``), and revisited with the same RAPID program and links as ``capture``
+   (``station.capture.loop``: install, confirm, visit): the measurements are a session beside SESSION;
 4. the discrepancies against the fit's prediction are tested at the stated false-alarm rate
    (``calibration.verification``), and a drift explained (``calibration.drift_causes``); when the
    camera moved, the quick update gives a new X with its uncertainty, which ``handeye writeback``
    accepts like a calibration;
-5. one record goes into the history beside the sessions (``station.verify_history``).
+5. one record goes into the history beside the sessions (``station.verify.history``).
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ EXIT_CODES = {OK: 0, DRIFT: 3, INCONCLUSIVE: 4}
 
 @dataclass
 class VerifyOutcome:
-    """What a check found (``station.verify_result`` turns it into the text, the JSON and the record).
+    """What a check found (``station.verify.result`` turns it into the text, the JSON and the record).
 
     Attributes
     ----------
@@ -86,7 +86,7 @@ class VerifyOutcome:
     capture_motion_s : float or None
         The full capture's robot time by the same model (``verify_plan.capture_time``).
     tolerance : DriftTolerance or None
-        The smallest change the check acts on (``station.verify_tolerance``).
+        The smallest change the check acts on (``station.verify.tolerance``).
     size : DriftSize or None
         The detected change's size against it (None: the test found nothing).
     """
@@ -108,13 +108,13 @@ class VerifyOutcome:
 
     @property
     def beyond_tolerance(self) -> bool:
-        """The test found a change and it is larger than the tolerance (``station.verify_tolerance``)."""
+        """The test found a change and it is larger than the tolerance (``station.verify.tolerance``)."""
         return self.size is not None and self.size.beyond
 
 
 def check_request(config: StationConfig, session_dir: Path, postures: int):
     """SESSION as ``verify`` needs it, or a one-line refusal (VerifyError): a capture on this station
-    (controller, camera, robot and board: ``station.session_station``) with its plan on record, and K
+    (controller, camera, robot and board: ``station.config.session_match``) with its plan on record, and K
     at least :data:`MIN_VERIFY_POSTURES`."""
     if postures < MIN_VERIFY_POSTURES:
         raise VerifyError(f"--postures {postures} is too few: the test and its diagnosis need at least "

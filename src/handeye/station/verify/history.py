@@ -3,8 +3,8 @@
 Each ``handeye verify`` appends one JSON line (time, station, session, verdict, diagnosis, sizes);
 ``handeye writeback`` of a check's quick update appends a ``writeback`` record. The file is never
 rewritten in place: an append writes the old lines and the new one to a temporary file that replaces
-the old one atomically (``calibration.files.write_text_atomic``), so a kill leaves the old history or
-the new one, never half a line; the read-add-rename holds an exclusive lock (``station.file_lock``,
+the old one atomically (``base.files.write_text_atomic``), so a kill leaves the old history or
+the new one, never half a line; the read-add-rename holds an exclusive lock (``station.verify.file_lock``,
 ``history.jsonl.lock``), so checks and write-backs appending at once all keep their records.
 A damaged record (not JSON, a line cut short, a time that is not an ISO date-time, a size that is not
 a number) is skipped by :func:`load_history` and counted with its line number, never fatal: the
@@ -141,7 +141,7 @@ def append_record(path, record: dict) -> dict:
     """Append ``record`` (with ``time`` added when missing) as one line; returns it.
 
     The old lines are kept as they are (a damaged one too: it stays visible and counted); another
-    process appending at the same time waits for the lock (``station.file_lock``).
+    process appending at the same time waits for the lock (``station.verify.file_lock``).
     """
     path = Path(path)
     record = {"time": time.strftime("%Y-%m-%dT%H:%M:%S"), **record}

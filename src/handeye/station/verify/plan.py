@@ -2,10 +2,10 @@
 
 The postures are chosen for diagnostic power (``calibration.verify_postures``), then ordered for the
 shortest motion from where the robot stands, every move checked against the cell of the station
-config (``station.cell_plan``: the same check the capture's planner makes). The check's measurements
+config (``station.cell.plan``: the same check the capture's planner makes). The check's measurements
 are a session of their own beside SESSION (``SESSION-verify-<time>``, the capture format with a
 capture record whose ``verify_of`` names SESSION and the postures), captured with the same RAPID
-program and links as ``capture`` (``station.capture``).
+program and links as ``capture`` (``station.capture.loop``).
 """
 
 from __future__ import annotations
@@ -95,7 +95,7 @@ TIME_BUDGET = 0.15
 #: A check whose real path would exceed this fraction of the capture's robot time is chosen again
 #: with a tighter budget (:data:`TIME_BUDGET` times ``TIME_TIGHTEN`` each time, up to ``TIME_TRIES``
 #: choices); the bound is a fifth, this keeps a margin below it. When no choice fits (a session of
-#: few postures) the shortest tried is taken and the check says so (``station.verify._chosen``).
+#: few postures) the shortest tried is taken and the check says so (``station.verify.check._chosen``).
 TIME_LIMIT = 0.18
 TIME_TIGHTEN = 0.8
 TIME_TRIES = 6

@@ -1,6 +1,6 @@
 """A check's outcome as the operator reads it: the diagnosis, what to do, the JSON and the text.
 
-Presenters only: everything here formats what ``station.verify.VerifyOutcome`` holds.
+Presenters only: everything here formats what ``station.verify.check.VerifyOutcome`` holds.
 """
 
 from __future__ import annotations

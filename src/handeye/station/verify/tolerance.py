@@ -76,7 +76,7 @@ class DriftSize:
 
 def drift_tolerance(config, thresholds=None) -> DriftTolerance:
     """The station's tolerance: ``config.verify`` where set, else the quality thresholds' sigmas
-    (``thresholds``, default ``station.quality.config_thresholds(config)``)."""
+    (``thresholds``, default ``station.report.quality.config_thresholds(config)``)."""
     from ..report.quality import config_thresholds  # noqa: PLC0415
 
     settings = config.verify

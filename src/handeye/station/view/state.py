@@ -1,8 +1,8 @@
-"""What the live view shows, kept from the capture's events (``station.capture_events``).
+"""What the live view shows, kept from the capture's events (``station.capture.events``).
 
 :class:`ViewState` folds the events into the page's JSON: the posture list (each posture's quality,
 or why it was skipped), the coverage in the quality words (``calibration.quality_words``: image
-cells, rotation axes, distance spread), what is still missing and the hint (``station.guided.
+cells, rotation axes, distance spread), what is still missing and the hint (``station.guided.capture.
 what_is_missing``, the same words the guided capture prints), the progress, GOOD ENOUGH, for a planned
 capture the plan seen from above and from the side with the current posture and the time left, and,
 once the postures allow a solve, the calibration (:class:`Predictor`) that predicts where the next
