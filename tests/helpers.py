@@ -106,9 +106,9 @@ def flipped_board(prob, k: int):
 
 
 def assessed(problem, result, session_path="s", origin=None, **options):
-    """``station.assessment.assess`` of a result solved in the test (no session folder needed; the
+    """``station.report.assessment.assess`` of a result solved in the test (no session folder needed; the
     origin is read from ``session_path`` when not given)."""
-    from handeye.station.assessment import assess
+    from handeye.station.report.assessment import assess
     from handeye.station.calibrate import CalibrationOutcome
 
     return assess(CalibrationOutcome(session_path, result, problem=problem, origin=origin), **options)

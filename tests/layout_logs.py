@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration.transforms import invert_transforms
+from handeye.geometry.transforms import invert_transforms
 
 LAYOUTS = ("tag_rows", "p_and_c", "matrix_rows", "matrix_sections", "two_files", "image_rows", "extra_columns")
 ROBOT_TAGS = ("hand", "robot", "tcp", "flange", "Robot Pose", "ROBOT", "arm")

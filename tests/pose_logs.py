@@ -18,7 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from handeye.calibration.compact_points import compact_points_from_corners
 from handeye.calibration.synthetic import NoiseConfig, sample_session
-from handeye.calibration.transforms import invert_transforms
+from handeye.geometry.transforms import invert_transforms
 from helpers import scene
 
 #: The 24 Euler conventions as scipy names them: uppercase = rotating (intrinsic) axes, lowercase =

@@ -10,7 +10,7 @@ import os
 import pickle
 from pathlib import Path
 
-from handeye.calibration.files import write_bytes_atomic
+from handeye.base.files import write_bytes_atomic
 
 #: Environment variable naming the folder the workers of one test run share.
 RUN_CACHE = "HANDEYE_TEST_RUN_CACHE"

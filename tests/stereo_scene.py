@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration.compact_points import BoardGeometry, board_corners
+from handeye.geometry.board import BoardGeometry, board_corners
 from handeye.drivers.camera.board_pattern import canonical_orderings, pattern_score
 from handeye.drivers.camera.stereo import StereoModel
 from handeye.mocks.camera import StereoRenderer, hard_options

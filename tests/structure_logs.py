@@ -13,7 +13,7 @@ import json
 import numpy as np
 
 from handeye.calibration.solve import calibrate_session
-from handeye.calibration.transforms import invert_transforms
+from handeye.geometry.transforms import invert_transforms
 from layout_logs import encode
 
 #: Attribute names of a 6-number pose (position, then Euler angles) as controllers write them.

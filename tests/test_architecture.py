@@ -10,9 +10,12 @@ import pytest
 from helpers import docstring_nodes
 
 REPO = Path(__file__).resolve().parents[1]
-ROOMS = ("calibration", "drivers", "station", "rapid", "mocks")
+ROOMS = ("base", "geometry", "robot", "calibration", "drivers", "station", "rapid", "mocks")
 # Which room may import which: the import-linter contract in pyproject.toml (tests/test_import_contracts.py).
 CALIBRATION_THIRD_PARTY = {"numpy", "scipy", "yaml"}
+#: What each of the lower rooms may import beyond the standard library and handeye.
+THIRD_PARTY = {"base": {"yaml"}, "geometry": CALIBRATION_THIRD_PARTY, "robot": CALIBRATION_THIRD_PARTY,
+               "calibration": CALIBRATION_THIRD_PARTY}
 
 
 def _imports(path: Path, room: str):
@@ -34,13 +37,14 @@ def _files(room):
     return sorted((REPO / "src" / "handeye" / room).rglob("*.py"))
 
 
-def test_calibration_needs_only_numpy_scipy_yaml():
+@pytest.mark.parametrize("room", sorted(THIRD_PARTY))
+def test_the_core_needs_only_numpy_scipy_yaml(room):
     stdlib = set(sys.stdlib_module_names)
     bad = []
-    for file in _files("calibration"):
-        for name in _imports(file, "calibration"):
+    for file in _files(room):
+        for name in _imports(file, room):
             top = name.split(".")[0]
-            if top not in stdlib and top != "handeye" and top not in CALIBRATION_THIRD_PARTY:
+            if top not in stdlib and top != "handeye" and top not in THIRD_PARTY[room]:
                 bad.append(f"{file.relative_to(REPO)} imports {name}")
     assert not bad, bad
 

@@ -10,7 +10,7 @@ import ast
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-ROOMS = ("calibration", "drivers", "station", "rapid", "mocks")
+ROOMS = ("base", "geometry", "robot", "calibration", "drivers", "station", "rapid", "mocks")
 MAX_BODY_LINES = 80
 
 #: (file, function) -> why it may be longer. Numeric kernels that read best as one block go here,

@@ -32,9 +32,9 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from handeye.calibration.errors import HandEyeError
+from handeye.base.errors import HandEyeError
 from handeye.calibration.session import read_session
-from handeye.station.config import EXAMPLE_FILE, load_config
+from handeye.station.config.station import EXAMPLE_FILE, load_config
 from handeye.station.importers import (
     read_any,
     read_easy_handeye,
@@ -45,7 +45,7 @@ from handeye.station.importers import (
     read_stream,
     read_visp,
 )
-from handeye.station.quality import load_thresholds
+from handeye.station.report.quality import load_thresholds
 
 #: A reader's numpy warning (an overflow in a norm, say) would print before its one-line message: here it fails.
 pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from handeye.calibration.errors import CalibrationError
+from handeye.base.errors import CalibrationError
 from handeye.calibration.methods import METHODS, Method
 from handeye.calibration.session import read_session
 from handeye.calibration.solve import calibrate_session

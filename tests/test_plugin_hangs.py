@@ -174,8 +174,8 @@ def test_a_protocol_without_a_rapid_module_is_refused_by_rapid_generate_saying_s
 
 
 def test_a_station_whose_mock_protocol_has_no_mock_is_told_why(hanging):
-    from handeye.calibration.errors import ConfigError
-    from handeye.station.config import config_from_dict
+    from handeye.base.errors import ConfigError
+    from handeye.station.config.station import config_from_dict
 
     with pytest.raises(ConfigError, match="mock.protocol must be one of .*; got 'bare': the controller protocol 'bare' of "
                                           f"the installed package {PACKAGE} .* has no mock"):

@@ -16,7 +16,7 @@ from handeye.drivers.controller.backends import CONTROLLERS
 from helpers import docstring_nodes
 
 REPO = Path(__file__).resolve().parents[1]
-ROOMS = ("calibration", "drivers", "rapid", "mocks", "station")
+ROOMS = ("base", "geometry", "robot", "calibration", "drivers", "rapid", "mocks", "station")
 #: The package's own controller back ends (no plug-in installed here).
 BUILT_IN = CONTROLLERS.names()
 

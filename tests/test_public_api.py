@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-ROOMS = ("calibration", "drivers", "drivers.controller", "drivers.camera", "rapid", "mocks", "station")
+ROOMS = ("base", "geometry", "robot", "calibration", "drivers", "drivers.controller", "drivers.camera", "rapid", "mocks", "station")
 HEAVY = ("numpy", "scipy", "cv2", "pymodbus", "serial", "matplotlib")
 
 
@@ -38,7 +38,7 @@ def test_the_calibration_entry_points_import_from_the_room():
 
 
 def test_importing_the_rooms_and_building_the_command_line_loads_nothing_heavy():
-    code = ("import sys, handeye, handeye.calibration, handeye.drivers, handeye.drivers.controller, "
+    code = ("import sys, handeye, handeye.base, handeye.geometry, handeye.robot, handeye.calibration, handeye.drivers, handeye.drivers.controller, "
             "handeye.drivers.camera, handeye.rapid, handeye.mocks, handeye.station\n"
             "from handeye.station.cli import build_parser\n"
             "build_parser()\n"

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from handeye.station.cli import build_parser
-from handeye.station.quality import QualityThresholds
+from handeye.station.report.quality import QualityThresholds
 
 REPO = Path(__file__).resolve().parents[1]
 README = (REPO / "README.md").read_text(encoding="utf-8")

@@ -24,7 +24,7 @@ from handeye.mocks.backends import mock_protocols
 from handeye.mocks.controller import start_mock_controller
 from handeye.rapid.links import BUILT_IN_LINKS
 from handeye.station.cli import build_parser, main
-from handeye.station.config import ConfigError, config_from_dict, describe_keys
+from handeye.station.config.station import ConfigError, config_from_dict, describe_keys
 from handeye.station.runtime import _camera_options, _controller_options, open_station
 
 from helpers import plugin_installed

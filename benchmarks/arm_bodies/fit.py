@@ -2,9 +2,9 @@
 
 Reads ``link0.stl .. link6.stl`` of ``../shared/reference/irb1410-arte/`` (ARTE, LGPL-3.0; ASCII STL in
 metres, mesh ``i`` in ARTE's DH frame ``i``), places them in the package's frames with every axis at 0
-(``calibration.arm_meshes``: mesh ``i`` by frame ``i`` of ``src/handeye/calibration/robots/irb1400.yaml``'s own DH
+(``robot.arm_meshes``: mesh ``i`` by frame ``i`` of ``src/handeye/robot/robots/irb1400.yaml``'s own DH
 table, which corrects ARTE's d1 and d6 (10 mm short); the base mesh lifted so its foot is at base z 0,
-12 mm), and fits per link the capsules of :data:`PARTS` (``calibration.capsule_fit``: least total volume,
+12 mm), and fits per link the capsules of :data:`PARTS` (``robot.capsule_fit``: least total volume,
 every vertex inside, none reaching much beyond its mesh's box), each radius grown by :data:`MARGIN_MM` for the meshes' own uncertainty (about 10 mm).
 
 The tube of the upper arm (mesh 4, turned by axis 4) is fitted on axis 4, so axis 4 turns its capsule into
@@ -30,9 +30,9 @@ from pathlib import Path
 
 import numpy as np
 
-from handeye.calibration.arm_meshes import place_link_meshes, read_ascii_stl, write_vertex_table
-from handeye.calibration.capsule_fit import fit_capsules, grown
-from handeye.calibration.kinematics import ROBOTS_DIR, load_robot
+from handeye.robot.arm_meshes import place_link_meshes, read_ascii_stl, write_vertex_table
+from handeye.robot.capsule_fit import fit_capsules, grown
+from handeye.robot.kinematics import ROBOTS_DIR, load_robot
 
 REPO = Path(__file__).resolve().parents[2]
 MESHES = REPO.parent / "shared" / "reference" / "irb1410-arte"

@@ -21,11 +21,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import fit  # noqa: E402
 
-from handeye.calibration.arm_meshes import read_ascii_stl_faces  # noqa: E402
-from handeye.calibration.body_cover import link_capsules  # noqa: E402
-from handeye.calibration.capsule_fit import Capsule, facet_depths  # noqa: E402
-from handeye.calibration.clearance import arm_capsules  # noqa: E402
-from handeye.calibration.kinematics import load_robot  # noqa: E402
+from handeye.robot.arm_meshes import read_ascii_stl_faces  # noqa: E402
+from handeye.robot.body_cover import link_capsules  # noqa: E402
+from handeye.robot.capsule_fit import Capsule, facet_depths  # noqa: E402
+from handeye.robot.clearance import arm_capsules  # noqa: E402
+from handeye.robot.kinematics import load_robot  # noqa: E402
 
 
 def main(argv=None) -> int:

@@ -1,6 +1,6 @@
 """Planning time with the cell checks: 30 postures around the mock station's board, per cell.
 
-Each run plans from the embedded mock station's start view (``station.planning.plan_postures``, the
+Each run plans from the embedded mock station's start view (``station.capture.planning.plan_postures``, the
 capture's own planner): drawing the postures, the cell's veto, the shortest-motion order repaired
 so every move is clear, and the plan's score (five simulated calibrations). Cells: none (the
 planner before the cell checks), the built-in station's (the floor and the board's stand), the
@@ -22,14 +22,14 @@ import statistics
 import sys
 import time
 
-from handeye.calibration.cell import Box, CellModel, Floor
-from handeye.calibration.compact_points import BoardGeometry
-from handeye.calibration.kinematics import load_robot
-from handeye.calibration.transforms import invert_transforms
+from handeye.robot.cell import Box, CellModel, Floor
+from handeye.geometry.board import BoardGeometry
+from handeye.robot.kinematics import load_robot
+from handeye.geometry.transforms import invert_transforms
 from handeye.mocks.station import DEFAULT_BOARD, DEFAULT_MOUNT, DEFAULT_START
-from handeye.station.cell_plan import CellCheck
-from handeye.station.cell_settings import DEFAULT_CARRIED, DEFAULT_KEEP_OUT
-from handeye.station.planning import plan_postures
+from handeye.station.cell.plan import CellCheck
+from handeye.station.config.cell import DEFAULT_CARRIED, DEFAULT_KEEP_OUT
+from handeye.station.capture.planning import plan_postures
 
 TARGET_S = 10.0
 CELLS = {

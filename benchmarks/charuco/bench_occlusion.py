@@ -18,7 +18,7 @@ import tempfile
 from pathlib import Path
 
 from handeye.calibration.session import read_session
-from handeye.calibration.targets import STATION_CHARUCO
+from handeye.geometry.targets import STATION_CHARUCO
 from handeye.mocks.printed_targets import Occlusion
 from handeye.station.demo import DemoOptions, run_demo
 

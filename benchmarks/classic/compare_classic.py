@@ -25,11 +25,11 @@ import yaml
 from scipy.spatial.transform import Rotation
 
 from handeye.calibration.classic import CLASSIC_METHODS
-from handeye.calibration.errors import CalibrationError
+from handeye.base.errors import CalibrationError
 from handeye.calibration.metrics import d_org, fixed_points
 from handeye.calibration.solve import problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session
-from handeye.calibration.transforms import invert_transforms, rotation_error_deg, translation_error_mm
+from handeye.geometry.transforms import invert_transforms, rotation_error_deg, translation_error_mm
 
 DATASETS = Path(__file__).resolve().parents[2].parent / "shared" / "datasets"
 

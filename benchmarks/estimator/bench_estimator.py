@@ -68,7 +68,7 @@ def speed(cache: Path) -> None:
 
 def mock(seeds) -> None:
     from handeye.station.demo import DemoOptions, run_demo
-    from handeye.calibration.transforms import transform_from_pose
+    from handeye.geometry.transforms import transform_from_pose
 
     z_all = []
     print("| seed | error (mm) | error (deg) | one-sigma x/y/z (mm) | error/sigma x, y, z, rx, ry, rz | kinematics modelled | CV RMS (mm) |")

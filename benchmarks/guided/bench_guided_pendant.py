@@ -5,7 +5,7 @@ Must-hold).
 Per link: ``handeye mock controller --protocol P --camera-port 0 --pendant-port 0`` in its own process;
 ``capture --plan-only`` plans N postures around the board from where the arm stands (the postures an
 operator who knows the cell would jog to); ``capture --guided`` with a scripted operator
-(``src/handeye/station/pendant_operator.py``: at each prompt Capture, JOG to the next posture, Start; Done at the end);
+(``tests/pendant_operator.py``: at each prompt Capture, JOG to the next posture, Start; Done at the end);
 then the planned capture of the same plan on the same mock (``capture --yes``). Both sessions are
 calibrated; each result is compared with the camera mount the mock hides (the default mock station's,
 reproduced here: the mock never tells). Prints one line per link and appends them to results.jsonl.
@@ -30,13 +30,14 @@ import numpy as np
 import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "controller"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))  # the scripted operator (tests/pendant_operator.py)
 from mock_process import mock_controller  # noqa: E402
 
 from handeye.calibration.session import read_session  # noqa: E402
-from handeye.calibration.transforms import rotation_error_deg, transform_from_pose, translation_error_mm  # noqa: E402
+from handeye.geometry.transforms import rotation_error_deg, transform_from_pose, translation_error_mm  # noqa: E402
 from handeye.mocks.station import MockStationSpec  # noqa: E402
 from handeye.station.cli import main  # noqa: E402
-from handeye.station.pendant_operator import PendantOperator  # noqa: E402
+from pendant_operator import PendantOperator  # noqa: E402
 
 KEY = "bench-guided-key"
 

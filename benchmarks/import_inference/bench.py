@@ -32,7 +32,7 @@ from scipy.spatial.transform import Rotation
 
 from handeye.calibration.compact_points import compact_points_from_corners
 from handeye.calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session
-from handeye.calibration.transforms import invert_transforms
+from handeye.geometry.transforms import invert_transforms
 from handeye.station.import_session import ImportOptions, import_to_session
 from handeye.station.importers import read_any
 

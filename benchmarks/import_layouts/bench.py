@@ -29,7 +29,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from layout_logs import LAYOUTS, station, write_log, same_as_truth  # noqa: E402
 
-from handeye.calibration.errors import SessionError  # noqa: E402
+from handeye.base.errors import SessionError  # noqa: E402
 from handeye.station.importers import read_any  # noqa: E402
 
 

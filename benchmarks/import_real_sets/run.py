@@ -14,7 +14,7 @@ from scipy.spatial.transform import Rotation
 
 from handeye.calibration import diagnostics
 from handeye.calibration.solve import calibrate_session
-from handeye.calibration.transforms import rotation_error_deg
+from handeye.geometry.transforms import rotation_error_deg
 from handeye.station.importers import read_any
 
 SETS = {

@@ -30,16 +30,16 @@ from bench_kinematics import summary  # noqa: E402
 
 from handeye.calibration.arm_identification import identify_arm  # noqa: E402
 from handeye.calibration.arm_parameters import parameter_names  # noqa: E402
-from handeye.calibration.compact_points import board_corners  # noqa: E402
-from handeye.calibration.kinematics import load_robot  # noqa: E402
+from handeye.geometry.board import board_corners  # noqa: E402
+from handeye.robot.kinematics import load_robot  # noqa: E402
 from handeye.calibration.solve import problem_from_session  # noqa: E402
 from handeye.calibration.session import read_session  # noqa: E402
 from handeye.calibration.standoff import measured_standoff, predicted_standoff  # noqa: E402
-from handeye.calibration.views import sample_eye_in_hand_postures  # noqa: E402
+from handeye.robot.views import sample_eye_in_hand_postures  # noqa: E402
 from handeye.mocks.arm_truth import ArmDeviations, true_arm  # noqa: E402
 from handeye.mocks.station import DEFAULT_BOARD, DEFAULT_MOUNT  # noqa: E402
-from handeye.station.config import ArmSettings, default_config  # noqa: E402
-from handeye.station.capture import capture  # noqa: E402
+from handeye.station.config.station import ArmSettings, default_config  # noqa: E402
+from handeye.station.capture.loop import capture  # noqa: E402
 from handeye.station.runtime import open_station  # noqa: E402
 
 NAMES = parameter_names()

@@ -2,7 +2,7 @@
 
 On the embedded mock station, the same planned capture (same seed, ``--postures`` postures) is run
 ``--rounds`` times each way, alternating (without, with, without, with, ...), each into a new session
-folder, in this process (``station.capture.capture``, as the command runs it). With the view, a page
+folder, in this process (``station.capture.loop.capture``, as the command runs it). With the view, a page
 watches: headless Chromium (Debian's ``chromium`` + ``chromium-driver`` and selenium) when there is
 one, else a client that reads the event stream; so the JPEG encoding, the state and the server's
 writes all happen as at a station with the page open. The figure is the time of the posture loop
@@ -29,8 +29,8 @@ import urllib.request
 from dataclasses import replace
 from pathlib import Path
 
-from handeye.station.capture import capture
-from handeye.station.config import default_config
+from handeye.station.capture.loop import capture
+from handeye.station.config.station import default_config
 from handeye.station.runtime import open_station
 from handeye.station.view import live_view
 

@@ -24,10 +24,10 @@ from scipy.spatial.transform import Rotation
 
 from handeye.calibration.classic import CLASSIC_METHODS
 from handeye.calibration.crossval import cross_validate
-from handeye.calibration.errors import CalibrationError
+from handeye.base.errors import CalibrationError
 from handeye.calibration.metrics import d_org, fixed_points
 from handeye.calibration.solve import ALL_METHODS, DEFAULT_METHOD, calibrate, problem_from_session
-from handeye.calibration.transforms import invert_transforms
+from handeye.geometry.transforms import invert_transforms
 from handeye.station.importers import read_any
 from handeye.station.opencv_reference import OPENCV_METHODS, opencv_available, solve_opencv
 

@@ -46,7 +46,7 @@ from handeye.calibration.metrics import d_org, errors_against_truth, fixed_point
 from handeye.calibration.noise import retract  # noqa: E402
 from handeye.calibration.eiv import solve_eiv  # noqa: E402
 from handeye.calibration.solve import DEFAULT_METHOD, problem_from_session  # noqa: E402
-from handeye.calibration.transforms import invert_transforms  # noqa: E402
+from handeye.geometry.transforms import invert_transforms  # noqa: E402
 from handeye.station.importers import read_any  # noqa: E402
 
 

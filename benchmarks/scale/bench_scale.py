@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration.transforms import invert_transforms, transform_from_rotation_translation
+from handeye.geometry.transforms import invert_transforms, transform_from_rotation_translation
 
 #: The camera in the flange (cam2tool0) and the board in the base (target2base), mm.
 CAM2TOOL0 = transform_from_rotation_translation(Rotation.from_euler("xyz", [3.0, -2.0, 91.0], degrees=True).as_matrix(),

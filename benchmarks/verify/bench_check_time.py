@@ -1,7 +1,7 @@
 """A check's robot time against the full capture's, over many seeds, without running the checks.
 
 Per seed: a 30-posture baseline captured and solved on the embedded mock station (as
-``bench_verify.py``), then only the posture choice of ``handeye verify`` (``station.verify._chosen``,
+``bench_verify.py``), then only the posture choice of ``handeye verify`` (``station.verify.check._chosen``,
 K = 5) from where the mock arm stands at power-up; the ratio is the chosen path's time (from there
 through the postures in their visiting order, synchronised moves) over the capture's
 (``verify_plan.capture_time``), which is what the mock arm records for both. One process.
@@ -22,14 +22,14 @@ from pathlib import Path
 
 import numpy as np
 
-from handeye.calibration.kinematics import load_robot
+from handeye.robot.kinematics import load_robot
 from handeye.calibration.session import read_session
 from handeye.mocks.station import DEFAULT_START
-from handeye.station.capture import capture
-from handeye.station.config import default_config
+from handeye.station.capture.loop import capture
+from handeye.station.config.station import default_config
 from handeye.station.runtime import open_station
-from handeye.station.verify import _chosen, session_baseline
-from handeye.station.verify_plan import capture_time, path_time_along
+from handeye.station.verify.check import _chosen, session_baseline
+from handeye.station.verify.plan import capture_time, path_time_along
 
 
 def one_seed(seed: int) -> dict:

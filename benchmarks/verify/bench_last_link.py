@@ -26,9 +26,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_verify import baseline, last_link_mount  # noqa: E402
 
-from handeye.calibration.kinematics import load_robot  # noqa: E402
+from handeye.robot.kinematics import load_robot  # noqa: E402
 from handeye.mocks.station import DEFAULT_MOUNT, perturbed_robot  # noqa: E402
-from handeye.station.config import default_config  # noqa: E402
+from handeye.station.config.station import default_config  # noqa: E402
 
 
 HEADER = ("seed  d6 error   baseline vs physical mount (z, in sigmas)   "

@@ -1,10 +1,10 @@
 """``handeye verify`` on the embedded mock station: false alarms, detection, diagnosis, quick update.
 
 Per trial (a fresh seed: new arm errors, sensor noise and plan), one baseline is captured (30
-postures, ``station.capture``), calibrated and written back to the mock controller (its PERS tool
+postures, ``station.capture.loop``), calibrated and written back to the mock controller (its PERS tool
 data kept in the state file beside the session, as the CLI does); then every case disturbs the
 station through ``mock.faults`` (or, for ``tooldata``, the controller's tool data) and runs
-``station.verify.verify`` with K = 5 over the mock's socket link:
+``station.verify.check.verify`` with K = 5 over the mock's socket link:
 
 - ``none``: nothing changed (drift is a false alarm);
 - ``camera_shift`` 0.5 mm (random direction), ``camera_turn`` 0.05 deg (random axis);
@@ -37,15 +37,15 @@ from pathlib import Path
 
 import numpy as np
 
-from handeye.calibration.kinematics import load_robot
-from handeye.calibration.transforms import rotation_error_deg
+from handeye.robot.kinematics import load_robot
+from handeye.geometry.transforms import rotation_error_deg
 from handeye.mocks.station import DEFAULT_MOUNT, read_state, write_state
-from handeye.station.capture import capture
-from handeye.station.config import FaultSettings, default_config
+from handeye.station.capture.loop import capture
+from handeye.station.config.station import FaultSettings, default_config
 from handeye.station.runtime import mock_state_file, open_controller_link, open_station
-from handeye.station.verify import session_baseline, verify
-from handeye.station.verify_plan import capture_time
-from handeye.station.verify_result import diagnosis
+from handeye.station.verify.check import session_baseline, verify
+from handeye.station.verify.plan import capture_time
+from handeye.station.verify.result import diagnosis
 from handeye.station.writeback import writeback
 from handeye.calibration.session import read_session
 
@@ -104,7 +104,7 @@ def last_link_mount(config, mount: np.ndarray) -> np.ndarray:
     controller's tooldata, which the nominal last link carries) holds ``mount`` with it. The other
     rows' deviations stay where they are (the calibration models them).
     """
-    from handeye.calibration.kinematics import RobotModel, load_robot
+    from handeye.robot.kinematics import RobotModel, load_robot
     from handeye.mocks.station import perturbed_robot
 
     nominal = load_robot(config.robot)

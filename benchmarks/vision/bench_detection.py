@@ -37,7 +37,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from handeye.calibration.compact_points import board_corners
+from handeye.geometry.board import board_corners
 from handeye.drivers.camera.checkerboard import detect_board
 from handeye.drivers.camera.errors import BoardNotFound
 from handeye.drivers.camera.grid_search import DETECT_FLAGS, SB_FLAGS

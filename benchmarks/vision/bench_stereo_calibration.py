@@ -11,7 +11,7 @@ R = 1.3 deg, T = (-240.5, 1.2, -0.8) mm), a 9x6-corner board with 30 mm squares 
 tilted up to 45 deg, up to 300 px off centre, made hard the way real images are
 (``mocks.camera.hard_options``: blur, uneven light, glare or shadow, noise, JPEG). Then:
 
-- **ours**: ``station.stereo_calibration.run_stereo_calibration`` on the folder, exactly what
+- **ours**: ``station.stereo_from_pairs.run_stereo_calibration`` on the folder, exactly what
   ``handeye stereo calibrate --images DIR --board 9x6 --square-mm 30 -o s.yaml`` does (files written);
 - **plain OpenCV**: ``findChessboardCorners`` (default flags) + ``cornerSubPix`` (11x11), the grid put
   in the canonical order by the printed pattern (OpenCV leaves the start corner open), then
@@ -42,14 +42,14 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration.compact_points import BoardGeometry, board_corners
+from handeye.geometry.board import BoardGeometry, board_corners
 from handeye.drivers.camera.board_pattern import canonical_orderings, pattern_score
 from handeye.drivers.camera.checkerboard import observe_board
 from handeye.drivers.camera.stereo import StereoModel, load_stereo_model
-from handeye.drivers.camera.stereo_calibration import calibrate_stereo
+from handeye.drivers.camera.stereo_fit import calibrate_stereo
 from handeye.mocks.camera import StereoRenderer, hard_options
 from handeye.mocks.world import PrintedBoard, sample_board_views
-from handeye.station.stereo_calibration import StereoCalibrationConfig, detect_pairs, find_pairs, run_stereo_calibration
+from handeye.station.stereo_from_pairs import StereoCalibrationConfig, detect_pairs, find_pairs, run_stereo_calibration
 
 BOARD = PrintedBoard(BoardGeometry((9, 6), 30.0), 20.0)
 OBJ = board_corners(BOARD.corners, BOARD.square_mm).astype(np.float32)

@@ -35,10 +35,10 @@ import numpy as np
 import yaml
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration.compact_points import BoardGeometry, board_corners
+from handeye.geometry.board import BoardGeometry, board_corners
 from handeye.calibration.session import Posture, Session
 from handeye.calibration.solve import calibrate_session
-from handeye.calibration.transforms import pose_from_transform
+from handeye.geometry.transforms import pose_from_transform
 from handeye.drivers.camera import open_camera
 from handeye.drivers.camera.checkerboard import board_pose_from_corners, detect_board, observe_board
 from handeye.drivers.camera.decode import decode_xb3_frame

@@ -4,7 +4,7 @@ The cell: the floor, a cabinet beside the robot's base where the upper arm swing
 axis 1), a post the upper arm passes, and the board's stand (from the board's pose). Every link of the arm
 (base, links 1-3 and the wrist) and what the flange carries are checked against every
 volume, and the robot file's self-collision pairs (the camera against link 3, ...), by the
-capture's own planner (``station.planning.plan_postures``): drawing, veto, the moves' conservative
+capture's own planner (``station.capture.planning.plan_postures``): drawing, veto, the moves' conservative
 advancement, the order repaired, the score (five simulated calibrations). The figure is the median
 wall-clock time (``time.perf_counter``) of ``--runs`` plans (seeds 0, 1, ...).
 
@@ -22,13 +22,13 @@ import statistics
 import sys
 import time
 
-from handeye.calibration.cell import DEFAULT_CARRIED, Box, CellModel, Cylinder, Floor
-from handeye.calibration.compact_points import BoardGeometry
-from handeye.calibration.kinematics import load_robot
-from handeye.calibration.transforms import invert_transforms
+from handeye.robot.cell import DEFAULT_CARRIED, Box, CellModel, Cylinder, Floor
+from handeye.geometry.board import BoardGeometry
+from handeye.robot.kinematics import load_robot
+from handeye.geometry.transforms import invert_transforms
 from handeye.mocks.station import DEFAULT_BOARD, DEFAULT_MOUNT, DEFAULT_START
-from handeye.station.cell_plan import CellCheck
-from handeye.station.planning import plan_postures
+from handeye.station.cell.plan import CellCheck
+from handeye.station.capture.planning import plan_postures
 
 TARGET_S = 10.0
 BOARD = BoardGeometry((13, 8), 30.0)

@@ -1,9 +1,12 @@
 """handeye: hand-eye calibration of a stereo camera on an ABB robot flange, from capture to tooldata.
 
-The package is five rooms, each a sub-package with its own public names (see its docstring and
-``__all__``):
+The package is eight rooms, each a sub-package whose ``__init__`` is its face (its public names, see its
+docstring and ``__all__``); a room imports only the rooms below it, from their faces:
 
-- :mod:`handeye.calibration`: the numeric core (sessions on disk, the methods, kinematics);
+- :mod:`handeye.base`: errors, safe files, the YAML reader, the extension registries (stdlib and PyYAML);
+- :mod:`handeye.geometry`: rotations, transforms, the checkerboard's description;
+- :mod:`handeye.robot`: kinematics from the robot files, the cell, clearance and self-collision, views;
+- :mod:`handeye.calibration`: the hand-eye numbers (sessions on disk, the methods, metrics);
 - :mod:`handeye.drivers`: the controller link and the camera, back ends by name;
 - :mod:`handeye.rapid`: the RAPID program of the station;
 - :mod:`handeye.mocks`: the simulated controller and camera;

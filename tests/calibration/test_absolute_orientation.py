@@ -2,7 +2,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from handeye.calibration.absolute_orientation import absolute_orientation, rotation_between_vectors
-from handeye.calibration.rotations import matrix_from_quaternion
+from handeye.geometry.rotations import matrix_from_quaternion
 
 
 def test_matches_scipy_align_vectors_with_noise():

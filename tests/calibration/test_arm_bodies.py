@@ -2,10 +2,10 @@
 link, lies inside that link's capsules at 2,000 random postures over the joint ranges, with the stated margin.
 
 The meshes (``../shared/reference/irb1410-arte``, ARTE, LGPL-3.0) are placed in the package's frames by
-``calibration.arm_meshes``; the placed vertices are kept in ``data/irb1410_arte_vertices.csv`` (derived,
+``robot.arm_meshes``; the placed vertices are kept in ``data/irb1410_arte_vertices.csv`` (derived,
 LGPL-3.0: ``data/irb1410_arte_COPYING.LESSER.txt``) so the test runs in a clone without ``../shared``; beside
 ``../shared`` the copy is first checked against the meshes. The capsules were fitted by
-``python benchmarks/arm_bodies/fit.py --write``; ``calibration.body_cover`` moves each vertex by its DH frame
+``python benchmarks/arm_bodies/fit.py --write``; ``robot.body_cover`` moves each vertex by its DH frame
 (the serial angles through the parallelogram's coupling) and the capsules by the checks' own chain.
 """
 
@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from handeye.calibration.arm_meshes import place_link_meshes, read_ascii_stl, read_vertex_table
-from handeye.calibration.body_cover import link_capsules, outside_counts
-from handeye.calibration.kinematics import ROBOTS_DIR, FrameBody, RobotModel, load_robot
+from handeye.robot.arm_meshes import place_link_meshes, read_ascii_stl, read_vertex_table
+from handeye.robot.body_cover import link_capsules, outside_counts
+from handeye.robot.kinematics import ROBOTS_DIR, FrameBody, RobotModel, load_robot
 
 from helpers import SHARED
 

@@ -115,7 +115,7 @@ def test_prior_comes_from_the_robot_file(tmp_path):
     from handeye.calibration.arm_parameters import robot_prior
 
     assert robot_prior("IRB1400") == {"length_mm": 0.5, "angle_deg": 0.1}
-    text = (Path(__file__).parents[2] / "src/handeye/calibration/robots/irb1400.yaml").read_text()
+    text = (Path(__file__).parents[2] / "src/handeye/robot/robots/irb1400.yaml").read_text()
     other = tmp_path / "arm.yaml"
     other.write_text(text.replace("kinematic_prior: {length_mm: 0.5, angle_deg: 0.1}",
                                   "kinematic_prior: {length_mm: 0.2, angle_deg: 0.03}"))

@@ -5,7 +5,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from handeye.calibration.board_scale import board_scale, grid_scales, judge_square_size
+from handeye.geometry.board_scale import board_scale, grid_scales, judge_square_size
 from handeye.calibration.plausibility import implausibilities
 from handeye.calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session
 

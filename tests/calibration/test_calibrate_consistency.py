@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration.errors import CalibrationError
+from handeye.base.errors import CalibrationError
 from handeye.calibration.session import Session, create_session, write_posture
 from handeye.calibration.solve import calibrate_session, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, sample_session
-from handeye.calibration.transforms import invert_transforms
+from handeye.geometry.transforms import invert_transforms
 from handeye.station import cli
 from handeye.station.importers import read_any
 

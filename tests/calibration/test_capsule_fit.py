@@ -1,10 +1,10 @@
-"""The capsule fit (``calibration.capsule_fit``) and the mesh reader (``calibration.arm_meshes``) of issue 41."""
+"""The capsule fit (``robot.capsule_fit``) and the mesh reader (``robot.arm_meshes``) of issue 41."""
 
 import numpy as np
 import pytest
 
-from handeye.calibration.arm_meshes import read_ascii_stl, read_vertex_table, write_vertex_table
-from handeye.calibration.capsule_fit import capsule_volume, fit_capsule, fit_capsules, grown
+from handeye.robot.arm_meshes import read_ascii_stl, read_vertex_table, write_vertex_table
+from handeye.robot.capsule_fit import capsule_volume, fit_capsule, fit_capsules, grown
 
 
 def _cylinder(centre, axis, radius, length, count=400, seed=0) -> np.ndarray:
@@ -54,7 +54,7 @@ def test_grown_rounds_the_ends_and_keeps_every_point_the_margin_inside():
 
 
 def test_the_slack_measures_how_far_a_capsule_reaches_beyond_the_box_and_keeps_every_point_inside():
-    from handeye.calibration.capsule_fit import Capsule, _overshoot
+    from handeye.robot.capsule_fit import Capsule, _overshoot
 
     capsule = Capsule(np.array([0.0, 0.0, 0.0]), np.array([100.0, 0.0, 0.0]), 20.0)
     box = (np.array([-10.0, -20.0, -30.0]), np.array([100.0, 25.0, 20.0]))
@@ -86,7 +86,7 @@ def test_a_facet_between_two_capsules_is_measured_between_its_corners():
     """Two spheres of radius 20 at x = 0 and x = 100, a thin facet from one to the other at y = 15: its
     corners are 5 mm inside, its middle (x 50, 50 mm from both centres) 30 mm outside; cover_facets grows
     the radii until the whole facet is the margin deep."""
-    from handeye.calibration.capsule_fit import Capsule, cover_facets, facet_depths, surface_gap
+    from handeye.robot.capsule_fit import Capsule, cover_facets, facet_depths, surface_gap
 
     spheres = [Capsule(np.zeros(3), np.zeros(3), 20.0), Capsule(np.array([100.0, 0, 0]), np.array([100.0, 0, 0]), 20.0)]
     facet = np.array([[[0.0, 15.0, 0.0], [100.0, 15.0, 0.0], [0.0, 15.0, 0.1]]])

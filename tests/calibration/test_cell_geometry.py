@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from handeye.calibration.cell import Box, CellModel, Cylinder, Floor, Sphere, board_stand
-from handeye.calibration.clearance import CellGuard, carried_spheres, link_spheres
-from handeye.calibration.compact_points import BoardGeometry
-from handeye.calibration.kinematics import load_robot
+from handeye.robot.cell import Box, CellModel, Cylinder, Floor, Sphere, board_stand
+from handeye.robot.clearance import CellGuard, carried_spheres, link_spheres
+from handeye.geometry.board import BoardGeometry
+from handeye.robot.kinematics import load_robot
 from handeye.mocks.station import DEFAULT_BOARD
 
 ROBOT = load_robot("IRB1400")
@@ -34,7 +34,7 @@ def test_world_zones_are_axis_aligned_and_cover_the_volume():
     corners = plate.corners()
     assert np.all(corners >= np.array(zone["min_mm"]) - 1e-9) and np.all(corners <= np.array(zone["max_mm"]) + 1e-9)
     # the plate holds every board corner, grown by the margin; the leg reaches the floor
-    from handeye.calibration.compact_points import board_corners
+    from handeye.geometry.board import board_corners
 
     points = board_corners((13, 8), 30.0) @ DEFAULT_BOARD[:3, :3].T + DEFAULT_BOARD[:3, 3]
     assert np.all(plate.signed_distance(points) <= -50 + 1e-6)

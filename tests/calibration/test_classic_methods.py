@@ -29,12 +29,12 @@ from handeye.calibration.classic.common import (
     prepare_motions,
     right_matrix,
 )
-from handeye.calibration.errors import CalibrationError
+from handeye.base.errors import CalibrationError
 from handeye.calibration.problem import EYE_IN_HAND, EYE_TO_HAND
-from handeye.calibration.rotations import quaternion_multiply
+from handeye.geometry.rotations import quaternion_multiply
 from handeye.calibration.solve import problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session
-from handeye.calibration.transforms import invert_transforms, rotation_error_deg, translation_error_mm
+from handeye.geometry.transforms import invert_transforms, rotation_error_deg, translation_error_mm
 
 METHODS = list(CLASSIC_METHODS)
 OPENCV_METHODS = ["tsai", "park", "horaud", "andreff", "daniilidis"]

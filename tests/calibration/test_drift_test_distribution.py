@@ -1,6 +1,6 @@
 """The check's statistic when nothing changed (issue 42.7): over fresh calibrations and fresh revisits
 of a synthetic station, ``q = d^T Σ^-1 d`` must follow its reference distribution, so that the level is
-the false-alarm rate and a DRIFT is "beyond the noise" (what matters is ``station.verify_tolerance``'s).
+the false-alarm rate and a DRIFT is "beyond the noise" (what matters is ``station.verify.tolerance``'s).
 
 Each sample draws a calibration (16 postures) and a revisit of K = 5 of its postures with the same
 noise, solves the calibration with the default estimator (its noise levels estimated, as on a

@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from handeye.calibration.errors import CalibrationError
+from handeye.base.errors import CalibrationError
 from handeye.calibration.metrics import errors_against_truth
 from handeye.calibration.session import create_session, write_posture
 from handeye.calibration.solve import calibrate_session, problem_from_session

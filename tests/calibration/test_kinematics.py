@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from handeye.calibration.kinematics import dh_transforms, inverse_kinematics, known_robots, load_robot
+from handeye.robot.kinematics import dh_transforms, inverse_kinematics, known_robots, load_robot
 
 
 @pytest.fixture(scope="module")

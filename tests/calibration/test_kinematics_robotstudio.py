@@ -7,7 +7,7 @@ the serial DH angle) and tool0 in base (mm, quaternion w x y z).
 
 How the comparison is made: the IRB 1410 shares the IRB 1400's arm geometry (the reference README: d1
 475, a1 150, a2 600, a3 120, d4 720, flange 85 mm, the same parallelogram coupling of axes 2-3), which is
-exactly the package's robot file (``calibration/robots/irb1400.yaml``, which also names IRB1410 as an
+exactly the package's robot file (``robot/robots/irb1400.yaml``, which also names IRB1410 as an
 alias). So the rows are compared with ``load_robot("IRB1400").forward`` as they are, with no frame
 correction. (The ARTE meshes beside the rows use a different DH table, d1 and d6 10 mm short; that
 concerns only the meshes, not these poses.)
@@ -31,7 +31,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration.kinematics import RobotModel, load_robot
+from handeye.robot.kinematics import RobotModel, load_robot
 
 from helpers import SHARED
 

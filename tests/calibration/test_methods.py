@@ -9,7 +9,7 @@ import pytest
 
 from handeye.calibration import classic, solve
 from handeye.calibration.classic import CLASSIC_METHODS
-from handeye.calibration.errors import CalibrationError
+from handeye.base.errors import CalibrationError
 from handeye.calibration.methods import (
     KINDS,
     METHODS,
@@ -27,7 +27,7 @@ from helpers import problem as make_problem
 
 CONVENTIONS = ("mc", "mcr", "mct", "mcb", "mco", "tsai", "park", "horaud", "andreff", "daniilidis", "chou", "lu",
                "liang")
-ROOMS = ("calibration", "drivers", "station", "rapid", "mocks")
+ROOMS = ("base", "geometry", "robot", "calibration", "drivers", "station", "rapid", "mocks")
 
 
 @pytest.fixture

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration.compact_points import board_corners
+from handeye.geometry.board import board_corners
 from handeye.calibration.crossval import SYSTEMATIC_RATIO, CrossValidation, cross_validate
 from handeye.calibration.eiv import board_pose_angle_gaps_deg, observations, solve_eiv, varied_rotation_subset
-from handeye.calibration.kinematics import load_robot
+from handeye.robot.kinematics import load_robot
 from handeye.calibration.noise import (
     CornerNoise,
     corner_noise,
@@ -30,7 +30,7 @@ from handeye.calibration.noise import (
 from handeye.calibration.session import Posture, Session
 from handeye.calibration.solve import DEFAULT_METHOD, ML_METHOD, calibrate, problem_from_session
 from handeye.calibration.synthetic_poses import opencv_test_problem
-from handeye.calibration.transforms import invert_transforms
+from handeye.geometry.transforms import invert_transforms
 from handeye.mocks.station import perturbed_robot
 
 from helpers import flipped_board, problem, scene

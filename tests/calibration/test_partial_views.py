@@ -6,14 +6,14 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from handeye.calibration.errors import CalibrationError, SessionError
+from handeye.base.errors import CalibrationError, SessionError
 from handeye.calibration.partial_views import MIN_CORNERS, board_arrays, rigid_fit, view_refusal
 from handeye.calibration.session import Posture, Session, create_session, read_session, write_postures
 from handeye.calibration.solve import calibrate, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session
-from handeye.calibration.targets import (STATION_CHARUCO, STATION_CIRCLES, CharucoBoard, TARGETS, parse_target_spec,
+from handeye.geometry.targets import (STATION_CHARUCO, STATION_CIRCLES, CharucoBoard, TARGETS, parse_target_spec,
                                          target_from_dict, target_to_dict)
-from handeye.calibration.transforms import rotation_error_deg, translation_error_mm
+from handeye.geometry.transforms import rotation_error_deg, translation_error_mm
 
 
 def test_the_registry_holds_the_three_kinds_and_round_trips_them():

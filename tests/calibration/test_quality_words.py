@@ -12,9 +12,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from handeye.calibration.classic import CLASSIC_METHODS
-from handeye.calibration.compact_points import BoardGeometry
-from handeye.calibration.errors import CalibrationError
-from handeye.calibration.kinematics import load_robot
+from handeye.geometry.board import BoardGeometry
+from handeye.base.errors import CalibrationError
+from handeye.robot.kinematics import load_robot
 from handeye.calibration.quality_words import (
     MAX_AXIS_SPREAD_DEG,
     hand_axis_coverage,
@@ -27,11 +27,11 @@ from handeye.calibration.quality_words import (
 )
 from handeye.calibration.solve import calibrate, check_motion, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, Scene, SceneConfig, sample_session
-from handeye.calibration.transforms import invert_transforms, transform_from_rotation_translation
+from handeye.geometry.transforms import invert_transforms, transform_from_rotation_translation
 from handeye.mocks.station import DEFAULT_BOARD, DEFAULT_MOUNT, DEFAULT_START
-from handeye.station.capture import plan_line
-from handeye.station.planning import plan_postures
-from handeye.station.quality import verdict
+from handeye.station.capture.loop import plan_line
+from handeye.station.capture.planning import plan_postures
+from handeye.station.report.quality import verdict
 
 from helpers import problem as make_problem
 
@@ -138,7 +138,7 @@ def test_each_quality_word_is_defined_in_one_module():
     axes, and the retired names of the old definitions are gone."""
     retired = {"station_d_org", "_axis_statistics", "_axis_spread_deg", "axis_spread"}
     offenders = []
-    for room in ("calibration", "station"):
+    for room in ("geometry", "robot", "calibration", "station"):
         for path in sorted((REPO / "src" / "handeye" / room).rglob("*.py")):
             if path.name == "quality_words.py":
                 continue

@@ -11,7 +11,7 @@ import pytest
 
 from handeye.calibration import drift_causes
 from handeye.calibration.noise import retract, twist_between
-from handeye.calibration.transforms import invert_transforms, rotation_error_deg
+from handeye.geometry.transforms import invert_transforms, rotation_error_deg
 from handeye.calibration.verification import Baseline, Discrepancy
 
 K = 5

@@ -56,7 +56,7 @@ def test_robust_at_least_as_consistent_as_opencv(name):
 
 
 def _rotation_residual_deg(problem, x):
-    from handeye.calibration.transforms import invert_transforms
+    from handeye.geometry.transforms import invert_transforms
 
     i, j = np.triu_indices(problem.n, 1)
     a = invert_transforms(problem.hand[i]) @ problem.hand[j]

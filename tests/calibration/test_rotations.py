@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration import rotations as rot
+from handeye.geometry import rotations as rot
 
 
 @pytest.fixture

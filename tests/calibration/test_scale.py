@@ -15,11 +15,11 @@ from scipy.spatial.transform import Rotation
 
 from handeye.calibration import diagnostics
 from handeye.calibration.eiv import board_pose_angle_gaps_deg
-from handeye.calibration.errors import SessionError
+from handeye.base.errors import SessionError
 from handeye.calibration.invariants import ALL_PAIRS_UP_TO, bounded_pairs, pair_indices
 from handeye.calibration.session import Posture, Session, write_posture, write_postures
 from handeye.calibration.solve import check_motion, problem_from_session
-from handeye.calibration.transforms import invert_transforms, transform_from_rotation_translation
+from handeye.geometry.transforms import invert_transforms, transform_from_rotation_translation
 from handeye.station import cli
 from handeye.station.importers import read_stream
 

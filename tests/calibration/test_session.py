@@ -2,9 +2,9 @@ import numpy as np
 import pytest
 import yaml
 
-from handeye.calibration.errors import SessionError
+from handeye.base.errors import SessionError
 from handeye.calibration.session import Posture, Session, create_session, read_session, write_posture
-from handeye.calibration.compact_points import BoardGeometry
+from handeye.geometry.board import BoardGeometry
 from handeye.calibration.synthetic import NoiseConfig, sample_session
 
 from helpers import scene
@@ -93,7 +93,7 @@ def test_duplicate_index(tmp_path):
 
 
 def test_stale_temporaries_of_a_killed_writer_are_removed(tmp_path):
-    from handeye.calibration.files import remove_stale_temporaries, write_text_atomic
+    from handeye.base.files import remove_stale_temporaries, write_text_atomic
 
     write_text_atomic(tmp_path / "postures" / "000.yaml", "index: 0\n")
     stale = tmp_path / "postures" / ".000.yaml.abc123.tmp"

@@ -3,10 +3,10 @@ import pytest
 
 from handeye.calibration.absolute_orientation import rotation_between_vectors
 from handeye.calibration.metrics import axxb_residuals, d_back, d_org, fixed_points
-from handeye.calibration.rotations import matrix_from_quaternion
+from handeye.geometry.rotations import matrix_from_quaternion
 from handeye.calibration.selection import CandidateScorer, select_candidate
 from handeye.calibration.solve import PAPER_METHODS, calibrate
-from handeye.calibration.transforms import rotation_error_deg, translation_error_mm
+from handeye.geometry.transforms import rotation_error_deg, translation_error_mm
 from handeye.calibration.triplets import pair_indices, relative_motions, triplet_candidates, triplet_indices
 
 from helpers import problem

@@ -1,4 +1,4 @@
-"""The write key's code (calibration/write_key.py): one definition for the drivers and the RAPID generator."""
+"""The write key's code (base/write_key.py): one definition for the drivers and the RAPID generator."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import hashlib
 
 import pytest
 
-import handeye.calibration.write_key as write_key
-from handeye.calibration.write_key import WRITE_KEY_PATTERN, write_key_code
+import handeye.base.write_key as write_key
+from handeye.base.write_key import WRITE_KEY_PATTERN, write_key_code
 
 
 @pytest.mark.parametrize("key", ["right-key_42", "a" * 32, "________", "ABCdef12"])

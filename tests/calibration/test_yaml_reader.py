@@ -9,11 +9,11 @@ from pathlib import Path
 
 import pytest
 
-from handeye.calibration.errors import SessionError
-from handeye.calibration.files import parse_yaml
+from handeye.base.errors import SessionError
+from handeye.base.files import parse_yaml
 from handeye.calibration.session import read_session
 from handeye.station.cli import main
-from handeye.station.config import EXAMPLE_FILE, ConfigError, load_config
+from handeye.station.config.station import EXAMPLE_FILE, ConfigError, load_config
 from handeye.station.importers.common import parse_json
 
 BLOCKING_BOX = "cell:\n  volumes:\n    - {type: box, min_mm: [600, -300, 0], max_mm: [900, 300, 800]}\n"
@@ -105,7 +105,7 @@ def test_a_json_log_with_a_duplicated_key_is_refused_with_both_lines():
 
 def test_the_shipped_yaml_files_have_no_duplicated_keys():
     repo = Path(__file__).resolve().parents[2]
-    files = [p for room in ("calibration", "drivers", "station", "rapid", "mocks") for p in (repo / "src" / "handeye" / room).rglob("*.yaml")]
+    files = [p for room in ("base", "geometry", "robot", "calibration", "drivers", "station", "rapid", "mocks") for p in (repo / "src" / "handeye" / room).rglob("*.yaml")]
     assert len(files) >= 5
     for path in files:
         parse_yaml(path.read_text(encoding="utf-8"), path)

@@ -10,7 +10,7 @@ import time
 import numpy as np
 import pytest
 
-from handeye.calibration.kinematics import load_robot
+from handeye.robot.kinematics import load_robot
 from handeye.mocks.controller import start_mock_controller
 from handeye.mocks.controller.runner import tooldata_of
 

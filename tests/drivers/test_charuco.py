@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from handeye.calibration.partial_views import rigid_fit
-from handeye.calibration.targets import STATION_CHARUCO
+from handeye.geometry.targets import STATION_CHARUCO
 from handeye.drivers.camera.charuco import detect_charuco, opencv_board, reference_detector
 from handeye.drivers.camera.checkerboard import observe_board
 from handeye.drivers.camera.errors import BoardNotFound, NoBoardInView

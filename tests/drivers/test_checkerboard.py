@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 import pytest
 
-from handeye.calibration.compact_points import BoardGeometry, board_corners
+from handeye.geometry.board import BoardGeometry, board_corners
 from handeye.drivers.camera import checkerboard as cb
 from handeye.drivers.camera.checkerboard import board_pose_from_corners, detect_board, observe_board
 from handeye.drivers.camera.errors import BoardNotFound, CameraError, FrameError, StereoMismatch

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from helpers import shared_dataset
-from handeye.calibration.compact_points import board_corners
+from handeye.geometry.board import board_corners
 from handeye.drivers.camera import checkerboard as cb
 from handeye.drivers.camera.checkerboard import detect_board, observe_board, off_grid_corners
 from handeye.drivers.camera.errors import BoardNotFound

@@ -14,14 +14,7 @@ import stereo_scene as ss
 from handeye.drivers.camera.checkerboard import detect_board, observe_board
 from handeye.drivers.camera.errors import BoardNotFound
 from handeye.drivers.camera.stereo import load_stereo_model, save_stereo_model
-from handeye.drivers.camera.stereo_calibration import (
-    StereoCalibrationError,
-    StereoSwapped,
-    ViewCorners,
-    calibrate_stereo,
-    epipolar_errors,
-    swap_votes,
-)
+from handeye.drivers.camera.stereo_fit import StereoCalibrationError, StereoSwapped, ViewCorners, calibrate_stereo, epipolar_errors, swap_votes
 from handeye.mocks.camera import StereoRenderer
 from handeye.mocks.world import sample_board_views
 

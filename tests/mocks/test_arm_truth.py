@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from handeye.calibration.errors import ConfigError
-from handeye.calibration.kinematics import load_robot
+from handeye.base.errors import ConfigError
+from handeye.robot.kinematics import load_robot
 from handeye.mocks.arm_truth import ArmDeviations, true_arm
 from handeye.mocks.station import MockStationSpec, flange_camera
-from handeye.station.config import config_from_dict
+from handeye.station.config.station import config_from_dict
 from handeye.station.runtime import mock_spec
 
 

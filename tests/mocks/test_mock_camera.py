@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 import pytest
 
-from handeye.calibration.compact_points import board_corners
+from handeye.geometry.board import board_corners
 from handeye.drivers.camera import open_camera
 from handeye.drivers.camera.checkerboard import detect_board, observe_board
 from handeye.drivers.camera.decode import decode_xb3_frame

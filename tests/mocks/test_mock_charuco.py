@@ -4,14 +4,14 @@ with a band (``mock.occlude``, issue 37)."""
 import numpy as np
 import pytest
 
-from handeye.calibration.errors import ConfigError
-from handeye.calibration.targets import STATION_CHARUCO
+from handeye.base.errors import ConfigError
+from handeye.geometry.targets import STATION_CHARUCO
 from handeye.drivers.camera.checkerboard import observe_board
 from handeye.drivers.camera.errors import BoardNotFound
 from handeye.mocks.camera import MockCamera
 from handeye.mocks.printed_targets import Occlusion, OcclusionPicker
 from handeye.mocks.world import PrintedBoard
-from handeye.station.config import config_from_dict
+from handeye.station.config.station import config_from_dict
 
 MOCK = {"controller": {"protocol": "mock"}, "camera": {"backend": "mock"}}
 

@@ -9,10 +9,10 @@ import math
 import numpy as np
 import pytest
 
-from handeye.calibration.cell import Box, Sphere
-from handeye.calibration.clearance import CellGuard
-from handeye.calibration.kinematics import load_robot
-from handeye.calibration.transforms import transform_from_pose
+from handeye.robot.cell import Box, Sphere
+from handeye.robot.clearance import CellGuard
+from handeye.robot.kinematics import load_robot
+from handeye.geometry.transforms import transform_from_pose
 from handeye.mocks.controller.arm import ArmBinding
 from handeye.mocks.robot import SimulatedRobot
 from handeye.rapid.interpreter import Bindings, FixedArm, Task, load_program

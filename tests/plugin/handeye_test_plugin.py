@@ -16,12 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from handeye.drivers.camera import Camera, StereoFrame
-from handeye.drivers.camera.backends import CameraBackend
-from handeye.drivers.registry import Setting
-from handeye.drivers.controller.backends import ControllerBackend, LinkSetting, MockServer
-from handeye.drivers.controller.socket_client import SocketController
-from handeye.rapid.links import RapidLink
+from handeye.drivers import Camera, CameraBackend, ControllerBackend, LinkSetting, MockServer, Setting, SocketController, StereoFrame
+from handeye.rapid import RapidLink
 
 
 class LoopbackController(SocketController):
@@ -43,7 +39,7 @@ RAPID_LINK = RapidLink("HeLoop", Path(__file__).with_name("HeLoop.mod.tmpl"))
 def _mock_server(*args, note: str = "", **kwargs):
     """The mock controller of the loopback link: the socket mock running HeLoop (imported when it
     starts), with an option of its own (``note``, kept: ``--loop-note`` of ``handeye mock controller``)."""
-    from handeye.mocks.controller.line_server import SocketControllerServer
+    from handeye.mocks import SocketControllerServer
 
     server = SocketControllerServer(*args, **kwargs)
     server.note = note

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from handeye.calibration.methods import Method
+from handeye.calibration import Method
 
 METHOD = Method("kabsch", "classic", "Test plug-in (2025)", "rotation axes aligned by SVD, then translation",
                 solver=f"{__name__}:solve_kabsch", in_comparison=True)

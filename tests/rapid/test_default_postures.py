@@ -8,9 +8,9 @@ what ``make_scene(SceneConfig(postures=12, self_clear_mm=30))`` draws, rounded t
 
 import numpy as np
 
-from handeye.calibration.cell import DEFAULT_CARRIED
-from handeye.calibration.clearance import CellGuard
-from handeye.calibration.kinematics import load_robot
+from handeye.robot.cell import DEFAULT_CARRIED
+from handeye.robot.clearance import CellGuard
+from handeye.robot.kinematics import load_robot
 from handeye.calibration.synthetic import SceneConfig, make_scene
 from handeye.mocks.robot import self_guard
 from handeye.rapid.station import default_station

@@ -138,7 +138,7 @@ def test_rendering_refuses_postures_outside_the_limits():
 
 
 def test_tool_module_holds_the_calibrated_frame():
-    from handeye.calibration.transforms import transform_from_pose
+    from handeye.geometry.transforms import transform_from_pose
 
     frame = transform_from_pose([12.5, -3.25, 88.0], [0.5, 0.5, -0.5, 0.5])
     text = render_tool(default_station(), frame, comments=["method mcb"]).text

@@ -10,7 +10,7 @@ import pytest
 from handeye.drivers.controller import protocol as P
 from handeye.rapid.checks import check_program, for_rapidchecker
 from handeye.rapid.errors import RapidError, StationConfigError
-from handeye.calibration.write_key import write_key_code
+from handeye.base.write_key import write_key_code
 from handeye.rapid.generate import render_key, render_link, render_program, write_modules
 from handeye.rapid.station import default_station, load_station
 from handeye.station.cli import main

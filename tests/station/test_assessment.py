@@ -1,4 +1,4 @@
-"""Compute once, present many times (station/assessment.py): one assessment per calibration, and the
+"""Compute once, present many times (station/report/assessment.py): one assessment per calibration, and the
 presenters (text, JSON, HTML) only format it."""
 
 from __future__ import annotations
@@ -11,17 +11,17 @@ import pytest
 import handeye.calibration.metrics as metrics
 import handeye.calibration.quality_words as quality_words
 import handeye.calibration.solve as solve
-import handeye.station.assessment as assessment_module
-import handeye.station.quality as quality
+import handeye.station.report.assessment as assessment_module
+import handeye.station.report.quality as quality
 from handeye.calibration.session import create_session, write_posture, write_truth
 from handeye.calibration.solve import DEFAULT_METHOD
 from handeye.calibration.synthetic import NoiseConfig, sample_session, truth_dict
-from handeye.station.assessment import COMPARISON_METHODS, assess
+from handeye.station.report.assessment import COMPARISON_METHODS, assess
 from handeye.station.calibrate import calibrate_session_folder
 from handeye.station.cli import main
-from handeye.station.report import write_report
-from handeye.station.report_json import calibration_json
-from handeye.station.report_text import calibration_summary
+from handeye.station.report.document import write_report
+from handeye.station.report.as_json import calibration_json
+from handeye.station.report.text import calibration_summary
 
 from helpers import scene
 

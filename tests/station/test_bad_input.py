@@ -25,9 +25,9 @@ import pytest
 import yaml
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration import files
-from handeye.calibration.errors import CalibrationError, OutputError, SessionError
-from handeye.calibration.files import make_folder, read_text_file, write_text_atomic
+from handeye.base import files
+from handeye.base.errors import CalibrationError, OutputError, SessionError
+from handeye.base.files import make_folder, read_text_file, write_text_atomic
 from handeye.calibration.session import create_session, read_session, write_posture
 from handeye.calibration.solve import calibrate, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, sample_session
@@ -512,7 +512,7 @@ def test_broken_pipe_is_still_quiet(monkeypatch, capsys):
 def test_a_huge_value_is_quoted_briefly_in_the_one_line_error(tmp_path, key):
     """Found by the fuzz test: a list of 600-digit numbers where a word belongs was echoed whole (12,000
     characters); the message quotes it briefly."""
-    from handeye.calibration.errors import HandEyeError
+    from handeye.base.errors import HandEyeError
     from handeye.station.importers.plain import read_plain
 
     data = {"setup": "eye_in_hand", "units": "mm", "quaternion_order": "wxyz", "postures": []}

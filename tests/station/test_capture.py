@@ -13,9 +13,9 @@ import yaml
 
 from handeye.calibration.session import read_session
 from handeye.calibration.solve import calibrate, problem_from_session
-from handeye.calibration.transforms import rotation_error_deg, translation_error_mm
-from handeye.station.capture import capture
-from handeye.station.config import default_config
+from handeye.geometry.transforms import rotation_error_deg, translation_error_mm
+from handeye.station.capture.loop import capture
+from handeye.station.config.station import default_config
 from handeye.station.runtime import open_station
 
 

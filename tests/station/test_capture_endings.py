@@ -12,14 +12,14 @@ import pytest
 
 from handeye.drivers.camera.stereo import nominal_xb3_model
 from handeye.station.cli import main
-from handeye.station.config import default_config
+from handeye.station.config.station import default_config
 from handeye.station.view.hub import ViewHub
 from handeye.station.view.server import ViewServer
 
 
 def _stopped_at_once(monkeypatch):
     """The guided loop runs with its stop already set: the operator ended it before any posture."""
-    from handeye.station import guided
+    from handeye.station.guided import capture as guided
 
     real = guided.guided_capture
 

@@ -9,14 +9,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from handeye.calibration.kinematics import ROBOTS_DIR, load_robot
+from handeye.robot.kinematics import ROBOTS_DIR, load_robot
 from handeye.mocks.robot import SimulatedRobot, ZoneViolation
 from handeye.mocks.station import DEFAULT_START
 from handeye.rapid.interpreter import Bindings, Task, load_program
 from handeye.mocks.controller.arm import ArmBinding
-from handeye.station.cell_plan import cell_check
+from handeye.station.cell.plan import cell_check
 from handeye.station.cli import main
-from handeye.station.config import ConfigError, config_from_dict, load_config
+from handeye.station.config.station import ConfigError, config_from_dict, load_config
 
 ROBOT = load_robot("IRB1400")
 #: The wrist folded back (axis 5 at 108 deg): the camera in link 3 (the tube of the upper arm).

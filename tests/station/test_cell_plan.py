@@ -7,16 +7,16 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from handeye.calibration.cell import Box, CellModel, Cylinder, Floor
-from handeye.calibration.clearance import Violation
-from handeye.calibration.compact_points import BoardGeometry
-from handeye.calibration.kinematics import load_robot
-from handeye.calibration.transforms import invert_transforms
+from handeye.robot.cell import Box, CellModel, Cylinder, Floor
+from handeye.robot.clearance import Violation
+from handeye.geometry.board import BoardGeometry
+from handeye.robot.kinematics import load_robot
+from handeye.geometry.transforms import invert_transforms
 from handeye.mocks.station import DEFAULT_BOARD, DEFAULT_MOUNT, DEFAULT_START
-from handeye.station.cell_plan import CellCheck, Rejections, clear_route
-from handeye.station.cell_settings import DEFAULT_CARRIED
-from handeye.station.planning import PlanningError, order_for_short_motions, plan_postures
-from handeye.station.quality import QualityThresholds
+from handeye.station.cell.plan import CellCheck, Rejections, clear_route
+from handeye.station.config.cell import DEFAULT_CARRIED
+from handeye.station.capture.planning import PlanningError, order_for_short_motions, plan_postures
+from handeye.station.report.quality import QualityThresholds
 
 from helpers import joint_path
 
@@ -101,7 +101,7 @@ def test_the_cell_mattered_and_the_score_says_why(cell_plan):
 def test_the_default_cell_leaves_the_demo_plan_as_it_was():
     """The default cell's floor changes nothing: the plan is the one of the self-collision check alone (the
     camera against the arm's own links, issue 21, is what the default cell rejects)."""
-    from handeye.station.cell_settings import DEFAULT_KEEP_OUT
+    from handeye.station.config.cell import DEFAULT_KEEP_OUT
 
     with_cell = _plan(CellModel(DEFAULT_KEEP_OUT, DEFAULT_CARRIED), count=12)
     self_only = _plan(CellModel((), DEFAULT_CARRIED), count=12)

@@ -4,15 +4,15 @@
 import numpy as np
 import pytest
 
-from handeye.calibration.cell import Box, CellModel, Floor
-from handeye.calibration.compact_points import BoardGeometry, board_corners
-from handeye.calibration.kinematics import load_robot
-from handeye.calibration.transforms import invert_transforms
+from handeye.robot.cell import Box, CellModel, Floor
+from handeye.geometry.board import BoardGeometry, board_corners
+from handeye.robot.kinematics import load_robot
+from handeye.geometry.transforms import invert_transforms
 from handeye.mocks.station import DEFAULT_BOARD, DEFAULT_MOUNT, DEFAULT_START
-from handeye.station.cell_plan import CellCheck
-from handeye.station.cell_settings import DEFAULT_CARRIED
-from handeye.station.config import ConfigError, config_from_dict
-from handeye.station.planning import PlanningError, plan_postures
+from handeye.station.cell.plan import CellCheck
+from handeye.station.config.cell import DEFAULT_CARRIED
+from handeye.station.config.station import ConfigError, config_from_dict
+from handeye.station.capture.planning import PlanningError, plan_postures
 
 ROBOT = load_robot("IRB1400")
 BOARD = BoardGeometry((13, 8), 30.0)
@@ -39,7 +39,7 @@ def test_a_keep_out_box_around_the_board_is_refused_naming_it():
 
 
 def test_volumes_that_leave_some_views_are_no_board_problem():
-    from handeye.station.cell_plan import board_problem, view_points
+    from handeye.station.cell.plan import board_problem, view_points
 
     points = view_points(DEFAULT_BOARD, BOARD, (700.0, 1200.0), 35.0)
     centre = DEFAULT_BOARD[:3, :3] @ board_corners(BOARD.corners, BOARD.square_mm).mean(axis=0) + DEFAULT_BOARD[:3, 3]
@@ -96,7 +96,7 @@ SIDE_X, SIDE_Y = min(((e[0], e[1] - r) for a, b, r in BASE for e in (a, b)), key
 def test_the_base_distance_is_the_capsule_geometry():
     """A box beside the base, its face 20 mm in front of the base capsules' reach: 20 mm from the base, to
     within half a sample spacing below (never above); one behind: 20 mm from the capsules' rear reach."""
-    from handeye.calibration.base_clearance import BASE_STEP_MM, base_clearances
+    from handeye.robot.base_clearance import BASE_STEP_MM, base_clearances
 
     assert all(abs(e[1]) < 250 and 0 < e[2] < 800 for a, b, _ in BASE for e in (a, b))
     beside = Box("beside", (FRONT + 20.0, -250.0, 0.0), (900.0, 250.0, 800.0))
@@ -140,7 +140,7 @@ def test_volumes_the_robot_stands_on_and_volumes_clear_of_the_base_load():
 def test_the_planner_refuses_a_cell_built_in_code_with_a_volume_in_the_base():
     """A CellCheck built without a config (a script, a benchmark) gets the same line from the planner, and
     the board's stand is checked against the base too."""
-    from handeye.station.cell_plan import base_problem
+    from handeye.station.cell.plan import base_problem
 
     cell = CellModel((Floor("floor", 0.0), Box("cabinet", (FRONT - 120, -250, 0), (600, 250, 900))), DEFAULT_CARRIED)
     view = invert_transforms(ROBOT.forward_transform(DEFAULT_START) @ DEFAULT_MOUNT) @ DEFAULT_BOARD

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 import yaml
 
-from handeye.calibration.cell import Box, CellModel, Floor
-from handeye.calibration.clearance import CellGuard
-from handeye.calibration.kinematics import load_robot
+from handeye.robot.cell import Box, CellModel, Floor
+from handeye.robot.clearance import CellGuard
+from handeye.robot.kinematics import load_robot
 from handeye.calibration.session import read_session
 from handeye.drivers.controller import open_controller
 from handeye.drivers.errors import StationError
@@ -21,9 +21,9 @@ from handeye.mocks.robot import SimulatedRobot, ZoneViolation
 from handeye.rapid.checks import check_program
 from handeye.rapid.generate import render_program, write_modules
 from handeye.rapid.station import station_from_dict
-from handeye.station.capture import CaptureError, capture
-from handeye.station.cell_settings import DEFAULT_CARRIED
-from handeye.station.config import ConfigError, config_from_dict, default_config
+from handeye.station.capture.loop import CaptureError, capture
+from handeye.station.config.cell import DEFAULT_CARRIED
+from handeye.station.config.station import ConfigError, config_from_dict, default_config
 from handeye.station.runtime import StationLink, open_station
 
 ROBOT = load_robot("IRB1400")
@@ -165,9 +165,9 @@ def test_a_real_station_moves_only_after_a_yes(tmp_path, no_leaked_threads):
 
 
 def test_the_report_shows_the_preview(tmp_path, no_leaked_threads):
-    from handeye.station.assessment import assess
+    from handeye.station.report.assessment import assess
     from handeye.station.calibrate import calibrate_session_folder
-    from handeye.station.report import write_report
+    from handeye.station.report.document import write_report
 
     config = _small(default_config(), 12)
     with open_station(config, mock=True) as link:
@@ -181,12 +181,12 @@ def test_the_report_shows_the_preview(tmp_path, no_leaked_threads):
 def test_the_preview_is_readable(tmp_path):
     import test_report_figures as figures
 
-    from handeye.calibration.compact_points import BoardGeometry
-    from handeye.calibration.transforms import invert_transforms
+    from handeye.geometry.board import BoardGeometry
+    from handeye.geometry.transforms import invert_transforms
     from handeye.mocks.station import DEFAULT_BOARD, DEFAULT_MOUNT, DEFAULT_START
-    from handeye.station.cell_plan import CellCheck
-    from handeye.station.planning import plan_postures
-    from handeye.station.preview import plan_preview_figure
+    from handeye.station.cell.plan import CellCheck
+    from handeye.station.capture.planning import plan_postures
+    from handeye.station.cell.preview import plan_preview_figure
 
     view = invert_transforms(ROBOT.forward_transform(DEFAULT_START) @ DEFAULT_MOUNT) @ DEFAULT_BOARD
     cell = CellModel((Floor("floor", 0.0), Box("cabinet", (500, 250, 0), (1200, 700, 1400))), DEFAULT_CARRIED)

@@ -8,7 +8,7 @@ from scipy.spatial.transform import Rotation
 
 from handeye.calibration.session import Posture, Session, create_session, write_posture
 from handeye.calibration.synthetic import NoiseConfig, sample_session
-from handeye.calibration.transforms import invert_transforms, transform_from_rotation_translation
+from handeye.geometry.transforms import invert_transforms, transform_from_rotation_translation
 from handeye.station.cli import main
 
 from helpers import scene

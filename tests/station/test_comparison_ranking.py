@@ -1,6 +1,6 @@
 """The report's method comparison ranks the methods by their held-out (cross-validated) error, carries it
 per method in the JSON, and says in one line why the chosen method's in-sample d_org may not be the
-lowest (station/assessment.py computes it; report, report_text and report_json present it)."""
+lowest (station/report/assessment.py computes it; report, report_text and report_json present it)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import pytest
 from handeye.calibration.crossval import cross_validate
 from handeye.calibration.quality_words import kept_postures
 from handeye.calibration.solve import calibrate
-from handeye.station.assessment import COMPARISON_METHODS, assess, d_org_note
+from handeye.station.report.assessment import COMPARISON_METHODS, assess, d_org_note
 from handeye.station.calibrate import calibrate_session_folder
 from handeye.station.cli import main
 

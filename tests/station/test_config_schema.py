@@ -8,16 +8,9 @@ from dataclasses import dataclass, fields, replace
 import pytest
 import yaml
 
-from handeye.station import config as station_config
-from handeye.station.config import (
-    EXAMPLE_FILE,
-    ConfigError,
-    StationConfig,
-    config_from_dict,
-    default_config,
-    describe_keys,
-)
-from handeye.station.schema import Number, check_section, declared_fields, rule_of, schema_keys, setting
+from handeye.station.config import station as station_config
+from handeye.station.config.station import EXAMPLE_FILE, ConfigError, StationConfig, config_from_dict, default_config, describe_keys
+from handeye.station.config.schema import Number, check_section, declared_fields, rule_of, schema_keys, setting
 
 REAL = {"controller": {"protocol": "socket"}, "camera": {"backend": "xb3"}}
 
@@ -96,7 +89,7 @@ def test_secrets_are_masked_from_their_declaration():
 @pytest.fixture
 def five_axis_robot(tmp_path):
     """A robot YAML with five axes (the IRB 1400 without its last wrist axis)."""
-    robot = yaml.safe_load((EXAMPLE_FILE.parents[1] / "calibration" / "robots" / "irb1400.yaml").read_text())
+    robot = yaml.safe_load((EXAMPLE_FILE.parents[2] / "robot" / "robots" / "irb1400.yaml").read_text())
     robot.update(name="FiveAxis", aliases=[], dh=robot["dh"][:5], joint_limits_deg=robot["joint_limits_deg"][:5],
                  max_speed_deg_s=robot["max_speed_deg_s"][:5], bodies=robot["bodies"][:2],  # no flange: no link 6
                  link_bodies=[b for b in robot["link_bodies"] if b["link"] <= 5])  # nor link 6's fitted capsule

@@ -7,7 +7,7 @@ import pytest
 import yaml
 
 from handeye.station.cli import main
-from handeye.station.config import ConfigError, config_from_dict
+from handeye.station.config.station import ConfigError, config_from_dict
 
 REAL = {"controller": {"protocol": "socket"}, "camera": {"backend": "xb3"}}
 

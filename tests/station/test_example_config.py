@@ -1,5 +1,5 @@
 """The back ends' documentation written from their declarations: the example station file's controller
-part (station/example_config.py) and the help lines (station/backend_help.py)."""
+part (station/config/example.py) and the help lines (station/backend_help.py)."""
 
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ import pytest
 import yaml
 
 from handeye.drivers.controller.backends import CONTROLLERS, ControllerBackend, ControllerLink, LinkSetting, link_settings
-from handeye.station import example_config
+from handeye.station.config import example as example_config
 from handeye.station.cli import build_parser
-from handeye.station.config import EXAMPLE_FILE
-from handeye.station.example_config import BEGIN, END, REGENERATE, controller_lines, example_problem, render_example
+from handeye.station.config.station import EXAMPLE_FILE
+from handeye.station.config.example import BEGIN, END, REGENERATE, controller_lines, example_problem, render_example
 
 from test_registries import plugin  # noqa: F401 (the fixture)
 
@@ -25,7 +25,7 @@ def _help(capsys, *argv) -> str:
 
 def test_the_shipped_example_is_what_the_back_ends_declare():
     text = EXAMPLE_FILE.read_text()
-    assert example_problem() is None, f"station/example_station.yaml is out of date: run {REGENERATE}"
+    assert example_problem() is None, f"station/config/example_station.yaml is out of date: run {REGENERATE}"
     assert render_example(text) == text
     part = text[text.index(BEGIN):text.index(END)]
     words = " ".join(word for word in part.split() if word != "#")  # the comments, unwrapped
@@ -57,7 +57,7 @@ def test_the_regenerating_command_writes_the_file(monkeypatch, tmp_path, capsys)
     copy = tmp_path / "example_station.yaml"
     text = EXAMPLE_FILE.read_text()
     copy.write_text(text.replace("  baudrate: null", "  baudrate: 4800"))
-    monkeypatch.setattr("handeye.station.config.EXAMPLE_FILE", copy)
+    monkeypatch.setattr("handeye.station.config.station.EXAMPLE_FILE", copy)
     assert example_config.main(["--check"]) == 1 and REGENERATE in capsys.readouterr().err
     assert example_config.main([]) == 0 and copy.read_text() == text
     assert example_config.main(["--check"]) == 0

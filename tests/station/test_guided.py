@@ -9,18 +9,18 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from handeye.calibration.kinematics import load_robot
+from handeye.robot.kinematics import load_robot
 from handeye.calibration.session import read_session
 from handeye.calibration.solve import calibrate, problem_from_session
-from handeye.calibration.transforms import invert_transforms, rotation_error_deg, translation_error_mm
+from handeye.geometry.transforms import invert_transforms, rotation_error_deg, translation_error_mm
 from handeye.mocks.station import DEFAULT_BOARD, DEFAULT_MOUNT, DEFAULT_START
-from handeye.station.capture import CaptureError, capture
-from handeye.station.cell_plan import cell_check
-from handeye.station.cell_settings import GuidedSettings
-from handeye.station.config import default_config
-from handeye.station.guided import StillWatch, guided_capture, postures_needed, what_is_missing
-from handeye.station.planning import plan_postures
-from handeye.station.quality import QualityThresholds
+from handeye.station.capture.loop import CaptureError, capture
+from handeye.station.cell.plan import cell_check
+from handeye.station.config.cell import GuidedSettings
+from handeye.station.config.station import default_config
+from handeye.station.guided.capture import StillWatch, guided_capture, postures_needed, what_is_missing
+from handeye.station.capture.planning import plan_postures
+from handeye.station.report.quality import QualityThresholds
 from handeye.station.runtime import StationLink, open_station
 
 ROBOT = load_robot("IRB1400")

@@ -16,7 +16,7 @@ from helpers import start_mock_station, stop_standalone_mock
 
 from handeye.calibration.session import read_session
 from handeye.station.cli import main
-from handeye.station.pendant_operator import PendantClient, PendantOperator
+from pendant_operator import PendantClient, PendantOperator
 
 KEY = "guided-key_22"
 POSTURES = 6
@@ -66,7 +66,8 @@ def _guided(cell, session, operator, capsys):
 def test_guided_capture_with_the_pendant_program_over_every_link(cell, capsys, monkeypatch):
     """The operator jogs to each posture from outside; every one is captured once, and the pendant showed the
     PC's hint each time; an observer (the live view's) hears the prompts and every capture."""
-    from handeye.station import capture_events, guided_pendant
+    from handeye.station.capture import events as capture_events
+    from handeye.station.guided import pendant as guided_pendant
 
     events, loop = [], guided_pendant.pendant_guided_capture
     monkeypatch.setattr(guided_pendant, "pendant_guided_capture",
@@ -211,7 +212,7 @@ def test_a_link_cut_while_the_pendant_asks_recovers_within_the_run(cell, capsys,
     program serves) and goes on; every posture once."""
     if cell["protocol"] != "socket":
         pytest.skip("a connection to cut: the socket link")
-    from handeye.station import guided_pendant
+    from handeye.station.guided import pendant as guided_pendant
 
     session, first = cell["folder"] / "cut", 2
     real, cut = guided_pendant._wait_for_operator, []
@@ -232,7 +233,7 @@ def test_an_interrupted_guided_capture_keeps_its_postures_and_resumes(cell, caps
     """Ctrl-C while the pendant asks: the postures stay, once each; the same command goes on from there."""
     if cell["protocol"] == "serial":
         pytest.skip("one line link and the register link cover the resume")
-    from handeye.station import guided_pendant
+    from handeye.station.guided import pendant as guided_pendant
 
     session, first = cell["folder"] / "resumed", 3
     proceed = threading.Event()
@@ -275,8 +276,8 @@ def test_the_pendant_port_answers_in_one_line(cell):
 
 def test_robot_web_services_guides_with_no_program(tmp_path):
     """Over RWS the PC reads the joints while the operator jogs (the pendant port's JOG): no program loaded."""
-    from handeye.station.config import load_config
-    from handeye.station.guided import guided_capture
+    from handeye.station.config.station import load_config
+    from handeye.station.guided.capture import guided_capture
     from handeye.station.runtime import open_station
 
     base = {"controller": {"protocol": "rws"}, "camera": {"backend": "xb3"}, "plan": {"postures": 3},

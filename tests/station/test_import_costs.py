@@ -8,8 +8,8 @@ import json
 
 import pytest
 
-from handeye.calibration.errors import SessionError
-from handeye.calibration.yaml_text import ALIAS_EXPANSION_BUDGET, expanded_size, parse_yaml
+from handeye.base.errors import SessionError
+from handeye.base.yaml_text import ALIAS_EXPANSION_BUDGET, expanded_size, parse_yaml
 
 
 def _bomb(levels: int = 9) -> str:

@@ -15,7 +15,7 @@ import json
 import numpy as np
 import pytest
 
-from handeye.calibration.errors import SessionError
+from handeye.base.errors import SessionError
 from handeye.station.importers import detect_format, read_any
 from pose_logs import (EULER_SEQUENCES, FANUC, KUKA, MATRIX16, ROS_RPY, ROTVEC, RVEC_TVEC, WXYZ, XYZW, PoseConvention,
                        Truth, encode, same_poses, table_text, write_yaml)
@@ -293,7 +293,7 @@ def import_then_calibrate(capsys, tmp_path, source, *flags):
         assert code2 == 1 and err2.count("\n") == 1 and "Traceback" not in err2, err2
         return code, code2, None, lines + [err2.strip()]
     pose = json.loads(result.read_text())["camera_pose"]
-    from handeye.calibration.transforms import transform_from_pose
+    from handeye.geometry.transforms import transform_from_pose
 
     return code, code2, (pose["parent"], transform_from_pose(pose["position_mm"], pose["quaternion_wxyz"])), lines
 

@@ -13,7 +13,7 @@ import shutil
 
 import pytest
 
-from handeye.calibration.errors import SessionError
+from handeye.base.errors import SessionError
 from handeye.station import cli
 from handeye.station.importers import detect_format, read_any
 
@@ -113,7 +113,7 @@ def test_cli_empty_and_binary(tmp_path, capsys):
 @pytest.fixture
 def bytes_read(monkeypatch):
     """Counts every byte the package reads through ``os.fdopen`` handles (calibration.files)."""
-    import handeye.calibration.files as files
+    import handeye.base.files as files
 
     total = [0]
     real = files.os.fdopen

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from handeye.calibration.errors import SessionError
+from handeye.base.errors import SessionError
 from handeye.station.importers import read_any
 from layout_logs import LAYOUTS, Station, station, write_log, same_as_truth
 

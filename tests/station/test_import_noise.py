@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from handeye.calibration.errors import SessionError
+from handeye.base.errors import SessionError
 from handeye.station.importers import read_any
 from handeye.station.importers.noise_test import ALPHA, compare
 from layout_logs import same_as_truth

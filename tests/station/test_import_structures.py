@@ -8,7 +8,7 @@ import pytest
 
 from handeye.station.importers import read_any
 from layout_logs import same_as_truth, station
-from handeye.calibration.errors import SessionError
+from handeye.base.errors import SessionError
 from structure_logs import commented_log, dump_json, posture_files_folder, recovers_x, side_files_folder, state_log
 
 

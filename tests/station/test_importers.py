@@ -12,12 +12,12 @@ from scipy.spatial.transform import Rotation
 
 from helpers import shared_dataset
 from handeye.calibration import diagnostics
-from handeye.calibration.errors import SessionError
+from handeye.base.errors import SessionError
 from handeye.calibration.session import read_session
 from handeye.calibration.solve import calibrate_session
 from handeye.calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session
 from handeye.calibration.compact_points import compact_points_from_corners
-from handeye.calibration.transforms import invert_transforms, rotation_error_deg
+from handeye.geometry.transforms import invert_transforms, rotation_error_deg
 from handeye.station import cli
 from handeye.station.importers import (
     FORMAT_NAMES,
@@ -779,7 +779,7 @@ def _camera_xml(path, k):
 def test_board_pose_from_an_image_keeps_the_conventions_frame(tmp_path, roll_deg):
     import cv2
 
-    from handeye.calibration.compact_points import BoardGeometry
+    from handeye.geometry.board import BoardGeometry
     from handeye.station.importers.visp_images import CameraIntrinsics, measure_board_pose
 
     k = np.array([[600.0, 0, 320.0], [0, 600.0, 240.0], [0, 0, 1]])
@@ -824,7 +824,7 @@ def test_visp_app_folder_with_images_end_to_end(tmp_path, eih):
     solved camera mount match the truth."""
     import cv2
 
-    from handeye.calibration.views import NOMINAL_XB3_LEFT as cam
+    from handeye.robot.views import NOMINAL_XB3_LEFT as cam
 
     k = np.array([[cam.f_px, 0, cam.cx], [0, cam.f_px, cam.cy], [0, 0, 1.0]])
     folder = tmp_path / "app"

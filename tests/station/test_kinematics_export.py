@@ -7,7 +7,7 @@ import pytest
 
 from handeye.calibration.arm_identification import identify_arm
 from handeye.calibration.arm_parameters import corrected_robot, parameter_names
-from handeye.calibration.kinematics import load_robot
+from handeye.robot.kinematics import load_robot
 from handeye.calibration.arm_synthetic import deviated_session
 from handeye.calibration.session import create_session, write_postures
 from handeye.calibration.solve import problem_from_session

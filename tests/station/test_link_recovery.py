@@ -10,8 +10,8 @@ from dataclasses import replace
 import pytest
 
 from handeye.calibration.session import read_session
-from handeye.station.capture import capture
-from handeye.station.config import default_config
+from handeye.station.capture.loop import capture
+from handeye.station.config.station import default_config
 from handeye.station.runtime import open_station
 
 IDLE = 0.5

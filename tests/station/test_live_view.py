@@ -14,12 +14,12 @@ import pytest
 
 from handeye.calibration.session import read_session
 from handeye.drivers.camera.stereo import nominal_xb3_model
-from handeye.station.capture import capture
-from handeye.station.capture_events import CAPTURED, CaptureStarted, Measured, Prompt, Verdict
+from handeye.station.capture.loop import capture
+from handeye.station.capture.events import CAPTURED, CaptureStarted, Measured, Prompt, Verdict
 from handeye.station.cli import main
-from handeye.station.config import default_config
-from handeye.station.guided import guided_capture
-from handeye.station.mock_operator import mock_operator
+from handeye.station.config.station import default_config
+from handeye.station.guided.capture import guided_capture
+from handeye.station.guided.operator import mock_operator
 from handeye.station.runtime import open_station
 from handeye.station.view import live_view, loopback
 from handeye.station.view.hub import ViewHub

@@ -138,7 +138,7 @@ def _captures_detection(session: Path, index: int):
     import cv2
 
     from handeye.calibration.session import read_session
-    from handeye.station.config import default_config
+    from handeye.station.config.station import default_config
     from handeye.station.runtime import open_station
 
     with open_station(default_config().as_mock(), session_dir=None) as link:
@@ -184,7 +184,7 @@ def test_the_corners_and_the_board_state_shown_are_the_captures_detection(watche
 def _mock_grab_s() -> float:
     """How long the embedded mock camera takes for one frame on this machine now (it renders three
     full-size sensors: 0.15-0.2 s on two idle cores, several times that on a loaded machine)."""
-    from handeye.station.config import default_config
+    from handeye.station.config.station import default_config
     from handeye.station.runtime import open_station
 
     with open_station(default_config().as_mock(), session_dir=None) as link:

@@ -18,10 +18,10 @@ from helpers import start_mock_station, stop_standalone_mock
 
 from handeye.calibration.session import read_session
 from handeye.station.cli import main
-from handeye.station.config import load_config
-from handeye.station.guided import guided_capture
+from handeye.station.config.station import load_config
+from handeye.station.guided.capture import guided_capture
 from handeye.station.origin import session_origin
-from handeye.station.pendant_operator import PendantClient, PendantOperator
+from pendant_operator import PendantClient, PendantOperator
 from handeye.station.runtime import open_station
 
 KEY = "never-real_40"

@@ -13,9 +13,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from handeye.calibration.quality_words import AXIS_SPREAD_NAME, MEDIAN_ANGLE_NAME, hand_axis_coverage
-from handeye.station import guided
-from handeye.station.planning import PlanScore
-from handeye.station.quality import CHECK_LABELS, QualityThresholds, meets, motion_shortfalls
+from handeye.station.guided import capture as guided
+from handeye.station.capture.planning import PlanScore
+from handeye.station.report.quality import CHECK_LABELS, QualityThresholds, meets, motion_shortfalls
 
 THRESHOLDS = QualityThresholds()
 

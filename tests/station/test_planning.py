@@ -1,13 +1,13 @@
 import numpy as np
 import pytest
 
-from handeye.calibration.compact_points import BoardGeometry, board_corners
-from handeye.calibration.kinematics import load_robot
+from handeye.geometry.board import BoardGeometry, board_corners
+from handeye.robot.kinematics import load_robot
 from handeye.calibration.quality_words import MAX_AXIS_SPREAD_DEG
-from handeye.calibration.transforms import invert_transforms
-from handeye.calibration.views import NOMINAL_XB3, ViewSampling, board_visible
+from handeye.geometry.transforms import invert_transforms
+from handeye.robot.views import NOMINAL_XB3, ViewSampling, board_visible
 from handeye.mocks.station import DEFAULT_BOARD, DEFAULT_MOUNT, DEFAULT_START
-from handeye.station.planning import PlanningError, motion_time_s, order_for_short_motions, plan_postures
+from handeye.station.capture.planning import PlanningError, motion_time_s, order_for_short_motions, plan_postures
 
 ROBOT = load_robot("IRB1400")
 BOARD = BoardGeometry((13, 8), 30.0)

@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from handeye.station.config import ConfigError, config_from_dict, default_config
+from handeye.station.config.station import ConfigError, config_from_dict, default_config
 from handeye.station.plant.settings import broker_password
 
 REAL = {"controller": {"protocol": "socket"}, "camera": {"backend": "xb3"}}

@@ -35,7 +35,7 @@ def _program_comments(rapid_dir) -> dict:
 
 
 def test_the_plan_names_each_posture_by_its_file_number(tmp_path, capsys):
-    from handeye.station.preview import posture_labels
+    from handeye.station.cell.preview import posture_labels
 
     session = tmp_path / "s"
     _capture(capsys, session, 5, "--plan-only")

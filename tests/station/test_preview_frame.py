@@ -4,15 +4,15 @@ volume is clipped to that view instead of shrinking the postures to a dot cluste
 import numpy as np
 import pytest
 
-from handeye.calibration.cell import Box, CellModel, Cylinder, Floor
-from handeye.calibration.compact_points import BoardGeometry
-from handeye.calibration.kinematics import load_robot
-from handeye.calibration.transforms import invert_transforms
+from handeye.robot.cell import Box, CellModel, Cylinder, Floor
+from handeye.geometry.board import BoardGeometry
+from handeye.robot.kinematics import load_robot
+from handeye.geometry.transforms import invert_transforms
 from handeye.mocks.station import DEFAULT_BOARD, DEFAULT_MOUNT, DEFAULT_START
-from handeye.station.cell_plan import CellCheck
-from handeye.station.cell_settings import DEFAULT_CARRIED
-from handeye.station.planning import plan_postures
-from handeye.station.preview import plan_preview_figure
+from handeye.station.cell.plan import CellCheck
+from handeye.station.config.cell import DEFAULT_CARRIED
+from handeye.station.capture.planning import plan_postures
+from handeye.station.cell.preview import plan_preview_figure
 
 ROBOT = load_robot("IRB1400")
 BOARD = BoardGeometry((13, 8), 30.0)

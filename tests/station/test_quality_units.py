@@ -1,5 +1,5 @@
 """The verdict's second line of defence against wrong units and impossible camera mounts
-(station/quality.py, station/units_advice.py): a session written in metres must not PASS, and the
+(station/report/quality.py, station/report/units_advice.py): a session written in metres must not PASS, and the
 advice of a failed verdict names the units when the data say units."""
 
 from __future__ import annotations
@@ -9,12 +9,12 @@ import copy
 import numpy as np
 import pytest
 
-from handeye.calibration.compact_points import BoardGeometry
-from handeye.calibration.errors import HandEyeError
+from handeye.geometry.board import BoardGeometry
+from handeye.base.errors import HandEyeError
 from handeye.calibration.solve import calibrate, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, sample_session
 from handeye.station.commands.calibrate import EPILOG
-from handeye.station.quality import QualityThresholds, ThresholdError, verdict
+from handeye.station.report.quality import QualityThresholds, ThresholdError, verdict
 
 from helpers import scene
 
@@ -131,7 +131,7 @@ def test_a_single_posture_in_metres_left_out_is_named_in_the_outlier_note():
 
 
 def test_good_sessions_get_no_units_advice():
-    from handeye.station.units_advice import units_advice
+    from handeye.station.report.units_advice import units_advice
 
     assert units_advice(_session()) is None
     _, judged = _judge(_session())

@@ -12,11 +12,11 @@ import pytest
 
 from handeye.calibration.session import create_session, write_posture, write_truth
 from handeye.calibration.synthetic import NoiseConfig, sample_session, truth_dict
-from handeye.station.assessment import COMPARISON_METHODS, assess, rank_note, verdict_scope
+from handeye.station.report.assessment import COMPARISON_METHODS, assess, rank_note, verdict_scope
 from handeye.station.calibrate import calibrate_session_folder
-from handeye.station.report import write_report
-from handeye.station.report_json import calibration_json
-from handeye.station.report_text import calibration_summary
+from handeye.station.report.document import write_report
+from handeye.station.report.as_json import calibration_json
+from handeye.station.report.text import calibration_summary
 
 from helpers import scene
 

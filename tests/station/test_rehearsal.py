@@ -11,10 +11,10 @@ import pytest
 import yaml
 from helpers import start_mock_station, stop_standalone_mock
 
-from handeye.calibration.errors import ConfigError
+from handeye.base.errors import ConfigError
 from handeye.calibration.session import read_session
 from handeye.station.cli import main
-from handeye.station.config import config_from_dict
+from handeye.station.config.station import config_from_dict
 from handeye.station.origin import session_origin
 
 KEY = "rehearse-key_07"
@@ -106,7 +106,7 @@ def test_a_rehearsal_config_naming_another_controller_is_refused(tmp_path, capsy
 def test_the_shipped_rehearsal_config_is_a_rehearsal_of_the_mock_the_docs_start():
     from pathlib import Path
 
-    from handeye.station.config import REHEARSAL_FILE, load_config
+    from handeye.station.config.station import REHEARSAL_FILE, load_config
 
     config = load_config(REHEARSAL_FILE)
     assert config.is_rehearsal and not config.is_mock

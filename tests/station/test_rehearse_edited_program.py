@@ -15,8 +15,8 @@ import pytest
 import yaml
 from helpers import start_standalone_mock, stop_standalone_mock
 
-from handeye.calibration.kinematics import load_robot
-from handeye.calibration.rotations import quaternion_from_matrix
+from handeye.robot.kinematics import load_robot
+from handeye.geometry.rotations import quaternion_from_matrix
 from handeye.mocks.station import DEFAULT_START
 from handeye.rapid.interpreter.configuration import confdata
 from handeye.station.cli import main

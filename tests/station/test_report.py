@@ -1,4 +1,4 @@
-"""The calibration report (station/report*.py), the quality verdict (station/quality.py) and
+"""The calibration report (station/report*.py), the quality verdict (station/report/quality.py) and
 ``handeye calibrate --report``."""
 
 from __future__ import annotations
@@ -12,23 +12,18 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration.compact_points import BoardGeometry, board_corners
-from handeye.calibration.errors import HandEyeError
+from handeye.geometry.board import BoardGeometry, board_corners
+from handeye.base.errors import HandEyeError
 from handeye.calibration.session import Posture, Session, create_session, read_session, write_posture, write_truth
 from handeye.calibration.solve import calibrate, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, sample_session, truth_dict
-from handeye.calibration.transforms import (
-    invert_transforms,
-    rotation_error_deg,
-    transform_from_pose,
-    transform_from_rotation_translation,
-)
+from handeye.geometry.transforms import invert_transforms, rotation_error_deg, transform_from_pose, transform_from_rotation_translation
 from handeye.rapid.literals import pose_literal
 from handeye.station.cli import main
 from handeye.calibration.quality_words import rotation_axis_coverage
-from handeye.station.assessment import comparison_results, corner_repeatability
-from handeye.station.quality import QualityThresholds, ThresholdError, load_thresholds, verdict
-from handeye.station.report import write_report
+from handeye.station.report.assessment import comparison_results, corner_repeatability
+from handeye.station.report.quality import QualityThresholds, ThresholdError, load_thresholds, verdict
+from handeye.station.report.document import write_report
 
 from helpers import assessed, scene
 
@@ -345,7 +340,7 @@ def test_d_org_is_one_figure_in_header_table_chart_verdict_text_and_json(tmp_pat
     """A session with outliers: the header's d_org is the chosen method's d_org in the comparison table
     and chart, the verdict's max_d_org_mm value, the JSON metrics and the text summary (on main the
     header showed the result's own metric and the table another definition under the same name)."""
-    import handeye.station.report_figures as report_figures
+    import handeye.station.report.figures as report_figures
 
     figures = []
     original = report_figures.to_png

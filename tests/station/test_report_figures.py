@@ -9,11 +9,11 @@ import itertools
 import numpy as np
 import pytest
 
-import handeye.station.report_figures as report_figures
+import handeye.station.report.figures as report_figures
 from handeye.calibration.solve import calibrate, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, sample_session
-from handeye.station.assessment import COMPARISON_METHODS, comparison_results, method_comparison
-from handeye.station.report import write_report
+from handeye.station.report.assessment import COMPARISON_METHODS, comparison_results, method_comparison
+from handeye.station.report.document import write_report
 
 from helpers import assessed, scene
 

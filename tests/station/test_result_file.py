@@ -14,7 +14,7 @@ import yaml
 from handeye.calibration import solve
 from handeye.calibration.session import create_session, write_posture
 from handeye.calibration.synthetic import NoiseConfig, sample_session
-from handeye.calibration.transforms import transform_from_pose
+from handeye.geometry.transforms import transform_from_pose
 from handeye.station.cli import main
 
 from helpers import scene

@@ -13,7 +13,7 @@ from handeye.calibration.solve import calibrate, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, sample_session, truth_dict
 from handeye.station.cli import main
 from handeye.station.origin import ORIGINS, session_origin
-from handeye.station.report import write_report
+from handeye.station.report.document import write_report
 
 from helpers import assessed, scene
 

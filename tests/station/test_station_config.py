@@ -2,7 +2,7 @@ import pytest
 import yaml
 
 from handeye.station.cli import main
-from handeye.station.config import EXAMPLE_FILE, ConfigError, config_from_dict, default_config, load_config
+from handeye.station.config.station import EXAMPLE_FILE, ConfigError, config_from_dict, default_config, load_config
 
 
 def test_default_is_the_mock_station():

@@ -1,4 +1,4 @@
-"""One decision of which station a command runs on (station/station_kind.py): any mock part (the embedded
+"""One decision of which station a command runs on (station/config/station_kind.py): any mock part (the embedded
 station, a simulated camera, the camera of `handeye mock controller`, a driver that says it talks to a
 simulation, data derived from a mock session) makes it a mock station; a session on disk that says
 ``real`` beside a recorded mock configuration reads as ``mock``. The end-to-end paths over every link
@@ -12,10 +12,10 @@ import pytest
 
 from handeye.calibration.session import create_session, read_session
 from handeye.calibration.synthetic import NoiseConfig, sample_session
-from handeye.station.config import config_from_dict, default_config
+from handeye.station.config.station import config_from_dict, default_config
 from handeye.station.origin import MOCK, REAL, session_origin
 from handeye.station.runtime import StationLink, open_station
-from handeye.station.station_kind import mock_parts, station_kind, station_tag
+from handeye.station.config.station_kind import mock_parts, station_kind, station_tag
 
 from helpers import scene
 

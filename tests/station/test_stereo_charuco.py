@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import stereo_scene as ss
-from handeye.calibration.targets import CharucoBoard
+from handeye.geometry.targets import CharucoBoard
 from handeye.drivers.camera.stereo import load_stereo_model
 from handeye.mocks.camera import StereoRenderer
 from handeye.mocks.world import PrintedBoard, sample_board_views
@@ -44,7 +44,7 @@ def test_stereo_calibrate_takes_a_charuco_board(tmp_path, capsys):
 
 
 def test_triangulate_takes_a_charuco_board_and_writes_the_corner_ids(tmp_path, capsys):
-    from handeye.calibration.targets import STATION_CHARUCO
+    from handeye.geometry.targets import STATION_CHARUCO
     from handeye.mocks.camera import MockCamera
 
     camera = MockCamera(board=PrintedBoard(STATION_CHARUCO), seed=5, output="gray", render_centre=False)

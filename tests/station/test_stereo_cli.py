@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 import stereo_scene as ss
-from handeye.calibration.errors import HandEyeError
+from handeye.base.errors import HandEyeError
 from handeye.drivers.camera.coverage import Coverage
 from handeye.drivers.camera.stereo import load_stereo_model
 from handeye.station.cli import main
-from handeye.station.stereo_calibration import StereoCalibrationConfig, capture_live, find_pairs
+from handeye.station.stereo_from_pairs import StereoCalibrationConfig, capture_live, find_pairs
 
 
 def _run(capsys, *args):

@@ -6,8 +6,8 @@ from __future__ import annotations
 import pytest
 
 import stereo_scene as ss
-from handeye.calibration.compact_points import BoardGeometry
-from handeye.station import stereo_calibration as sc
+from handeye.geometry.board import BoardGeometry
+from handeye.station import stereo_from_pairs as sc
 from handeye.station.cli import main
 
 

@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from handeye.calibration.compact_points import board_corners
+from handeye.geometry.board import board_corners
 from handeye.drivers.camera.stereo import nominal_xb3_model, save_stereo_model
 from handeye.mocks.camera import StereoRenderer
 from handeye.mocks.world import PrintedBoard, board_view

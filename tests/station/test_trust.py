@@ -15,14 +15,14 @@ from handeye.calibration.plausibility import UnitsError, check_plausible, implau
 from handeye.calibration.session import create_session, read_session, write_posture
 from handeye.calibration.solve import calibrate, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, sample_session
-from handeye.calibration.transforms import translation_error_mm
+from handeye.geometry.transforms import translation_error_mm
 from handeye.drivers.controller import open_controller
 from handeye.drivers.controller.errors import ControllerRefused, ControllerTimeout
 from handeye.mocks.controller import start_mock_controller
 from handeye.mocks.station import MockStation
-from handeye.station.capture import CaptureError, capture
+from handeye.station.capture.loop import CaptureError, capture
 from handeye.station.cli import main
-from handeye.station.config import ConfigError, config_from_dict, default_config, load_config
+from handeye.station.config.station import ConfigError, config_from_dict, default_config, load_config
 from handeye.station.origin import session_origin
 from handeye.station.runtime import StationLink
 from handeye.station.writeback import PENDING_FILE, WritebackError, writeback

@@ -13,10 +13,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from handeye.calibration.transforms import rotation_error_deg
+from handeye.geometry.transforms import rotation_error_deg
 from handeye.mocks.station import DEFAULT_MOUNT, read_state, write_state
 from handeye.station.cli import main
-from handeye.station.config import FaultSettings
+from handeye.station.config.station import FaultSettings
 from handeye.station.runtime import mock_state_file
 
 BASE_YAML = "controller: {protocol: mock}\ncamera: {backend: mock}\nplan: {postures: 14}\n"
@@ -231,10 +231,10 @@ class _RealLink:
 def test_verify_over_a_link_without_a_mock_reports_the_robot_time(station):
     """The robot time comes from the plan's motion model from where the controller reports the arm, never from
     a mock: over a link without one the check works and says it, and it is the time the simulated arm took."""
-    from handeye.station.config import load_config
+    from handeye.station.config.station import load_config
     from handeye.station.runtime import open_station
-    from handeye.station.verify import verify
-    from handeye.station.verify_result import outcome_json
+    from handeye.station.verify.check import verify
+    from handeye.station.verify.result import outcome_json
 
     root, session, config = station
     config = load_config(config)
@@ -376,7 +376,7 @@ def test_a_level_outside_its_range_is_a_usage_error(station, capsys, level):
 def test_a_link_failure_after_three_postures_counts_them(station, capsys, monkeypatch):
     # issue 42.10: the JSON said "measured": 0 after 3 postures were measured and written
     from handeye.drivers.errors import StationError
-    from handeye.station import capture
+    from handeye.station.capture import loop as capture
 
     real, calls = capture._capture_posture, []
 

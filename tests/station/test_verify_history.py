@@ -12,7 +12,7 @@ import multiprocessing
 import pytest
 
 from handeye.station.cli import main
-from handeye.station.verify_history import append_record, history_lines, load_history, read_history, trend_png
+from handeye.station.verify.history import append_record, history_lines, load_history, read_history, trend_png
 
 GOOD = {"time": "2026-01-02T03:04:05", "kind": "verify", "station": "mock", "session": "/x/base", "verdict": "ok",
         "cause": "none", "joint": None, "translation_mm": 0.01, "rotation_deg": 0.001, "p_value": 0.5, "postures": 5}

@@ -1,4 +1,4 @@
-"""Which write-back a check follows (``station.verify_reference``), and the tooldata advice it gives: it never
+"""Which write-back a check follows (``station.verify.reference``), and the tooldata advice it gives: it never
 advises undoing the latest deliberate write-back (issue 42.2). The whole path on the mock station is in
 ``test_verify.py``; here the history's cases the station test does not reach."""
 
@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import json
 
-from handeye.station.verify_history import append_record, history_path
-from handeye.station.verify_reference import follow, lineage
-from handeye.station.verify_result import _tooldata_advice
+from handeye.station.verify.history import append_record, history_path
+from handeye.station.verify.reference import follow, lineage
+from handeye.station.verify.result import _tooldata_advice
 
 HELD = {"position_mm": [-118.0, 34.5, 92.0], "quaternion_wxyz": [0.703087, 0.01412, -0.018827, 0.710715]}
 SESSION_TOOL = {"position_mm": [-117.0, 34.5, 92.0], "quaternion_wxyz": HELD["quaternion_wxyz"]}

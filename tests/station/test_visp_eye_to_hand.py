@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from handeye.calibration.errors import SessionError
+from handeye.base.errors import SessionError
 from handeye.calibration.solve import calibrate_session
-from handeye.calibration.transforms import rotation_error_deg
-from handeye.calibration.views import NOMINAL_XB3_LEFT as CAM
+from handeye.geometry.transforms import rotation_error_deg
+from handeye.robot.views import NOMINAL_XB3_LEFT as CAM
 from handeye.station.importers import read_any
 
 from pose_logs import Truth

@@ -18,7 +18,7 @@ import yaml
 from scipy.spatial.transform import Rotation
 
 from helpers import shared_dataset
-from handeye.calibration.compact_points import BoardGeometry
+from handeye.geometry.board import BoardGeometry
 from handeye.calibration.session import Posture, Session
 from handeye.calibration.solve import calibrate_session
 from handeye.drivers.camera.checkerboard import board_pose_from_corners, detect_board

@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from handeye.calibration.kinematics import load_robot
-from handeye.station.cell_plan import CellCheck
+from handeye.robot.kinematics import load_robot
+from handeye.station.cell.plan import CellCheck
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks" / "whole_arm"))
 from bench_whole_arm import BOARD, CELL, plan_once  # noqa: E402  (the benchmark's own cell)

@@ -7,9 +7,9 @@ import yaml
 from handeye.drivers.controller import InvalidRequest, ToolData, open_controller
 from handeye.drivers.controller.types import write_key_code
 from handeye.mocks.station import MockStation, MockStationSpec
-from handeye.station.capture import capture
+from handeye.station.capture.loop import capture
 from handeye.station.cli import main
-from handeye.station.config import ConfigError, config_from_dict, default_config
+from handeye.station.config.station import ConfigError, config_from_dict, default_config
 from handeye.station.runtime import _controller_options, open_station
 
 KEY = "Station-7_secret"

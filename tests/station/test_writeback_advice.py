@@ -14,8 +14,8 @@ from handeye.calibration.session import create_session, write_posture
 from handeye.calibration.solve import calibrate, problem_from_session
 from handeye.calibration.synthetic import NoiseConfig, sample_session
 from handeye.station.cli import main
-from handeye.station.config import default_config
-from handeye.station.quality import verdict
+from handeye.station.config.station import default_config
+from handeye.station.report.quality import verdict
 from handeye.station.writeback import WritebackError, writeback
 
 from helpers import scene

@@ -12,7 +12,7 @@ from handeye.calibration.synthetic import NoiseConfig, sample_session
 from handeye.drivers.controller import open_controller
 from handeye.mocks.station import MockStation
 from handeye.station.cli import main
-from handeye.station.config import default_config
+from handeye.station.config.station import default_config
 from handeye.station.writeback import WritebackError, writeback
 
 from helpers import problem as synthetic_problem

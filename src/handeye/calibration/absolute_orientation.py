@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .parallel import WORKERS, map_chunks
-from .rotations import canonical_quaternions, rotate_vectors
+from ..base import WORKERS, map_chunks
+from ..geometry import canonical_quaternions, rotate_vectors
 
 __all__ = ["AbsoluteOrientation", "rotation_between_vectors", "absolute_orientation", "horn_matrix"]
 

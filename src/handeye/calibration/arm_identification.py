@@ -258,7 +258,7 @@ def identify_arm(problem, solution=None, prior: dict | None = None) -> ArmIdenti
         A session without joint angles of a known robot (one line, what to do).
     """
     from .eiv import solve_eiv  # noqa: PLC0415
-    from .kinematics import load_robot  # noqa: PLC0415
+    from ..robot import load_robot  # noqa: PLC0415
 
     if problem.joints_deg is None or problem.robot is None:
         raise ValueError("the arm's kinematics need the joint angles of every posture and the robot model in the "

@@ -21,8 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .files import parse_yaml, read_text_file
-from .kinematics import RobotModel
+from ..base import parse_yaml, read_text_file
+from ..robot import RobotModel
 
 __all__ = ["KINDS", "DEFAULT_PRIOR", "parameter_names", "parameter_kinds", "parameter_jacobian", "robot_prior",
            "why_absorbed", "dh_deviation", "corrected_robot"]
@@ -77,7 +77,7 @@ def robot_prior(robot_name: str | None) -> dict:
     """``kinematic_prior`` of the robot file (``length_mm``, ``angle_deg``), else :data:`DEFAULT_PRIOR`."""
     if robot_name is None:
         return dict(DEFAULT_PRIOR)
-    from .kinematics import _normalise_name, _robot_files  # noqa: PLC0415
+    from ..robot import _normalise_name, _robot_files  # noqa: PLC0415
     from pathlib import Path  # noqa: PLC0415
 
     path = _robot_files().get(_normalise_name(str(robot_name)))

@@ -11,11 +11,11 @@ from __future__ import annotations
 import numpy as np
 
 from .arm_parameters import corrected_robot
-from .compact_points import board_corners
+from ..geometry import board_corners
 from .noise import stereo_point_shape
 from .session import Posture, Session
 from .synthetic import Scene
-from .transforms import invert_transforms
+from ..geometry import invert_transforms
 
 __all__ = ["deviated_session", "random_deviation"]
 

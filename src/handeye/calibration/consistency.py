@@ -36,11 +36,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .errors import CalibrationError
+from ..base import CalibrationError
 from .invariants import (MIN_MOTION_DEG, fit_hand_eye, pair_indices, posture_medians, relative_transforms,
                          screw_pitches)
 from .refine import keep_majority, robust_outliers
-from .transforms import invert_transforms
+from ..geometry import invert_transforms
 
 __all__ = ["ConsistencyLimits", "InconsistentPosesError", "consistency_figures", "check_consistent", "posture_gaps",
            "consistent_majority"]

@@ -39,10 +39,10 @@ import numpy as np
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
-from .errors import brief
+from ..base import brief
 from .invariants import bounded_pairs, posture_medians as posture_median_gaps, relative_transforms
 from .problem import EYE_IN_HAND, EYE_TO_HAND, SETUPS, hand_poses
-from .transforms import rotation_error_deg
+from ..geometry import rotation_error_deg
 
 __all__ = [
     "Finding",

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .transforms import invert_transforms
+from ..geometry import invert_transforms
 
 __all__ = [
     "MIN_MOTION_DEG",

@@ -82,7 +82,7 @@ def joint_mismatch(robot, joints_deg, tool02base, posture_ids=None) -> JointMism
 def session_joint_mismatch(session) -> JointMismatch | None:
     """:func:`joint_mismatch` over a session's postures that hold both readings (None when the session
     names no robot model that loads, or no posture holds both)."""
-    from .kinematics import load_robot  # noqa: PLC0415
+    from ..robot import load_robot  # noqa: PLC0415
 
     if not session.robot:
         return None

@@ -36,7 +36,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from .registry import Registry, load_target
+from ..base import Registry, load_target
 
 __all__ = [
     "Method",

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .transforms import invert_transforms, rotation_error_deg, translation_error_mm
+from ..geometry import invert_transforms, rotation_error_deg, translation_error_mm
 
 __all__ = [
     "axxb_residuals",

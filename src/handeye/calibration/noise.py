@@ -38,8 +38,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .kinematics import RobotModel
-from .rotations import quaternion_from_axis_angle, quaternion_multiply, rotate_vectors, skew
+from ..robot import RobotModel
+from ..geometry import quaternion_from_axis_angle, quaternion_multiply, rotate_vectors, skew
 
 __all__ = [
     "XB3_FOCAL_PX",
@@ -400,7 +400,7 @@ def kinematic_jacobian(robot: RobotModel, joints_deg) -> tuple[np.ndarray, np.nd
     kinds : ndarray of int, shape (4k,)
         0 for lengths (mm), 1 for angles (degrees).
     """
-    from .kinematics import dh_transforms  # noqa: PLC0415
+    from ..robot import dh_transforms  # noqa: PLC0415
 
     theta = robot.serial_angles_rad(joints_deg) + np.radians(robot.dh[:, 3])
     links = dh_transforms(robot.dh, theta)  # (n, k, 4, 4)

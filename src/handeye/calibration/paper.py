@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import CalibrationError
+from ..base import CalibrationError
 from .problem import HandEyeProblem
 from .selection import CandidateScorer, select_candidate
 from .triplets import all_postures_solution, relative_motions, triplet_candidates

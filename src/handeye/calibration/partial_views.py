@@ -14,34 +14,10 @@ from __future__ import annotations
 import numpy as np
 
 from .compact_points import CompactPoints
-from .transforms import transform_from_rotation_translation
+from ..geometry import transform_from_rotation_translation
+from ..geometry import MIN_CORNERS, MIN_SPAN_FRACTION, view_refusal  # where a view is judged (drivers use it)
 
 __all__ = ["MIN_CORNERS", "MIN_SPAN_FRACTION", "view_refusal", "rigid_fit", "board_arrays", "compact_points_from_fit"]
-
-#: Fewest corners of a partial view (a pose needs 3; a check of spacing and planarity needs more).
-MIN_CORNERS = 6
-#: The seen corners must span at least this fraction of the board along its long side and along its
-#: short side (their bounding box in the target frame), or the pose is poorly fixed.
-MIN_SPAN_FRACTION = 0.25
-
-
-def view_refusal(ids, board) -> str:
-    """Why the corners ``ids`` (target indices) of ``board`` cannot fix a board pose ("" when they can)."""
-    ids = np.asarray(ids, int)
-    if len(ids) < MIN_CORNERS:
-        return f"only {len(ids)} corners of the board seen (at least {MIN_CORNERS}): bring more of the board into view"
-    grid = board.grid(1.0)
-    seen = grid[ids, :2]
-    full = np.ptp(grid[:, :2], axis=0)
-    span = np.ptp(seen, axis=0) / np.maximum(full, 1e-12)
-    if np.min(span) < MIN_SPAN_FRACTION:
-        return (f"the seen corners span only {100 * span[0]:.0f} % x {100 * span[1]:.0f} % of the board "
-                f"(at least {100 * MIN_SPAN_FRACTION:.0f} % each way): too little to fix its pose")
-    rank = np.linalg.matrix_rank(seen - seen.mean(axis=0), tol=1e-6)
-    if rank < 2:
-        return "the seen corners lie on one line of the board: too little to fix its pose"
-    return ""
-
 
 def rigid_fit(model, measured) -> np.ndarray:
     """``target2cam`` ``(4, 4)``: the least-squares rigid motion of ``model`` ``(k, 3)`` onto ``measured`` ``(k, 3)``."""

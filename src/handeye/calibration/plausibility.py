@@ -25,8 +25,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .board_scale import SQUARE_TOLERANCE, judge_square_size
-from .errors import CalibrationError, brief
+from ..geometry import SQUARE_TOLERANCE, judge_square_size
+from ..base import CalibrationError, brief
 
 __all__ = [
     "MIN_DISTANCE_MM",
@@ -120,7 +120,7 @@ def _odd_postures(distances: np.ndarray, ids, what: str) -> list:
 def _robot_reach_mm(name) -> tuple[str, float] | None:
     if not name:
         return None
-    from .kinematics import load_robot
+    from ..robot import load_robot
 
     try:
         robot = load_robot(name)

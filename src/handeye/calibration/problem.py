@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .compact_points import CompactPoints
-from .transforms import invert_transforms
+from ..geometry import invert_transforms
 
 __all__ = ["EYE_IN_HAND", "EYE_TO_HAND", "SETUPS", "MIN_POSTURES", "HandEyeProblem", "hand_poses"]
 

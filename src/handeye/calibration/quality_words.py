@@ -74,7 +74,7 @@ from .invariants import bounded_pairs
 from .metrics import d_org, fixed_points
 from .metrics import posture_residuals as metrics_posture_residuals
 from .problem import EYE_IN_HAND, HandEyeProblem
-from .rotations import canonical_quaternions, quaternion_conjugate, quaternion_from_matrix, quaternion_multiply
+from ..geometry import canonical_quaternions, quaternion_conjugate, quaternion_from_matrix, quaternion_multiply
 
 __all__ = [
     "AXIS_SPREAD_NAME",

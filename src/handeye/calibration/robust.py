@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import CalibrationError
+from ..base import CalibrationError
 from .paper import solve_paper
 from .problem import MIN_POSTURES, HandEyeProblem
 from .refine import (

@@ -31,8 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .methods import get_method, method_names
-from .parallel import map_chunks
-from .rotations import matrix_from_quaternion
+from ..base import map_chunks
+from ..geometry import matrix_from_quaternion
 from .triplets import Candidates, RelativeMotions
 
 __all__ = [

@@ -21,11 +21,11 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from .compact_points import BoardGeometry
-from .errors import SessionError, brief
-from .files import make_folder, parse_yaml, read_text_file, write_failure, write_text_atomic, write_texts_atomic
+from ..geometry import BoardGeometry
+from ..base import SessionError, brief
+from ..base import make_folder, parse_yaml, read_text_file, write_failure, write_text_atomic, write_texts_atomic
 from .problem import SETUPS
-from .transforms import pose_from_transform, transform_from_pose
+from ..geometry import pose_from_transform, transform_from_pose
 
 __all__ = [
     "FORMAT",
@@ -122,7 +122,7 @@ class Session:
         if self.robot:
             out["robot"] = self.robot
         if self.target is not None:
-            from .targets import target_to_dict  # noqa: PLC0415 (the target registry: checkerboard, charuco, circles)
+            from ..geometry import target_to_dict  # noqa: PLC0415 (the target registry: checkerboard, charuco, circles)
 
             out["target"] = target_to_dict(self.target)
         out.update(self.extra)
@@ -327,7 +327,7 @@ def _parse_target(value) -> BoardGeometry | None:
     if value is None:
         return None
     if isinstance(value, dict) and value.get("type", "checkerboard") != "checkerboard":
-        from .targets import target_from_dict  # noqa: PLC0415 (a ChArUco board or a circle grid: issue 37)
+        from ..geometry import target_from_dict  # noqa: PLC0415 (a ChArUco board or a circle grid: issue 37)
 
         try:
             return target_from_dict(value)

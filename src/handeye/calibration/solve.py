@@ -12,9 +12,9 @@ import numpy as np
 
 from .compact_points import compact_points_from_corners, compact_points_from_poses
 from .consistency import consistent_majority
-from .errors import CalibrationError, HandEyeError, brief, exception_line
+from ..base import CalibrationError, HandEyeError, brief, exception_line
 from .invariants import bounded_pairs
-from .kinematics import load_robot
+from ..robot import load_robot
 from .methods import DEFAULT_METHOD, METHODS, Method, get_method, method_names
 from .metrics import axxb_residuals, d_back, d_org, errors_against_truth, fixed_points
 from .paper import solve_paper, truth_board_points
@@ -31,8 +31,8 @@ from .quality_words import (
     usable_axes,
 )
 from .session import Session
-from .time_bound import TIME_VARIABLE, OutOfTime, call_within
-from .transforms import pose_from_transform, rigid_defect, transform_from_pose
+from ..base import TIME_VARIABLE, OutOfTime, call_within
+from ..geometry import pose_from_transform, rigid_defect, transform_from_pose
 from .triplets import relative_motions
 
 __all__ = [
@@ -251,7 +251,7 @@ def problem_from_session(session: Session, check_units: bool = True,
 
 def _partial(session: Session) -> bool:
     """True for a session of a board that may be seen in part (ChArUco), or one whose postures name corner ids."""
-    from .targets import partial_ok  # noqa: PLC0415
+    from ..geometry import partial_ok  # noqa: PLC0415
 
     return partial_ok(session.target) or any(p.corner_ids is not None for p in session.postures)
 
@@ -397,7 +397,7 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
 
 def bounded_for(method: str, function, what: str = "solve"):
     """``function()``, under the time bound when ``method`` is another package's (an entry point's, or
-    registered in code from outside handeye: :func:`~handeye.calibration.time_bound.call_within`); handeye's
+    registered in code from outside handeye: :func:`~handeye.base.time_bound.call_within`); handeye's
     own methods run as they are.
 
     Raises

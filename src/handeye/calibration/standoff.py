@@ -30,7 +30,7 @@ import numpy as np
 
 from .arm_parameters import corrected_robot, parameter_jacobian
 from .noise import adjoint, skew
-from .transforms import invert_transforms
+from ..geometry import invert_transforms
 
 __all__ = ["DEFAULT_STANDOFF_MM", "StandoffError", "predicted_standoff", "standoff_points", "measured_standoff"]
 
@@ -117,7 +117,7 @@ def _jacobian(robot, joints, x, target, columns, standoff_mm) -> np.ndarray:
 def predicted_standoff(ident, joints_deg=None, standoff_mm: float = DEFAULT_STANDOFF_MM) -> StandoffError:
     """The predicted stand-off error of an :class:`~handeye.calibration.arm_identification.ArmIdentification`
     with and without its correction, at ``joints_deg`` (default: the session's postures)."""
-    from .kinematics import load_robot  # noqa: PLC0415
+    from ..robot import load_robot  # noqa: PLC0415
 
     sol = ident.camera_only
     robot = load_robot(ident.robot)

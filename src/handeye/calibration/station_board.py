@@ -1,10 +1,5 @@
-"""The station's checkerboard, the one default of every board setting (no import beyond the standard
-library, so the command line can show it without loading numpy): 13 x 8 inner corners (14 x 9
-squares) of 30 mm. ``compact_points.STATION_BOARD`` is the same as a ``BoardGeometry``."""
+"""Deprecated alias of :mod:`handeye.geometry.station_board` (moved there by issue 39; goes in the next release)."""  # handeye-rooms-shim
 
-__all__ = ["STATION_CORNERS", "STATION_SQUARE_MM"]
+from handeye.base import alias_module
 
-#: Inner corners along x (the long side), along y.
-STATION_CORNERS = (13, 8)
-#: Square size, mm.
-STATION_SQUARE_MM = 30.0
+alias_module(__name__, "handeye.geometry.station_board")

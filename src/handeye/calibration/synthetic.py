@@ -21,19 +21,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .compact_points import STATION_BOARD, BoardGeometry, board_corners
-from .kinematics import RobotModel, inverse_kinematics, load_robot
-from .views import (
-    NOMINAL_XB3_LEFT,
-    ViewSampling,
-    board_visible,
-    ik_from_standard_seeds,
-    look_at,
-    sample_eye_in_hand_postures,
-)
+from ..geometry import STATION_BOARD, BoardGeometry, board_corners
+from ..robot import RobotModel, inverse_kinematics, load_robot
+from ..robot import NOMINAL_XB3_LEFT, ViewSampling, board_visible, ik_from_standard_seeds, look_at, sample_eye_in_hand_postures
 from .problem import EYE_IN_HAND, SETUPS
 from .session import Posture, Session
-from .transforms import invert_transforms, pose_from_transform, transform_from_rotation_translation
+from ..geometry import invert_transforms, pose_from_transform, transform_from_rotation_translation
 
 __all__ = [
     "SceneConfig",
@@ -191,8 +184,8 @@ def _default_geometry(config: SceneConfig):
 
 def _self_clear_veto(robot: RobotModel, margin_mm: float):
     """``veto(joints) -> bool`` of :attr:`SceneConfig.self_clear_mm`: True keeps the posture (and remembers it)."""
-    from .cell import DEFAULT_CARRIED
-    from .clearance import CellGuard
+    from ..robot import DEFAULT_CARRIED
+    from ..robot import CellGuard
 
     posture = CellGuard(robot, [], DEFAULT_CARRIED, margin_mm=margin_mm)
     moves = CellGuard(robot, [], DEFAULT_CARRIED, margin_mm=0.0, step_mm=5.0)  # as the mock supervises them

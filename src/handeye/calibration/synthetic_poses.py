@@ -24,7 +24,7 @@ from scipy.spatial.transform import Rotation
 
 from .compact_points import compact_points_from_poses
 from .problem import EYE_IN_HAND, HandEyeProblem
-from .transforms import invert_transforms, transform_from_rotation_translation
+from ..geometry import invert_transforms, transform_from_rotation_translation
 
 __all__ = ["OPENCV_TEST_NOISE", "random_pose", "opencv_test_problem"]
 

@@ -19,13 +19,7 @@ import numpy as np
 from .absolute_orientation import rotation_between_vectors
 from .invariants import pair_indices
 from .problem import HandEyeProblem
-from .rotations import (
-    canonical_quaternions,
-    matrix_from_quaternion,
-    quaternion_conjugate,
-    quaternion_from_matrix,
-    quaternion_multiply,
-)
+from ..geometry import canonical_quaternions, matrix_from_quaternion, quaternion_conjugate, quaternion_from_matrix, quaternion_multiply
 
 __all__ = [
     "RelativeMotions",

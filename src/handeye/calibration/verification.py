@@ -30,7 +30,7 @@ import numpy as np
 from scipy.stats import f as f_dist
 
 from .noise import adjoint, flange_jacobian, retract, twist_between
-from .transforms import invert_transforms
+from ..geometry import invert_transforms
 
 __all__ = ["DEFAULT_LEVEL", "LEVEL_RANGE", "MIN_VERIFY_POSTURES", "Baseline", "Discrepancy", "DriftTest", "baseline_from_solution",
            "discrepancy", "drift_test", "hypothesis_jacobians"]

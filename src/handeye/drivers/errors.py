@@ -3,8 +3,8 @@ back end's name (``.backend``, and in front of the message: ``socket: PING: no r
 
 The tree::
 
-    HandEyeError (src/handeye/calibration/errors.py)
-     +-- ConfigError (src/handeye/calibration/errors.py)   configuration: a bad option, register map, back-end name
+    HandEyeError (src/handeye/base/errors.py)
+     +-- ConfigError (src/handeye/base/errors.py)   configuration: a bad option, register map, back-end name
      +-- StationError                          base of every driver error (``.backend``)
           +-- LinkConnectionError              connection: cannot connect, or reconnecting failed
           +-- LinkTimeout                      timeout: no answer within the time budget
@@ -21,7 +21,7 @@ is no copy of the tree per back end. The controller-flavoured names of the kinds
 
 from __future__ import annotations
 
-from ..calibration.errors import ConfigError, HandEyeError, with_backend
+from ..base import ConfigError, HandEyeError, with_backend
 
 __all__ = [
     "StationError",

@@ -14,7 +14,7 @@ to handeye::
 Entry points are read at the first question asked of a registry (and again after :meth:`Registry.refresh`),
 so importing handeye never imports a plug-in. Everything that lists back ends (config validation,
 command-line choices, the runtime, the mocks, test parameters) asks the registry. The machinery is
-:class:`handeye.calibration.registry.Registry`, shared with the calibration methods.
+:class:`handeye.base.registry.Registry`, shared with the calibration methods.
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TypeVar
 
-from ..calibration.registry import Registry as _Registry
-from ..calibration.registry import load_target
+from ..base import Registry as _Registry
+from ..base import load_target
 
 __all__ = ["Backend", "Registry", "Setting", "chosen_with_own", "declared_settings", "keyword_options", "load_target"]
 
@@ -85,7 +85,7 @@ class Setting:
     required : str
         Not empty: the back end cannot open without it; what it is, for the message (``a device or pyserial URL``).
     note : str
-        More about it for the documented example (``src/handeye/station/example_station.yaml``), beyond ``help``.
+        More about it for the documented example (``src/handeye/station/config/example_station.yaml``), beyond ``help``.
     """
 
     key: str
@@ -116,7 +116,7 @@ class Setting:
 
 def declared_settings(registry, attribute: str, names=None) -> dict:
     """``{key: (Setting, names of the back ends declaring it)}`` over the back ends ``names`` of
-    ``registry`` (registry order; default: those loaded, :meth:`~handeye.calibration.registry.Registry.loaded_names`:
+    ``registry`` (registry order; default: those loaded, :meth:`~handeye.base.registry.Registry.loaded_names`:
     handeye's own and the plug-ins asked for so far, so describing settings imports no other plug-in),
     from each one's ``attribute`` (a tuple of :class:`Setting`): the keys of one station config section.
     Two back ends sharing a key share its description (the first one's)."""
@@ -158,7 +158,7 @@ B = TypeVar("B", bound=Backend)
 
 class Registry(_Registry[B]):
     """Back ends of one kind by name, in registration order (the package's first, then plug-ins):
-    :class:`handeye.calibration.registry.Registry` whose entry points may also name a class.
+    :class:`handeye.base.registry.Registry` whose entry points may also name a class.
 
     Parameters
     ----------

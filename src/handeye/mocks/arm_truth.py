@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..calibration.kinematics import RobotModel
+from ..robot import RobotModel
 
 __all__ = ["ArmDeviations", "LINK_NAMES", "true_arm"]
 

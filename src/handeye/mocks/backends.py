@@ -8,8 +8,8 @@ camera back end ``mock``. Nothing heavy is imported here: the classes load when 
 
 from __future__ import annotations
 
-from ..drivers.camera.backends import CAMERAS, CameraBackend
-from ..drivers.controller.backends import CONTROLLERS, LinkSetting, MockServer
+from ..drivers import CAMERAS, CameraBackend
+from ..drivers import CONTROLLERS, LinkSetting, MockServer
 
 __all__ = ["MOCK_SERVERS", "MOCK_CAMERA", "MockVariant", "mock_protocol_choices", "mock_protocols", "mock_server",
            "mock_settings", "mock_variants"]

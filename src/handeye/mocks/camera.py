@@ -35,10 +35,10 @@ from typing import Callable
 import cv2
 import numpy as np
 
-from ..drivers.camera.decode import decode_xb3_frame, pack_rgb8
-from ..drivers.camera.errors import CameraError
-from ..drivers.camera.interface import Camera, StereoFrame
-from ..drivers.camera.stereo import StereoModel, nominal_xb3_model
+from ..drivers import decode_xb3_frame, pack_rgb8
+from ..drivers import CameraError
+from ..drivers import Camera, StereoFrame
+from ..drivers import StereoModel, nominal_xb3_model
 from .world import Lighting, PrintedBoard, hard_lighting
 
 __all__ = ["RenderOptions", "ViewRenderer", "StereoRenderer", "MockCamera", "render_views", "render_xb3_frame",

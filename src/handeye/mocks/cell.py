@@ -33,11 +33,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..drivers.camera.decode import decode_xb3_frame
-from ..drivers.camera.errors import CameraError
-from ..drivers.camera.interface import Camera, StereoFrame
-from ..rapid.errors import RapidError
-from ..rapid.interpreter import ModuleSource
+from ..drivers import decode_xb3_frame
+from ..drivers import CameraError
+from ..drivers import Camera, StereoFrame
+from ..rapid import RapidError
+from ..rapid import ModuleSource
 from .controller.sources import MODULE_SUFFIXES, ControllerProgram
 from .side_port import TOO_LONG, SidePort, read_line
 

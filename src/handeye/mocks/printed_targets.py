@@ -39,7 +39,7 @@ class Occlusion:
 
 @functools.lru_cache(maxsize=4)
 def _print(squares, square_mm, marker_mm, dictionary, legacy, px_per_mm) -> np.ndarray:
-    from ..drivers.camera.charuco import _opencv_board
+    from ..drivers import _opencv_board
 
     board = _opencv_board(squares, square_mm, marker_mm, dictionary, legacy)
     size = (int(round(squares[0] * square_mm * px_per_mm)), int(round(squares[1] * square_mm * px_per_mm)))
@@ -47,7 +47,7 @@ def _print(squares, square_mm, marker_mm, dictionary, legacy, px_per_mm) -> np.n
 
 
 def charuco_print(geometry, px_per_mm: float = PX_PER_MM) -> np.ndarray:
-    """OpenCV's image ``(h, w)`` uint8 of a :class:`~handeye.calibration.targets.CharucoBoard` (squares only)."""
+    """OpenCV's image ``(h, w)`` uint8 of a :class:`~handeye.geometry.targets.CharucoBoard` (squares only)."""
     return _print(tuple(geometry.squares), float(geometry.square_mm), float(geometry.marker_mm), geometry.dictionary,
                   bool(geometry.legacy), float(px_per_mm))
 

@@ -8,12 +8,12 @@ the program defines are kept in :attr:`SimulatedRobot.world_zones`.
 The arm moves between joint configurations with all axes starting and stopping together
 (a synchronised ``MoveAbsJ``): the move lasts ``max_i |Δq_i| / (speed_fraction * max_speed_i)``,
 axes interpolated linearly in time (no acceleration ramps, no path planning). A cell can be given
-(``guard``: a :class:`~handeye.calibration.clearance.CellGuard`): a move whose joint-interpolated
+(``guard``: a :class:`~handeye.robot.clearance.CellGuard`): a move whose joint-interpolated
 path takes any link or what the flange carries into one of its volumes, or into the arm's own links
 (the robot file's self-collision pairs), is refused before the arm moves (:class:`ZoneViolation`), as
 a real cell's world zones, or a real arm's crash, would stop it. Without a cell the arm still
 refuses self-collision (:func:`self_guard`, the default). The
-flange pose comes from the kinematics model (``calibration.kinematics``: the parallel-arm coupling
+flange pose comes from the kinematics model (``robot.kinematics``: the parallel-arm coupling
 of axes 2 and 3 included). ``time_scale`` shrinks wall-clock motion time for tests (0.01 = 100x).
 
 Thread-safe: the controller servers move the robot from their threads while a test or the station
@@ -29,11 +29,11 @@ from typing import Callable
 
 import numpy as np
 
-from ..calibration.cell import DEFAULT_CARRIED
-from ..calibration.clearance import CellGuard
-from ..calibration.errors import HandEyeError
-from ..calibration.kinematics import RobotModel, load_robot
-from ..drivers.controller.types import FlangePose, ToolData
+from ..robot import DEFAULT_CARRIED
+from ..robot import CellGuard
+from ..base import HandEyeError
+from ..robot import RobotModel, load_robot
+from ..drivers import FlangePose, ToolData
 
 __all__ = ["SimulatedRobot", "DEFAULT_TOOL", "SELF_ONLY", "ZoneViolation", "self_guard"]
 
@@ -56,7 +56,7 @@ class ZoneViolation(HandEyeError):
 
     Attributes
     ----------
-    violation : handeye.calibration.clearance.Violation
+    violation : handeye.robot.clearance.Violation
         What would have entered which volume, and where along the move.
     target_deg : ndarray, shape (dof,)
     """
@@ -268,7 +268,7 @@ class SimulatedRobot:
     def path_violation(self, configurations):
         """The cell check of a path: the first place where the arm, moving joint-interpolated from each
         configuration of ``configurations`` ``(n, dof)`` to the next, comes closer to a volume of the cell
-        (``guard``) than its margin; a :class:`~handeye.calibration.clearance.Violation` whose ``at`` is
+        (``guard``) than its margin; a :class:`~handeye.robot.clearance.Violation` whose ``at`` is
         the fraction of the whole path, or None (clear, or no cell)."""
         path = np.asarray(configurations, dtype=float).reshape(-1, self.model.dof)
         if self.guard is None:

@@ -28,15 +28,15 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..calibration.cell import CellModel
-from ..calibration.clearance import CellGuard
+from ..robot import CellModel
+from ..robot import CellGuard
 from .robot import self_guard
-from ..calibration.compact_points import STATION_BOARD, BoardGeometry
-from ..calibration.kinematics import RobotModel, load_robot
-from ..calibration.transforms import transform_from_rotation_translation
-from ..drivers.camera.stereo import StereoModel, nominal_xb3_model
-from ..drivers.controller.backends import DEFAULT_PROTOCOL
-from ..drivers.controller.types import ToolData
+from ..geometry import STATION_BOARD, BoardGeometry
+from ..robot import RobotModel, load_robot
+from ..geometry import transform_from_rotation_translation
+from ..drivers import StereoModel, nominal_xb3_model
+from ..drivers import DEFAULT_PROTOCOL
+from ..drivers import ToolData
 from .arm_truth import ArmDeviations, true_arm
 from .camera import MockCamera, RenderOptions
 from .controller import start_mock_controller
@@ -215,7 +215,7 @@ class MockStation:
 def cell_guard(spec: MockStationSpec, robot: RobotModel | None = None) -> CellGuard:
     """The physical cell of ``spec`` (its stand around the true board) and the arm itself: entering a volume
     or one of the arm's own bodies (margin 0) is refused, moves sampled every 5 mm; without a cell, the
-    arm's self-collision alone (what it carries: :data:`~handeye.calibration.cell.DEFAULT_CARRIED`)."""
+    arm's self-collision alone (what it carries: :data:`~handeye.robot.cell.DEFAULT_CARRIED`)."""
     if spec.cell is None:
         return self_guard(robot or load_robot(spec.robot))
     zones = None
@@ -248,7 +248,7 @@ def write_state(path, tool: ToolData, runs: int) -> None:
     """Keep the controller's PERS tool data and its run count in ``path`` (written atomically)."""
     import json
 
-    from ..calibration.files import write_text_atomic
+    from ..base import write_text_atomic
 
     value = {"position_mm": list(tool.position_mm), "quaternion_wxyz": list(tool.quaternion_wxyz),
              "mass_kg": tool.mass_kg, "cog_mm": list(tool.cog_mm)}

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..calibration.compact_points import STATION_BOARD, BoardGeometry
-from ..calibration.views import look_at
+from ..geometry import STATION_BOARD, BoardGeometry
+from ..robot import look_at
 
 __all__ = ["PrintedBoard", "Lighting", "BoardOperator", "look_at", "board_view", "sample_board_views", "sheet_in_view",
            "hard_lighting"]
@@ -270,7 +270,7 @@ class BoardOperator:
 
     def pose_for(self, hint, tries: int = 4000) -> np.ndarray:
         """A board pose satisfying ``hint`` as well as can be found in ``tries`` random poses."""
-        from ..drivers.camera.coverage import tilt_class  # the class names of the guided loop
+        from ..drivers import tilt_class  # the class names of the guided loop
 
         side = getattr(hint, "side", None)
         cell = getattr(hint, "cell", None)

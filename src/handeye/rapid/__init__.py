@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ..calibration.lazy import lazy_exports
+from ..base import lazy_exports
 
 _EXPORTS = {
     "RapidLink": "links",
@@ -38,6 +38,38 @@ _EXPORTS = {
     "check_program": "checks",
     "RapidError": "errors",
     "ConfigError": "errors",
+    "GUIDED_LINKS": "generate",
+    "render_guided_program": "generate",
+    "station_link": "generate",
+    "PROMPTS": "guided",
+    "VERDICT_CODES": "guided",
+    "hint_code_for": "guided",
+    "hint_text": "guided",
+    "verdict_text": "guided",
+    "Bindings": "interpreter",
+    "IoBinding": "interpreter",
+    "ModuleSource": "interpreter",
+    "MotionBinding": "interpreter",
+    "Program": "interpreter",
+    "RapidFatalError": "interpreter",
+    "RapidRuntimeError": "interpreter",
+    "SerialBinding": "interpreter",
+    "Task": "interpreter",
+    "load_program": "interpreter",
+    "parse_module": "interpreter",
+    "TcpSockets": "interpreter.net",
+    "FlexPendant": "interpreter.pendant",
+    "MAX_STRING": "interpreter.values",
+    "aggregate": "interpreter.values",
+    "coerce": "interpreter.values",
+    "coerce_array": "interpreter.values",
+    "format_value": "interpreter.values",
+    "POSITION_DECIMALS": "literals",
+    "QUATERNION_DECIMALS": "literals",
+    "pose_literal": "literals",
+    "rounded_pose": "literals",
+    "tooldata_literal": "literals",
+    "IDLE_TIMEOUT_RANGE": "station",
 }
 __all__ = list(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
@@ -45,6 +77,12 @@ __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
     from .checks import check_program  # noqa: F401
     from .errors import ConfigError, RapidError  # noqa: F401
-    from .generate import RapidModule, render_key, render_link, render_main, render_program, render_tool, write_modules  # noqa: F401
+    from .generate import GUIDED_LINKS, RapidModule, render_guided_program, render_key, render_link, render_main, render_program, render_tool, station_link, write_modules  # noqa: F401
+    from .guided import PROMPTS, VERDICT_CODES, hint_code_for, hint_text, verdict_text  # noqa: F401
+    from .interpreter import Bindings, IoBinding, ModuleSource, MotionBinding, Program, RapidFatalError, RapidRuntimeError, SerialBinding, Task, load_program, parse_module  # noqa: F401
+    from .interpreter.net import TcpSockets  # noqa: F401
+    from .interpreter.pendant import FlexPendant  # noqa: F401
+    from .interpreter.values import MAX_STRING, aggregate, coerce, coerce_array, format_value  # noqa: F401
     from .links import BUILT_IN_LINKS, LINK_MODULES, PROTOCOLS, RapidLink  # noqa: F401
-    from .station import RapidStation, check_postures, default_station, load_station, station_from_dict  # noqa: F401
+    from .literals import POSITION_DECIMALS, QUATERNION_DECIMALS, pose_literal, rounded_pose, tooldata_literal  # noqa: F401
+    from .station import IDLE_TIMEOUT_RANGE, RapidStation, check_postures, default_station, load_station, station_from_dict  # noqa: F401

@@ -14,7 +14,7 @@ always got. ``HeMain`` then calls ``HeCellSetup`` once, first thing in ``main``:
   the camera's nominal mount (the camera's optical centre, as planned), not ``tool0``.
   Temporary zones are erased when the program pointer is moved to main; main defines them again.
 
-The zones come from :mod:`handeye.calibration.cell` (``world_zone()`` of each volume); the planner
+The zones come from :mod:`handeye.robot.cell` (``world_zone()`` of each volume); the planner
 keeps that TCP clear of the zones as the controller sees them, so a plan never trips them.
 """
 
@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.transforms import transform_from_pose
+from ..geometry import transform_from_pose
 from .errors import ConfigError
 from .literals import POSITION_DECIMALS, format_num, tooldata_literal
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..calibration.kinematics import load_robot
+from ..robot import load_robot
 from .interpreter.errors import RapidLoadError
 from .interpreter.lexer import KEYWORDS
 from .interpreter.lexer import tokenize as rapid_tokens

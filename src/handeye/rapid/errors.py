@@ -6,7 +6,7 @@ A station config that cannot be used raises the package's one :class:`ConfigErro
 
 from __future__ import annotations
 
-from ..calibration.errors import ConfigError, HandEyeError
+from ..base import ConfigError, HandEyeError
 
 __all__ = ["RapidError", "ConfigError", "StationConfigError"]
 

@@ -34,8 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.session import write_text_atomic
-from ..calibration.write_key import write_key_code
+from ..base import write_text_atomic
+from ..base import write_key_code
 from .cell import CELL_MODULE, ZONE_TOOL, needs_cell_module, render_cell_text
 from .checks import check_program
 from .errors import RapidError

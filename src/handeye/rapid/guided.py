@@ -78,7 +78,7 @@ def hint_text(code: int) -> str:
 
 
 def hint_code_for(word: str, advice: str) -> int:
-    """The hint code of one missing quality word (``station.guided.Missing``: its word and advice)."""
+    """The hint code of one missing quality word (``station.guided.capture.Missing``: its word and advice)."""
     if word == "postures":
         return 1
     if "about tool0" in advice:

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ..calibration.rotations import canonical_quaternions, quaternion_from_matrix
+from ..geometry import canonical_quaternions, quaternion_from_matrix
 
 __all__ = [
     "POSITION_DECIMALS",

@@ -47,9 +47,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.files import parse_yaml, read_text_file
-from ..calibration.kinematics import load_robot
-from ..calibration.write_key import WRITE_KEY_PATTERN
+from ..base import parse_yaml, read_text_file
+from ..robot import load_robot
+from ..base import WRITE_KEY_PATTERN
 from .cell import check_world_zones
 from .errors import ConfigError
 from .links import BUILT_IN_LINKS, PROTOCOLS

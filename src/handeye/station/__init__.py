@@ -1,8 +1,8 @@
 """The station: its configuration, opening its hardware (real or the embedded mock), guided
 capture, write-back of the calibrated tooldata, the demo, and the ``handeye`` command.
 
-Every command of ``handeye`` is a library call here (``station.capture.capture``,
-``station.writeback.writeback`` ...; the modules keep their own names). Names load on first use
+Every command of ``handeye`` is a library call here (``station.capture.loop.capture``,
+``station.writeback.writeback`` ...; grouped by flow: ``config``, ``capture``, ``guided``, ``cell``, ``report``, ``verify``). Names load on first use
 (``handeye --help`` stays fast)::
 
     from handeye.station import load_config, open_station
@@ -15,18 +15,18 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ..calibration.lazy import lazy_exports
+from ..base import lazy_exports
 
 _EXPORTS = {
-    "StationConfig": "config",
-    "ConfigError": "config",
-    "load_config": "config",
-    "default_config": "config",
-    "config_from_dict": "config",
+    "StationConfig": "config.station",
+    "ConfigError": "config.station",
+    "load_config": "config.station",
+    "default_config": "config.station",
+    "config_from_dict": "config.station",
     "StationLink": "runtime",
     "open_station": "runtime",
     "open_controller_link": "runtime",
-    "CaptureError": "capture",
+    "CaptureError": "capture.loop",
     "WritebackError": "writeback",
     "run_demo": "demo",
     "DemoOptions": "demo",
@@ -36,9 +36,9 @@ __all__ = list(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 
 if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
-    from .capture import CaptureError  # noqa: F401
+    from .capture.loop import CaptureError  # noqa: F401
     from .cli import main  # noqa: F401
-    from .config import ConfigError, StationConfig, config_from_dict, default_config, load_config  # noqa: F401
+    from .config.station import ConfigError, StationConfig, config_from_dict, default_config, load_config  # noqa: F401
     from .demo import DemoOptions, run_demo  # noqa: F401
     from .runtime import StationLink, open_controller_link, open_station  # noqa: F401
     from .writeback import WritebackError  # noqa: F401

@@ -1,7 +1,7 @@
 """The controller back ends' help lines, written from their registry entries
 (:data:`handeye.drivers.controller.backends.CONTROLLERS`): what each talks to, its RAPID link
 module and its command-line options, for ``handeye robot --help`` and ``handeye rapid generate
---help`` (and the example station file, :mod:`handeye.station.example_config`). A back end added in
+--help`` (and the example station file, :mod:`handeye.station.config.example`). A back end added in
 code or by a plug-in's entry point shows up in them as a built-in one does; none is written by hand.
 """
 
@@ -16,14 +16,14 @@ _WIDTH = 100
 
 def link_module(name: str):
     """The RAPID link (``rapid.links.RapidLink``) of a controller back end, or None when it has none."""
-    from ..drivers.controller.backends import RAPID_LINKS  # noqa: PLC0415 (read when a help text is built)
+    from ..drivers import RAPID_LINKS  # noqa: PLC0415 (read when a help text is built)
 
     return RAPID_LINKS.get(name)
 
 
 def described(name: str) -> str:
     """``TCP to the RAPID program's server (PC Interface option); RAPID module HeSocket``."""
-    from ..drivers.controller.backends import CONTROLLERS  # noqa: PLC0415
+    from ..drivers import CONTROLLERS  # noqa: PLC0415
 
     link = link_module(name)
     module = f"; RAPID module {link.module}" if link is not None else "; no RAPID module (capture refuses it)"
@@ -33,8 +33,8 @@ def described(name: str) -> str:
 def protocol_lines() -> list[str]:
     """Two lines per back end, registry order: ``--protocol NAME  what it talks to (its module)`` and its
     options (``ControllerBackend.usage``)."""
-    from ..calibration.registry import quiet_loads  # noqa: PLC0415
-    from ..drivers.controller.backends import CONTROLLERS  # noqa: PLC0415
+    from ..base import quiet_loads  # noqa: PLC0415
+    from ..drivers import CONTROLLERS  # noqa: PLC0415
 
     lines = []
     with quiet_loads():  # a plug-in that does not load is named here, with why
@@ -51,7 +51,7 @@ def protocol_lines() -> list[str]:
 
 def link_module_lines() -> list[str]:
     """``  HeSocket.mod   what it does (protocol socket)`` for every back end with a RAPID link module."""
-    from ..drivers.controller.backends import CONTROLLERS, RAPID_LINKS  # noqa: PLC0415
+    from ..drivers import CONTROLLERS, RAPID_LINKS  # noqa: PLC0415
 
     lines = []
     for name in RAPID_LINKS:

@@ -22,13 +22,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.errors import CalibrationError, HandEyeError
-from ..calibration.files import make_folder, write_text_atomic
-from ..calibration.metrics import d_back, d_org, errors_against_truth, fixed_points
-from ..calibration.methods import DEFAULT_METHOD, METHODS, get_method, method_names
-from ..calibration.solve import calibrate, problem_from_session
-from ..calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session
-from ..calibration.synthetic_poses import opencv_test_problem
+from ..base import CalibrationError, HandEyeError
+from ..base import make_folder, write_text_atomic
+from ..calibration import d_back, d_org, errors_against_truth, fixed_points
+from ..calibration import DEFAULT_METHOD, METHODS, get_method, method_names
+from ..calibration import calibrate, problem_from_session
+from ..calibration import NoiseConfig, SceneConfig, make_scene, sample_session
+from ..calibration import opencv_test_problem
 from .opencv_reference import OPENCV_METHODS, opencv_available, solve_opencv
 
 SWEEPS = ("sigma_cam", "sigma_rob", "postures", "pose_noise")

@@ -1,6 +1,6 @@
 """Calibrate a session folder (the library side of ``handeye calibrate``): read, validate, solve.
 
-What comes after the solve (verdict, method comparison, figures) is ``station.assessment``; how it is
+What comes after the solve (verdict, method comparison, figures) is ``station.report.assessment``; how it is
 shown is the presenters' (``report_text``, ``report_json``, ``report``).
 """
 
@@ -9,10 +9,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..calibration.plausibility import session_in_mm
-from ..calibration.problem import HandEyeProblem
-from ..calibration.session import Session, read_session, read_truth
-from ..calibration.solve import CalibrationResult, calibrate_within, problem_from_session, truth_from_dict
+from ..calibration import session_in_mm
+from ..calibration import HandEyeProblem
+from ..calibration import Session, read_session, read_truth
+from ..calibration import CalibrationResult, calibrate_within, problem_from_session, truth_from_dict
 
 #: File name of the report inside the session folder when ``--report`` is given without a value.
 DEFAULT_REPORT_NAME = "report.html"
@@ -24,7 +24,7 @@ class CalibrationOutcome:
 
     ``origin`` is where the data were captured: ``mock``, ``real``, ``simulated`` or ``unknown``
     (``station.origin.session_origin``); the text summary, the report and the JSON key ``station`` show
-    it. ``None`` means "not looked up": ``station.assessment.assess`` reads it from the folder
+    it. ``None`` means "not looked up": ``station.report.assessment.assess`` reads it from the folder
     ``session_path``.
     """
 

@@ -14,7 +14,7 @@ import os
 import sys
 import warnings
 
-from ..calibration.errors import HandEyeError, UsageError
+from ..base import HandEyeError, UsageError
 
 #: Sub-commands in the order ``handeye --help`` lists them: a module name, or ``(command, module)``
 #: when the command's name cannot be a module's (``import`` is a Python keyword).
@@ -39,7 +39,7 @@ class OneLineParser(argparse.ArgumentParser):
     """An argument parser whose usage errors are one line (``handeye CMD: error: ...``), exit code 2.
 
     Usage errors found by the commands' own checks (flags that exclude each other, values out of range)
-    are :class:`~handeye.calibration.errors.UsageError`: ``main`` exits 2 on them too."""
+    are :class:`~handeye.base.errors.UsageError`: ``main`` exits 2 on them too."""
 
     def error(self, message):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")

@@ -14,17 +14,17 @@ import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from ..calibration.errors import HandEyeError
-from ..calibration.files import make_folder, write_failure, write_text_atomic
-from ..calibration.transforms import pose_from_transform, rotation_error_deg, translation_error_mm
-from ..drivers.controller.backends import DEFAULT_PROTOCOL
-from .assessment import Assessment, assess, comparison_methods
+from ..base import HandEyeError
+from ..base import make_folder, write_failure, write_text_atomic
+from ..geometry import pose_from_transform, rotation_error_deg, translation_error_mm
+from ..drivers import DEFAULT_PROTOCOL
+from .report.assessment import Assessment, assess, comparison_methods
 from .calibrate import calibrate_session_folder
-from .capture import capture
-from .config import StationConfig, default_config
+from .capture.loop import capture
+from .config.station import StationConfig, default_config
 from .origin import MOCK
-from .quality import config_thresholds
-from .report import write_report
+from .report.quality import config_thresholds
+from .report.document import write_report
 from .runtime import open_station
 from .writeback import writeback
 
@@ -132,7 +132,7 @@ def _kinematics(assessment: Assessment, config: StationConfig, options: DemoOpti
 def _assess(session_dir: Path, config: StationConfig, compare: bool, progress) -> Assessment:
     """Calibrate the captured session (the default estimator) and assess it against the config's thresholds,
     with the method comparison when the report is wanted."""
-    from ..rapid.literals import tooldata_literal
+    from ..rapid import tooldata_literal
 
     from .result_file import save_result
 

@@ -7,11 +7,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.compact_points import BoardGeometry
-from ..calibration.diagnostics import diagnose
-from ..calibration.errors import CalibrationError, SessionError, SessionUsageError, brief
-from ..calibration.invariants import bounded_pairs, pairs_used
-from ..calibration.session import Session, create_session, write_postures
+from ..geometry import BoardGeometry
+from ..calibration import diagnose
+from ..base import CalibrationError, SessionError, SessionUsageError, brief
+from ..calibration import bounded_pairs, pairs_used
+from ..calibration import Session, create_session, write_postures
 from .importers import read_any
 from .importers.inference import format_table
 
@@ -77,7 +77,7 @@ def _compare_with_log_result(session) -> None:
     result = record.get("log_result")
     if not result:
         return
-    from ..calibration.solve import calibrate_session
+    from ..calibration import calibrate_session
     from .importers.log_result import compare_result
 
     factor = 1000.0 if (record.get("units") or {}).get("robot") == "m" else 1.0

@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.errors import HandEyeError
-from ..calibration.files import write_text_atomic
+from ..base import HandEyeError
+from ..base import write_text_atomic
 
 __all__ = ["export_kinematics", "correct_program_text"]
 
@@ -94,8 +94,8 @@ def correct_program_text(text: str, nominal, identified, base_fix=None, flange_f
     HandEyeError
         A target the identified arm cannot reach (inverse kinematics fails).
     """
-    from ..calibration.kinematics import inverse_kinematics
-    from ..calibration.transforms import transform_from_rotation_translation
+    from ..robot import inverse_kinematics
+    from ..geometry import transform_from_rotation_translation
     from scipy.spatial.transform import Rotation
 
     corrected_joints = []
@@ -135,7 +135,7 @@ def _fixes(ident) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _seed(nominal, pose) -> np.ndarray:
-    from ..calibration.views import ik_from_standard_seeds
+    from ..robot import ik_from_standard_seeds
 
     found = ik_from_standard_seeds(nominal, pose, 0.0)
     if found is None:
@@ -145,8 +145,8 @@ def _seed(nominal, pose) -> np.ndarray:
 
 def export_kinematics(session, out_dir, program=None, config=None) -> dict:
     """Identify and write the export; returns what was written (``files``, ``cell``)."""
-    from ..calibration.arm_parameters import corrected_robot
-    from ..calibration.kinematics import load_robot
+    from ..calibration import corrected_robot
+    from ..robot import load_robot
     from .calibrate import calibrate_session_folder
     from .kinematics_step import identify_outcome, kinematics_json
 
@@ -191,9 +191,9 @@ def export_kinematics(session, out_dir, program=None, config=None) -> dict:
 def _cell_checked(joints, robot, config):
     if not joints:
         return None
-    from .cell_plan import cell_check
-    from .cell_report import check_joints
-    from .config import default_config
+    from .cell.plan import cell_check
+    from .cell.check import check_joints
+    from .config.station import default_config
 
     config = config or default_config()
     return check_joints(robot, cell_check(config).guard(robot), np.array(joints))

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .report_figures import new_figure, style_axes, to_png
-from .report_html import escape, img
+from .report.figures import new_figure, style_axes, to_png
+from .report.html import escape, img
 
 __all__ = ["plot_standoff_map", "kinematics_section"]
 

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from ..calibration.errors import CalibrationError
+from ..base import CalibrationError
 
 __all__ = ["identify_outcome", "kinematics_json", "kinematics_lines", "hidden_offsets", "demo_lines"]
 
@@ -31,9 +31,9 @@ def identify_outcome(outcome, standoff_mm: float = 750.0):
     CalibrationError
         A session without joint angles of a known robot, in one line.
     """
-    from ..calibration.arm_identification import identify_arm
-    from ..calibration.problem import EYE_IN_HAND
-    from ..calibration.standoff import predicted_standoff
+    from ..calibration import identify_arm
+    from ..calibration import EYE_IN_HAND
+    from ..calibration import predicted_standoff
 
     problem = outcome.problem
     if problem is None or problem.joints_deg is None or problem.robot is None:
@@ -113,7 +113,7 @@ def _zero_test(ident) -> dict:
 
 def _pose_change(ident) -> dict:
     """How far the camera pose moved from the camera-only fit, against its one-sigma."""
-    from ..calibration.noise import twist_between
+    from ..calibration import twist_between
 
     x0 = ident.camera_only.fit.x
     delta = twist_between(x0, ident.x)
@@ -165,7 +165,7 @@ def hidden_offsets(dh_deviation) -> dict:
     """The mock arm's hidden deviations (true minus nominal DH table ``(k, 4)``) as the identification
     names them: controller zero offsets (through the IRB 1400's coupling: serial 3 = controller 3 - 2)
     and DH lengths."""
-    from ..calibration.kinematics import load_robot
+    from ..robot import load_robot
 
     delta = np.asarray(dh_deviation, float)
     robot = load_robot("IRB1400") if delta.shape[0] == 6 else None

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..calibration.transforms import transform_from_rotation_translation
+from ..geometry import transform_from_rotation_translation
 
 __all__ = ["OPENCV_METHODS", "opencv_available", "solve_opencv"]
 

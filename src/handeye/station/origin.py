@@ -8,7 +8,7 @@ so that nobody takes it for a calibration of the robot in front of them.
   ``capture: {station: mock}``. Sessions captured before that key existed are
   recognised by their recorded station configuration (``capture.config.camera.backend: mock``).
 - ``real``: ``capture: {station: real}``, written by a capture on the real controller and camera
-  (``station.station_kind``), and no mock part in the station configuration it recorded (a record
+  (``station.config.station_kind``), and no mock part in the station configuration it recorded (a record
   that says ``real`` beside a mock camera or ``camera.mock_arm`` is ``mock``).
 - ``simulated``: ``session.yaml`` says ``origin: simulated``, or ``truth.yaml`` lies beside it
   (``handeye simulate``), and the capture record does not say otherwise.
@@ -35,7 +35,7 @@ _BANNERS = {
 
 def _header(path) -> dict:
     """``session.yaml`` of a folder as a mapping ({} when missing or unreadable)."""
-    from ..calibration.session import parse_yaml
+    from ..base import parse_yaml
 
     try:
         data = parse_yaml((Path(path) / "session.yaml").read_text(), Path(path) / "session.yaml", ValueError)
@@ -73,7 +73,7 @@ def session_origin(session=None, path=None) -> str:
     capture = capture if isinstance(capture, dict) else {}
     station = capture.get("station")
     if isinstance(station, str) and station.strip().lower() in ("mock", "real"):
-        from .station_kind import recorded_mock_parts
+        from .config.station_kind import recorded_mock_parts
 
         return MOCK if station.strip().lower() == MOCK or recorded_mock_parts(capture) else REAL
     if extra.get("origin") == SIMULATED or (path is not None and (Path(path) / "truth.yaml").is_file()):

@@ -7,8 +7,8 @@ import os
 import sys
 from pathlib import Path
 
-from ..calibration.errors import OutputError
-from ..calibration.session import write_text_atomic
+from ..base import OutputError
+from ..base import write_text_atomic
 
 
 def check_output_file(target: str) -> None:

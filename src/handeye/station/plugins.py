@@ -3,9 +3,9 @@
 Every entry point of handeye's groups (methods, controller protocols, camera back ends) is listed by
 group, with its package, what it is and, for each command that takes an entry of its kind, whether it
 serves that command or what it lacks. The commands' own checks decide (the same
-:class:`~handeye.calibration.registry.Choices` the command line and the station config use), so the
+:class:`~handeye.base.registry.Choices` the command line and the station config use), so the
 list says what the commands will do. Each plug-in is loaded to know, under the time bound
-(:mod:`handeye.calibration.time_bound`): one that fails or hangs is listed with why.
+(:mod:`handeye.base.time_bound`): one that fails or hangs is listed with why.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ class PluginGroup:
     registry : Registry
     uses : tuple of (str, callable)
         ``(the commands, choices())``: the commands an entry may serve and the
-        :class:`~handeye.calibration.registry.Choices` they check a name against.
+        :class:`~handeye.base.registry.Choices` they check a name against.
     what : callable
         ``what(entry) -> str``: one line on the loaded entry.
     """
@@ -79,11 +79,11 @@ def _camera_line(backend) -> str:
 
 def plugin_groups() -> tuple[PluginGroup, ...]:
     """The kinds of plug-in, each with the commands that take one (imports the registries, no plug-in)."""
-    from ..calibration.methods import METHODS
-    from ..drivers.camera.backends import CAMERAS
-    from ..drivers.controller.backends import CONTROLLERS, rapid_protocol_choices
-    from ..mocks.backends import mock_protocol_choices
-    from .config import camera_choices, protocol_choices
+    from ..calibration import METHODS
+    from ..drivers import CAMERAS
+    from ..drivers import CONTROLLERS, rapid_protocol_choices
+    from ..mocks import mock_protocol_choices
+    from .config.station import camera_choices, protocol_choices
 
     return (
         PluginGroup("methods", METHODS, (
@@ -104,7 +104,7 @@ def plugin_groups() -> tuple[PluginGroup, ...]:
 
 def installed_plugins() -> list[tuple[PluginGroup, list[PluginRow]]]:
     """Every installed plug-in, by group (each loaded under the time bound to know what it can do)."""
-    from ..calibration.registry import quiet_loads
+    from ..base import quiet_loads
 
     out = []
     with quiet_loads():  # the rows say why a plug-in did not load
@@ -127,7 +127,7 @@ def installed_plugins() -> list[tuple[PluginGroup, list[PluginRow]]]:
 
 def plugin_lines(groups: list[tuple[PluginGroup, list[PluginRow]]]) -> list[str]:
     """The text ``handeye plugins`` prints."""
-    from ..calibration.registry import unusable_clause
+    from ..base import unusable_clause
 
     lines = []
     for group, rows in groups:

@@ -26,11 +26,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.errors import HandEyeError, OutputError
-from ..calibration.files import parse_yaml, read_text_file
-from ..calibration.session import Session, write_yaml_atomic
-from ..calibration.solve import CalibrationResult, problem_from_session
-from ..calibration.transforms import transform_from_pose
+from ..base import HandEyeError, OutputError
+from ..base import parse_yaml, read_text_file
+from ..calibration import Session, write_yaml_atomic
+from ..calibration import CalibrationResult, problem_from_session
+from ..geometry import transform_from_pose
 from .calibrate import CalibrationOutcome
 
 __all__ = ["RESULT_FILE", "RESULT_FORMAT", "ResultError", "SavedResult", "current_outcome", "postures_hash",
@@ -89,7 +89,7 @@ def _code_version() -> str:
 
 def result_record(outcome: CalibrationOutcome, units: str = "mm") -> dict:
     """The mapping ``result.yaml`` holds for a solved session (plain numbers only)."""
-    from ..calibration.transforms import pose_from_transform
+    from ..geometry import pose_from_transform
 
     r = outcome.result
     session = outcome.session
@@ -194,7 +194,7 @@ def refuse_stale_result(session_dir) -> None:
 
 def current_outcome(session: Session, session_dir, method: str | None = None, units: str = "mm",
                     origin: str | None = None, say: Callable[[str], None] = print) -> CalibrationOutcome:
-    """The session's saved result, as an outcome ``station.assessment.assess`` judges without solving.
+    """The session's saved result, as an outcome ``station.report.assessment.assess`` judges without solving.
 
     ``session`` is read (lengths in mm). A missing ``result.yaml`` is solved now with ``method`` (the
     recommended one when ``None``), ``say`` tells so in one line, and it is saved (a folder that cannot

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .config import StationConfig
+from .config.station import StationConfig
 
 
 @dataclass
@@ -64,7 +64,7 @@ class StationLink:
 def _controller_options(config: StationConfig) -> dict:
     """The keyword options of ``open_controller`` for the config's controller: where it is, as its
     back end's registry entry builds it from the ``controller`` section, and the link settings."""
-    from ..drivers.controller.backends import CONTROLLERS
+    from ..drivers import CONTROLLERS
 
     c = config.controller
     common = {"timeout": c.timeout_s, "motion_timeout": c.motion_timeout_s, "robot": config.robot,
@@ -74,7 +74,7 @@ def _controller_options(config: StationConfig) -> dict:
 
 def _camera_options(config: StationConfig) -> dict:
     """The keyword options of ``open_camera`` for the config's camera, as its back end builds them."""
-    from ..drivers.camera.backends import CAMERAS
+    from ..drivers import CAMERAS
 
     return CAMERAS[config.camera.backend].camera_options(config.camera)
 
@@ -92,7 +92,7 @@ def mock_state_file(session_dir) -> Path | None:
 def mock_spec(config: StationConfig, state_file=None):
     """The embedded mock station described by the configuration's ``mock`` section (``state_file``: where its
     controller keeps its PERS tool data between runs, :func:`mock_state_file`)."""
-    from ..mocks.station import MockStationSpec
+    from ..mocks import MockStationSpec
 
     m = config.mock
     zone_tcp = tuple(config.camera.nominal_mount[0]) if config.cell.world_zones else None
@@ -136,10 +136,10 @@ def check_rehearsal(config: StationConfig) -> dict:
     CameraError
         No rehearsal camera answers at ``camera.mock_arm``.
     """
-    from ..calibration.errors import ConfigError
-    from ..mocks.cell import cell_info
+    from ..base import ConfigError
+    from ..mocks import cell_info
 
-    from ..drivers.controller.backends import CONTROLLERS
+    from ..drivers import CONTROLLERS
 
     served = cell_info(config.camera.mock_arm)["controller"]
     c = config.controller
@@ -162,8 +162,8 @@ def check_rehearsal(config: StationConfig) -> dict:
 
 @contextmanager
 def _mock_station(config: StationConfig, session_dir=None):
-    from ..drivers.controller import open_controller
-    from ..mocks.station import MockStation
+    from ..drivers import open_controller
+    from ..mocks import MockStation
 
     with MockStation(mock_spec(config, mock_state_file(session_dir))) as station:
         options = {**station.controller_options(), "timeout": config.controller.timeout_s,
@@ -189,9 +189,9 @@ def open_station(config: StationConfig, mock: bool = False, session_dir=None):
             yield StationLink(controller, camera, camera.model, lambda _postures, rapid_dir: station.load_program(rapid_dir),
                               station)
         return
-    from ..drivers.camera import open_camera
-    from ..drivers.camera.stereo import load_stereo_model, nominal_xb3_model
-    from ..drivers.controller import open_controller
+    from ..drivers import open_camera
+    from ..drivers import load_stereo_model, nominal_xb3_model
+    from ..drivers import open_controller
 
     if config.is_rehearsal:
         check_rehearsal(config)
@@ -218,7 +218,7 @@ def _program_loader(controller):
         return None
 
     def put(_postures, rapid_dir) -> None:
-        from ..drivers.errors import StationError
+        from ..drivers import StationError
 
         try:
             controller.read_tool()
@@ -242,7 +242,7 @@ def open_controller_link(config: StationConfig, mock: bool = False, session_dir=
         with _mock_station(config, session_dir) as (station, controller):
             yield StationLink(controller, mock=station)
         return
-    from ..drivers.controller import open_controller
+    from ..drivers import open_controller
 
     if config.is_rehearsal:
         check_rehearsal(config)

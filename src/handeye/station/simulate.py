@@ -5,8 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..calibration.station_board import STATION_CORNERS, STATION_SQUARE_MM
-from ..calibration.errors import HandEyeError, UsageError
+from ..geometry import STATION_CORNERS, STATION_SQUARE_MM
+from ..base import HandEyeError, UsageError
 from .origin import SIMULATED
 
 #: Most postures a synthetic session may have (sampling takes about 0.05 s a posture; the triplet
@@ -32,9 +32,9 @@ class SimulateOptions:
 
 def simulate_session(options: SimulateOptions, progress=lambda message: None) -> Path:
     """Sample a scene, draw noise and write the session with ``truth.yaml``; returns the folder."""
-    from ..calibration.kinematics import load_robot
-    from ..calibration.session import create_session, write_posture, write_truth
-    from ..calibration.synthetic import NoiseConfig, SceneConfig, make_scene, sample_session, truth_dict
+    from ..robot import load_robot
+    from ..calibration import create_session, write_posture, write_truth
+    from ..calibration import NoiseConfig, SceneConfig, make_scene, sample_session, truth_dict
 
     if not 3 <= options.postures <= MAX_POSTURES:
         raise UsageError(f"postures must be between 3 and {MAX_POSTURES}; got {options.postures}")

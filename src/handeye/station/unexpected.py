@@ -1,6 +1,6 @@
 """One line for an exception no part of handeye expected: whose code raised it and what to do.
 
-The commands report what goes wrong as :class:`~handeye.calibration.errors.HandEyeError`, one line
+The commands report what goes wrong as :class:`~handeye.base.errors.HandEyeError`, one line
 each. What escapes them is a fault in code: an installed plug-in's (a controller, camera or method
 registered through a ``handeye.*`` entry point) or handeye's own. :func:`unexpected_error_line` names
 which, from the traceback's frames (the innermost frame of a plug-in's modules blames that plug-in's
@@ -17,8 +17,8 @@ import time
 import traceback
 from pathlib import Path
 
-from ..calibration.errors import HandEyeError, exception_line
-from ..calibration.files import write_text_atomic
+from ..base import HandEyeError, exception_line
+from ..base import write_text_atomic
 
 __all__ = ["DEBUG_VARIABLE", "plugin_packages", "unexpected_error_line"]
 
@@ -29,9 +29,9 @@ DEBUG_VARIABLE = "HANDEYE_DEBUG"
 def plugin_packages() -> dict[str, str]:
     """``{top-level module: installed package}`` of every plug-in of every handeye registry (methods,
     controllers, cameras), read from the entry points whether or not they load."""
-    from ..calibration.methods import METHODS
-    from ..drivers.camera.backends import CAMERAS
-    from ..drivers.controller.backends import CONTROLLERS
+    from ..calibration import METHODS
+    from ..drivers import CAMERAS
+    from ..drivers import CONTROLLERS
 
     owners: dict[str, str] = {}
     for registry in (METHODS, CONTROLLERS, CAMERAS):
@@ -80,7 +80,7 @@ def _short(filename: str) -> str:
 
 def _save_traceback(exc: BaseException, command: str) -> str | None:
     """Writes the whole traceback to a file in the temporary folder (as every file is written:
-    ``calibration.files.write_text_atomic``); its path, or None when it cannot be written."""
+    ``base.files.write_text_atomic``); its path, or None when it cannot be written."""
     text = f"handeye {command}\n" + "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
     path = Path(tempfile.gettempdir()) / f"handeye-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}.traceback.txt"
     try:

@@ -27,15 +27,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.errors import HandEyeError, OutputError
-from ..calibration.files import parse_yaml, read_text_file
-from ..calibration.methods import DEFAULT_METHOD
-from ..calibration.problem import EYE_IN_HAND
-from ..calibration.session import write_yaml_atomic
-from ..calibration.solve import CalibrationResult
-from ..drivers.controller.types import ToolData, check_tooldata
-from ..rapid.literals import POSITION_DECIMALS, QUATERNION_DECIMALS, tooldata_literal
-from .config import StationConfig
+from ..base import HandEyeError, OutputError
+from ..base import parse_yaml, read_text_file
+from ..calibration import DEFAULT_METHOD
+from ..calibration import EYE_IN_HAND
+from ..calibration import write_yaml_atomic
+from ..calibration import CalibrationResult
+from ..drivers import ToolData, check_tooldata
+from ..rapid import POSITION_DECIMALS, QUATERNION_DECIMALS, tooldata_literal
+from .config.station import StationConfig
 from .origin import MOCK, SIMULATED
 
 __all__ = ["PENDING_FILE", "WritebackError", "check_camera_offset", "check_session_origin", "WritebackOutcome", "side_by_side", "tooldata_from_result", "writeback"]
@@ -98,7 +98,7 @@ def tooldata_from_result(result: CalibrationResult, config: StationConfig) -> To
     """
     if result.setup != EYE_IN_HAND:
         raise WritebackError("only an eye-in-hand calibration (camera on the flange) becomes tooldata")
-    from ..drivers.errors import ControllerError
+    from ..drivers import ControllerError
 
     try:
         tool = check_tooldata(ToolData.from_transform(result.x, config.tool.mass_kg, config.tool.cog_mm))
@@ -135,7 +135,7 @@ def check_session_origin(origin: str | None, mock_controller: bool) -> None:
 def check_camera_offset(cam2tool0, config: StationConfig) -> None:
     """Refuse a camera frame whose distance from the flange is outside the config's quality limits
     (``min_camera_offset_mm``, ``max_camera_offset_mm``): checked before every write, ``--force`` or not."""
-    from .quality import camera_too_near, config_thresholds
+    from .report.quality import camera_too_near, config_thresholds
 
     limits = config_thresholds(config)
     offset = float(np.linalg.norm(np.asarray(cam2tool0, float)[:3, 3]))
@@ -246,8 +246,8 @@ def writeback(session_dir, config: StationConfig, result: CalibrationResult, con
         return WritebackOutcome(literal, new, dry_run=True)
     if controller is None:
         raise WritebackError("no controller to write to (give --config or --mock, or use --dry-run)")
-    from ..drivers.controller.errors import (ControllerConnectionError, ControllerRefused, ControllerTimeout,
-                                             InvalidRequest, ProtocolError)
+    from ..drivers import ControllerConnectionError, ControllerRefused, ControllerTimeout, InvalidRequest
+    from ..drivers import ProtocolError
 
     old = controller.read_tool()
     previous = None

@@ -4,12 +4,12 @@
    mm) are read; a rehearsal's controller is checked to be the standalone mock, and a mock or
    simulated session is refused for a real controller (``station.writeback.check_session_origin``);
 2. the result: a check's folder (``handeye verify``) gives its quick update, judged by its
-   uncertainty (``station.verify_update``); any other SESSION gives its saved ``result.yaml``
+   uncertainty (``station.verify.update``); any other SESSION gives its saved ``result.yaml``
    (``station.result_file``: refused when older than the postures or of another ``--method``; solved
    and saved first, saying so, when there is none), judged against the config's quality thresholds;
 3. ``--dry-run`` prints the RAPID literal; otherwise the controller link opens and
    ``station.writeback.writeback`` backs up, writes and reads back;
-4. every write is recorded in the history beside the sessions (``station.verify_reference``: the
+4. every write is recorded in the history beside the sessions (``station.verify.reference``: the
    write-back ``handeye verify`` follows).
 
 The command module (``station.commands.writeback``) only parses the arguments and calls :func:`run_writeback`.
@@ -39,10 +39,10 @@ class WritebackRequest:
 def writeback_source(request: WritebackRequest, session, config, origin: str | None,
                      say: Callable[[str], None]) -> tuple:
     """``(result, passed, reason, is_check)``: what would be written and its verdict (see the module docstring)."""
-    from .assessment import assess
-    from .quality import config_thresholds
+    from .report.assessment import assess
+    from .report.quality import config_thresholds
     from .result_file import current_outcome
-    from .verify_update import verify_check
+    from .verify.update import verify_check
 
     check = verify_check(request.session)
     if check is not None:  # a check's folder: its quick update is the result, judged by its uncertainty
@@ -58,12 +58,12 @@ def writeback_source(request: WritebackRequest, session, config, origin: str | N
 
 def _station(request: WritebackRequest):
     """The station config and SESSION as read: ``(config, session, origin, mock_controller)``."""
-    from ..calibration.plausibility import session_in_mm
-    from ..calibration.session import read_session
-    from .config import default_config, load_config
+    from ..calibration import session_in_mm
+    from ..calibration import read_session
+    from .config.station import default_config, load_config
     from .origin import MOCK, session_origin
     from .runtime import check_rehearsal
-    from .station_kind import station_kind
+    from .config.station_kind import station_kind
     from .writeback import check_session_origin
 
     config = load_config(request.config) if request.config else default_config()
@@ -123,9 +123,9 @@ def _record(folder, outcome, what: str) -> None:
     is one line on stderr: the tool data is written and read back all the same."""
     import sys
 
-    from ..calibration.errors import HandEyeError
-    from .verify_history import append_record, history_path
-    from .verify_reference import written_record
+    from ..base import HandEyeError
+    from .verify.history import append_record, history_path
+    from .verify.reference import written_record
 
     try:
         append_record(history_path(folder), written_record(folder, outcome, what))

@@ -12,7 +12,7 @@ import time
 import numpy as np
 import pytest
 
-from handeye.calibration.kinematics import load_robot
+from handeye.robot.kinematics import load_robot
 from handeye.drivers.controller import ControllerRefused, ToolData
 from handeye.drivers.controller.types import AT, LATE, READY
 
@@ -120,7 +120,7 @@ def test_tool_data_written_and_read_back(controller, server):
 
 
 def test_tool_from_transform_roundtrip(controller):
-    from handeye.calibration.transforms import transform_from_pose
+    from handeye.geometry.transforms import transform_from_pose
 
     cam2tool0 = transform_from_pose([30.0, -12.5, 95.25], [0.5, -0.5, 0.5, 0.5])
     back = controller.set_tool(ToolData.from_transform(cam2tool0, mass_kg=0.8))

@@ -11,7 +11,7 @@ import time
 import numpy as np
 import pytest
 
-from handeye.calibration.kinematics import load_robot
+from handeye.robot.kinematics import load_robot
 from handeye.station.cli import main
 
 

@@ -26,7 +26,7 @@ fraction of a degree of noise, which breaks every solver that compares the axes 
 ``B_ij``. Such pairs are dropped (for the rotation; the translation keeps the near-180 ones, which are
 its best-conditioned rows). If what is left cannot determine ``X`` (fewer than two usable pairs, all
 axes parallel: rotation-axis divergence of ``calibration.quality_words`` below
-``MIN_AXIS_DIVERGENCE_DEG``) a :class:`~handeye.calibration.errors.CalibrationError` says so in one line.
+``MIN_AXIS_DIVERGENCE_DEG``) a :class:`~handeye.base.errors.CalibrationError` says so in one line.
 """
 
 from __future__ import annotations
@@ -36,12 +36,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..errors import CalibrationError
+from ...base import CalibrationError
 from ..problem import MIN_POSTURES
 from ..invariants import relative_transforms
 from ..quality_words import MIN_AXIS_DIVERGENCE_DEG, rotation_axis_divergence_deg
-from ..rotations import quaternion_from_matrix, skew
-from ..transforms import transform_from_rotation_translation
+from ...geometry import quaternion_from_matrix, skew
+from ...geometry import transform_from_rotation_translation
 
 __all__ = [
     "MIN_POSTURES",

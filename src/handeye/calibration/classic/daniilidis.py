@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..rotations import matrix_from_quaternion, quaternion_conjugate, quaternion_multiply
+from ...geometry import matrix_from_quaternion, quaternion_conjugate, quaternion_multiply
 from .common import constrained_null_combination, prepare_motions, quaternions, skew, solution_transform
 
 __all__ = ["solve_daniilidis"]

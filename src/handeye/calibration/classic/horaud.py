@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..rotations import matrix_from_quaternion
+from ...geometry import matrix_from_quaternion
 from .common import left_matrix, prepare_motions, right_matrix, solution_transform, translation_least_squares
 
 __all__ = ["solve_horaud"]

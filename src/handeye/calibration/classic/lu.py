@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..rotations import matrix_from_quaternion, quaternion_conjugate, quaternion_multiply
+from ...geometry import matrix_from_quaternion, quaternion_conjugate, quaternion_multiply
 from .common import constrained_null_combination, left_matrix, prepare_motions, quaternions, right_matrix, solution_transform
 
 __all__ = ["solve_lu"]

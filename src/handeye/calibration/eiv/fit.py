@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..noise import VARIANCE_FLOOR, adjoint, retract, twist_between
-from ..transforms import invert_transforms
+from ...geometry import invert_transforms
 from .model import Observations
 
 

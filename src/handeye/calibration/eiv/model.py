@@ -29,7 +29,7 @@ from ..noise import (
 )
 from ..joint_match import joint_mismatch
 from ..problem import EYE_IN_HAND, HandEyeProblem
-from ..transforms import invert_transforms
+from ...geometry import invert_transforms
 
 
 @dataclass(frozen=True)
@@ -158,7 +158,7 @@ def _robot_for(problem: HandEyeProblem, tool02base: np.ndarray):
     robot_name = getattr(problem, "robot", None)
     if joints is None or robot_name is None:
         return None, None
-    from ..kinematics import load_robot  # noqa: PLC0415 (only sessions with joints need it)
+    from ...robot import load_robot  # noqa: PLC0415 (only sessions with joints need it)
 
     try:
         robot = load_robot(robot_name)
@@ -185,7 +185,7 @@ def observations(problem: HandEyeProblem, stereo: tuple | None = None) -> Observ
     start = problem.target2cam if corners else None
     if not corners:  # board poses from the three compact points (Horn, eq. 24-29)
         from ..absolute_orientation import absolute_orientation  # noqa: PLC0415
-        from ..rotations import matrix_from_quaternion  # noqa: PLC0415
+        from ...geometry import matrix_from_quaternion  # noqa: PLC0415
 
         fit = absolute_orientation(np.broadcast_to(model, pts.shape), pts)
         start = np.tile(np.eye(4), (n, 1, 1))

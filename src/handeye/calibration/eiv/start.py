@@ -9,7 +9,7 @@ import numpy as np
 from ..invariants import bounded_pairs, posture_medians
 from ..metrics import fixed_points
 from ..problem import HandEyeProblem
-from ..rotations import quaternion_from_matrix
+from ...geometry import quaternion_from_matrix
 from .model import Observations
 
 
@@ -77,7 +77,7 @@ def _compact_residuals(problem: HandEyeProblem, x: np.ndarray, target: np.ndarra
 def _start(problem: HandEyeProblem, obs: Observations, gap_flags: np.ndarray) -> tuple[np.ndarray, dict]:
     """mcb on (a spread subset of) the invariant-consistent postures; mcb on all of them, then the
     paper's MC, when that subset is degenerate."""
-    from ..errors import CalibrationError  # noqa: PLC0415
+    from ...base import CalibrationError  # noqa: PLC0415
     from ..triplets import all_postures_solution  # noqa: PLC0415
 
     candidates = np.flatnonzero(~gap_flags)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ...calibration.lazy import lazy_exports
+from ...base import lazy_exports
 
 _EXPORTS = {
     "CAMERAS": "backends",

@@ -2,14 +2,14 @@
 
 ChArUco (``cv2.aruco.CharucoDetector``, OpenCV >= 4.7): the markers are found and decoded, the chessboard
 corners between them interpolated and refined by OpenCV; each corner carries its id, which is the
-canonical target index (``row * nx + col``, :mod:`handeye.calibration.targets`). The left and right
+canonical target index (``row * nx + col``, :mod:`handeye.geometry.targets`). The left and right
 detections are matched by id, the common corners triangulated and checked as a checkerboard's are
 (rectified rows, plane fit, corner spacing between neighbours that were both seen). A view with fewer
 than :data:`~handeye.calibration.partial_views.MIN_CORNERS` common corners, or whose corners span too
 little of the board, is refused with the reason (:func:`~handeye.calibration.partial_views.view_refusal`).
 
 Circle grids (``cv2.findCirclesGrid`` with ``CALIB_CB_ASYMMETRIC_GRID``) are found whole, in OpenCV's
-order, which is the target index order of :class:`~handeye.calibration.targets.CircleGrid`.
+order, which is the target index order of :class:`~handeye.geometry.targets.CircleGrid`.
 """
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ...calibration.partial_views import view_refusal
-from ...calibration.targets import CharucoBoard, CircleGrid, describe
+from ...geometry import view_refusal
+from ...geometry import CharucoBoard, CircleGrid, describe
 from .checkerboard import BoardObservation, _gray_u8, plane_fit
 from .errors import BoardNotFound, NoBoardInView, StereoMismatch
 from .stereo import StereoModel

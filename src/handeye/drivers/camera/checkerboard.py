@@ -51,7 +51,7 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from ...calibration.compact_points import BoardGeometry, board_corners
+from ...geometry import BoardGeometry, board_corners
 from .board_pattern import MAX_OUTER_ALTERNATION, MIN_CONTRAST, canonical_orderings, outer_alternation, pattern_score
 from .errors import BoardNotFound, CameraError, FrameError, StereoMismatch
 from .grid_search import SEARCH_STAGES, GridSearch, board_region, find_grid, refuse_missing_grid

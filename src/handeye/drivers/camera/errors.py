@@ -6,7 +6,7 @@ Each carries a one-line message that names the offending value and what to do ne
 
 from __future__ import annotations
 
-from ...calibration.errors import UsageError
+from ...base import UsageError
 from ..errors import CameraError
 
 __all__ = ["CameraError", "FrameError", "FrameUsageError", "BoardNotFound", "NoBoardInView", "StereoModelError",

@@ -74,7 +74,7 @@ class Camera(ABC):
     #: Back-end name, e.g. ``"xb3"``.
     name = "camera"
     #: True for a camera that renders a simulation (the mocks): a session it captures is never a real one
-    #: (``station.station_kind``).
+    #: (``station.config.station_kind``).
     simulated = False
 
     @abstractmethod

@@ -30,7 +30,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ...calibration.files import read_text_file
+from ...base import read_text_file
 from .errors import StereoMismatch, StereoModelError
 
 __all__ = [

@@ -19,9 +19,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ...calibration.compact_points import STATION_BOARD, BoardGeometry
-from ...calibration.files import read_file_bytes
-from ...calibration.plausibility import SQUARE_TOLERANCE
+from ...geometry import STATION_BOARD, BoardGeometry
+from ...base import read_file_bytes
+from ...geometry import SQUARE_TOLERANCE
 from .checkerboard import as_board, observe_board
 from .decode import decode_xb3_frame, frame_bytes
 from .errors import FrameError, FrameUsageError, SquareSizeMismatch
@@ -76,7 +76,7 @@ class TriangulationResult:
         if self.board.square_mm is not None:
             board["square_mm"] = float(self.board.square_mm)
         if self.corner_ids is not None:
-            from ...calibration.targets import target_to_dict  # noqa: PLC0415
+            from ...geometry import target_to_dict  # noqa: PLC0415
 
             board = target_to_dict(self.board)
         ids = {} if self.corner_ids is None else {"corner_ids": [int(i) for i in self.corner_ids]}

@@ -49,7 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...calibration.files import parse_yaml, read_file_bytes
+from ...base import parse_yaml, read_file_bytes
 from .errors import StereoModelError
 from .stereo import StereoModel
 

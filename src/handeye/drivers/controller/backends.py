@@ -7,7 +7,7 @@ key, type, default, help, flag; the station config's keys, the flags of ``handey
 runs for it (a ``rapid.links.RapidLink``: a template or a renderer), the mock that serves it (the
 package's own are filled in by ``handeye.mocks``; the drivers never name the mocks) and one line of
 help: what it talks to (its options are written from its settings, :meth:`ControllerBackend.usage`;
-``handeye robot --help``, ``rapid generate --help`` and ``src/handeye/station/example_station.yaml`` read them all
+``handeye robot --help``, ``rapid generate --help`` and ``src/handeye/station/config/example_station.yaml`` read them all
 here). Another package adds one with :func:`register_backend` or an entry point in the
 ``handeye.controllers`` group, bringing its own RAPID link and mock in the same entry.
 

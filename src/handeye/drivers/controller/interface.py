@@ -100,7 +100,7 @@ class Controller(ABC):
     """
 
     #: True once the controller has said it is a simulation (``handeye mock controller``): a session made
-    #: with it is never a real one (``station.station_kind``). A back end whose protocol cannot say so keeps False.
+    #: with it is never a real one (``station.config.station_kind``). A back end whose protocol cannot say so keeps False.
     simulated = False
     #: What a connection failure tells the operator to check (a back end with no RAPID server overrides it).
     unreachable_hint = "check that the RAPID program runs and the address/port"

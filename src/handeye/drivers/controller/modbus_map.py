@@ -13,8 +13,8 @@ import struct
 from dataclasses import dataclass
 from pathlib import Path
 
-from ...calibration.errors import brief
-from ...calibration.files import parse_yaml, read_text_file
+from ...base import brief
+from ...base import parse_yaml, read_text_file
 from .errors import ConfigError
 
 __all__ = ["Register", "RegisterMap", "load_register_map", "DEFAULT_MAP", "STATE_CODES", "STATE_NAMES", "GUIDED_REGISTERS",

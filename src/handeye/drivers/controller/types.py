@@ -15,7 +15,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ...calibration.write_key import WRITE_KEY_PATTERN, write_key_code  # one definition for drivers and rapid
+from ...base import WRITE_KEY_PATTERN, write_key_code  # one definition for drivers and rapid
 from .errors import InvalidRequest
 
 __all__ = [
@@ -133,7 +133,7 @@ class FlangePose:
 
     def to_transform(self) -> np.ndarray:
         """tool02base, shape (4, 4)."""
-        from ...calibration.transforms import transform_from_pose
+        from ...geometry import transform_from_pose
 
         return transform_from_pose(self.position_mm, self.quaternion_wxyz)
 
@@ -172,7 +172,7 @@ class ToolData:
     @classmethod
     def from_transform(cls, cam2tool0, mass_kg: float = 1.0, cog_mm=(0.0, 0.0, 0.0)) -> "ToolData":
         """Tool data whose frame is the 4x4 ``cam2tool0`` (mm)."""
-        from ...calibration.rotations import canonical_quaternions, quaternion_from_matrix
+        from ...geometry import canonical_quaternions, quaternion_from_matrix
 
         t = np.asarray(cam2tool0, dtype=float)
         if t.shape != (4, 4):
@@ -218,7 +218,7 @@ def check_finite(name: str, values) -> np.ndarray:
 @lru_cache(maxsize=None)
 def robot_model(name: str):
     """The kinematics model (joint limits) of a robot by name; ValueError if unknown."""
-    from ...calibration.kinematics import load_robot
+    from ...robot import load_robot
 
     return load_robot(name)
 

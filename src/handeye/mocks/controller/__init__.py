@@ -22,8 +22,8 @@ included). A program the interpreter cannot run is refused at start with its mod
 
 from __future__ import annotations
 
-from ...drivers.controller.backends import DEFAULT_PROTOCOL
-from ...rapid.station import default_station
+from ...drivers import DEFAULT_PROTOCOL
+from ...rapid import default_station
 from ..backends import mock_protocols, mock_server
 from ..robot import SimulatedRobot
 from .faults import Faults

@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...calibration.transforms import transform_from_pose
-from ...rapid.interpreter import MotionBinding, RapidFatalError
+from ...geometry import transform_from_pose
+from ...rapid import MotionBinding, RapidFatalError
 from ..robot import ZoneViolation
 
 __all__ = ["ArmBinding", "zone_violation", "PATH_SAMPLES"]

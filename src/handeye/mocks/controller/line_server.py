@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import time
 
-from ...rapid.errors import RapidError
-from ...rapid.interpreter import Bindings
+from ...rapid import RapidError
+from ...rapid import Bindings
 from .network import MockSockets
 from .serial_line import SerialLine
 from .server import DEFAULT_IDLE_TIMEOUT_S, RapidControllerServer

@@ -25,8 +25,8 @@ import re
 import threading
 import time
 
-from ...drivers.controller.modbus_map import load_register_map
-from ...rapid.interpreter import Bindings, IoBinding, RapidFatalError
+from ...drivers import load_register_map
+from ...rapid import Bindings, IoBinding, RapidFatalError
 from .faults import Faults
 from .server import DEFAULT_IDLE_TIMEOUT_S, RapidControllerServer
 

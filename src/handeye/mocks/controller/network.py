@@ -21,8 +21,8 @@ from __future__ import annotations
 
 import threading
 
-from ...rapid.interpreter import RapidRuntimeError
-from ...rapid.interpreter.net import TcpSockets
+from ...rapid import RapidRuntimeError
+from ...rapid import TcpSockets
 
 __all__ = ["MockSockets"]
 

@@ -15,9 +15,9 @@ import time
 
 import numpy as np
 
-from ...drivers.controller.types import ToolData
-from ...rapid.errors import RapidError
-from ...rapid.interpreter import Program, Task, load_program
+from ...drivers import ToolData
+from ...rapid import RapidError
+from ...rapid import Program, Task, load_program
 
 __all__ = ["RapidRunner", "approved_postures", "tooldata_of"]
 

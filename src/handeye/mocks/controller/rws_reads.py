@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...drivers.controller.rws_client import SIMULATION_SYSTEM_NAME
-from ...rapid.interpreter.values import format_value
+from ...drivers import SIMULATION_SYSTEM_NAME
+from ...rapid import format_value
 from .rws_web import HttpError
 
 __all__ = ["RwsReads", "rws_text", "rws_num"]

@@ -38,7 +38,7 @@ import threading
 import time
 from urllib.parse import parse_qs, unquote, urlsplit
 
-from ...rapid.interpreter import Bindings
+from ...rapid import Bindings
 from .faults import Faults
 from .rws_auth import DEFAULT_PASSWORD, DEFAULT_USER, REALM, RwsAuth
 from .rws_reads import RwsReads

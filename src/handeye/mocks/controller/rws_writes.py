@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import logging
 
-from ...drivers.controller.rws_codec import parse_rapid_value
-from ...rapid.errors import RapidError
-from ...rapid.interpreter import ModuleSource, parse_module
-from ...rapid.interpreter.values import aggregate, coerce, coerce_array
+from ...drivers import parse_rapid_value
+from ...rapid import RapidError
+from ...rapid import ModuleSource, parse_module
+from ...rapid import aggregate, coerce, coerce_array
 from .rws_web import HttpError
 from .sources import ControllerProgram
 

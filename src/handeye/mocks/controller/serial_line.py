@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import socket
 
-from ...rapid.interpreter import RapidRuntimeError, SerialBinding
-from ...rapid.interpreter.values import MAX_STRING
+from ...rapid import RapidRuntimeError, SerialBinding
+from ...rapid import MAX_STRING
 
 __all__ = ["SerialLine"]
 

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import logging
 
-from ...drivers.controller.types import check_write_key
-from ...rapid.interpreter import Bindings
-from ...rapid.interpreter.pendant import FlexPendant
+from ...drivers import check_write_key
+from ...rapid import Bindings
+from ...rapid import FlexPendant
 from .arm import ArmBinding
 from .faults import Faults
 from .runner import RapidRunner

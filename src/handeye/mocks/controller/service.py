@@ -15,8 +15,8 @@ import sys
 import time
 from dataclasses import dataclass, field
 
-from ...drivers.controller.backends import DEFAULT_PROTOCOL, RAPID_LINKS
-from ...rapid.station import IDLE_TIMEOUT_RANGE, RapidStation, default_station, load_station
+from ...drivers import DEFAULT_PROTOCOL, RAPID_LINKS
+from ...rapid import IDLE_TIMEOUT_RANGE, RapidStation, default_station, load_station
 from ..backends import mock_protocol_choices, mock_server
 from . import start_mock_controller
 
@@ -125,8 +125,8 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
 
     ``warn`` receives one line when the mock listens on an address other machines can reach.
     """
-    from ...drivers.controller.errors import InvalidRequest
-    from ...drivers.controller.types import check_write_key
+    from ...drivers import InvalidRequest
+    from ...drivers import check_write_key
 
     if options.protocol not in mock_protocol_choices():  # that protocol's plug-in only is loaded
         raise InvalidRequest(f"unknown protocol {options.protocol!r}; choose one of {mock_protocol_choices().listed()}")
@@ -255,7 +255,7 @@ def _start_pendant(server, options: MockControllerOptions):
     try:
         return PendantService(server, host="127.0.0.1", port=options.pendant_port).start()
     except OSError as exc:
-        from ...drivers.controller.errors import InvalidRequest
+        from ...drivers import InvalidRequest
 
         raise InvalidRequest(f"cannot listen on 127.0.0.1:{options.pendant_port} for the pendant ({exc}); pick "
                              "another --pendant-port (0 = any free port)") from None

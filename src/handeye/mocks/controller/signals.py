@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import threading
 
-from ...rapid.interpreter import IoBinding
+from ...rapid import IoBinding
 
 __all__ = ["CellSignals", "CELL_SIGNALS", "parse_signal"]
 

@@ -13,11 +13,11 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-from ...drivers.controller.backends import RAPID_LINKS
-from ...rapid.errors import RapidError
-from ...rapid.generate import render_key, render_program
-from ...rapid.interpreter import ModuleSource, parse_module
-from ...rapid.station import RapidStation, default_station
+from ...drivers import RAPID_LINKS
+from ...rapid import RapidError
+from ...rapid import render_key, render_program
+from ...rapid import ModuleSource, parse_module
+from ...rapid import RapidStation, default_station
 
 __all__ = ["ControllerProgram", "generated_program", "program_from_folder", "keep_system_modules", "MODULE_SUFFIXES",
            "NEVER_LATE_S"]

@@ -118,8 +118,8 @@ class MotionBinding:
         raise NotImplementedError
 
     def model(self):
-        """The arm's kinematics (:class:`~handeye.calibration.kinematics.RobotModel`)."""
-        from ...calibration.kinematics import load_robot
+        """The arm's kinematics (:class:`~handeye.robot.kinematics.RobotModel`)."""
+        from ...robot import load_robot
 
         return load_robot("IRB1400")
 

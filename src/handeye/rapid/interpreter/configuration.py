@@ -11,7 +11,7 @@ RAPID's ``confdata`` (RAPID reference, "Basic Characteristics", Robot configurat
   and 3), and axis 5 negative. 0 is the usual configuration (all axes at 0 deg).
 
 :func:`solve_robtarget` finds the solutions of a flange pose from several seeds with the project's
-forward kinematics (:class:`handeye.calibration.kinematics.RobotModel`) and damped Newton steps
+forward kinematics (:class:`handeye.robot.kinematics.RobotModel`) and damped Newton steps
 (:func:`follow`; the project's least-squares ``inverse_kinematics`` takes some 0.2 s a pose, too slow
 for the samples of a linear move), adds the
 wrist's equivalent solutions (axis 4 + 180, axis 5 negated, axis 6 + 180) and whole turns of axes 4
@@ -30,7 +30,7 @@ import numpy as np
 
 from scipy.spatial.transform import Rotation
 
-from ...calibration.kinematics import RobotModel
+from ...robot import RobotModel
 from .errors import RapidFatalError
 
 __all__ = ["confdata", "solve_robtarget", "solutions", "nearest", "follow"]
@@ -82,7 +82,7 @@ def follow(model: RobotModel, flange, seed, iterations: int = 40):
     The forward model is the project's (:meth:`RobotModel.forward`, batched: the Jacobian's seven
     configurations in one call), so a step costs one call; a ``MoveL`` solves every sample from the one
     before. Residual: position (mm) and 500 mm x the rotation vector of the orientation error, as
-    :func:`~handeye.calibration.kinematics.inverse_kinematics` weighs them.
+    :func:`~handeye.robot.kinematics.inverse_kinematics` weighs them.
     """
     target = np.asarray(flange, float)
     goal = Rotation.from_matrix(target[:3, :3]).inv()

@@ -98,7 +98,7 @@ def setting_value(setting):
 
 
 def registry_choice(choices):
-    """A type for one name of a registry's :class:`~handeye.calibration.registry.Choices`: checking it loads
+    """A type for one name of a registry's :class:`~handeye.base.registry.Choices`: checking it loads
     that plug-in only; a name that is not a choice is refused saying why (an installed plug-in that lacks
     what the command needs, or did not load) and what the choices are."""
 
@@ -140,7 +140,7 @@ def load_for_flags(registry, wanted: str | None) -> None:
     """Load (under the time bound, quietly: the option's check says why one fails) the plug-ins whose own
     flags a parser must offer: the one ``wanted`` names, or every one when ``wanted`` is None (the help).
     A name that is not a plug-in's loads nothing."""
-    from ...calibration.registry import quiet_loads
+    from ...base import quiet_loads
 
     names = registry.plugin_names() if wanted is None else [wanted.lower()] if wanted else []
     with quiet_loads():
@@ -151,9 +151,10 @@ def load_for_flags(registry, wanted: str | None) -> None:
 
 def target_spec(text: str):
     """``--board``: ``13x8`` (checkerboard corners), ``charuco``, ``circles``, or a kind with keys
-    (``charuco:squares=14x9,square_mm=30``): :func:`~handeye.calibration.targets.parse_target_spec`."""
-    from ...calibration.errors import CalibrationError
-    from ...calibration.targets import STATION_BOARD, parse_target_spec
+    (``charuco:squares=14x9,square_mm=30``): :func:`~handeye.geometry.targets.parse_target_spec`."""
+    from ...base import CalibrationError
+    from ...geometry import STATION_BOARD
+    from ...geometry import parse_target_spec
 
     try:
         board = parse_target_spec(text)

@@ -50,7 +50,7 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from ...calibration.errors import UsageError
+    from ...base import UsageError
     from ..benchmark import BenchmarkOptions, benchmark
     from ..progress import progress_bar
 

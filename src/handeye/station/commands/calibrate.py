@@ -19,7 +19,7 @@ def methods_help(width: int = 100) -> str:
     """The ``--method`` section of the help: every row of the methods table (a plug-in's too), by kind."""
     import textwrap
 
-    from ...calibration.methods import DEFAULT_METHOD, METHODS, method_names
+    from ...calibration import DEFAULT_METHOD, METHODS, method_names
 
     lines = [f"Methods (--method); without it the recommended default ({DEFAULT_METHOD}) runs:"]
     for kind, (heading, shared) in _KIND_HEADINGS.items():
@@ -109,30 +109,30 @@ def add_parser(sub):
 def run(args) -> int:
     import sys
 
-    from ..assessment import assess, comparison_methods
+    from ..report.assessment import assess, comparison_methods
     from ..calibrate import calibrate_session_folder, report_path_for
     from ..output import check_output_file, write_json
-    from ..report_json import calibration_json
-    from ..report_text import calibration_summary
+    from ..report.as_json import calibration_json
+    from ..report.text import calibration_summary
 
     if args.json:  # an unwritable --json fails before any solving
         check_output_file(args.json)
     if not 0 < args.standoff <= 5000:  # so does a stand-off that is no distance
-        from ...calibration.errors import UsageError
+        from ...base import UsageError
 
         raise UsageError(f"--standoff must be more than 0 and at most 5000 mm; got {args.standoff:g}")
-    from ...calibration.solve import method_row
+    from ...calibration import method_row
 
     method_row(args.method)  # an unknown --method, too (the table, a plug-in's methods included)
     wants_report = args.report is not None
     thresholds = None
     if args.thresholds:  # a bad thresholds file fails before any solving
-        from ..quality import load_thresholds
+        from ..report.quality import load_thresholds
 
         thresholds = load_thresholds(args.thresholds)
     report_path = report_path_for(args.session, args.report) if wants_report else None
     if report_path is not None and not report_path.parent.is_dir():
-        from ...calibration.errors import HandEyeError
+        from ...base import HandEyeError
 
         raise HandEyeError(f"cannot write the report {report_path}: folder {report_path.parent} does not exist")
     from ..progress import delayed_progress
@@ -150,7 +150,7 @@ def run(args) -> int:
                         methods=comparison_methods() if wants_report else ())
     written = None
     if wants_report:
-        from ..report import write_report
+        from ..report.document import write_report
 
         title = f"Hand-eye calibration report: {outcome.session_path.resolve().name}"
         written = write_report(report_path, assessment, title=title, extra_sections=_kinematics_sections(kinematics))
@@ -185,7 +185,7 @@ def _save_result(outcome, units: str):
     line on stderr: the calibration stands, writeback and verify will solve it again."""
     import sys
 
-    from ...calibration.errors import OutputError
+    from ...base import OutputError
     from ..result_file import save_result
 
     try:
@@ -210,7 +210,7 @@ def _warn_joint_mismatch(session) -> None:
     """One warning line on stderr when postures' joint angles do not reproduce their flange poses."""
     import sys
 
-    from ...calibration.joint_match import session_joint_mismatch
+    from ...calibration import session_joint_mismatch
 
     found = session_joint_mismatch(session)
     if found is not None:

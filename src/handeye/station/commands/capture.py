@@ -86,7 +86,7 @@ Examples:
 def add_parser(sub):
     p = sub.add_parser("capture", help=HELP, description=HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--config", metavar="STATION.yaml", help="station configuration (see src/handeye/station/example_station.yaml)")
+    p.add_argument("--config", metavar="STATION.yaml", help="station configuration (see src/handeye/station/config/example_station.yaml)")
     p.add_argument("--mock", action="store_true", help="use the embedded mock robot and camera")
     p.add_argument("--session", required=True, metavar="DIR", help="session folder (created, or resumed); a relative "
                    "one inside the config's output folder when it names one")
@@ -107,7 +107,7 @@ def _view(config, args, link, say):
     """The live view's context (``station.view.live_view``) with --view, else one that yields None."""
     import contextlib
 
-    from ...calibration.errors import HandEyeError, UsageError
+    from ...base import HandEyeError, UsageError
 
     if not args.view:
         if args.view_host:
@@ -148,12 +148,12 @@ def _confirmation(args):
 
 class _Say:
     """Prints a message a line, each after the station's tag (``MOCK `` on a mock station:
-    ``station.station_kind``), from any thread (the mock's simulated operator speaks from its own)."""
+    ``station.config.station_kind``), from any thread (the mock's simulated operator speaks from its own)."""
 
     def __init__(self, config):
         import threading
 
-        from ..station_kind import station_tag
+        from ..config.station_kind import station_tag
 
         self.config, self.tag, self.lock = config, station_tag(config), threading.Lock()
 
@@ -166,7 +166,7 @@ class _Say:
         that makes a real config a mock station says so first, in one line. A context that does nothing more."""
         import contextlib
 
-        from ..station_kind import mock_parts, station_tag
+        from ..config.station_kind import mock_parts, station_tag
 
         tag = station_tag(self.config, link)
         if tag and not self.tag:
@@ -179,9 +179,9 @@ class _Say:
 def run(args) -> int:
     from dataclasses import replace
 
-    from ...calibration.errors import UsageError
-    from ..capture import capture
-    from ..config import default_config, load_config
+    from ...base import UsageError
+    from ..capture.loop import capture
+    from ..config.station import default_config, load_config
     from ..progress import progress_bar
     from ..runtime import MOCK_BANNER, open_station, rehearsal_banner
 
@@ -236,7 +236,7 @@ def _end(lines: list, say, view, error: str | None = None, ok: bool | None = Non
 def _guided_ending(session, captured: int, already: int, what: str) -> tuple[list, str | None]:
     """The last lines of a guided run (``what``: what was captured and what is missing), and the error when
     the session holds fewer postures than a calibration needs (None: enough)."""
-    from ...calibration.problem import MIN_POSTURES
+    from ...calibration import MIN_POSTURES
 
     total = captured + already
     if total == 0:
@@ -252,10 +252,10 @@ def _guided_ending(session, captured: int, already: int, what: str) -> tuple[lis
 def _run_guided(config, args, say) -> int:
     import threading
 
-    from ...calibration.errors import HandEyeError
-    from ..guided import guided_capture
-    from ..guided_pendant import pendant_guided_capture, uses_guided_program
-    from ..mock_operator import mock_operator
+    from ...base import HandEyeError
+    from ..guided.capture import guided_capture
+    from ..guided.pendant import pendant_guided_capture, uses_guided_program
+    from ..guided.operator import mock_operator
     from ..runtime import open_station
 
     stop = threading.Event()  # the embedded mock's simulated operator sets it when done
@@ -292,6 +292,6 @@ def _postures_on_disk(session) -> int:
     """How many postures the session folder holds (0 when it holds no session)."""
     from pathlib import Path
 
-    from ...calibration.session import read_session
+    from ...calibration import read_session
 
     return len(read_session(session).postures) if (Path(session) / "session.yaml").is_file() else 0

@@ -48,11 +48,11 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from ...calibration.errors import UsageError
-    from ...calibration.kinematics import load_robot
-    from ..cell_plan import cell_check
-    from ..cell_report import check_joints, read_joints_csv
-    from ..config import default_config, load_config
+    from ...base import UsageError
+    from ...robot import load_robot
+    from ..cell.plan import cell_check
+    from ..cell.check import check_joints, read_joints_csv
+    from ..config.station import default_config, load_config
     from ..output import check_output_file, write_json
 
     if getattr(args, "action", None) != "check":

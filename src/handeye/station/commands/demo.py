@@ -26,8 +26,8 @@ Examples:
 
 
 def add_parser(sub):
-    from ...drivers.controller.backends import DEFAULT_PROTOCOL
-    from ...mocks.backends import mock_protocol_choices
+    from ...drivers import DEFAULT_PROTOCOL
+    from ...mocks import mock_protocol_choices
     from . import argtypes
     from .argtypes import left_out_lines, registry_choice
 
@@ -55,7 +55,7 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from ...calibration.errors import UsageError
+    from ...base import UsageError
     from ..demo import DemoOptions, run_demo
     from ..output import check_output_file, write_json
     from ..progress import progress_bar
@@ -66,7 +66,7 @@ def run(args) -> int:
         raise UsageError(f"--occlude must be a share of the postures between 0 and 1; got {args.occlude}")
     occlude = None
     if args.occlude is not None:
-        from ...mocks.printed_targets import Occlusion
+        from ...mocks import Occlusion
 
         occlude = Occlusion(args.occlude)
     if args.json:  # an unwritable --json fails before the run

@@ -34,8 +34,8 @@ def add_parser(sub):
 def run(args) -> int:
     from pathlib import Path
 
-    from ...calibration.errors import UsageError
-    from ..config import load_config
+    from ...base import UsageError
+    from ..config.station import load_config
     from ..kinematics_export import export_kinematics
 
     if getattr(args, "action", None) != "export":

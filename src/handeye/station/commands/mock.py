@@ -82,7 +82,7 @@ Example:
 def _protocols(loaded: bool = False) -> tuple[str, str]:
     """The protocols a mock serves (registry order; with ``loaded``, of the back ends loaded so far only) and
     their lines for the epilog."""
-    from ...mocks.backends import mock_protocols, mock_server
+    from ...mocks import mock_protocols, mock_server
 
     names = mock_protocols(loaded)
     lines = [f"  {name:<8} {mock_server(name).help}, port {mock_server(name).default_port}" for name in names]
@@ -92,7 +92,7 @@ def _protocols(loaded: bool = False) -> tuple[str, str]:
 def _server_options(parser) -> None:
     """One flag per mock server option (``MockServer.options`` of the mock protocols loaded so far: handeye's
     own and the plug-in the command line names, described once)."""
-    from ...mocks.backends import mock_settings
+    from ...mocks import mock_settings
 
     for key, (setting, names) in mock_settings(loaded=True).items():
         parser.add_argument(setting.option, dest=f"server_{key}", type=argtypes.setting_value(setting), default=None,
@@ -102,8 +102,8 @@ def _server_options(parser) -> None:
 def add_parser(sub, words=None):
     """``words``: the command line; only the plug-in its ``--protocol`` names is loaded (for its mock's own
     flags), every one for ``--help`` or when None (the whole parser)."""
-    from ...drivers.controller.backends import CONTROLLERS
-    from ...mocks.backends import mock_protocol_choices
+    from ...drivers import CONTROLLERS
+    from ...mocks import mock_protocol_choices
     from .argtypes import left_out_lines, load_for_flags, option_word, registry_choice
 
     wanted = None if words is None else option_word(words, "--protocol")
@@ -119,7 +119,7 @@ def add_parser(sub, words=None):
 
     c = targets.add_parser("controller", help=controller_help, description=controller_help, epilog=epilog,
                            formatter_class=argparse.RawDescriptionHelpFormatter)
-    from ...drivers.controller.backends import DEFAULT_PROTOCOL
+    from ...drivers import DEFAULT_PROTOCOL
 
     c.add_argument("--protocol", choices=protocols, type=registry_choice(protocols), default=DEFAULT_PROTOCOL,
                    metavar="PROTOCOL", help=f"one of the protocols above (default {DEFAULT_PROTOCOL})")
@@ -194,8 +194,8 @@ def _run_pendant(args) -> int:
     """Sends each request to the pendant port and prints the reply; 1 when a reply is ERR."""
     import sys
 
-    from ...calibration.errors import HandEyeError
-    from ..pendant_operator import PendantClient
+    from ...base import HandEyeError
+    from ..guided.pendant_client import PendantClient
 
     requests = ((line.strip() for line in sys.stdin if line.strip()) if args.requests == ["-"] else args.requests)
     try:
@@ -228,15 +228,15 @@ def run(args) -> int:
         return 2
     import sys
 
-    from ...calibration.errors import UsageError
-    from ...mocks.controller.service import MockControllerOptions, run_mock_controller
-    from ...rapid.station import IDLE_TIMEOUT_RANGE
+    from ...base import UsageError
+    from ...mocks import MockControllerOptions, run_mock_controller
+    from ...rapid import IDLE_TIMEOUT_RANGE
 
     low, high = IDLE_TIMEOUT_RANGE
     if args.idle_timeout is not None and not low <= args.idle_timeout <= high:
         raise UsageError(f"--idle-timeout must be {low:g} to {high:g} s; got {args.idle_timeout:g}")
 
-    from ...mocks.controller.signals import parse_signal
+    from ...mocks import parse_signal
 
     try:
         signals = tuple(parse_signal(text) for text in args.signal)
@@ -244,9 +244,9 @@ def run(args) -> int:
         raise UsageError(str(exc)) from None
     station = cell = faults = arm = None
     if args.config:
-        from ...drivers.controller.backends import RAPID_LINKS
-        from ...rapid.station import default_station, station_from_dict
-        from ..config import load_config
+        from ...drivers import RAPID_LINKS
+        from ...rapid import default_station, station_from_dict
+        from ..config.station import load_config
 
         config = load_config(args.config)
         postures = config.postures if config.postures is not None else default_station().postures

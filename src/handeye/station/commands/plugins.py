@@ -32,7 +32,7 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from ...calibration.time_bound import plugin_time_s
+    from ...base import plugin_time_s
     from ..output import check_output_file, write_json
     from ..plugins import installed_plugins, plugin_lines
 

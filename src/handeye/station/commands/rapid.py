@@ -25,14 +25,14 @@ one link module, by protocol (every registered controller back end's):
 Postures outside the joint limits are refused; every module is checked before it is written.
 The protocol is documented in src/handeye/rapid/PROTOCOL.md.
 
-Station config: the station YAML (src/handeye/station/example_station.yaml documents every key). These keys
+Station config: the station YAML (src/handeye/station/config/example_station.yaml documents every key). These keys
 shape the RAPID program; all are optional, missing ones come from the built-in station:
   robot: IRB1400
   controller: {protocol: socket, pc_address: 192.168.125.10, controller_address: auto,
                port: 1025, serial_channel: "sio1:", ack_timeout_s: 30, idle_timeout_s: 5,
                write_key: YOUR-SECRET-KEY}
   motion: {speed_tcp_mm_s: 200, speed_ori_deg_s: 100, speed_override_pct: 100}
-  cell: {keep_out: [...], world_zones: false}      # see src/handeye/station/example_station.yaml
+  cell: {keep_out: [...], world_zones: false}      # see src/handeye/station/config/example_station.yaml
   tool: {name: tHeCamera, mass_kg: 1.0, cog_mm: [0, 0, 60]}
   postures: [[a1, a2, a3, a4, a5, a6], ...]        # controller axis angles, degrees (one per robot axis)
 controller_address auto binds to GetSysInfo(\\LanIp); a virtual controller needs 127.0.0.1.
@@ -53,7 +53,7 @@ Example:
 
 
 def add_parser(sub):
-    from ...drivers.controller.backends import rapid_protocol_choices
+    from ...drivers import rapid_protocol_choices
     from .argtypes import left_out_lines, registry_choice
 
     p = sub.add_parser("rapid", help=HELP, description=HELP)
@@ -85,11 +85,11 @@ def run(args) -> int:
     if getattr(args, "rapid_command", None) != "generate":
         args._rapid_parser.print_help()
         return 2
-    from ...drivers.controller.backends import RAPID_LINKS
-    from ...calibration.errors import UsageError
-    from ...rapid.generate import render_guided_program, render_key, render_program, station_link, write_modules
-    from ...rapid.station import default_station, station_from_dict
-    from ..config import load_config
+    from ...drivers import RAPID_LINKS
+    from ...base import UsageError
+    from ...rapid import render_guided_program, render_key, render_program, station_link, write_modules
+    from ...rapid import default_station, station_from_dict
+    from ..config.station import load_config
 
     if args.prompt and not args.guided:
         raise UsageError("--prompt applies to --guided only")

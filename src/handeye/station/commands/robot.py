@@ -26,7 +26,7 @@ def _epilog() -> str:
 def _link_options(p, backends) -> None:
     """``--protocol``, ``--host``, ``--port`` and one flag per link setting of the back ends loaded so far
     (``link_settings()``: handeye's own, and the plug-in the command line names, :func:`add_parser`)."""
-    from ...drivers.controller.backends import DEFAULT_PROTOCOL, link_settings
+    from ...drivers import DEFAULT_PROTOCOL, link_settings
     from .argtypes import registry_choice
 
     ports = ", ".join(f"{name} {backends[name].default_port}" for name in backends.loaded_names()
@@ -49,7 +49,7 @@ def _link_options(p, backends) -> None:
 def add_parser(sub, words=None):
     """``words``: the command line; only the plug-in its ``--protocol`` names is loaded (for its own link
     flags), every one for ``--help`` or when None (the whole parser)."""
-    from ...drivers.controller.backends import CONTROLLERS
+    from ...drivers import CONTROLLERS
     from .argtypes import load_for_flags, option_word
 
     load_for_flags(CONTROLLERS, None if words is None else option_word(words, "--protocol"))
@@ -70,7 +70,7 @@ def add_parser(sub, words=None):
 
 def _options(args) -> dict:
     """``open_controller`` options: where the controller is, as the back end's registry entry builds them."""
-    from ...drivers.controller.backends import CONTROLLERS, ControllerLink
+    from ...drivers import CONTROLLERS, ControllerLink
 
     settings = {name[len("link_"):]: value for name, value in vars(args).items() if name.startswith("link_")}
     link = ControllerLink(host=args.host, port=args.port, **settings)
@@ -84,7 +84,8 @@ def run(args) -> int:
         return 2
     import json
 
-    from ...drivers.controller import open_controller, read_robot_state
+    from ...drivers import open_controller
+    from ...drivers import read_robot_state
 
     with open_controller(args.protocol, **_options(args)) as controller:
         if args.robot_command == "joints":

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from ...calibration.station_board import STATION_CORNERS, STATION_SQUARE_MM
+from ...geometry import STATION_CORNERS, STATION_SQUARE_MM
 from . import argtypes
 
 HELP = "calibrate the stereo head from checkerboard pairs, or read its factory (Triclops) calibration"
@@ -136,10 +136,10 @@ def add_parser(sub):
 def _calibrate(args) -> int:
     from pathlib import Path
 
-    from ...calibration.errors import UsageError
-    from ...drivers.camera.checkerboard import as_board
+    from ...base import UsageError
+    from ...drivers import as_board
     from ..progress import progress_bar
-    from ..stereo_calibration import StereoCalibrationConfig, run_stereo_calibration
+    from ..stereo_from_pairs import StereoCalibrationConfig, run_stereo_calibration
 
     sources = sum(bool(x) for x in (args.images, args.left or args.right, args.camera))
     if sources != 1:
@@ -169,8 +169,8 @@ def _calibrate(args) -> int:
 
 
 def _mock_camera(config, seed):
-    from ...drivers.camera import open_camera
-    from ...mocks.world import BoardOperator, PrintedBoard
+    from ...drivers import open_camera
+    from ...mocks import BoardOperator, PrintedBoard
 
     board = PrintedBoard(config.board, margin_mm=max(15.0, 0.8 * config.board.square_mm))
     camera = open_camera("mock", board=board, seed=seed, output="gray", render_centre=False)
@@ -211,8 +211,8 @@ def _print_summary(run, say) -> None:
 def _triclops(args) -> int:
     from pathlib import Path
 
-    from ...drivers.camera.triclops import read_triclops_model
-    from ..stereo_calibration import write_stereo_file
+    from ...drivers import read_triclops_model
+    from ..stereo_from_pairs import write_stereo_file
 
     model = read_triclops_model(args.file, size=args.size)
     path = write_stereo_file(Path(args.output), model, {"source": model.name})
@@ -235,9 +235,9 @@ def run(args) -> int:
 def _stereo_board(board, square_mm):
     """The board of ``stereo calibrate``: a ChArUco description keeps its own square size unless
     ``--square-mm`` says otherwise (its default is the checkerboard's)."""
-    from ...calibration.compact_points import BoardGeometry
-    from ...calibration.station_board import STATION_SQUARE_MM
-    from ...drivers.camera.checkerboard import as_board
+    from ...geometry import BoardGeometry
+    from ...geometry import STATION_SQUARE_MM
+    from ...drivers import as_board
 
     if isinstance(board, BoardGeometry) and square_mm == STATION_SQUARE_MM:
         return board

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ...calibration.station_board import STATION_CORNERS
+from ...geometry import STATION_CORNERS
 from . import argtypes
 
 HELP = "board corners in mm (camera frame) from a stereo image pair or a raw XB3 frame"
@@ -58,7 +58,7 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from ...drivers.camera.triangulate import triangulate_files
+    from ...drivers import triangulate_files
     from ..output import write_json
 
     from .stereo import _stereo_board

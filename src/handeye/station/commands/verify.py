@@ -66,9 +66,9 @@ def add_parser(sub):
 def _history(args, config) -> int:
     import sys
 
-    from ..quality import config_thresholds
-    from ..verify_history import history_lines, history_path, load_history
-    from ..verify_report import write_history_report
+    from ..report.quality import config_thresholds
+    from ..verify.history import history_lines, history_path, load_history
+    from ..verify.page import write_history_report
 
     path = history_path(args.against)
     history = load_history(path)
@@ -88,11 +88,11 @@ def run(args) -> int:
 
     import sys
 
-    from ...calibration.errors import HandEyeError, UsageError
-    from ...calibration.verification import DEFAULT_LEVEL, LEVEL_RANGE, MIN_VERIFY_POSTURES
-    from ..config import default_config, load_config
+    from ...base import HandEyeError, UsageError
+    from ...calibration import DEFAULT_LEVEL, LEVEL_RANGE, MIN_VERIFY_POSTURES
+    from ..config.station import default_config, load_config
     from ..runtime import MOCK_BANNER, open_station, rehearsal_banner
-    from ..station_kind import station_tag
+    from ..config.station_kind import station_tag
 
     if not args.config and not args.mock:
         raise UsageError("give --config STATION.yaml (the station) or --mock (the embedded mock station)")
@@ -108,7 +108,7 @@ def run(args) -> int:
         config = config.as_mock()
     if args.history:
         return _history(args, config)
-    from ..verify import EXIT_CODES, check_request
+    from ..verify.check import EXIT_CODES, check_request
 
     check_request(config, Path(args.against), args.postures)  # refusals before anything opens or moves
     if not config.is_mock and not args.yes and not sys.stdin.isatty():
@@ -124,14 +124,14 @@ def run(args) -> int:
 
 
 def _check(args, config, link, tag: str) -> str:
-    from ...calibration.files import write_text_atomic
-    from ..quality import config_thresholds
-    from ..verify import verify
-    from ..verify_history import append_record, check_record, history_path, load_history
-    from ..verify_report import write_history_report
+    from ...base import write_text_atomic
+    from ..report.quality import config_thresholds
+    from ..verify.check import verify
+    from ..verify.history import append_record, check_record, history_path, load_history
+    from ..verify.page import write_history_report
     from ..origin import MOCK
-    from ..station_kind import station_kind
-    from ..verify_result import advice, outcome_json, outcome_lines
+    from ..config.station_kind import station_kind
+    from ..verify.result import advice, outcome_json, outcome_lines
 
     import json
     import sys
@@ -179,7 +179,7 @@ def _after_check(step, what: str) -> None:
     check's verdict (its exit status) stands."""
     import sys
 
-    from ...calibration.errors import HandEyeError
+    from ...base import HandEyeError
 
     try:
         step()

@@ -54,7 +54,7 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from ...calibration.errors import UsageError
+    from ...base import UsageError
     from ..writeback_flow import WritebackRequest, run_writeback
 
     if not args.dry_run and not args.config and not args.mock:

@@ -12,10 +12,10 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ...calibration.errors import SessionError
-from ...calibration.invariants import fit_hand_eye, pair_indices
-from ...calibration.problem import EYE_IN_HAND
-from ...calibration.transforms import invert_transforms
+from ...base import SessionError
+from ...calibration import fit_hand_eye, pair_indices
+from ...calibration import EYE_IN_HAND
+from ...geometry import invert_transforms
 from .readings import FIT_PAIRS, Reading, Side, pose_outcome
 
 __all__ = ["AmbiguousReading", "choice_lines", "reading_flags"]

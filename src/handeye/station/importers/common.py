@@ -20,12 +20,12 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ...calibration.compact_points import BoardGeometry
-from ...calibration.errors import SessionError, brief
-from ...calibration.files import parse_yaml, read_text_file
-from ...calibration.problem import SETUPS
-from ...calibration.session import MAX_LENGTH_MM, MAX_LENGTH_WORDS, MAX_POSTURE_INDEX, Posture, Session
-from ...calibration.transforms import rigid_defect
+from ...geometry import BoardGeometry
+from ...base import SessionError, brief
+from ...base import parse_yaml, read_text_file
+from ...calibration import SETUPS
+from ...calibration import MAX_LENGTH_MM, MAX_LENGTH_WORDS, MAX_POSTURE_INDEX, Posture, Session
+from ...geometry import rigid_defect
 from .head import check_log_head, read_head
 from .ambiguity import AmbiguousReading
 from .inference import METRES_BELOW, Constraints, Side, SideReading, infer
@@ -449,7 +449,7 @@ def build_session(
 
 def read_text(path) -> str:
     """The UTF-8 text of ``path``, or a one-line :class:`SessionError` (missing, a folder, a named pipe,
-    unreadable, over 64 MB, not UTF-8; see ``calibration.files.read_text_file``; empty, binary, or
+    unreadable, over 64 MB, not UTF-8; see ``base.files.read_text_file``; empty, binary, or
     without a number in its first 64 KB: ``head.check_log_head``, before the file is read whole)."""
     check_log_head(path, read_head(path))
     return read_text_file(Path(path), "input file", SessionError, missing=f"{path}: no such file")

@@ -23,8 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...calibration.errors import SessionError, brief
-from ...calibration.session import Session, parse_yaml
+from ...base import SessionError, brief
+from ...calibration import Session
+from ...base import parse_yaml
 from .common import Dropped, EntryErrors, build_session, read_text, transform_from_quaternion
 
 __all__ = ["FORMAT", "DEFAULT_SETUP", "read_easy_handeye", "looks_like_easy_handeye"]

@@ -1,7 +1,7 @@
 """An input's first bytes, and the inputs they already show are not a log of poses.
 
 Every importer reads its files through :func:`common.read_text`, and format detection looks at the
-files' heads: both refuse here, from the first :data:`~handeye.calibration.files.HEAD_BYTES` (64 KB),
+files' heads: both refuse here, from the first :data:`~handeye.base.files.HEAD_BYTES` (64 KB),
 an empty file, a binary one (named when its first bytes say what it is: an image, an archive, a ROS
 bag) and a large text without a single number, in one line that says what is wrong and what to give
 instead. A 50 MB image given by mistake is never read whole.
@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ...calibration.errors import SessionError
-from ...calibration.files import HEAD_BYTES, binary_offset, check_regular_file, read_file_bytes
+from ...base import SessionError
+from ...base import HEAD_BYTES, binary_offset, check_regular_file, read_file_bytes
 
 __all__ = ["read_head", "check_log_head", "head_text"]
 
@@ -34,7 +34,7 @@ _SIGNATURES = (
 
 def read_head(path, size: int = HEAD_BYTES) -> bytes:
     """The first ``size`` bytes of an input (a folder, named pipe or device, or a file over
-    :data:`~handeye.calibration.files.MAX_FILE_BYTES`, is refused in one line)."""
+    :data:`~handeye.base.files.MAX_FILE_BYTES`, is refused in one line)."""
     missing = f"{path}: no such file"
     check_regular_file(path, "input file", SessionError, missing=missing)
     return read_file_bytes(path, "input file", SessionError, missing=missing, head=size)

@@ -50,8 +50,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...calibration.errors import SessionError
-from ...calibration.problem import SETUPS
+from ...base import SessionError
+from ...calibration import SETUPS
 from .ambiguity import AmbiguousReading, choice_lines
 from .inference_table import format_table, inference_record, reading_words, table_rows
 from .readings import (

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...calibration.errors import SessionError
+from ...base import SessionError
 from .log_group import Group
 
 __all__ = ["Candidate", "choose_layout", "CONE_MAX_DEG", "CONE_FACTOR", "NOISE_FACTOR"]

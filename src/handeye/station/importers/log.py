@@ -31,8 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...calibration.errors import SessionError, SessionUsageError, brief
-from ...calibration.session import Session, parse_yaml
+from ...base import SessionError, SessionUsageError, brief
+from ...calibration import Session
+from ...base import parse_yaml
 from .common import QUATERNION_ORDERS, Dropped, build_session, check_posture_count, parse_json, read_text
 from .conventions import POSE_WIDTHS, PoseConvention, conventions_for_width, parse_rotation_spec, vendor_units
 from .inference import Side, SideReading

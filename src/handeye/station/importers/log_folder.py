@@ -22,8 +22,8 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ...calibration.errors import SessionError
-from ...calibration.session import parse_yaml
+from ...base import SessionError
+from ...base import parse_yaml
 from .common import parse_json
 from .head import check_log_head, read_head
 from .layout_text import tokenise

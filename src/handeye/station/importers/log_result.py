@@ -17,7 +17,7 @@ import re
 
 import numpy as np
 
-from ...calibration.transforms import invert_transforms
+from ...geometry import invert_transforms
 
 __all__ = ["frame_hints", "own_result", "compare_result"]
 

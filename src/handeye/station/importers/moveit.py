@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...calibration.errors import SessionError
-from ...calibration.session import Session
+from ...base import SessionError
+from ...calibration import Session
 from .common import Dropped, EntryErrors, build_session, parse_json, read_text, rigid_transform
 
 __all__ = ["FORMAT", "DEFAULT_SETUP", "read_moveit", "looks_like_moveit"]

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from ...calibration.invariants import posture_medians
+from ...calibration import posture_medians
 
 __all__ = ["ALPHA", "MISFITS", "NoiseComparison", "posture_misfits", "compare"]
 

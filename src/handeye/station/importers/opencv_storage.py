@@ -29,8 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...calibration.errors import SessionError
-from ...calibration.session import Session
+from ...base import SessionError
+from ...calibration import Session
 from .common import Dropped, EntryErrors, build_session, read_text, rigid_transform
 from .head import head_text
 
@@ -151,7 +151,7 @@ def read_opencv(path, *, setup=None, units=None, board=None, skip_invalid: bool 
     """
     import cv2  # station-side only: the calibration core does not depend on OpenCV
 
-    from ...drivers.camera.stereo import refuse_base64_filestorage
+    from ...drivers import refuse_base64_filestorage
 
     path, skipped = _source(path, robot_prefix, camera_prefix)
     # a regular UTF-8 file of sane size without base64 values: cv2 would hang on a named pipe or on a

@@ -33,10 +33,10 @@ import csv
 
 import numpy as np
 
-from ...calibration.compact_points import BoardGeometry
-from ...calibration.errors import SessionError, brief
-from ...calibration.problem import SETUPS
-from ...calibration.session import MAX_CORNERS, MAX_LENGTH_MM, Session
+from ...geometry import BoardGeometry
+from ...base import SessionError, brief
+from ...calibration import SETUPS
+from ...calibration import MAX_CORNERS, MAX_LENGTH_MM, Session
 from .head import check_log_head, read_head
 from .common import (
     QUATERNION_ORDERS,

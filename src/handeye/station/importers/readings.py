@@ -15,10 +15,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ...calibration.errors import SessionError, SessionUsageError
-from ...calibration.invariants import MIN_MOTION_DEG, fit_hand_eye, pair_indices
-from ...calibration.problem import EYE_IN_HAND, EYE_TO_HAND
-from ...calibration.transforms import invert_transforms, rotation_error_deg
+from ...base import SessionError, SessionUsageError
+from ...calibration import MIN_MOTION_DEG, fit_hand_eye, pair_indices
+from ...calibration import EYE_IN_HAND, EYE_TO_HAND
+from ...geometry import invert_transforms, rotation_error_deg
 from .noise_test import compare, posture_misfits
 
 __all__ = [

@@ -26,8 +26,8 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ...calibration.errors import SessionError, brief
-from ...calibration.session import Session
+from ...base import SessionError, brief
+from ...calibration import Session
 from ..csv_values import is_header, parse_value, value_problem
 from .common import (
     Dropped,

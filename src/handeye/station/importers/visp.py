@@ -33,8 +33,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...calibration.errors import SessionError, SessionUsageError
-from ...calibration.session import Session, parse_yaml
+from ...base import SessionError, SessionUsageError
+from ...calibration import Session
+from ...base import parse_yaml
 from .common import Dropped, EntryErrors, build_session, flat_numbers, read_text, transform_from_rotvec
 from .visp_images import (find_images, measure_board_pose, measure_tag_pose, read_apriltag_data, read_chessboard_data,
                           read_visp_camera)

@@ -21,10 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ...calibration.compact_points import BoardGeometry, board_corners
-from ...calibration.errors import SessionError
-from ...calibration.files import check_regular_file, read_file_bytes, read_text_file
-from ...calibration.session import MAX_CORNERS, MAX_LENGTH_MM
+from ...geometry import BoardGeometry, board_corners
+from ...base import SessionError
+from ...base import check_regular_file, read_file_bytes, read_text_file
+from ...calibration import MAX_CORNERS, MAX_LENGTH_MM
 
 __all__ = ["IMAGE_PATTERN", "CameraIntrinsics", "read_visp_camera", "read_chessboard_data", "find_images",
            "canonical_corner_order", "measure_board_pose", "measure_tag_pose", "tag_corners"]
@@ -192,7 +192,7 @@ def _read_gray(image_path):
 
 def _pnp(objects, pixels, camera, flags) -> tuple[np.ndarray, float]:
     """Pose (4x4, mm) and reprojection RMS (px) with the ViSP intrinsics (ValueError: PnP failed)."""
-    from ...drivers.camera.pnp import pnp_pose
+    from ...drivers import pnp_pose
 
     solved = pnp_pose(objects, pixels, camera.matrix(), camera.distortion(), flags)
     if solved is None:

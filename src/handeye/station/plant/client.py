@@ -13,7 +13,7 @@ import os
 import ssl
 import threading
 
-from ...calibration.errors import HandEyeError
+from ...base import HandEyeError
 
 __all__ = ["make_client", "connect", "PlantLinkError"]
 

@@ -115,7 +115,7 @@ def _sigma(uncertainty: dict | None) -> dict | None:
 
 def calibration_event(plant, recorded: dict, session_folder, result, verdict=None) -> dict:
     """A ``calibrate`` event of ``result`` (``CalibrationResult``) and its verdict (``quality.Verdict`` or None)."""
-    from ...calibration.transforms import pose_from_transform
+    from ...geometry import pose_from_transform
 
     event = base_event("calibrate", plant, recorded, session_folder)
     event["result"] = {"method": result.method, "camera_pose": {"parent": result.parent, **pose_from_transform(result.x)},

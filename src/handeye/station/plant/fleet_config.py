@@ -18,10 +18,10 @@ import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from ...calibration.errors import ConfigError, brief
-from ...calibration.files import read_text_file
-from ...calibration.session import parse_yaml
-from ..schema import Custom, Number, Text, check_section, section, setting, text
+from ...base import ConfigError, brief
+from ...base import read_text_file
+from ...base import parse_yaml
+from ..config.schema import Custom, Number, Text, check_section, section, setting, text
 from .settings import BrokerSettings
 
 __all__ = ["FleetSettings", "ViewSettings", "load_fleet_config", "fleet_from_dict"]

@@ -62,7 +62,7 @@ def after_calibrate(args, outcome, assessment) -> None:
     config = getattr(args, "config", None)
     try:
         if config:  # a calibrate that reads a station file (not yet: the session's record otherwise)
-            from ..config import load_config
+            from ..config.station import load_config
 
             station = load_config(config)
             plant, recorded = station.plant, (station.to_dict() if station.plant is not None else {})

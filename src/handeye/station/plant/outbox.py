@@ -2,7 +2,7 @@
 
 A folder (``plant.outbox``) holding one ``<seq:012d>.json`` per event waiting and ``last-sent.json``,
 the last event the broker acknowledged. :meth:`Outbox.add` gives the next number (one more than the
-largest of those) and writes the event under the folder's lock (``station.file_lock``: two commands at
+largest of those) and writes the event under the folder's lock (``station.verify.file_lock``: two commands at
 one cell never share a number), atomically (temporary file, flushed to disk, renamed: a killed command
 leaves the whole event or none). :meth:`Outbox.pending` lists them in order; :meth:`Outbox.done` renames
 an acknowledged one (QoS 1) over ``last-sent.json``, so the numbers never go back, with one write to
@@ -17,8 +17,8 @@ import json
 import os
 from pathlib import Path
 
-from ...calibration.files import write_text_atomic
-from ..file_lock import exclusive_lock
+from ...base import write_text_atomic
+from ..verify.file_lock import exclusive_lock
 
 __all__ = ["Outbox"]
 

@@ -1,6 +1,6 @@
 """The station file's ``plant:`` section: where a cell publishes its calibration health (MQTT).
 
-Declared like every other section (:func:`~handeye.station.schema.setting`: default, rule, doc), and
+Declared like every other section (:func:`~handeye.station.config.schema.setting`: default, rule, doc), and
 checked key by key; nothing here imports an MQTT client. Without a ``plant:`` section the config's
 ``plant`` is None and nothing is published (``station.plant.hooks``)::
 
@@ -22,8 +22,8 @@ import re
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from ...calibration.errors import ConfigError, brief
-from ..schema import Custom, Number, Optional, Text, check_section, section, setting, text
+from ...base import ConfigError, brief
+from ..config.schema import Custom, Number, Optional, Text, check_section, section, setting, text
 
 __all__ = ["TlsSettings", "BrokerSettings", "MqttSettings", "PlantSettings", "plant_rule", "topic_levels",
            "broker_password"]

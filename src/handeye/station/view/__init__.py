@@ -1,7 +1,7 @@
 """The live view of a capture (``handeye capture --view``): a page the operator watches while capturing.
 
 :func:`live_view` opens it for a connected station: the hub (``hub``: takes the capture's events,
-``station.capture_events``, and keeps the page's state, ``state``; encodes the images, ``frames``),
+``station.capture.events``, and keeps the page's state, ``state``; encodes the images, ``frames``),
 the live frames while the robot moves (``feed``) and the HTTP server with its token (``server``).
 The page (``page.html``) is plain JavaScript: one ``EventSource``, inline SVG drawings; nothing is
 loaded from anywhere but the server, so it works offline at the station.
@@ -41,7 +41,7 @@ class LiveView:
 
     def finish(self, text: str, ok: bool = True) -> None:
         """The run is over: the page says ``text`` (what the command said last) in place of the next step."""
-        from ..capture_events import CaptureEnded
+        from ..capture.events import CaptureEnded
 
         self.hub.observe(CaptureEnded(text, ok))
 

@@ -67,7 +67,7 @@ class LiveFeed:
         self._thread.join(timeout=5.0)
 
     def _run(self) -> None:
-        from ...calibration.errors import HandEyeError
+        from ...base import HandEyeError
 
         while not self._stop.wait(self.poll_s):
             if not self.hub.wants_live_frame():

@@ -25,12 +25,12 @@ _JPEG_QUALITY = 70
 def detected_corners(image: np.ndarray, board) -> np.ndarray | None:
     """The board's inner corners ``(m, 2)`` in ``image`` (full-size px, canonical order) as the capture's
     detector finds them with its fast search; None when it finds none there."""
-    from ...drivers.camera.checkerboard import detect_board
-    from ...drivers.camera.errors import BoardNotFound, FrameError
+    from ...drivers import detect_board
+    from ...drivers import BoardNotFound, FrameError
 
     try:
         if getattr(board, "kind", "checkerboard") != "checkerboard":  # ChArUco: the corners seen (issue 37)
-            from ...drivers.camera.charuco import detect_charuco, detect_circles
+            from ...drivers import detect_charuco, detect_circles
 
             found = detect_circles if board.kind == "circles" else detect_charuco
             return found(image, board).corners_px

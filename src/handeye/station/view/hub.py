@@ -17,7 +17,7 @@ import json
 import threading
 import time
 
-from ..capture_events import CaptureEnded, Measured, Prompt, Verdict
+from ..capture.events import CaptureEnded, Measured, Prompt, Verdict
 from .frames import detected_corners, encode_image, page_points
 from .state import ViewState
 
@@ -68,7 +68,7 @@ class ViewHub:
 
     # ---------------------------------------------------------------------------- capture side
     def observe(self, event) -> None:
-        """The capture's observer (``station.capture_events``): returns at once."""
+        """The capture's observer (``station.capture.events``): returns at once."""
         with self._lock:
             if isinstance(event, Measured):
                 self._frame, self._frame_at = (event, MEASURED), time.monotonic()

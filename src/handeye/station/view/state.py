@@ -1,8 +1,8 @@
-"""What the live view shows, kept from the capture's events (``station.capture_events``).
+"""What the live view shows, kept from the capture's events (``station.capture.events``).
 
 :class:`ViewState` folds the events into the page's JSON: the posture list (each posture's quality,
 or why it was skipped), the coverage in the quality words (``calibration.quality_words``: image
-cells, rotation axes, distance spread), what is still missing and the hint (``station.guided.
+cells, rotation axes, distance spread), what is still missing and the hint (``station.guided.capture.
 what_is_missing``, the same words the guided capture prints), the progress, GOOD ENOUGH, for a planned
 capture the plan seen from above and from the side with the current posture and the time left, and,
 once the postures allow a solve, the calibration (:class:`Predictor`) that predicts where the next
@@ -17,15 +17,15 @@ import time
 
 import numpy as np
 
-from ...calibration.errors import HandEyeError
-from ...calibration.kinematics import load_robot
-from ...calibration.problem import MIN_POSTURES
-from ...calibration.quality_words import AXIS_SPREAD_NAME, board_distances_mm, distance_spread_mm, hand_axis_coverage, image_cells
-from ...calibration.session import Posture, Session
-from ..capture import stereo_views
-from ..capture_events import CAPTURED, SKIPPED, CaptureEnded, CaptureStarted, Prompt, Verdict
-from ..guided import postures_needed, what_is_missing
-from ..quality import config_thresholds, direction_name
+from ...base import HandEyeError
+from ...robot import load_robot
+from ...calibration import MIN_POSTURES
+from ...calibration import AXIS_SPREAD_NAME, board_distances_mm, distance_spread_mm, hand_axis_coverage, image_cells
+from ...calibration import Posture, Session
+from ..capture.loop import stereo_views
+from ..capture.events import CAPTURED, SKIPPED, CaptureEnded, CaptureStarted, Prompt, Verdict
+from ..guided.capture import postures_needed, what_is_missing
+from ..report.quality import config_thresholds, direction_name
 
 __all__ = ["PREDICTION_METHOD", "Predictor", "ViewState"]
 
@@ -53,8 +53,8 @@ class Predictor:
 
     def update(self, postures: list) -> None:
         """Solve again with ``postures`` (``calibration.session.Posture``, flange pose and corners)."""
-        from ...calibration.metrics import fixed_points
-        from ...calibration.solve import calibrate, problem_from_session
+        from ...calibration import fixed_points
+        from ...calibration import calibrate, problem_from_session
 
         if len(postures) < MIN_POSTURES:
             self.cam2tool0, self.reason = None, f"a calibration needs {MIN_POSTURES} postures ({len(postures)} so far)"

@@ -25,7 +25,7 @@ import math
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from ....calibration.transforms import transform_from_pose
+from ....geometry import transform_from_pose
 from ..configuration import confdata, follow, solve_robtarget
 from ..errors import RapidFatalError
 from ..values import PREDEFINED, TYPES, Record, copy_value, to_num

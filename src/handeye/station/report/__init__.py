@@ -1,0 +1,1 @@
+"""What the station says about one calibration: the assessment, the verdict and its presenters."""
