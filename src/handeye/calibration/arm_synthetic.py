@@ -56,6 +56,8 @@ def deviated_session(scene: Scene, deviation, sigma_px: float = 0.1, sigma_joint
     standing = joints + rng.normal(0.0, sigma_joint_deg, joints.shape)
     cam2base = true_arm.forward_transform(standing) @ scene.x_true
     target2cam = invert_transforms(cam2base) @ scene.target2fixed
+    if scene.board.square_mm is None:
+        raise ValueError("a synthetic scene's board needs its square size")
     corners = board_corners(scene.board.corners, scene.board.square_mm)
     points = np.einsum("nij,mj->nmi", target2cam[:, :3, :3], corners) + target2cam[:, None, :3, 3]
     shape = stereo_point_shape(points) * sigma_px ** 2

@@ -138,7 +138,7 @@ def _charuco(data: dict) -> CharucoBoard:
         squares = tuple(c + 1 for c in _pair(data["corners"], "corners", 2))
     else:
         squares = _pair(data.get("squares", list(d.squares)), "squares", 3)
-    squares = _long_first(squares, "squares")
+    squares = _long_first((int(squares[0]), int(squares[1])), "squares")
     square = _number(data.get("square_mm", d.square_mm), "square_mm", 0, 1e4)
     marker = _number(data.get("marker_mm", d.marker_mm), "marker_mm", 0, 1e4)
     if marker >= square:

@@ -148,7 +148,7 @@ def fit_capsules(points, count: int, line=None, seed: int = 0, rounds: int = 6, 
     bounds = None if slack_mm is None else (points.min(axis=0) - slack_mm, points.max(axis=0) + slack_mm)
     if count <= 1:
         return [(fit_capsule(points, line, bounds), np.arange(len(points)))]
-    _, labels = kmeans2(points, count, seed=seed, minit="++")
+    _, labels = kmeans2(points, count, seed=seed, minit="++")  # pyright: ignore[reportCallIssue]  (the stubs know only rng; seed keeps the stream the robot file was fitted with)
     best, best_volume = None, np.inf
     for _ in range(rounds + 1):
         groups = [np.flatnonzero(labels == c) for c in range(count) if np.any(labels == c)]
@@ -161,6 +161,7 @@ def fit_capsules(points, count: int, line=None, seed: int = 0, rounds: int = 6, 
         if np.array_equal(new, labels):
             break
         labels = new
+    assert best is not None  # the first round's volume is below the initial infinity
     return best
 
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 __all__ = ["WritebackRequest", "run_writeback", "writeback_source"]
 
@@ -51,7 +52,12 @@ def writeback_source(request: WritebackRequest, session, config, origin: str | N
         return result, passed, reason, True
     outcome = current_outcome(session, request.session, request.method, request.units, origin, say=say)
     assessment = assess(outcome, config_thresholds(config))
-    result, passed, reason = assessment.result, assessment.verdict.passed, assessment.verdict.line()
+    verdict = assessment.verdict
+    if verdict is None:  # assess with thresholds always judges
+        from ..base import HandEyeError
+
+        raise HandEyeError("the calibration was not judged against the quality thresholds")
+    result, passed, reason = assessment.result, verdict.passed, verdict.line()
     say(f"calibration ({result.method}): {reason}")
     return result, passed, reason, False
 
@@ -96,7 +102,7 @@ def run_writeback(request: WritebackRequest, say: Callable[[str], None] = lambda
     if origin_line(origin):
         say(origin_line(origin))
     result, passed, reason, is_check = writeback_source(request, session, config, origin, say)
-    common = dict(verdict_passed=passed, verdict_reason=reason, force=request.force, origin=origin, progress=say)
+    common: dict[str, Any] = dict(verdict_passed=passed, verdict_reason=reason, force=request.force, origin=origin, progress=say)
     if request.dry_run:
         say(writeback(request.session, config, result, None, dry_run=True, **common).literal)
         return 0

@@ -46,8 +46,14 @@ def _opencv_board(squares: tuple, square_mm: float, marker_mm: float, dictionary
 
 def opencv_board(board: CharucoBoard):
     """The ``cv2.aruco.CharucoBoard`` of a board description (cached)."""
-    return _opencv_board(tuple(board.squares), float(board.square_mm), float(board.marker_mm), board.dictionary,
-                         bool(board.legacy))
+    return _opencv_board(*_board_key(board))
+
+
+def _board_key(board: CharucoBoard) -> tuple:
+    """The cache key of a board: squares, square and marker size (mm), dictionary, legacy layout."""
+    if board.square_mm is None or board.marker_mm is None:
+        raise ValueError("a ChArUco board needs its square and marker sizes")
+    return tuple(board.squares), float(board.square_mm), float(board.marker_mm), board.dictionary, bool(board.legacy)
 
 
 @functools.lru_cache(maxsize=8)
@@ -108,7 +114,7 @@ def detect_charuco(image: np.ndarray, board: CharucoBoard, what: str = "image") 
         Markers, but no chessboard corner between them.
     """
     gray = _gray_u8(image, what)
-    key = (tuple(board.squares), float(board.square_mm), float(board.marker_mm), board.dictionary, bool(board.legacy))
+    key = _board_key(board)
     corners, ids, _, marker_ids = _detector(*key).detectBoard(gray)
     markers = 0 if marker_ids is None else len(marker_ids)
     if markers == 0:
@@ -201,7 +207,7 @@ def partial_quality(points_mm: np.ndarray, ids: np.ndarray, board, row_disagreem
 class PartialObservation(BoardObservation):
     """A :class:`BoardObservation` of the corners both images saw: ``corner_ids`` ``(k,)`` says which."""
 
-    corner_ids: np.ndarray = None
+    corner_ids: np.ndarray | None = None
 
 
 def _detect(image, board, what: str) -> CharucoDetection:
