@@ -49,6 +49,10 @@ class DriftTolerance:
     def to_json(self) -> dict:
         return {"translation_mm": self.translation_mm, "rotation_deg": self.rotation_deg, "source": self.source}
 
+    def exceeded_by(self, translation_mm: float, rotation_deg: float) -> bool:
+        """Whether a change of this size is larger than the tolerance in translation or rotation."""
+        return bool(translation_mm > self.translation_mm or rotation_deg > self.rotation_deg)
+
 
 @dataclass(frozen=True)
 class DriftSize:
@@ -119,8 +123,7 @@ def drift_size(explanations, test, tolerance: DriftTolerance) -> DriftSize | Non
     if best is None:
         return DriftSize("unexplained", 0.0, 0.0, False, True)
     fits = explained(best, test)
-    beyond = (not fits or best.translation_mm > tolerance.translation_mm
-              or best.rotation_deg > tolerance.rotation_deg)
+    beyond = not fits or tolerance.exceeded_by(best.translation_mm, best.rotation_deg)
     return DriftSize(best.name, best.translation_mm, best.rotation_deg, fits, beyond)
 
 
@@ -168,9 +171,10 @@ class ToolDifference:
 def tool_difference(held, expected, tolerance: DriftTolerance) -> ToolDifference:
     """The difference between two tooldata (``position_mm`` (3,), ``quaternion_wxyz`` (4,), unit or not)
     against ``tolerance``."""
+    from ...geometry import matrix_from_quaternion, rotation_error_deg  # noqa: PLC0415
+
     translation = float(np.linalg.norm(np.subtract(held.position_mm, expected.position_mm, dtype=float)))
-    q1, q2 = (np.asarray(q, float) / np.linalg.norm(np.asarray(q, float)) for q in (held.quaternion_wxyz,
-                                                                                     expected.quaternion_wxyz))
-    rotation = float(np.degrees(2.0 * np.arccos(np.clip(abs(float(q1 @ q2)), 0.0, 1.0))))
-    beyond = translation > tolerance.translation_mm or rotation > tolerance.rotation_deg
-    return ToolDifference(translation, rotation, bool(beyond))
+    rotations = [matrix_from_quaternion(np.asarray(q, float) / np.linalg.norm(np.asarray(q, float)))
+                 for q in (held.quaternion_wxyz, expected.quaternion_wxyz)]
+    rotation = float(rotation_error_deg(*rotations))
+    return ToolDifference(translation, rotation, tolerance.exceeded_by(translation, rotation))
