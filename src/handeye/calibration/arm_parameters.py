@@ -77,12 +77,9 @@ def robot_prior(robot_name: str | None) -> dict:
     """``kinematic_prior`` of the robot file (``length_mm``, ``angle_deg``), else :data:`DEFAULT_PRIOR`."""
     if robot_name is None:
         return dict(DEFAULT_PRIOR)
-    from ..robot import _normalise_name, _robot_files  # noqa: PLC0415
-    from pathlib import Path  # noqa: PLC0415
+    from ..robot import robot_file  # noqa: PLC0415
 
-    path = _robot_files().get(_normalise_name(str(robot_name)))
-    if path is None and Path(str(robot_name)).is_file():
-        path = Path(str(robot_name))
+    path = robot_file(str(robot_name))
     if path is None:
         return dict(DEFAULT_PRIOR)
     data = parse_yaml(read_text_file(path, "robot file", ValueError), path, ValueError) or {}

@@ -78,7 +78,7 @@ _EXPORTS = {
     "check_tooldata": "controller.types",
     "check_write_key": "controller.types",
     "chosen_with_own": "registry",
-    "_opencv_board": "camera.charuco",
+    "opencv_board": "camera.charuco",
     "detect_charuco": "camera.charuco",
     "detect_circles": "camera.charuco",
 }
@@ -86,7 +86,7 @@ __all__ = list(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 
 if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
-    from .camera.charuco import _opencv_board, detect_charuco, detect_circles  # noqa: F401
+    from .camera.charuco import detect_charuco, opencv_board, detect_circles  # noqa: F401
     from .registry import Setting  # noqa: F401
     from .controller.socket_client import SocketController  # noqa: F401
     from .camera.backends import CAMERAS, CameraBackend, camera_settings  # noqa: F401

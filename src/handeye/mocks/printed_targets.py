@@ -38,18 +38,18 @@ class Occlusion:
 
 
 @functools.lru_cache(maxsize=4)
-def _print(squares, square_mm, marker_mm, dictionary, legacy, px_per_mm) -> np.ndarray:
-    from ..drivers import _opencv_board
+def _print(geometry, px_per_mm: float) -> np.ndarray:
+    from ..drivers import opencv_board
 
-    board = _opencv_board(squares, square_mm, marker_mm, dictionary, legacy)
+    board = opencv_board(geometry)
+    squares, square_mm = geometry.squares, float(geometry.square_mm)
     size = (int(round(squares[0] * square_mm * px_per_mm)), int(round(squares[1] * square_mm * px_per_mm)))
     return board.generateImage(size, marginSize=0, borderBits=1)
 
 
 def charuco_print(geometry, px_per_mm: float = PX_PER_MM) -> np.ndarray:
     """OpenCV's image ``(h, w)`` uint8 of a :class:`~handeye.geometry.targets.CharucoBoard` (squares only)."""
-    return _print(tuple(geometry.squares), float(geometry.square_mm), float(geometry.marker_mm), geometry.dictionary,
-                  bool(geometry.legacy), float(px_per_mm))
+    return _print(geometry, float(px_per_mm))  # the geometry is a frozen dataclass: the cache key
 
 
 def printed_labels(u, v, front, board) -> np.ndarray:

@@ -33,14 +33,13 @@ _EXPORTS = {
     "ik_from_standard_seeds": "views",
     "look_at": "views",
     "sample_eye_in_hand_postures": "views",
-    "_normalise_name": "kinematics",
-    "_robot_files": "kinematics",
+    "robot_file": "kinematics",
 }
 __all__ = list(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 
 if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
-    from .kinematics import _normalise_name, _robot_files  # noqa: F401
+    from .kinematics import robot_file  # noqa: F401
     from .base_clearance import base_clearances, base_envelope  # noqa: F401
     from .cell import Box, CellModel, Cylinder, DEFAULT_CARRIED, Floor, Sphere  # noqa: F401
     from .clearance import CellGuard, arm_capsules  # noqa: F401

@@ -31,6 +31,7 @@ __all__ = [
     "LinkBody",
     "RobotModel",
     "load_robot",
+    "robot_file",
     "known_robots",
     "dh_transforms",
     "InverseKinematicsResult",
@@ -388,6 +389,19 @@ def _load_path(path: Path) -> RobotModel:
         raise ValueError(f"robot file {path} is not a valid robot model: {exc}") from None
 
 
+def robot_file(name_or_path: str) -> Path | None:
+    """The YAML file of a robot named (``IRB1400``, a shipped file's name or alias) or given by its path
+    (``.yaml``/``.yml``), or None when there is none."""
+    key = _normalise_name(str(name_or_path))
+    files = _robot_files()
+    if key in files:
+        return files[key]
+    path = Path(name_or_path)
+    if path.suffix in (".yaml", ".yml") and path.is_file():
+        return path.resolve()
+    return None
+
+
 def load_robot(name_or_path: str) -> RobotModel:
     """A robot model by name (``IRB1400``) or by the path of a YAML file of the same layout.
 
@@ -396,13 +410,9 @@ def load_robot(name_or_path: str) -> RobotModel:
     ValueError
         If the name is unknown and no such file exists.
     """
-    key = _normalise_name(str(name_or_path))
-    files = _robot_files()
-    if key in files:
-        return _load_path(files[key])
-    path = Path(name_or_path)
-    if path.suffix in (".yaml", ".yml") and path.is_file():
-        return _load_path(path.resolve())
+    path = robot_file(name_or_path)
+    if path is not None:
+        return _load_path(path)
     raise ValueError(f"unknown robot model {name_or_path!r}; known: {', '.join(known_robots())} (or a path to a robot YAML file)")
 
 
