@@ -58,3 +58,62 @@ def test_impossible_geometry_is_reported():
     with pytest.raises(PlanningError, match="postures found"):
         plan_postures(ROBOT, DEFAULT_START, far, DEFAULT_MOUNT, BOARD, count=5, seed=1,
                       sampling=ViewSampling(distance_mm=(3000.0, 3200.0)), max_attempts=20)
+
+
+def _plan_of(board, seed=3, count=12, cone=15.0):
+    return plan_postures(ROBOT, DEFAULT_START, _start_view(), DEFAULT_MOUNT, board, count=count, seed=seed,
+                         sampling=ViewSampling(cone_deg=cone, roll_deg=40.0))
+
+
+def _spread(joints):
+    from handeye.calibration.quality_words import hand_axis_coverage
+
+    return hand_axis_coverage(ROBOT.forward_transform(joints), "tool0").spread_deg
+
+
+def test_a_charuco_plan_takes_partial_views_where_they_widen_the_rotation_spread():
+    """Issue 37: a narrow cone leaves the rotations in nearly one plane; views aimed off the board centre
+    (part of the ChArUco board out of view) lift the spread; each such posture is said in the plan line,
+    sees enough of the board to fix its pose, and the checkerboard plan of the same seed stays whole."""
+    from handeye.geometry.targets import STATION_CHARUCO, view_refusal
+    from handeye.robot.views import corners_in_view
+    from handeye.station.capture.partial_plan import MAX_PARTIAL_SHARE, MIN_IN_VIEW
+
+    whole = _plan_of(BOARD)
+    charuco = _plan_of(STATION_CHARUCO)
+    assert whole.partial == [] and charuco.partial
+    assert len(charuco.partial) <= MAX_PARTIAL_SHARE * 12
+    assert charuco.score.rotation_axis_spread_deg > whole.score.rotation_axis_spread_deg + 3.0
+    assert charuco.score.rotation_axis_spread_deg == pytest.approx(_spread(charuco.joints_deg))
+    corners = board_corners(BOARD.corners, BOARD.square_mm)
+    numbers = {p.number for p in charuco.partial}
+    for k, joints in enumerate(charuco.joints_deg):
+        target2cam = invert_transforms(ROBOT.forward_transform(joints) @ DEFAULT_MOUNT) @ DEFAULT_BOARD
+        seen = corners_in_view(target2cam, corners, NOMINAL_XB3)
+        if k in numbers:  # partly out of view, yet enough corners with the span to fix the pose
+            assert MIN_IN_VIEW <= seen.mean() < 1.0 and view_refusal(np.flatnonzero(seen), STATION_CHARUCO) == ""
+        else:
+            assert seen.all()
+    previous = whole.score.rotation_axis_spread_deg
+    for p in charuco.partial:  # swapped in one after the other, each widening the spread
+        assert p.spread_after_deg > p.spread_before_deg == pytest.approx(previous, abs=1e-6)
+        previous = p.spread_after_deg
+        line = p.line()
+        assert line.startswith(f"posture {p.number}: board ") and "% in view (ChArUco), widens the rotation spread from" in line
+        assert f"{100 * p.in_view:.0f} % in view" in line
+
+
+def test_a_checkerboard_is_never_planned_partly_out_of_view_nor_a_charuco_board_when_turned_off():
+    from handeye.geometry.targets import STATION_CHARUCO, STATION_CIRCLES
+    from handeye.station.capture.partial_plan import widen_with_partial_views
+
+    whole = _plan_of(BOARD)
+    corners = board_corners(BOARD.corners, BOARD.square_mm)
+    for board in (BOARD, STATION_CIRCLES):  # the grids must be seen whole: nothing is swapped
+        joints, partial = widen_with_partial_views(ROBOT, whole.joints_deg, DEFAULT_MOUNT, DEFAULT_BOARD, board, corners,
+                                                   np.random.default_rng(1), ViewSampling(cone_deg=15.0), NOMINAL_XB3,
+                                                   DEFAULT_START)
+        assert partial == [] and np.array_equal(joints, whole.joints_deg)
+    off = plan_postures(ROBOT, DEFAULT_START, _start_view(), DEFAULT_MOUNT, STATION_CHARUCO, count=12, seed=3,
+                        sampling=ViewSampling(cone_deg=15.0, roll_deg=40.0), partial_views=False)
+    assert off.partial == [] and np.allclose(off.joints_deg, whole.joints_deg)

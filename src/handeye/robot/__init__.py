@@ -30,6 +30,7 @@ _EXPORTS = {
     "PinholeView": "views",
     "ViewSampling": "views",
     "board_visible": "views",
+    "corners_in_view": "views",
     "ik_from_standard_seeds": "views",
     "look_at": "views",
     "sample_eye_in_hand_postures": "views",
@@ -44,4 +45,4 @@ if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
     from .cell import Box, CellModel, Cylinder, DEFAULT_CARRIED, Floor, Sphere  # noqa: F401
     from .clearance import CellGuard, arm_capsules  # noqa: F401
     from .kinematics import RobotModel, dh_transforms, inverse_kinematics, known_robots, load_robot  # noqa: F401
-    from .views import NOMINAL_XB3, NOMINAL_XB3_LEFT, PinholeView, ViewSampling, board_visible, ik_from_standard_seeds, look_at, sample_eye_in_hand_postures  # noqa: F401
+    from .views import NOMINAL_XB3, NOMINAL_XB3_LEFT, PinholeView, ViewSampling, board_visible, corners_in_view, ik_from_standard_seeds, look_at, sample_eye_in_hand_postures  # noqa: F401

@@ -26,6 +26,7 @@ __all__ = [
     "ViewSampling",
     "look_at",
     "board_visible",
+    "corners_in_view",
     "sample_eye_in_hand_postures",
     "ik_from_standard_seeds",
 ]
@@ -61,13 +62,17 @@ class PinholeView:
 
     def sees(self, points_cam, margin_px: float = 25.0, min_depth_mm: float = 100.0) -> bool:
         """True when every point is in front (beyond ``min_depth_mm``) and inside the image margin."""
+        return bool(np.all(self.sees_each(points_cam, margin_px, min_depth_mm)))
+
+    def sees_each(self, points_cam, margin_px: float = 25.0, min_depth_mm: float = 100.0) -> np.ndarray:
+        """Bool ``(m,)``: which points ``(m, 3)`` are in front (beyond ``min_depth_mm``) and inside the margin."""
         pts = np.asarray(points_cam, float)
         local_z = ((pts - self.view2camera[:3, 3]) @ self.view2camera[:3, :3])[:, 2]
-        if np.any(local_z < min_depth_mm):
-            return False
-        uv = self.project(pts)
-        return bool(np.all((uv[:, 0] > margin_px) & (uv[:, 0] < self.width - margin_px)
-                           & (uv[:, 1] > margin_px) & (uv[:, 1] < self.height - margin_px)))
+        with np.errstate(invalid="ignore"):
+            uv = self.project(pts)
+            inside = ((uv[:, 0] > margin_px) & (uv[:, 0] < self.width - margin_px)
+                      & (uv[:, 1] > margin_px) & (uv[:, 1] < self.height - margin_px))
+        return inside & (local_z >= min_depth_mm)
 
 
 #: Nominal rectified XB3 wide pair (3.8 mm lenses, 1280x960): f 983 px, baseline 239.98 mm.
@@ -95,6 +100,16 @@ def board_visible(target2cam, corners_target, views=(NOMINAL_XB3_LEFT,), margin_
     """True when every view sees every corner ``(m, 3)`` (target frame) of a board at ``target2cam``."""
     pts = np.asarray(corners_target, float) @ np.asarray(target2cam)[:3, :3].T + np.asarray(target2cam)[:3, 3]
     return all(view.sees(pts, margin_px) for view in views)
+
+
+def corners_in_view(target2cam, corners_target, views=(NOMINAL_XB3_LEFT,), margin_px: float = 25.0) -> np.ndarray:
+    """Bool ``(m,)``: the corners ``(m, 3)`` (target frame) of a board at ``target2cam`` that every view sees
+    (a partial view of a ChArUco board holds these)."""
+    pts = np.asarray(corners_target, float) @ np.asarray(target2cam)[:3, :3].T + np.asarray(target2cam)[:3, 3]
+    seen = np.ones(len(pts), bool)
+    for view in views:
+        seen &= view.sees_each(pts, margin_px)
+    return seen
 
 
 @dataclass(frozen=True)
@@ -183,6 +198,13 @@ def _board_view_frame(board: np.ndarray, corners: np.ndarray):
     return centre, normal_out, e1, np.cross(normal_out, e1)
 
 
+def _view_ok(target2cam, corners, views, margin_px: float, accept_view) -> bool:
+    """The whole board in every view, or (``accept_view``) a part of it that callable accepts."""
+    if accept_view is None:
+        return board_visible(target2cam, corners, views, margin_px)
+    return bool(accept_view(corners_in_view(target2cam, corners, views, margin_px)))
+
+
 def sample_eye_in_hand_postures(
     robot: RobotModel,
     cam2tool0,
@@ -197,8 +219,10 @@ def sample_eye_in_hand_postures(
     veto=None,
     min_count: int | None = None,
     pose_veto=None,
+    accept_view=None,
 ) -> np.ndarray:
-    """Controller angles ``(count, k)`` of postures from which ``views`` see the whole board.
+    """Controller angles ``(count, k)`` of postures from which ``views`` see the whole board (or, with
+    ``accept_view``, the part of it that callable accepts).
 
     Parameters
     ----------
@@ -227,6 +251,9 @@ def sample_eye_in_hand_postures(
     pose_veto : callable, optional
         ``pose_veto(tool02base) -> bool``: like ``veto``, on the flange pose, before the inverse
         kinematics (what the flange carries needs no joints).
+    accept_view : callable, optional
+        ``accept_view(seen) -> bool`` on the corners every view sees (bool ``(m,)``, :func:`corners_in_view`):
+        True keeps the view point. Default: every corner seen (the whole board).
 
     Raises
     ------
@@ -251,7 +278,7 @@ def sample_eye_in_hand_postures(
         cam2base = _view_point(rng, sampling, centre, normal_out, (e1, e2), side)
         tool02base = cam2base @ invert_transforms(x)
         if not (robot.may_reach(tool02base[:3, 3])  # in this order: the vetoes count what they reject
-                and board_visible(invert_transforms(cam2base) @ board, corners, views, sampling.margin_px)
+                and _view_ok(invert_transforms(cam2base) @ board, corners, views, sampling.margin_px, accept_view)
                 and (pose_veto is None or pose_veto(tool02base))):
             continue
         found = _posture_near(robot, tool02base, anchor, sampling)

@@ -306,6 +306,8 @@ def plan_session(config: StationConfig, session_dir: Path, link: StationLink, pr
     plan = _new_plan(config, link, progress)
     plan_score = plan.score.to_dict()
     progress(plan_line(plan.score, len(plan.joints_deg)))
+    for partial in plan.partial:  # ChArUco: postures planned with the board partly out of view
+        progress(f"plan: {partial.line()}")
     for note in plan.notes:
         progress(f"plan warning: {note}")
     session = Session(setup="eye_in_hand", robot=config.robot, target=config.target, extra={"capture": {
@@ -313,6 +315,8 @@ def plan_session(config: StationConfig, session_dir: Path, link: StationLink, pr
         "plan_joints_deg": [[round(float(v), 4) for v in row] for row in plan.joints_deg],
         "start_joints_deg": [round(float(v), 4) for v in plan.start_joints_deg],
         "plan_score": plan_score,
+        **({"plan_partial": [{"posture": p.number, "in_view": round(p.in_view, 3)} for p in plan.partial]}
+           if plan.partial else {}),
         "board_estimate": pose_from_transform(plan.board2base),
         "nominal_mount": pose_from_transform(plan.cam2tool0),
         "skipped": {},

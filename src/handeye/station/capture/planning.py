@@ -38,6 +38,7 @@ from ...geometry import invert_transforms
 from ...robot import NOMINAL_XB3, ViewSampling, sample_eye_in_hand_postures
 from ..cell.plan import CellCheck, PostureVeto, Rejections, base_problem, board_problem, clear_route, start_problem
 from ..report.quality import QualityThresholds, motion_shortfalls
+from .partial_plan import number_partial_postures, widen_with_partial_views
 
 __all__ = [
     "PlanScore",
@@ -128,6 +129,9 @@ class PosturePlan:
         Warnings for the operator.
     cell : CellCheck or None
         The cell the plan was checked against.
+    partial : list of PartialPosture
+        Postures planned with the board partly out of view (ChArUco only, ``station.capture.partial_plan``),
+        numbered in capture order, each with the line that says so.
     """
 
     joints_deg: np.ndarray
@@ -138,6 +142,7 @@ class PosturePlan:
     board: BoardGeometry
     notes: list = field(default_factory=list)
     cell: CellCheck | None = None
+    partial: list = field(default_factory=list)
 
 
 def motion_time_s(robot: RobotModel, a, b) -> np.ndarray:
@@ -216,6 +221,7 @@ def plan_postures(
     max_attempts: int | None = None,
     thresholds: QualityThresholds | None = None,
     cell: CellCheck | None = None,
+    partial_views: bool = True,
 ) -> PosturePlan:
     """Plan ``count`` postures around the board seen from the start posture.
 
@@ -243,6 +249,9 @@ def plan_postures(
         The verdict's thresholds the plan is warned against (the defaults when omitted).
     cell : CellCheck, optional
         The cell every posture and move must keep clear of (its board stand from the board estimate).
+    partial_views : bool
+        A board that takes partial views (ChArUco) may be planned partly out of view where that widens the
+        rotation-axis spread (``station.capture.partial_plan``); never a checkerboard or a circle grid.
 
     Raises
     ------
@@ -261,20 +270,36 @@ def plan_postures(
     corners = board_corners(board.corners, board.square_mm)
     rng = np.random.default_rng(seed)
     thresholds = thresholds or QualityThresholds()
+    widen = _widener(robot, cam2tool0_nominal, board2base, board, corners, rng, sampling, views, start, partial_views)
     if cell is None:
         joints = _draw(robot, cam2tool0_nominal, board2base, corners, count, rng, sampling, views, start, max_attempts)
+        joints, partial = widen(joints)
         joints = joints[order_for_short_motions(robot, joints, start)]
         rejections = Rejections()
     else:
-        joints, rejections = _draw_clear_of_cell(robot, cam2tool0_nominal, board2base, board, corners, count, rng,
-                                                 sampling, views, start, max_attempts, cell, thresholds)
+        joints, rejections, partial = _draw_clear_of_cell(robot, cam2tool0_nominal, board2base, board, corners, count,
+                                                           rng, sampling, views, start, max_attempts, cell, thresholds,
+                                                           widen)
+    partial = number_partial_postures(joints, partial)
     score = score_plan(robot, joints, board2base, cam2tool0_nominal, board, start, noise)
     score = replace(score, rejected_postures=sum(rejections.postures.values()),
                     rejected_moves=sum(rejections.moves.values()), rejections=tuple(rejections.lines()))
     notes = score.verdict(thresholds)
     if len(joints) < count:
         notes.append(f"only {len(joints)} of {count} postures keep clear of the cell: {rejections.summary()}")
-    return PosturePlan(joints, board2base, np.asarray(cam2tool0_nominal, float), score, start, board, notes, cell)
+    return PosturePlan(joints, board2base, np.asarray(cam2tool0_nominal, float), score, start, board, notes, cell,
+                       partial)
+
+
+def _widener(robot, cam2tool0, board2base, board, corners, rng, sampling, views, start, enabled: bool):
+    """``widen(joints, veto=None, pose_veto=None) -> (joints, partial)``: the partial views swapped in where
+    they widen the rotation spread (``partial_plan``), or nothing when ``enabled`` is false."""
+    def widen(joints, veto=None, pose_veto=None):
+        if not enabled:
+            return joints, []
+        return widen_with_partial_views(robot, joints, cam2tool0, board2base, board, corners, rng, sampling, views,
+                                        start, veto=veto, pose_veto=pose_veto)
+    return widen
 
 
 def _draw(robot, cam2tool0, board2base, corners, count, rng, sampling, views, start, max_attempts, veto=None,
@@ -288,9 +313,10 @@ def _draw(robot, cam2tool0, board2base, corners, count, rng, sampling, views, st
 
 
 def _draw_clear_of_cell(robot, cam2tool0, board2base, board, corners, count, rng, sampling, views, start, max_attempts,
-                        cell: CellCheck, thresholds: QualityThresholds) -> tuple[np.ndarray, Rejections]:
+                        cell: CellCheck, thresholds: QualityThresholds, widen) -> tuple[np.ndarray, Rejections, list]:
     """Postures and their order clear of the cell (``station.cell.plan``), at least the verdict's
-    ``min_inlier_postures`` of them, and why the others were rejected."""
+    ``min_inlier_postures`` of them, why the others were rejected, and the partial views ``widen``
+    swapped in (before the route repair, with the same vetoes)."""
     guard = cell.guard(robot, board2base, board)
     problem = (board_problem(cell.model, board2base, board, sampling.distance_mm, sampling.cone_deg)
                or base_problem(robot, cell.model.volumes(board2base, board), cell.margin_mm, cell.model.keep_out)
@@ -308,6 +334,7 @@ def _draw_clear_of_cell(robot, cam2tool0, board2base, board, corners, count, rng
         found = int(str(exc).split()[1])  # "only N of M postures found; ..."
         raise PlanningError(_too_few(f"only {found} of {count} postures keep clear of the cell", fewest, rejections)) \
             from None
+    joints, partial = widen(joints, veto=veto, pose_veto=veto.pose)
 
     def redraw(m: int) -> np.ndarray:
         return sample_eye_in_hand_postures(robot, cam2tool0, board2base, corners, m, rng, sampling, views,
@@ -318,7 +345,7 @@ def _draw_clear_of_cell(robot, cam2tool0, board2base, board, corners, count, rng
     if len(joints) < fewest:
         raise PlanningError(_too_few(f"only {len(joints)} of {count} postures keep clear of the cell with clear moves "
                                      "between them", fewest, rejections))
-    return joints, rejections
+    return joints, rejections, partial
 
 
 def _too_few(found: str, fewest: int, rejections: Rejections) -> str:
