@@ -15,7 +15,8 @@ import base64
 
 import numpy as np
 
-__all__ = ["VIEW_WIDTH_PX", "detected_corners", "encode_image", "page_points"]
+__all__ = ["VIEW_WIDTH_PX", "corner_colours", "detected_corners", "detected_corners_with_ids", "encode_image",
+           "page_ids", "page_points"]
 
 #: Width of the images on the page, px (the height keeps the camera's aspect).
 VIEW_WIDTH_PX = 400
@@ -25,18 +26,63 @@ _JPEG_QUALITY = 70
 def detected_corners(image: np.ndarray, board) -> np.ndarray | None:
     """The board's inner corners ``(m, 2)`` in ``image`` (full-size px, canonical order) as the capture's
     detector finds them with its fast search; None when it finds none there."""
+    return detected_corners_with_ids(image, board)[0]
+
+
+def detected_corners_with_ids(image: np.ndarray, board) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """:func:`detected_corners` and, for a ChArUco board, the ids ``(k,)`` of the corners seen (a partial
+    view: which part of the board); ``(None, None)`` when no board is found, ids None for the grids (seen
+    whole, in id order)."""
     from ...drivers import detect_board
     from ...drivers import BoardNotFound, FrameError
 
     try:
-        if getattr(board, "kind", "checkerboard") != "checkerboard":  # ChArUco: the corners seen (issue 37)
-            from ...drivers import detect_charuco, detect_circles
+        kind = getattr(board, "kind", "checkerboard")
+        if kind == "charuco":  # the corners seen, by id (issue 37)
+            from ...drivers import detect_charuco
 
-            found = detect_circles if board.kind == "circles" else detect_charuco
-            return found(image, board).corners_px
-        return detect_board(image, board, search="fast").corners_px
+            found = detect_charuco(image, board)
+            return found.corners_px, np.asarray(found.ids, int)
+        if kind == "circles":
+            from ...drivers import detect_circles
+
+            return detect_circles(image, board).corners_px, None
+        return detect_board(image, board, search="fast").corners_px, None
     except (BoardNotFound, FrameError):
+        return None, None
+
+
+def corner_colours(ids, board) -> list[str]:
+    """A stable colour per corner id (``#rrggbb``): the hue runs along the board's long side (red to magenta
+    over the columns), the lightness down its short side (dark to light over the rows), so the colours of a
+    partial view say which part of the board is seen.
+
+    Parameters
+    ----------
+    ids : array-like of int, shape (k,)
+        Corner ids (``row * nx + col``, :mod:`handeye.geometry.targets`).
+    board : BoardGeometry
+        Its ``corners = (nx, ny)``.
+    """
+    import colorsys
+
+    nx, ny = (int(c) for c in board.corners)
+    out = []
+    for k in np.asarray(ids, int).ravel():
+        row, col = divmod(int(k), nx)
+        hue = (300.0 / 360.0) * col / max(nx - 1, 1)
+        light = 0.30 + 0.40 * row / max(ny - 1, 1)
+        r, g, b = colorsys.hls_to_rgb(hue, light, 1.0)
+        out.append(f"#{round(255 * r):02x}{round(255 * g):02x}{round(255 * b):02x}")
+    return out
+
+
+def page_ids(points_px, ids) -> list | None:
+    """The ids of the points :func:`page_points` keeps (the finite ones), as ints; None for None."""
+    if points_px is None or ids is None:
         return None
+    points = np.asarray(points_px, float).reshape(-1, 2)
+    return [int(i) for i in np.asarray(ids, int).ravel()[np.all(np.isfinite(points), axis=1)]]
 
 
 def encode_image(image: np.ndarray, width: int = VIEW_WIDTH_PX) -> tuple[str, float, tuple[int, int]]:

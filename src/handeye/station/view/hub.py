@@ -18,7 +18,7 @@ import threading
 import time
 
 from ..capture.events import CaptureEnded, Measured, Prompt, Verdict
-from .frames import detected_corners, encode_image, page_points
+from .frames import corner_colours, detected_corners_with_ids, encode_image, page_ids, page_points
 from .state import ViewState
 
 __all__ = ["GRAB", "LIVE", "LIVE_AFTER_S", "LIVE_PERIOD_S", "MEASURED", "ViewHub"]
@@ -167,23 +167,24 @@ class ViewHub:
         the running calibration's predicted corners, all in the page's pixels; a capture's grab not yet
         measured says neither (``found`` None: measuring)."""
         posture = problem = predicted = None
+        ids = [None, None]
         if kind == MEASURED:
             frame, posture, problem = item.frame, item.posture, item.problem
-            found = [item.result.left_px, item.result.right_px] if item.result is not None else \
-                [detected_corners(im, self.board) for im in (frame.left, frame.right)]
+            if item.result is not None:
+                found = [item.result.left_px, item.result.right_px]
+                ids = [getattr(item.result, "corner_ids", None)] * 2
+            else:
+                found, ids = self._detect(frame)
             predicted = self.state.predictor.predict_px(item.tool02base)
         elif kind == GRAB:
             frame, found = item, [MEASURING, MEASURING]
         else:
-            frame, found = item, [detected_corners(im, self.board) for im in (item.left, item.right)]
+            frame = item
+            found, ids = self._detect(item)
         if frame is not self._last_image[0]:
             self._last_image = (frame, self._last_image[1] + 1)
-        sides = []
-        for k, (image, corners) in enumerate(zip((frame.left, frame.right), found)):
-            url, scale, size = encode_image(image)
-            sides.append({"image": url, "size": size, "found": None if corners is MEASURING else corners is not None,
-                          "corners": None if corners is MEASURING else page_points(corners, scale),
-                          "predicted": None if predicted is None else page_points(predicted[k], scale)})
+        sides = [self._side(image, corners, side_ids, None if predicted is None else predicted[k])
+                 for k, (image, corners, side_ids) in enumerate(zip((frame.left, frame.right), found, ids))]
         data = {"seq": self.frame_version + 1, "image": self._last_image[1], "kind": kind, "live": kind == LIVE,
                 "posture": posture, "found": [side["found"] for side in sides], "predicted": predicted is not None,
                 "problem": problem, "left": sides[0]["image"], "right": sides[1]["image"], "sides": sides,
@@ -193,6 +194,23 @@ class ViewHub:
             self.frame_json, self.frame_version = text, self.frame_version + 1
             self.encoded += 1
             self._changed.notify_all()
+
+    def _detect(self, frame) -> tuple[list, list]:
+        """Corners and ids (ChArUco) of both images by the capture's detector (``frames.detected_corners_with_ids``)."""
+        left, right = (detected_corners_with_ids(im, self.board) for im in (frame.left, frame.right))
+        return [left[0], right[0]], [left[1], right[1]]
+
+    def _side(self, image, corners, ids, predicted) -> dict:
+        """One image for the page: the JPEG, its size, whether the board was found, its corners in the page's
+        pixels, for a ChArUco board their ids and a colour per id (``frames.corner_colours``), and the
+        predicted corners."""
+        url, scale, size = encode_image(image)
+        measuring = corners is MEASURING
+        shown = None if measuring else page_ids(corners, ids)
+        return {"image": url, "size": size, "found": None if measuring else corners is not None,
+                "corners": None if measuring else page_points(corners, scale), "ids": shown,
+                "colours": None if shown is None else corner_colours(shown, self.board),
+                "predicted": None if predicted is None else page_points(predicted, scale)}
 
     # ------------------------------------------------------------------------------ server side
     def wait(self, state_version: int, frame_version: int, timeout_s: float) -> tuple:
