@@ -209,35 +209,39 @@ def find_pairs(images=None, left=None, right=None, swap: bool = False) -> list[t
 
 
 def _detect(image, board, what: str):
-    """``(corners or None, note)`` of one image for calibration (corners off the grid leave it out)."""
+    """``(corners or None, note, ids or None)`` of one image for calibration (corners off the grid leave it
+    out; ids of a ChArUco board's corners, which may be part of it)."""
     from ..drivers import detect_board
     from ..drivers import BoardNotFound
 
     if getattr(board, "kind", "checkerboard") == "charuco":
-        return _detect_charuco_whole(image, board, what)
+        return _detect_charuco(image, board, what)
     try:
         det = detect_board(image, board, what=what)
     except BoardNotFound as exc:
-        return None, str(exc)
+        return None, str(exc), None
     if det.off_grid:
-        return None, det.off_grid_message(what)
-    return det.corners_px, ""
+        return None, det.off_grid_message(what), None
+    return det.corners_px, "", None
 
 
-def _detect_charuco_whole(image, board, what: str):
-    """``(corners or None, note)`` of a ChArUco board for calibration: OpenCV's corners by id when it saw the
-    whole board (the calibration takes whole views; a view of part of it is left out, saying so)."""
+def _detect_charuco(image, board, what: str):
+    """``(corners or None, note, ids or None)`` of a ChArUco board for calibration: OpenCV's corners by id, the
+    whole board or part of it; a view whose corners cannot fix the board's pose (``geometry.view_refusal``:
+    too few, too little of the board) is left out saying why."""
     from ..drivers import detect_charuco
     from ..drivers import BoardNotFound
+    from ..geometry import view_refusal
 
     try:
         det = detect_charuco(image, board, what)
     except BoardNotFound as exc:
-        return None, str(exc)
-    if len(det.ids) < board.count:
-        return None, (f"{len(det.ids)} of the ChArUco board's {board.count} corners in the {what}: stereo calibrate "
-                      "uses views of the whole board")
-    return det.corners_px, ""
+        return None, str(exc), None
+    ids = np.asarray(det.ids, int)
+    why = view_refusal(ids, board)
+    if why:
+        return None, f"{what}: {why}", None
+    return det.corners_px, "", ids
 
 
 #: Pairs searched before a board size found in none of their images is refused (a wrong ``--board``).
@@ -284,9 +288,9 @@ def detect_pairs(pairs, board: BoardGeometry, update: Callable | None = None) ->
                 raise StereoInputError(f"{path} is {this[0]}x{this[1]} but the first image is {size[0]}x{size[1]}: "
                                        "every image of a calibration must have the same size")
             images.append(image)
-        left, lnote = _detect(images[0], board, "left image")
-        right, rnote = _detect(images[1], board, "right image")
-        views.append(ViewCorners(name, left, right, lnote, rnote))
+        left, lnote, lids = _detect(images[0], board, "left image")
+        right, rnote, rids = _detect(images[1], board, "right image")
+        views.append(ViewCorners(name, left, right, lnote, rnote, lids, rids))
         if update:
             update(k + 1, len(pairs), f"pair {name}")
         if k + 1 == min(EARLY_PAIRS, len(pairs)) and all(v.left is None and v.right is None for v in views):

@@ -1,7 +1,10 @@
 """Stereo calibration of the head with OpenCV: each camera's intrinsics, then the pair, checked view by view.
 
 Input: the board's corners in each image of a set of stereo pairs (canonical order, see
-:mod:`.checkerboard`; a pair may hold the board in one image only). Steps:
+:mod:`.checkerboard`; a pair may hold the board in one image only). A ChArUco view may hold part of the
+board: its corners carry their ids (``ViewCorners.left_ids``), each view's object points are the board
+points of its ids, and a pair is calibrated on the ids both images saw (matched by id; a pair whose common
+corners cannot fix the board's pose, ``geometry.view_refusal``, is left out of the pair saying why). Steps:
 
 1. **Swap check** (before anything is solved): a left camera sees every point further right than the
    right camera does (for a side-by-side head the raw disparity ``x_left - x_right`` is
@@ -34,7 +37,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from ...geometry import BoardGeometry, board_corners
+from ...geometry import BoardGeometry, board_corners, view_refusal
 from .errors import CameraError, StereoModelError
 from .pnp import pose_from_rvec
 from .stereo import StereoModel
@@ -96,6 +99,9 @@ class ViewCorners:
         Canonical corners in the raw left/right image, ``None`` where the board was not found.
     left_note, right_note : str
         Why the board is missing in that image (the detector's message).
+    left_ids, right_ids : ndarray of int, shape (k,), or None
+        The corner ids (target indices) of ``left`` / ``right`` when the image saw part of the board
+        (ChArUco); None: every corner, in index order.
     """
 
     name: str
@@ -103,6 +109,19 @@ class ViewCorners:
     right: np.ndarray | None
     left_note: str = ""
     right_note: str = ""
+    left_ids: np.ndarray | None = None
+    right_ids: np.ndarray | None = None
+
+    def ids(self, side: str, count: int) -> np.ndarray:
+        """The corner ids of ``side``'s corners (``arange(count)`` for a whole view)."""
+        given = getattr(self, f"{side}_ids")
+        return np.arange(count) if given is None else np.asarray(given, int)
+
+    def common(self, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(ids, left, right)``: the ids both images saw (ascending) and their corners in each image."""
+        li, ri = self.ids("left", count), self.ids("right", count)
+        ids, a, b = np.intersect1d(li, ri, assume_unique=True, return_indices=True)
+        return ids, np.asarray(self.left)[a], np.asarray(self.right)[b]
 
 
 @dataclass
@@ -208,12 +227,19 @@ class StereoCalibration:
 
 def swap_votes(views) -> tuple[int, int, list]:
     """Pairs whose board sits further right in the left image than in the right one, pairs where it
-    does not, and the names of the latter. A left camera sees every point further right."""
+    does not, and the names of the latter. A left camera sees every point further right (of a partial
+    view, the corners both images saw)."""
     agree, disagree, names = 0, 0, []
     for v in views:
         if v.left is None or v.right is None:
             continue
-        if float(np.mean(v.left[:, 0]) - np.mean(v.right[:, 0])) > 0:
+        if v.left_ids is None and v.right_ids is None:
+            left, right = v.left, v.right
+        else:
+            _, left, right = v.common(1 + int(max(np.max(v.ids("left", 1)), np.max(v.ids("right", 1)))))
+        if not len(left):
+            continue
+        if float(np.mean(left[:, 0]) - np.mean(right[:, 0])) > 0:
             agree += 1
         else:
             disagree += 1
@@ -230,7 +256,7 @@ def _swap_message(agree: int, disagree: int, why: str) -> str:
 def _objects(board: BoardGeometry) -> np.ndarray:
     if board.square_mm is None:
         raise StereoCalibrationError("the square size is needed to calibrate (--square-mm)")
-    return board_corners(board.corners, board.square_mm).astype(np.float32)
+    return np.asarray(board.grid(board.square_mm), np.float32)  # index = corner id (any kind of target)
 
 
 def _outlier(errors: np.ndarray, n_dropped: int, n_total: int, min_keep: int) -> tuple[int, float] | None:
@@ -246,7 +272,8 @@ def _outlier(errors: np.ndarray, n_dropped: int, n_total: int, min_keep: int) ->
 
 
 def _calibrate_camera(side: str, items: list, obj: np.ndarray, size, flags: int, reports: dict) -> CameraIntrinsics:
-    """``calibrateCameraExtended`` on ``items = [(name, corners)]``, dropping far-off views one at a time."""
+    """``calibrateCameraExtended`` on ``items = [(name, corners, ids)]`` (each view's object points: the
+    board points ``obj`` of its ids), dropping far-off views one at a time."""
     if len(items) < MIN_VIEWS:
         raise StereoCalibrationError(
             f"the board was found in only {len(items)} {side} image(s); at least {MIN_VIEWS} are needed (15-25 "
@@ -256,7 +283,8 @@ def _calibrate_camera(side: str, items: list, obj: np.ndarray, size, flags: int,
     while True:
         try:
             rms, k, d, rvecs, tvecs, std_in, _, per_view = cv2.calibrateCameraExtended(
-                [obj] * len(items), [c.astype(np.float32).reshape(-1, 1, 2) for _, c in items], size, None, None,
+                [obj[ids] for _, _, ids in items], [c.astype(np.float32).reshape(-1, 1, 2) for _, c, _ in items], size,
+                None, None,
                 flags=flags, criteria=CRITERIA)
         except cv2.error as exc:
             raise StereoCalibrationError(
@@ -276,7 +304,7 @@ def _calibrate_camera(side: str, items: list, obj: np.ndarray, size, flags: int,
     if not np.all(np.isfinite(k)) or k[0, 0] <= 0 or k[1, 1] <= 0:
         raise StereoCalibrationError(f"the {side} camera's calibration diverged; capture more varied views")
     poses = {}
-    for (name, _), rvec, tvec, err in zip(items, rvecs, tvecs, errors):
+    for (name, _, _), rvec, tvec, err in zip(items, rvecs, tvecs, errors):
         poses[name] = pose_from_rvec(rvec, tvec)
         setattr(reports[name], f"used_{side}", True)
         setattr(reports[name], f"{side}_rms_px", float(err))
@@ -284,10 +312,17 @@ def _calibrate_camera(side: str, items: list, obj: np.ndarray, size, flags: int,
 
 
 def _stereo(obj, pairs, left: CameraIntrinsics, right: CameraIntrinsics, size, flags, criteria=CRITERIA):
+    """``cv2.stereoCalibrateExtended`` on the corners both images of each pair saw (matched by id)."""
+    common = [p.common(len(obj)) for p in pairs]
     return cv2.stereoCalibrateExtended(
-        [obj] * len(pairs), [p.left.astype(np.float32).reshape(-1, 1, 2) for p in pairs],
-        [p.right.astype(np.float32).reshape(-1, 1, 2) for p in pairs],
+        [obj[ids] for ids, _, _ in common], [a.astype(np.float32).reshape(-1, 1, 2) for _, a, _ in common],
+        [b.astype(np.float32).reshape(-1, 1, 2) for _, _, b in common],
         left.K.copy(), left.D.copy(), right.K.copy(), right.D.copy(), size, None, None, flags=flags, criteria=criteria)
+
+
+def _per_pair_rms(errors, pairs) -> np.ndarray:
+    """Per pair RMS (px) of ``stereoCalibrateExtended``'s per-view errors ``(n, 2)`` (both images)."""
+    return np.sqrt(np.mean(np.asarray(errors, float).reshape(len(pairs), -1) ** 2, axis=1))
 
 
 def epipolar_errors(model: StereoModel, left_px, right_px) -> np.ndarray:
@@ -320,7 +355,7 @@ def _stereo_without_outlier_pairs(obj, pairs: list, left, right, size, flags: in
     fixed = cv2.CALIB_FIX_INTRINSIC | flags  # the model flags too: RATIONAL_MODEL keeps its 8 coefficients
     while True:
         out = _stereo(obj, pairs, left, right, size, fixed)
-        per_pair = np.sqrt(np.mean(out[-1] ** 2, axis=1))
+        per_pair = _per_pair_rms(out[-1], pairs)
         drop = _outlier(per_pair, dropped, total, MIN_PAIRS)
         if drop is None:
             return out, per_pair
@@ -347,11 +382,23 @@ def _refined_stereo(obj, pairs: list, left, right, size, flags: int, out, per_pa
     if not (np.isfinite(r_rms) and r_rms < rms):
         return out, per_pair, False  # no better: the per-camera intrinsics stand
     if baseline_shift <= BASELINE_SHIFT and focal_shift <= FOCAL_SHIFT:
-        return ref, np.sqrt(np.mean(ref[-1] ** 2, axis=1)), True
+        return ref, _per_pair_rms(ref[-1], pairs), True
     warnings.append(
         f"the joint refinement moved the baseline by {100 * baseline_shift:.1f} % and a focal length by "
         f"{100 * focal_shift:.1f} %: kept the per-camera intrinsics (capture more varied views to refine)")
     return out, per_pair, False
+
+
+def _pair_fixes_pose(view: ViewCorners, board: BoardGeometry, report: ViewReport) -> bool:
+    """True when the corners both images of a pair saw (by id) fix the board's pose (``geometry.view_refusal``:
+    a whole view always); else the report says why the pair is left out."""
+    if view.left_ids is None and view.right_ids is None:
+        return True
+    ids, _, _ = view.common(board.count)
+    why = view_refusal(ids, board)
+    if why:
+        report.reasons.append(f"pair: the corners both images saw (matched by id): {why}; not used for the pair")
+    return not why
 
 
 def _view_reports(views: list) -> tuple[dict, tuple]:
@@ -418,11 +465,13 @@ def calibrate_stereo(views, board: BoardGeometry, image_size, *, distortion: str
         raise StereoCalibrationError("two pairs have the same name; name each pair once")
     reports, (agree, disagree, wrong) = _view_reports(views)
     usable = [v for v in views if v.name not in wrong]
-    left = _calibrate_camera("left", [(v.name, v.left) for v in usable if v.left is not None], obj, size, flags,
-                             reports)
-    right = _calibrate_camera("right", [(v.name, v.right) for v in usable if v.right is not None], obj, size, flags,
-                              reports)
-    pairs = [v for v in usable if reports[v.name].used_left and reports[v.name].used_right]
+    m = len(obj)
+    left = _calibrate_camera("left", [(v.name, v.left, v.ids("left", m)) for v in usable if v.left is not None], obj,
+                             size, flags, reports)
+    right = _calibrate_camera("right", [(v.name, v.right, v.ids("right", m)) for v in usable if v.right is not None],
+                              obj, size, flags, reports)
+    pairs = [v for v in usable if reports[v.name].used_left and reports[v.name].used_right
+             and _pair_fixes_pose(v, board, reports[v.name])]
     if len(pairs) < MIN_PAIRS:
         raise StereoCalibrationError(
             f"only {len(pairs)} pair(s) show the board in both images; at least {MIN_PAIRS} are needed (15-25 "
@@ -446,7 +495,8 @@ def calibrate_stereo(views, board: BoardGeometry, image_size, *, distortion: str
     for p, err in zip(pairs, per_pair_final):
         reports[p.name].used_pair = True
         reports[p.name].pair_rms_px = float(err)
-    epi = epipolar_errors(model, np.concatenate([p.left for p in pairs]), np.concatenate([p.right for p in pairs]))
+    common = [p.common(m) for p in pairs]
+    epi = epipolar_errors(model, np.concatenate([a for _, a, _ in common]), np.concatenate([b for _, _, b in common]))
     if len(pairs) < 10:
         warnings.append(f"only {len(pairs)} pairs were used; 15-25 well spread pairs give a steadier calibration")
     left_final = CameraIntrinsics(k1, d1.ravel(), left.rms_px, left.std_px, left.poses)

@@ -106,7 +106,7 @@ def add_parser(sub):
     src.add_argument("--right", metavar="'GLOB'", help="right images (quoted glob pattern)")
     src.add_argument("--camera", metavar="BACKEND", help="live capture from a camera back end (xb3, mock)")
     c.add_argument("--board", metavar="NXxNY", type=argtypes.corners_or_target, default=STATION_CORNERS,
-                   help="inner corners, long side first (default {}x{}), or charuco[:keys] (whole views only)".format(
+                   help="inner corners, long side first (default {}x{}), or charuco[:keys] (partial views by corner id)".format(
                        *STATION_CORNERS))
     c.add_argument("--square-mm", metavar="MM", type=argtypes.positive, default=STATION_SQUARE_MM,
                    help=f"square size in mm (default {STATION_SQUARE_MM:g}): sets the scale of T")
