@@ -254,7 +254,8 @@ def _new_plan(config: StationConfig, link: StationLink, progress) -> PosturePlan
         sampling = ViewSampling(**{**sampling.__dict__, "side": tuple(side / np.linalg.norm(side))})
     return plan_postures(robot, start, compact.target2cam[0], config.camera.nominal_mount_transform(), config.target,
                          p.postures, sampling, stereo_views(link.stereo_model), p.seed,
-                         thresholds=config_thresholds(config), cell=cell_check(config))
+                         thresholds=config_thresholds(config), cell=cell_check(config),
+                         partial_views=p.partial_views)
 
 
 @dataclass

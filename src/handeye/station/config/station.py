@@ -417,6 +417,8 @@ class PlanSettings:
     aim_mm: float = setting(80.0, Number(0, 500), "spread of the aim point over the board", "mm")
     joint_margin_deg: float = setting(5.0, Number(0, 45), "distance kept from every joint limit", "deg")
     seed: int = setting(0, Number(0, SEED_MAX, integer=True), "seed of the planner")
+    partial_views: bool = setting(True, Flag(), "ChArUco: plan postures with part of the board out of view where "
+                                  "they widen the rotation spread (never a checkerboard)")
 
 
 @dataclass(frozen=True)
