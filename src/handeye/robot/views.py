@@ -221,8 +221,7 @@ def sample_eye_in_hand_postures(
     pose_veto=None,
     accept_view=None,
 ) -> np.ndarray:
-    """Controller angles ``(count, k)`` of postures from which ``views`` see the whole board (or, with
-    ``accept_view``, the part of it that callable accepts).
+    """Controller angles ``(count, k)`` of postures from which ``views`` see the whole board (or what ``accept_view`` takes).
 
     Parameters
     ----------
@@ -239,21 +238,18 @@ def sample_eye_in_hand_postures(
     views : sequence of PinholeView
         Every camera of the head that must see the board.
     seed_joints : array-like, shape (k,), optional
-        Configuration the inverse kinematics starts from (default: found from standard seeds).
+        Where the IK starts (default: found from standard seeds).
     max_attempts : int, optional
         Give up after this many view points (default ``200 * count``).
     veto : callable, optional
         ``veto(joints) -> bool``: True keeps a posture that passed every other test (the cell's
         clearance check); a vetoed one counts as an attempt and another is drawn.
     min_count : int, optional
-        Fewest postures that will do when the attempts run out (default ``count``); the result may
-        then hold fewer than ``count`` rows.
+        Fewest postures that will do when the attempts run out (default ``count``; then fewer rows).
     pose_veto : callable, optional
-        ``pose_veto(tool02base) -> bool``: like ``veto``, on the flange pose, before the inverse
-        kinematics (what the flange carries needs no joints).
+        ``pose_veto(tool02base) -> bool``: like ``veto``, on the flange pose, before the IK.
     accept_view : callable, optional
-        ``accept_view(seen) -> bool`` on the corners every view sees (bool ``(m,)``, :func:`corners_in_view`):
-        True keeps the view point. Default: every corner seen (the whole board).
+        ``accept_view(seen) -> bool`` on the corners all views see (``(m,)`` bool, :func:`corners_in_view`).
 
     Raises
     ------

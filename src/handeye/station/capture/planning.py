@@ -250,8 +250,7 @@ def plan_postures(
     cell : CellCheck, optional
         The cell every posture and move must keep clear of (its board stand from the board estimate).
     partial_views : bool
-        A board that takes partial views (ChArUco) may be planned partly out of view where that widens the
-        rotation-axis spread (``station.capture.partial_plan``); never a checkerboard or a circle grid.
+        A ChArUco board may be partly out of view where that widens the rotation spread (``partial_plan``).
 
     Raises
     ------
@@ -287,8 +286,7 @@ def plan_postures(
     notes = score.verdict(thresholds)
     if len(joints) < count:
         notes.append(f"only {len(joints)} of {count} postures keep clear of the cell: {rejections.summary()}")
-    return PosturePlan(joints, board2base, np.asarray(cam2tool0_nominal, float), score, start, board, notes, cell,
-                       partial)
+    return PosturePlan(joints, board2base, np.asarray(cam2tool0_nominal, float), score, start, board, notes, cell, partial)
 
 
 def _widener(robot, cam2tool0, board2base, board, corners, rng, sampling, views, start, enabled: bool):
