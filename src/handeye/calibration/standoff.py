@@ -37,7 +37,7 @@ from .arm_parameters import corrected_robot, parameter_jacobian
 from .noise import adjoint, skew
 from ..geometry import invert_transforms
 
-__all__ = ["DEFAULT_STANDOFF_MM", "DRAWS", "StandoffError", "predicted_standoff", "standoff_points", "measured_standoff"]
+__all__ = ["DEFAULT_STANDOFF_MM", "DRAWS", "StandoffError", "predicted_standoff", "working_volume_joints", "rms_draws", "standoff_points", "measured_standoff"]
 
 #: The inspection stand-off along the camera's optical axis, mm.
 DEFAULT_STANDOFF_MM = 750.0
@@ -147,9 +147,11 @@ def _jacobian(robot, joints, x, target, columns, standoff_mm) -> np.ndarray:
     return jac
 
 
-def predicted_standoff(ident, joints_deg=None, standoff_mm: float = DEFAULT_STANDOFF_MM) -> StandoffError:
+def predicted_standoff(ident, joints_deg=None, standoff_mm: float = DEFAULT_STANDOFF_MM,
+                       draws: int = DRAWS) -> StandoffError:
     """The predicted stand-off error of an :class:`~handeye.calibration.arm_identification.ArmIdentification`
-    with and without its correction, at ``joints_deg`` (default: the session's postures)."""
+    with and without its correction, at ``joints_deg`` (default: the session's postures); ``draws``: of
+    the actual RMS's distribution (0: none, for a map of many postures)."""
     from ..robot import load_robot  # noqa: PLC0415
 
     sol = ident.camera_only
@@ -164,7 +166,7 @@ def predicted_standoff(ident, joints_deg=None, standoff_mm: float = DEFAULT_STAN
             - standoff_points(corrected, joints, ident.x, ident.target, standoff_mm))
     var_k = np.maximum(var_k, 0.0)
     points = (robot.forward_transform(joints) @ sol.fit.x)[:, :3, :] @ np.array([0.0, 0.0, standoff_mm, 1.0])
-    draws_k, draws_0 = rms_draws(jac_k, ident.covariance, bias)
+    draws_k, draws_0 = rms_draws(jac_k, ident.covariance, bias, draws)
     return StandoffError(float(standoff_mm), np.sqrt(var_k), np.sqrt(np.sum(bias ** 2, axis=1) + var_k), points,
                          draws_k, draws_0)
 
@@ -204,3 +206,23 @@ def measured_standoff(true_robot, x_true, target_true, robot, ident, joints_deg,
     without = standoff_points(robot, joints_deg, sol.fit.x, sol.fit.target, standoff_mm)
     with_ = standoff_points(corrected_robot(robot, ident.values), joints_deg, ident.x, ident.target, standoff_mm)
     return np.linalg.norm(with_ - truth, axis=1), np.linalg.norm(without - truth, axis=1)
+
+
+def working_volume_joints(robot, x, count: int = 600, seed: int = 0, margin_deg: float = 5.0,
+                          max_draws: int = 20) -> np.ndarray:
+    """Postures ``(<= count, k)`` spread over the arm's working volume: controller angles uniform inside
+    the joint limits (``margin_deg`` in from each), kept where every point of the chain and the camera
+    (tool0 times ``x``) is above the plane of the base (a cheap clearance: the floor under the base;
+    the cell's own bodies are not checked). Fixed ``seed``: the same map every time."""
+    rng = np.random.default_rng(seed)
+    low = robot.joint_limits_deg[:, 0] + margin_deg
+    high = robot.joint_limits_deg[:, 1] - margin_deg
+    kept = []
+    for _ in range(max_draws):
+        joints = rng.uniform(low, high, (count, robot.dof))
+        chain = robot.chain_points(joints)[:, 1:, 2]
+        camera = (robot.forward_transform(joints) @ np.asarray(x, float))[:, 2, 3]
+        kept.append(joints[np.all(chain > 0.0, axis=1) & (camera > 0.0)])
+        if sum(len(k) for k in kept) >= count:
+            break
+    return np.vstack(kept)[:count]
