@@ -127,3 +127,24 @@ def test_prior_comes_from_the_robot_file(tmp_path):
     other.write_text(text.replace("kinematic_prior: {length_mm: 0.5, angle_deg: 0.1}",
                                   "kinematic_prior: {length_mm: 0.2, angle_deg: 0.03}"))
     assert robot_prior(str(other)) == {"length_mm": 0.2, "angle_deg": 0.03}
+
+
+@pytest.mark.parametrize("seed", [4, 5, 6])
+def test_uncorrected_prediction_is_the_known_offset_plus_the_corrected_spread(scene, seed):
+    """Without the correction the error is the known difference b plus the corrected point's own error:
+    predicted within 10 % of the measured RMS (the camera-only covariance, which already holds the arm's
+    errors, added to b over-predicted by up to 2x)."""
+    deviation = random_deviation(np.random.default_rng(seed))
+    ident = _identify(scene, deviation, seed)
+    held = make_scene(SceneConfig(postures=60, seed=100 + seed)).joints_deg
+    predicted = predicted_standoff(ident, held)
+    true_arm = corrected_robot(scene.robot, deviation)
+    _, without = measured_standoff(true_arm, scene.x_true, scene.target2fixed, scene.robot, ident, held)
+    assert predicted.uncorrected_rms_mm / np.sqrt(np.mean(without ** 2)) == pytest.approx(1.0, abs=0.1)
+    # the drawn RMS of one calibration: its mean square is the prediction's, and the interval brackets it
+    for draws, rms in ((predicted.corrected_draws_mm, predicted.corrected_rms_mm),
+                       (predicted.uncorrected_draws_mm, predicted.uncorrected_rms_mm)):
+        assert np.sqrt(np.mean(draws ** 2)) == pytest.approx(rms, rel=0.03)
+    low, high = predicted.interval(0.9)
+    assert low < predicted.corrected_rms_mm < high
+    assert predicted.quantile(low) == pytest.approx(0.05, abs=0.01) and predicted.quantile(high) == pytest.approx(0.95, abs=0.01)
