@@ -93,12 +93,15 @@ class StandoffError:
         return float(np.mean(draws < measured_mm)) if len(draws) else float("nan")
 
     def to_dict(self) -> dict:
-        with_90, without_90 = self.interval(0.9, True), self.interval(0.9, False)
+        def _json(pair):  # null when not drawn (a JSON file holds no NaN)
+            return [float(v) for v in pair] if np.all(np.isfinite(pair)) else None
+
+        with_90, without_90 = _json(self.interval(0.9, True)), _json(self.interval(0.9, False))
         return {"standoff_mm": float(self.standoff_mm), "frame": "board (the work's frame)",
                 "with_correction_rms_mm": self.corrected_rms_mm,
                 "without_correction_rms_mm": self.uncorrected_rms_mm,
-                "with_correction_90_interval_mm": [with_90[0], with_90[1]],
-                "without_correction_90_interval_mm": [without_90[0], without_90[1]],
+                "with_correction_90_interval_mm": with_90,
+                "without_correction_90_interval_mm": without_90,
                 "with_correction_max_mm": float(np.max(self.corrected_mm)),
                 "without_correction_max_mm": float(np.max(self.uncorrected_mm)),
                 "postures": int(len(self.corrected_mm)),
