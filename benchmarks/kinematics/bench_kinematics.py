@@ -58,15 +58,30 @@ def one_seed(seed: int, postures: int = 30, held_out: int = 100) -> dict:
         zeros[f"J{axis}"] = {"true": float(deviation[j]), "value": float(ident.values[j]),
                              "sigma": float(ident.sigma[j]), "status": ident.status[j],
                              "z": float((ident.values[j] - deviation[j]) / ident.sigma[j])}
-    measured_with = float(np.sqrt(np.mean(with_ ** 2)))
-    measured_without = float(np.sqrt(np.mean(without ** 2)))
-    return {"seed": seed, "zeros": zeros, "seconds": seconds,
-            "measured_with_mm": measured_with, "measured_without_mm": measured_without,
+    row = {"seed": seed, "zeros": zeros, "seconds": seconds}
+    row.update(standoff_figures(predicted, with_, without))
+    row["not_identifiable"] = [n for n, s in zip(NAMES, ident.status) if s != "identified"]
+    return row
+
+
+def standoff_figures(predicted, with_, without) -> dict:
+    """A seed's stand-off figures: measured and predicted RMS, their ratio, and where the measured RMS
+    lies in the predicted distribution of one calibration's RMS (``StandoffError.quantile``)."""
+    mw, mo = float(np.sqrt(np.mean(with_ ** 2))), float(np.sqrt(np.mean(without ** 2)))
+    return {"measured_with_mm": mw, "measured_without_mm": mo,
             "predicted_with_mm": predicted.corrected_rms_mm, "predicted_without_mm": predicted.uncorrected_rms_mm,
-            "reduction": measured_with / measured_without,
-            "predicted_over_measured_with": predicted.corrected_rms_mm / measured_with,
-            "predicted_over_measured_without": predicted.uncorrected_rms_mm / measured_without,
-            "not_identifiable": [n for n, s in zip(NAMES, ident.status) if s != "identified"]}
+            "predicted_with_90_mm": list(predicted.interval(0.9, True)),
+            "predicted_without_90_mm": list(predicted.interval(0.9, False)),
+            "quantile_with": predicted.quantile(mw, True), "quantile_without": predicted.quantile(mo, False),
+            "reduction": mw / mo,
+            "predicted_over_measured_with": predicted.corrected_rms_mm / mw,
+            "predicted_over_measured_without": predicted.uncorrected_rms_mm / mo}
+
+
+def inside(rows: list[dict], key: str) -> float | None:
+    """Fraction of seeds whose measured RMS lies in the central 90 % of its predicted distribution."""
+    q = np.array([r[key] for r in rows if key in r])
+    return float(np.mean((q >= 0.05) & (q <= 0.95))) if len(q) else None
 
 
 def summary(rows: list[dict]) -> dict:
@@ -85,6 +100,10 @@ def summary(rows: list[dict]) -> dict:
             "predicted_over_measured_with_in_0.7_1.5": within(pw),
             "predicted_over_measured_without_median": float(np.median(po)),
             "predicted_over_measured_without_in_0.7_1.5": within(po),
+            "predicted_over_measured_with_range": [float(pw.min()), float(pw.max())],
+            "predicted_over_measured_without_range": [float(po.min()), float(po.max())],
+            "measured_in_predicted_90_with": inside(rows, "quantile_with"),
+            "measured_in_predicted_90_without": inside(rows, "quantile_without"),
             "seconds_median": float(np.median([r["seconds"] for r in rows]))}
 
 

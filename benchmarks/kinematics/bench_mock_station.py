@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_kinematics import summary  # noqa: E402
+from bench_kinematics import standoff_figures, summary  # noqa: E402
 
 from handeye.calibration.arm_identification import identify_arm  # noqa: E402
 from handeye.calibration.arm_parameters import parameter_names  # noqa: E402
@@ -72,12 +72,9 @@ def one_seed(seed: int, work: Path) -> dict:
         j = NAMES.index(f"zero{axis}")
         out[f"J{axis}"] = {"true": zeros[axis - 1], "value": float(ident.values[j]), "sigma": float(ident.sigma[j]),
                            "status": ident.status[j], "z": float((ident.values[j] - zeros[axis - 1]) / ident.sigma[j])}
-    mw, mo = float(np.sqrt(np.mean(with_ ** 2))), float(np.sqrt(np.mean(without ** 2)))
-    return {"seed": seed, "zeros": out, "seconds": seconds, "measured_with_mm": mw, "measured_without_mm": mo,
-            "predicted_with_mm": predicted.corrected_rms_mm, "predicted_without_mm": predicted.uncorrected_rms_mm,
-            "reduction": mw / mo, "predicted_over_measured_with": predicted.corrected_rms_mm / mw,
-            "predicted_over_measured_without": predicted.uncorrected_rms_mm / mo}
-
+    row = {"seed": seed, "zeros": out, "seconds": seconds}
+    row.update(standoff_figures(predicted, with_, without))
+    return row
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])

@@ -12,7 +12,7 @@ from handeye.calibration.noise import twist_between
 from handeye.calibration.solve import problem_from_session
 from handeye.calibration.standoff import measured_standoff, predicted_standoff
 from handeye.calibration.synthetic import SceneConfig, make_scene
-from handeye.station.kinematics_step import kinematics_json
+from handeye.station.kinematics_step import kinematics_json, kinematics_lines
 
 NAMES = parameter_names()
 
@@ -39,20 +39,27 @@ def test_injected_joint_zeros_are_recovered_within_three_sigma(scene, seed):
         assert abs(ident.values[j] - deviation[j]) < 4.0 * ident.sigma[j], NAMES[j]
 
 
-def test_exact_arm_offsets_consistent_with_zero_and_camera_unchanged(scene):
-    ident = _identify(scene, np.zeros(len(NAMES)))
+@pytest.mark.parametrize("seed", [3, 4, 5, 6])
+def test_exact_arm_offsets_consistent_with_zero_and_camera_unchanged(seed):
+    """An exact arm (no deviations), several plans and noise draws: the offsets are consistent with zero
+    (chi-square over the identified ones) and the camera pose moves by less than its one-sigma."""
+    ident = _identify(make_scene(SceneConfig(postures=30, seed=seed)), np.zeros(len(NAMES)), seed + 100)
     identified = np.array([s == "identified" for s in ident.status])
     z = ident.values[identified] / ident.sigma[identified]
     assert np.all(np.abs(z) < 3.5) and np.sqrt(np.mean(z ** 2)) < 1.6
     entry = kinematics_json(ident)
-    assert entry["consistent_with_zero"]["consistent"]
+    test = entry["consistent_with_zero"]
+    assert test["consistent"] and test["statistic"] <= test["limit"] and test["parameters"] == identified.sum()
+    assert test["statement"].startswith("consistent with zero: chi-square")
+    assert any(line.strip().startswith("offsets consistent with zero") for line in kinematics_lines(ident))
     change = twist_between(ident.camera_only.fit.x, ident.x)
-    # the two estimates differ by noise only: by less than the uncertainty of the pose (in the
-    # Mahalanobis sense; the expected squared distance is below 6, the number of pose parameters)
+    sigma = np.sqrt(np.diag(ident.covariance)[:6])
+    # the two estimates differ by noise only, by less than the pose's one-sigma (RMS over the six
+    # components) and within its uncertainty (Mahalanobis, chi-square with 6 degrees of freedom, 1 %)
+    assert np.sqrt(np.mean((change / sigma) ** 2)) < 1.0
+    assert entry["camera_pose_change"]["rms_in_sigmas"] == pytest.approx(np.sqrt(np.mean((change / sigma) ** 2)))
     distance = change @ np.linalg.solve(ident.covariance[:6, :6], change)
     assert distance < 16.8 and entry["camera_pose_change"]["within_uncertainty"]
-    sigma = np.sqrt(np.diag(ident.covariance)[:6])
-    assert np.all(np.abs(change) < 2.0 * sigma)
 
 
 def test_a_deviated_arm_is_not_consistent_with_zero(scene):
@@ -120,3 +127,24 @@ def test_prior_comes_from_the_robot_file(tmp_path):
     other.write_text(text.replace("kinematic_prior: {length_mm: 0.5, angle_deg: 0.1}",
                                   "kinematic_prior: {length_mm: 0.2, angle_deg: 0.03}"))
     assert robot_prior(str(other)) == {"length_mm": 0.2, "angle_deg": 0.03}
+
+
+@pytest.mark.parametrize("seed", [4, 5, 6])
+def test_uncorrected_prediction_is_the_known_offset_plus_the_corrected_spread(scene, seed):
+    """Without the correction the error is the known difference b plus the corrected point's own error:
+    predicted within 10 % of the measured RMS (the camera-only covariance, which already holds the arm's
+    errors, added to b over-predicted by up to 2x)."""
+    deviation = random_deviation(np.random.default_rng(seed))
+    ident = _identify(scene, deviation, seed)
+    held = make_scene(SceneConfig(postures=60, seed=100 + seed)).joints_deg
+    predicted = predicted_standoff(ident, held)
+    true_arm = corrected_robot(scene.robot, deviation)
+    _, without = measured_standoff(true_arm, scene.x_true, scene.target2fixed, scene.robot, ident, held)
+    assert predicted.uncorrected_rms_mm / np.sqrt(np.mean(without ** 2)) == pytest.approx(1.0, abs=0.1)
+    # the drawn RMS of one calibration: its mean square is the prediction's, and the interval brackets it
+    for draws, rms in ((predicted.corrected_draws_mm, predicted.corrected_rms_mm),
+                       (predicted.uncorrected_draws_mm, predicted.uncorrected_rms_mm)):
+        assert np.sqrt(np.mean(draws ** 2)) == pytest.approx(rms, rel=0.03)
+    low, high = predicted.interval(0.9)
+    assert low < predicted.corrected_rms_mm < high
+    assert predicted.quantile(low) == pytest.approx(0.05, abs=0.01) and predicted.quantile(high) == pytest.approx(0.95, abs=0.01)

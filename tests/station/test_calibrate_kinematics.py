@@ -54,3 +54,33 @@ def test_bad_standoff_is_a_usage_error(session, capsys):
     assert main(["calibrate", str(session[0]), "--kinematics", "--standoff", "-5"]) == 2
     err = capsys.readouterr().err
     assert "--standoff" in err and "Traceback" not in err
+
+
+def test_report_maps_the_working_volume(session, tmp_path, capsys):
+    """The report's kinematics section: a picture of the predicted error over the working volume."""
+    from handeye.calibration.arm_identification import identify_arm
+    from handeye.calibration.session import read_session
+    from handeye.calibration.solve import problem_from_session
+    from handeye.calibration.standoff import predicted_standoff, working_volume_joints
+    from handeye.robot import load_robot
+    from handeye.station.kinematics_report import volume_standoff
+
+    folder, _ = session
+    report = tmp_path / "report.html"
+    assert main(["calibrate", str(folder), "--kinematics", "--report", str(report), "--quiet"]) == 0
+    html = report.read_text()
+    assert "over the working volume" in html and "data:image/png;base64" in html
+    ident = identify_arm(problem_from_session(read_session(folder)))
+    robot = load_robot(ident.robot)
+    joints = working_volume_joints(robot, ident.camera_only.fit.x, 300)
+    assert len(joints) == 300 and np.all(robot.within_limits(joints))
+    assert np.all(robot.chain_points(joints)[:, 1:, 2] > 0)  # the arm above the base's plane
+    spread = np.ptp(joints, axis=0)
+    assert np.all(spread[:5] > 0.8 * np.ptp(robot.joint_limits_deg[:5], axis=1) - 10)  # the whole volume, not the plan
+    volume = volume_standoff(ident, 750.0)
+    assert np.median(volume.corrected_mm) < np.median(volume.uncorrected_mm)
+    # the map's numbers are the prediction's: the same function at the plan's postures gives the plan's figure
+    plan = predicted_standoff(ident, draws=0)
+    assert plan.corrected_rms_mm == pytest.approx(predicted_standoff(ident).corrected_rms_mm)
+    # away from the plan the correction extrapolates: the error there is larger than at the plan's postures
+    assert np.median(volume.corrected_mm) > plan.corrected_rms_mm

@@ -123,6 +123,7 @@ _EXPORTS = {
     "twist_between": "noise",
     "identify_arm": "arm_identification",
     "predicted_standoff": "standoff",
+    "working_volume_joints": "standoff",
 }
 __all__ = list(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
@@ -132,7 +133,7 @@ if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
     from .arm_parameters import corrected_robot  # noqa: F401
     from .noise import twist_between  # noqa: F401
     from .arm_identification import identify_arm  # noqa: F401
-    from .standoff import predicted_standoff  # noqa: F401
+    from .standoff import predicted_standoff, working_volume_joints  # noqa: F401
     from .compact_points import compact_points_from_corners  # noqa: F401
     from .crossval import cross_validate  # noqa: F401
     from .diagnostics import diagnose, find_unit_problems  # noqa: F401

@@ -91,8 +91,6 @@ class ArmIdentification:
         The robot model.
     joints_deg : ndarray, shape (n, k)
         The session's postures (the plan).
-    absorb : ndarray, shape (12, q)
-        How the camera-only fit absorbs the fitted deviations: ``(δx, δt) = H u`` (weighted least squares).
     """
 
     names: list
@@ -111,7 +109,6 @@ class ArmIdentification:
     correlations: list
     robot: str = ""
     joints_deg: np.ndarray | None = None
-    absorb: np.ndarray | None = None
 
     def identified(self, name: str) -> bool:
         return self.status[self.names.index(name)] == "identified"
@@ -292,7 +289,5 @@ def identify_arm(problem, solution=None, prior: dict | None = None) -> ArmIdenti
         else:
             status[j] = "identified"
     corr = _correlations(cov[12:, 12:], [names[j] for j in fitted])
-    plain = _whitened(sub, sol.fit.x, sol.fit.theta, columns[:, :, fitted])
-    absorb = np.linalg.lstsq(plain[:, :12], plain[:, 12:], rcond=None)[0]
     return ArmIdentification(names, values, sigma, prior_sigma, status, reasons, fitted, x, t, cov, theta, sol, keep,
-                             corr, str(problem.robot), np.asarray(problem.joints_deg, float), absorb)
+                             corr, str(problem.robot), np.asarray(problem.joints_deg, float))

@@ -1,14 +1,17 @@
 """``handeye kinematics export``: what the station does with the identified arm (never written silently).
 
-(a) ``joint_offsets.txt`` / ``kinematics.json``: the identified zero offsets of the controller axes as an
-engineer enters them in the controller's calibration. On an IRC5 the axis zeros are the calibration
-offsets of the motion configuration (MOC: type *Motor Calibration*, attribute *Calibration Offset*,
-``cal_offset``, one instance per axis), which are **motor-side radians**: the arm-side offset here times
-the axis' transmission ratio, with the sign convention of that controller; after changing them the
-revolution counters are updated and the fine calibration position checked on the FlexPendant
-(Calibration). ABB's supported route to a corrected arm model is the *Absolute Accuracy* option
-(a calibrated kinematic model per robot, measured by ABB or a certified service): this export is for
-stations without it, and it says so in the file.
+(a) ``joint_offsets.txt`` / ``kinematics.json``: the identified zero offsets of the controller axes
+(arm side, degrees and radians) for an engineer to enter in the controller's calibration. What we can
+cite of where: an IRC5 keeps calibration data per mechanical unit, which can be fine calibrated,
+offset by hand and loaded from a file (ABB PC SDK, ``Grant.CalibrateRobot``: "Fine calibrate
+mechanical unit", "Manual offset of mechanical unit calibration data and loading new calibration data
+from file require grant Modify configuration"); the motion configuration file ``MOC.cfg`` holds the
+motor calibration data, and the revolution counters are updated on the FlexPendant under Calibration
+(third-party service notes, industrialmonitordirect.com). The parameter's exact name in the Motion
+topic, its unit (motor or arm side) and its sign: check in the controller's manual (Technical
+reference manual, System parameters; the robot's Operating manual, Calibration). A calibrated arm
+model from the maker (for ABB the Absolute Accuracy option the issue names; check with ABB) is the
+supported route: this export is for stations without it, and it says so in the file.
 
 (b) ``--program DIR``: a corrected copy of a RAPID program's targets, computed with the identified arm:
 every ``jointtarget`` ``q`` becomes the angles at which the REAL arm puts the camera where the station's
@@ -39,9 +42,9 @@ NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 JOINTTARGET = re.compile(r"(jointtarget\s+\w+\s*:=\s*\[\s*\[)([^\]]*)(\])", re.IGNORECASE)
 ROBTARGET = re.compile(r"(robtarget\s+\w+\s*:=\s*\[\s*\[)([^\]]*)(\]\s*,\s*\[)([^\]]*)(\])", re.IGNORECASE)
 
-SUPPORTED_ROUTE = ("ABB's supported route to a corrected arm model is the Absolute Accuracy option (a calibrated "
-                   "kinematic model per robot from ABB or a certified service); these values are for a station "
-                   "without it, entered by an engineer, never written by handeye")
+SUPPORTED_ROUTE = ("the supported route to a corrected arm model is a calibrated model from the maker (for ABB the "
+                   "Absolute Accuracy option; check with ABB); these values are for a station without it, entered "
+                   "by an engineer, never written by handeye")
 
 
 def _refusal(ident) -> str | None:
@@ -56,10 +59,11 @@ def offsets_text(ident, session) -> str:
     """``joint_offsets.txt``: the offsets, their sigmas and where they go."""
     lines = [f"# Arm joint zero offsets identified with the camera from {session}",
              "# offset = how much further the axis stands than its controller angle (arm side).",
-             "# Where: IRC5 motion configuration (MOC), type Motor Calibration, attribute Calibration Offset",
-             "# (cal_offset), one instance per axis, in MOTOR-side radians: arm-side offset x the axis'",
-             "# transmission ratio, sign per the controller's convention; then update the revolution counters",
-             "# and check the fine calibration position on the FlexPendant (Calibration).",
+             "# Where: the controller's calibration data of the robot's mechanical unit (IRC5: fine calibration,",
+             "# manual offset of the calibration data, per ABB's PC SDK; the motor calibration data are in MOC.cfg).",
+             "# The parameter's exact name, its unit (arm or motor side: arm side x transmission ratio) and sign:",
+             "# check in the controller's manual (System parameters, Motion topic; Operating manual, Calibration).",
+             "# Afterwards update the revolution counters and check the calibration position (FlexPendant, Calibration).",
              "# " + SUPPORTED_ROUTE + ".",
              "axis, offset_deg, offset_rad, sigma_deg, status"]
     for axis in range(1, 7):

@@ -101,12 +101,18 @@ def _zero_test(ident) -> dict:
 
     ok = [i for i, j in enumerate(ident.fitted) if ident.status[j] == "identified"]
     if not ok:
-        return {"consistent": True, "statistic": 0.0, "limit": 0.0, "parameters": 0}
+        return {"consistent": True, "statistic": 0.0, "limit": 0.0, "parameters": 0,
+                "statement": "consistent with zero: no parameter identified"}
     u = ident.values[ident.fitted][ok]
     cov = ident.covariance[12:, 12:][np.ix_(ok, ok)]
     stat = float(u @ np.linalg.solve(cov, u))
     limit = float(chi2.ppf(1.0 - TEST_LEVEL, len(ok)))
-    return {"consistent": stat <= limit, "statistic": stat, "limit": limit, "parameters": len(ok),
+    consistent = stat <= limit
+    words = (f"consistent with zero: chi-square {stat:.1f} <= {limit:.1f} ({len(ok)} parameters, 1 % level)"
+             if consistent else
+             f"not consistent with zero: chi-square {stat:.1f} > {limit:.1f} ({len(ok)} parameters, 1 % level): "
+             "the arm deviates from its DH table")
+    return {"consistent": consistent, "statistic": stat, "limit": limit, "parameters": len(ok), "statement": words,
             "meaning": "the identified offsets together against an exact arm (chi-square, 1 % level): true means the "
                        "data show no deviation from the DH table"}
 
@@ -126,12 +132,15 @@ def _pose_change(ident) -> dict:
     from scipy.stats import chi2
 
     distance = float(delta @ np.linalg.solve(cov, delta))
+    in_sigma = float(np.sqrt(np.mean(delta ** 2 / np.diag(cov))))
     return {"translation_mm": [float(v) for v in shift], "rotation_deg": [float(v) for v in turn],
             "sigma_translation_mm": [float(v) for v in sigma_t], "sigma_rotation_deg": [float(v) for v in sigma_r],
+            "rms_in_sigmas": in_sigma,
             "mahalanobis_squared": distance, "within_uncertainty": distance <= float(chi2.ppf(1.0 - TEST_LEVEL, 6)),
             "meaning": "the camera pose with the kinematics minus the camera-only one (tool0 axes), against the "
-                       "one-sigma of the pose with the kinematics; within_uncertainty: chi-square, 6 degrees of "
-                       "freedom, 1 % level"}
+                       "one-sigma of the pose with the kinematics; rms_in_sigmas: the root-mean-square of the six "
+                       "components over their one-sigmas; within_uncertainty: chi-square, 6 degrees of freedom, 1 % "
+                       "level"}
 
 
 def kinematics_lines(ident, standoff=None) -> list[str]:
@@ -154,10 +163,18 @@ def kinematics_lines(ident, standoff=None) -> list[str]:
     other = [n for j, n in enumerate(ident.names) if ident.status[j] != "identified" and not n.startswith("zero")]
     if other:
         lines.append("  not identifiable here: " + ", ".join(other) + " (details in the JSON's kinematics)")
+    lines.append("  offsets " + _zero_test(ident)["statement"])
+    change = _pose_change(ident)
+    lines.append(f"  camera pose moved by {change['rms_in_sigmas']:.2f} of its one-sigma (RMS over the six components) "
+                 "against the camera-only calibration")
     if standoff is not None:
         lines.append(f"  point at the {standoff.standoff_mm:g} mm stand-off (board frame, RMS over the postures): "
                      f"{standoff.corrected_rms_mm:.3f} mm with the correction, {standoff.uncorrected_rms_mm:.3f} mm "
                      "without")
+        low, high = standoff.interval(0.9, True)
+        if math.isfinite(low):
+            lines.append(f"    one calibration's actual RMS with the correction: {low:.3f}-{high:.3f} mm (9 times in 10; "
+                         "the fit's error is the same at every posture)")
     return lines
 
 

@@ -146,6 +146,7 @@ def run(args) -> int:
         from ..kinematics_step import identify_outcome
 
         kinematics = identify_outcome(outcome, args.standoff)
+        _save_standoff(outcome, kinematics[1])
     assessment = assess(outcome, thresholds, judge=wants_report or bool(args.thresholds),
                         methods=comparison_methods() if wants_report else ())
     written = None
@@ -194,6 +195,23 @@ def _save_result(outcome, units: str):
         print(f"handeye calibrate: warning: the result was not saved ({exc}); handeye writeback and verify will "
               "solve the session again", file=sys.stderr)
         return None
+
+
+def _save_standoff(outcome, standoff) -> None:
+    """``SESSION/standoff.json`` (``station.standoff_file``: what ``verify`` compares against); a folder
+    that cannot be written is one warning line on stderr."""
+    import sys
+
+    from ...base import OutputError
+    from ..standoff_file import save_prediction
+
+    if standoff is None:
+        return
+    try:
+        save_prediction(outcome.session_path, outcome.problem.posture_ids, standoff)
+    except (OSError, OutputError) as exc:
+        print(f"handeye calibrate: warning: the stand-off prediction was not saved ({exc}); verify will not "
+              "compare against it", file=sys.stderr)
 
 
 def _kinematics_sections(kinematics) -> tuple:

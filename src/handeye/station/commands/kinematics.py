@@ -9,8 +9,9 @@ HELP = "the arm's kinematics identified with the camera: export joint offsets an
 EPILOG = """\
 handeye kinematics export SESSION -o OUT identifies the arm's deviations with the camera (as calibrate
 --kinematics) and writes OUT/joint_offsets.txt (the zero offsets of the controller axes, where an
-engineer enters them: the MOC configuration's Motor Calibration / Calibration Offset, motor-side
-radians; ABB's Absolute Accuracy option is the supported route) and OUT/kinematics.json. With
+engineer enters them in the controller's calibration data: the exact parameter, unit and sign are in
+the controller's manual; a maker's calibrated model, ABB's Absolute Accuracy option, is the supported
+route) and OUT/kinematics.json. With
 --program DIR, a corrected copy of the program's jointtargets and robtargets (robtargets taken as
 tool0 in wobj0) in OUT/program, checked against the cell (--config STATION.yaml, else the built-in
 station). Nothing is written to the controller. Refused when the zeros of J2-J5 are not identified.

@@ -97,6 +97,9 @@ class VerifyOutcome:
         The detected change's size against it (None: the test found nothing).
     reference : verify_reference.Reference or None
         What the check compared against (SESSION's result, or the quick update written after it).
+    standoff : dict or None
+        The measured error at the stand-off against ``calibrate --kinematics``'s prediction
+        (``verify.standoff_check``); None when SESSION has no current prediction.
     """
 
     verdict: str
@@ -114,6 +117,7 @@ class VerifyOutcome:
     tolerance: object = None
     size: object = None
     reference: object = None
+    standoff: dict | None = None
 
     @property
     def beyond_tolerance(self) -> bool:
@@ -353,7 +357,7 @@ def verify(config: StationConfig, session_dir, link: StationLink, postures: int 
                             capture_motion_s=capture_time(robot, session.extra["capture"]), tolerance=drift_tolerance(config),
                             reference=reference)
     if failure is None:
-        judge(outcome, folder, base, robot, level, numbers)
+        judge(outcome, folder, base, robot, level, numbers, session_dir)
     if tool is not None and tool["difference"].beyond and outcome.verdict != INCONCLUSIVE:
         outcome.verdict = DRIFT
         outcome.reason = (f"the controller's camera tooldata differs from {session_dir.name}'s by "
@@ -362,8 +366,10 @@ def verify(config: StationConfig, session_dir, link: StationLink, postures: int 
     return outcome
 
 
-def judge(outcome: VerifyOutcome, folder: Path, base: SessionBaseline, robot, level: float, numbers) -> None:
-    """The test, the explanations and the quick update on the check's measurements (into ``outcome``)."""
+def judge(outcome: VerifyOutcome, folder: Path, base: SessionBaseline, robot, level: float, numbers,
+          session_dir: Path | None = None) -> None:
+    """The test, the explanations, the quick update and (SESSION with a stand-off prediction) the error at
+    the stand-off on the check's measurements (into ``outcome``)."""
     from ...calibration import explain, quick_update
     from ...calibration import observations
     from ...calibration import problem_from_session
@@ -377,6 +383,10 @@ def judge(outcome: VerifyOutcome, folder: Path, base: SessionBaseline, robot, le
     obs = observations(problem)
     disc = discrepancy(base.baseline, obs, problem.joints_deg)
     outcome.test = drift_test(disc, base.baseline, level)
+    if session_dir is not None:
+        from .standoff_check import standoff_comparison
+
+        outcome.standoff = standoff_comparison(session_dir, problem, base.baseline, numbers)
     outcome.explanations = explain(disc, base.baseline, robot)
     outcome.size = drift_size(outcome.explanations, outcome.test, outcome.tolerance)
     outcome.verdict = DRIFT if outcome.size is not None and outcome.size.beyond else OK

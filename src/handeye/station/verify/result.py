@@ -173,6 +173,7 @@ def outcome_json(outcome, session: str, thresholds) -> dict:
         "reference": _reference_json(outcome),
         "simulated_robot_time_s": outcome.motion_s,  # the plan's motion model, on every station
         "capture_robot_time_s": outcome.capture_motion_s,
+        "standoff": getattr(outcome, "standoff", None),  # against calibrate --kinematics's prediction
     }
 
 
@@ -198,7 +199,10 @@ def outcome_lines(data: dict, advice_lines: list[str]) -> list[str]:
         s = q["uncertainty"]
         lines.append(f"quick update: camera at {np.round(q['camera_pose']['position_mm'], 3).tolist()} mm, one sigma "
                      f"{max(s['translation_mm']):.3f} mm / {max(s['rotation_deg']):.4f} deg: {q['advice']}")
-    return lines + advice_lines
+    from .standoff_check import standoff_line
+
+    standoff = standoff_line(data.get("standoff"))
+    return lines + ([standoff] if standoff else []) + advice_lines
 
 
 def _size(d: dict) -> str:
