@@ -6,6 +6,10 @@ capsules). Prints per link the least depth of its facets at all axes 0 (``capsul
 sampled every 5 mm, a lower bound) and how many facets are less than the margin deep or outside. The bodies
 move rigidly with their links, so the figures hold at every posture.
 
+Then the capsules' conservatism for the base and links 1-3: the volume of the union of the link's own capsules
+(link 3's without the tube's, which holds link 4 on axis 4) over the volume of its mesh's convex hull (the union
+by 400,000 seeded random points in its box), and how far the capsules reach beyond the mesh's box.
+
 Usage (from the repository root, in the project's venv):
     python benchmarks/arm_bodies/surface.py [--meshes ../shared/reference/irb1410-arte]
 """
@@ -17,6 +21,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial import ConvexHull
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import fit  # noqa: E402
@@ -26,6 +31,16 @@ from handeye.robot.body_cover import link_capsules  # noqa: E402
 from handeye.robot.capsule_fit import Capsule, facet_depths  # noqa: E402
 from handeye.robot.clearance import arm_capsules  # noqa: E402
 from handeye.robot.kinematics import load_robot  # noqa: E402
+
+
+def conservatism(held, vertices, seed: int = 0, count: int = 400_000) -> tuple[float, float]:
+    """``(union volume / the vertices' convex hull's volume, mm the capsules reach beyond the vertices' box)``."""
+    low = np.min([np.minimum(c.start, c.end) - c.radius for c in held], axis=0)
+    high = np.max([np.maximum(c.start, c.end) + c.radius for c in held], axis=0)
+    points = np.random.default_rng(seed).uniform(low, high, (count, 3))
+    union = np.mean(np.any([c.contains(points) for c in held], axis=0)) * np.prod(high - low)
+    beyond = max(float(np.max(vertices.min(axis=0) - low)), float(np.max(high - vertices.max(axis=0))))
+    return float(union / ConvexHull(vertices).volume), beyond
 
 
 def main(argv=None) -> int:
@@ -46,6 +61,12 @@ def main(argv=None) -> int:
         print(f"mesh {link}: {len(depth)} facets, least depth {depth.min():.1f} mm, "
               f"{int(np.sum(depth < fit.MARGIN_MM))} under the {fit.MARGIN_MM:g} mm margin, {int(np.sum(depth < 0))} "
               f"possibly outside")
+    members = link_capsules(robot)
+    for link in range(4):
+        own = [c for c in members[link] if capsules[c][1] == link and c not in members[link + 1]]
+        held = [Capsule(pivots[link] + capsules[c][2], pivots[link] + capsules[c][3], capsules[c][4]) for c in own]
+        ratio, beyond = conservatism(held, meshes[link])
+        print(f"link {link}: {len(held)} capsules, {ratio:.2f} times its mesh's hull, up to {beyond:.0f} mm beyond its box")
     return 0
 
 

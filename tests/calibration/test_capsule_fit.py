@@ -97,3 +97,34 @@ def test_a_facet_between_two_capsules_is_measured_between_its_corners():
     grown_ = cover_facets(spheres, facet, 10.0, 5.0)
     assert facet_depths(grown_, facet, 5.0)[0] >= 10.0
     assert all(g.radius >= s.radius for g, s in zip(grown_, spheres))
+
+
+def test_the_facet_grid_cuts_every_facet_into_similar_pieces_that_cover_it():
+    from handeye.robot.capsule_fit import facet_grid
+
+    facet = np.array([[[0.0, 0.0, 0.0], [100.0, 0.0, 0.0], [0.0, 30.0, 0.0]]])
+    points, triangles, owners = facet_grid(facet, 5.0)
+    cells = points[triangles]
+    area = 0.5 * np.linalg.norm(np.cross(cells[:, 1] - cells[:, 0], cells[:, 2] - cells[:, 0]), axis=1)
+    assert len(triangles) == 21 * 21 and (owners == 0).all()  # the longest edge 104.4 mm: 21 steps, 441 pieces
+    assert area.sum() == pytest.approx(1500.0) and np.allclose(area, 1500.0 / 441)  # they tile it
+    assert np.max(np.linalg.norm(cells - np.roll(cells, 1, axis=1), axis=2)) <= 5.0 + 1e-9
+
+
+def test_the_surface_fit_holds_a_long_facet_that_the_vertex_fit_leaves():
+    """An L of two thin plates, 400 mm each: two capsules on its vertices alone may cut the corner between
+    them; the surface fit holds every facet the margin deep (facet_depths), and again gives the same."""
+    from handeye.robot.capsule_fit import facet_depths, fit_surface_capsules
+
+    def plate(a, b, c, d):
+        return [[a, b, c], [a, c, d]]
+
+    facets = np.array(plate([0, 0, 0], [400, 0, 0], [400, 0, 20], [0, 0, 20]) + plate([0, 0, 0], [0, 400, 0], [0, 400, 20], [0, 0, 20])
+                      + plate([400, 0, 0], [0, 400, 0], [0, 400, 20], [400, 0, 20]), float)  # a thin triangle's walls
+    capsules, grid = fit_surface_capsules(facets, 2, spacing_mm=5.0)
+    held = [grown(c, grid[m], 10.0) for c, m in capsules]
+    assert facet_depths(held, facets, 5.0).min() >= 10.0 - 1e-9
+    vertex = [grown(c, facets.reshape(-1, 3)[m], 10.0) for c, m in fit_capsules(facets.reshape(-1, 3), 2)]
+    assert facet_depths(vertex, facets, 5.0).min() < 0.0  # the corners alone leave a wall's middle out
+    again, _ = fit_surface_capsules(facets, 2, spacing_mm=5.0)
+    assert all(np.array_equal(a.start, b.start) and a.radius == b.radius for (a, _), (b, _) in zip(capsules, again))

@@ -135,8 +135,9 @@ def _check(tmp_path, text, *extra):
     return main(["cell", "check", "--config", str(config), str(joints), "--moves", *extra])
 
 
-#: The wrist folded down onto the lower arm: the row of the issue, which is not clear (the closest pair is link 6
-#: against link 2 with the capsules fitted to the meshes, issue 41; link 4 against link 1 with the estimated ones).
+#: The wrist folded down onto the lower arm: the row of the issue, which is not clear (the closest pair is link 5
+#: against link 2 with the capsules fitted to the meshes' surface, issue 41; link 6 against link 2 with the
+#: vertex-only fit; link 4 against link 1 with the estimated ones).
 COLLIDING = "0,-30,60,0,90,0"
 
 
@@ -166,7 +167,7 @@ def test_a_header_is_a_line_without_numbers_and_the_output_names_it(tmp_path, ca
     assert _check(tmp_path, "# targets of HeCal\naxis 1,a2,a3,a4,a5,a6\n" + COLLIDING + "\n0,10,0,0,0,0\n") == 3
     out = capsys.readouterr().out
     assert "line 2 taken as a header (no number in it), not checked: 'axis 1,a2,a3,a4,a5,a6'" in out
-    assert "row 0 (line 3): NOT CLEAR: link 6 against link 2" in out
+    assert "row 0 (line 3): NOT CLEAR: link 5 against link 2" in out
     assert _check(tmp_path, COLLIDING + "\n0,10,0,0,0,0\n") == 3  # no header: none named
     assert "taken as a header" not in capsys.readouterr().out
 

@@ -29,11 +29,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.cluster.vq import kmeans2
 from scipy.optimize import minimize
+from scipy.spatial import ConvexHull, QhullError
 
 from .capsules import point_segment_distance
 
-__all__ = ["Capsule", "capsule_volume", "cover_facets", "facet_depths", "facet_samples", "fit_capsule", "fit_capsules",
-           "grown", "surface_gap"]
+__all__ = ["Capsule", "capsule_volume", "cover_facets", "facet_depths", "facet_grid", "facet_samples", "fit_capsule",
+           "fit_capsules", "fit_surface_capsules", "grown", "surface_gap"]
 
 #: Nelder-Mead runs at most, each from the last one's best with a fresh simplex.
 _RESTARTS = 8
@@ -59,6 +60,16 @@ class Capsule:
 def capsule_volume(length: float, radius: float) -> float:
     """Volume of a capsule of axis length ``length`` and radius ``radius``, mm^3."""
     return math.pi * radius * radius * length + 4.0 / 3.0 * math.pi * radius ** 3
+
+
+def _extreme(points: np.ndarray) -> np.ndarray:
+    """The corners of the points' convex hull (a capsule is convex: it holds the points when it holds these)."""
+    if len(points) < 5:
+        return points
+    try:
+        return points[ConvexHull(points).vertices]
+    except QhullError:  # flat or on a line: all of them
+        return points
 
 
 def _enclosing(points: np.ndarray, start: np.ndarray, end: np.ndarray) -> Capsule:
@@ -91,6 +102,7 @@ def fit_capsule(points, line=None, bounds=None) -> Capsule:
         Its radius is the largest distance of a point from its axis: every point is inside.
     """
     points = np.asarray(points, float)
+    hull = _extreme(points)
     if line is not None:
         origin, direction = (np.asarray(v, float) for v in line)
         direction = direction / np.linalg.norm(direction)
@@ -98,7 +110,7 @@ def fit_capsule(points, line=None, bounds=None) -> Capsule:
 
         def at(x):
             low, high = min(x), max(x)
-            return _enclosing(points, origin + low * direction, origin + high * direction)
+            return _enclosing(hull, origin + low * direction, origin + high * direction)
 
         start = np.array([s.min(), s.max()])
     else:
@@ -107,7 +119,7 @@ def fit_capsule(points, line=None, bounds=None) -> Capsule:
         s = (points - centre) @ direction
 
         def at(x):
-            return _enclosing(points, x[:3], x[3:])
+            return _enclosing(hull, x[:3], x[3:])
 
         start = np.concatenate([centre + s.min() * direction, centre + s.max() * direction])
     scale = max(float(np.ptp(s)), 1.0)
@@ -202,6 +214,99 @@ def facet_samples(facets, spacing_mm: float) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate(points), np.concatenate(owners)
 
 
+def _grid_triangles(k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Barycentric weights ``(g, 3)`` of the grid of ``k`` steps and its ``k * k`` sub-triangles ``(k * k, 3)``."""
+    i, j = np.meshgrid(np.arange(k + 1), np.arange(k + 1), indexing="ij")
+    keep = i + j <= k
+    index = np.full((k + 2, k + 2), -1)
+    index[i[keep], j[keep]] = np.arange(int(keep.sum()))
+    a, b = i[keep], j[keep]
+    up = a + b <= k - 1
+    down = a + b <= k - 2
+    triangles = np.vstack([np.stack([index[a[up], b[up]], index[a[up] + 1, b[up]], index[a[up], b[up] + 1]], axis=1),
+                           np.stack([index[a[down] + 1, b[down]], index[a[down], b[down] + 1],
+                                     index[a[down] + 1, b[down] + 1]], axis=1)])
+    weights = np.stack([k - a - b, a, b], axis=1) / k
+    return weights, triangles
+
+
+def facet_grid(facets, spacing_mm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Facets ``(m, 3, 3)`` cut into sub-triangles with edges at most ``spacing_mm``.
+
+    Each facet is cut by the barycentric grid of :func:`facet_samples` (``k`` steps along each edge) into
+    ``k * k`` sub-triangles similar to it.
+
+    Returns
+    -------
+    points : ndarray, shape (n, 3)
+        The grid's points (a facet's corners among them; shared by the sub-triangles of a facet).
+    triangles : ndarray, shape (t, 3)
+        Rows of indices into ``points``: the sub-triangles.
+    owners : ndarray, shape (t,)
+        The facet each sub-triangle lies on.
+    """
+    facets = np.asarray(facets, float).reshape(-1, 3, 3)
+    longest = np.max(np.linalg.norm(facets - np.roll(facets, 1, axis=1), axis=2), axis=1)
+    steps = np.maximum(1, np.ceil(longest / float(spacing_mm)).astype(int))
+    points, triangles, owners, count = [np.zeros((0, 3))], [np.zeros((0, 3), int)], [np.zeros(0, int)], 0
+    for k in np.unique(steps):
+        weights, cells = _grid_triangles(int(k))
+        which = np.flatnonzero(steps == k)
+        points.append(np.einsum("gc,mcx->mgx", weights, facets[which]).reshape(-1, 3))
+        offsets = count + len(weights) * np.arange(len(which))
+        triangles.append((offsets[:, None, None] + cells[None]).reshape(-1, 3))
+        owners.append(np.repeat(which, len(cells)))
+        count += len(which) * len(weights)
+    return np.concatenate(points), np.concatenate(triangles), np.concatenate(owners)
+
+
+def _kmeans_labels(centres: np.ndarray, count: int, seed: int, sample: int = 20000) -> np.ndarray:
+    """k-means groups of points ``(n, 3)``, found on a seeded subsample of at most ``sample`` and given to all."""
+    pick = np.random.default_rng(seed).permutation(len(centres))[:sample]
+    means, _ = kmeans2(centres[pick], count, seed=seed, minit="++")  # pyright: ignore[reportCallIssue]  (the stubs know only rng)
+    return np.argmin([np.sum((centres - m) ** 2, axis=1) for m in means], axis=0)
+
+
+def fit_surface_capsules(facets, count: int, line=None, seed: int = 0, rounds: int = 8, slack_mm=None,
+                         spacing_mm: float = 5.0) -> tuple[list, np.ndarray]:
+    """``count`` capsules whose union holds the surface of facets ``(m, 3, 3)``, not only their corners.
+
+    The facets are cut into sub-triangles (:func:`facet_grid`, edges at most ``spacing_mm``); each
+    sub-triangle belongs to one capsule, which holds its three corners and so (a capsule is convex) all of
+    it. The split starts from k-means groups of the sub-triangles' centres (seeded: the same facets give
+    the same capsules); then, as :func:`fit_capsules`, each group's least-volume capsule is fitted (on the
+    corners of its points' hull), each sub-triangle goes to the capsule its farthest corner is deepest
+    in, and the split of least total volume is kept.
+
+    Returns
+    -------
+    capsules : list of (Capsule, member point indices)
+        Every corner of every sub-triangle of the capsule's group is inside it (:func:`grown` adds a
+        margin that then holds for the whole surface of the group).
+    points : ndarray, shape (n, 3)
+        The grid's points the member indices refer to.
+    """
+    points, triangles, _ = facet_grid(facets, spacing_mm)
+    corners = np.asarray(facets, float).reshape(-1, 3)
+    bounds = None if slack_mm is None else (corners.min(axis=0) - slack_mm, corners.max(axis=0) + slack_mm)
+    labels = np.zeros(len(triangles), int) if count <= 1 else \
+        _kmeans_labels(points[triangles].mean(axis=1), count, seed)
+    best, best_volume = None, np.inf
+    for _ in range(rounds + 1):
+        groups = [np.unique(triangles[labels == c]) for c in range(count) if np.any(labels == c)]
+        fitted = [(fit_capsule(points[g], line, bounds), g) for g in groups]
+        volume = sum(_volume(c) + 1000.0 * math.pi * c.radius ** 2 * _overshoot(c, bounds) for c, _ in fitted)
+        if volume < best_volume - 1e-6:
+            best, best_volume = fitted, volume
+        excess = np.stack([c.distances(points) - c.radius for c, _ in fitted])  # (c, n)
+        new = np.argmin(excess[:, triangles].max(axis=2), axis=0)
+        if len(fitted) < count or np.array_equal(new, labels):
+            break
+        labels = new
+    assert best is not None  # the first round's volume is below the initial infinity
+    return best, points
+
+
 def _depths(capsules, points) -> np.ndarray:
     """``(c, n)``: radius less the distance from each capsule's axis (positive inside)."""
     return np.array([c.radius - c.distances(points) for c in capsules]).reshape(len(capsules), len(points))
@@ -210,18 +315,27 @@ def _depths(capsules, points) -> np.ndarray:
 def facet_depths(capsules, facets, spacing_mm: float = 5.0, enough_mm: float = np.inf) -> np.ndarray:
     """A lower bound ``(m,)`` on how deep each facet ``(m, 3, 3)`` lies inside the union of ``capsules``, mm.
 
-    The larger of: the best single capsule's least depth at the facet's corners (the depth in one capsule
-    is concave, so the whole facet is at least that deep in it), and the least depth of the facet's samples
-    (:func:`facet_samples`) in the union less :func:`surface_gap`. Negative: part of the facet may be outside.
-    Facets at least ``enough_mm`` deep by their corners are not sampled (their bound is the corners').
+    The larger of the best single capsule's least depth at the facet's corners (the depth in one capsule
+    is concave, so the whole facet is at least that deep in it) and the least bound of its sub-triangles
+    (:func:`facet_grid`, edges at most ``spacing_mm``): for each, the larger of the best single capsule's
+    least depth at its corners and its corners' least depth in the union less :func:`surface_gap` of its
+    longest edge. Negative: part of the facet may be outside. Facets at least ``enough_mm`` deep by their
+    corners are not cut (their bound is the corners').
     """
     facets = np.asarray(facets, float).reshape(-1, 3, 3)
     corners = _depths(capsules, facets.reshape(-1, 3)).reshape(len(capsules), len(facets), 3)
     bound = corners.min(axis=2).max(axis=0) if len(capsules) else np.full(len(facets), -np.inf)
     weak = np.flatnonzero(bound < enough_mm)
-    points, owners = facet_samples(facets[weak], spacing_mm)
+    if not len(capsules) or not len(weak):
+        return bound
+    points, triangles, owners = facet_grid(facets[weak], spacing_mm)
+    depth = _depths(capsules, points)[:, triangles]  # (c, t, 3)
+    cell = points[triangles]
+    edge = np.max(np.linalg.norm(cell - np.roll(cell, 1, axis=1), axis=2), axis=1)
+    single = depth.min(axis=2).max(axis=0)
+    union = depth.max(axis=0).min(axis=1) - edge / math.sqrt(3.0)
     sampled = np.full(len(weak), np.inf)
-    np.minimum.at(sampled, owners, _depths(capsules, points).max(axis=0) - surface_gap(spacing_mm))
+    np.minimum.at(sampled, owners, np.maximum(single, union))
     bound[weak] = np.maximum(bound[weak], sampled)
     return bound
 
