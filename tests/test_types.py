@@ -47,3 +47,53 @@ def test_the_count_sees_an_error():
     fake = {"generalDiagnostics": [{"severity": "error", "file": str(REPO / "src" / "handeye" / "base" / "files.py")},
                                    {"severity": "warning", "file": str(REPO / "src" / "handeye" / "robot" / "cell.py")}]}
     assert errors_by_room(fake) == {"base": 1}
+
+
+#: Public functions still without full annotations per room (issue 39: what remains). Lower a number when you
+#: annotate some; never raise it. A public function: no leading underscore, at module level or a method of a
+#: public class (``__init__`` included, its parameters only); annotated: every parameter but ``self``/``cls``,
+#: and the return.
+UNANNOTATED = {"base": 22, "geometry": 31, "robot": 58, "calibration": 146, "drivers": 120, "mocks": 97, "rapid": 130,
+               "station": 326}
+
+
+def unannotated_functions(path: Path) -> list[str]:
+    """``name:line`` of every public function of the module at ``path`` that lacks an annotation."""
+    import ast
+
+    found = []
+
+    def visit(body, owner: str = "") -> None:
+        for node in body:
+            if isinstance(node, ast.ClassDef) and not node.name.startswith("_"):
+                visit(node.body, f"{node.name}.")
+            elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and (
+                    not node.name.startswith("_") or node.name == "__init__"):
+                params = node.args.posonlyargs + node.args.args + node.args.kwonlyargs
+                if owner and params and params[0].arg in ("self", "cls"):
+                    params = params[1:]
+                params += [p for p in (node.args.vararg, node.args.kwarg) if p]
+                if any(p.annotation is None for p in params) or (node.returns is None and node.name != "__init__"):
+                    found.append(f"{owner}{node.name}:{node.lineno}")
+
+    visit(ast.parse(path.read_text(encoding="utf-8")).body)
+    return found
+
+
+def test_public_functions_carry_annotations():
+    package = REPO / "src" / "handeye"
+    rooms = collections.defaultdict(list)
+    for path in sorted(package.rglob("*.py")):
+        rooms[path.relative_to(package).parts[0]] += [f"{path.relative_to(REPO)}:{name}"
+                                                      for name in unannotated_functions(path)]
+    worse = {room: f"{len(names)} (at most {UNANNOTATED.get(room, 0)})" for room, names in rooms.items()
+             if len(names) > UNANNOTATED.get(room, 0)}
+    assert not worse, f"{worse}\n" + "\n".join(name for room in worse for name in rooms[room][:20])
+
+
+def test_the_annotation_check_sees_a_missing_annotation(tmp_path):
+    module = tmp_path / "m.py"
+    module.write_text("def f(a: int) -> int:\n    return a\n\ndef g(a):\n    return a\n\n"
+                      "class C:\n    def __init__(self, x: int):\n        pass\n    def h(self) -> None:\n        pass\n"
+                      "    def k(self, y) -> None:\n        pass\n    def _private(self, z):\n        pass\n", encoding="utf-8")
+    assert unannotated_functions(module) == ["g:4", "C.k:12"]
