@@ -214,6 +214,10 @@ class RapidControllerServer:
                   "tool writes refused: no write key (start it with --write-key KEY or --config STATION.yaml)")
         return f"idle timeout {idle_timeout_s:g} s; {writes}"
 
+    def client_options(self) -> dict:
+        """Keyword arguments of ``open_controller`` that reach it (its idle timeout and write key included)."""
+        raise NotImplementedError
+
     def client_flags(self) -> str:
         """The ``handeye robot`` flags that reach it."""
         return f"--host {self.host} --port {self.port}"
