@@ -133,3 +133,12 @@ def test_a_posture_seeing_too_little_is_refused_naming_it():
     p.points_mm, p.corner_ids = p.points_mm[:4], np.arange(4)
     with pytest.raises(CalibrationError, match="posture 3: only 4 corners"):
         problem_from_session(session)
+
+
+def test_a_charuco_description_without_its_square_size_is_refused_in_one_line():
+    from handeye.geometry.targets import target_to_dict
+
+    # float(None) used to raise a TypeError from deep inside; the description needs the square size
+    with pytest.raises(ValueError, match="square_mm"):
+        target_to_dict(CharucoBoard((13, 8)))
+    assert target_to_dict(STATION_CHARUCO)["square_mm"] == 30.0

@@ -61,6 +61,13 @@ def test_flange_pose_comes_from_the_kinematics_with_the_parallel_arm_coupling():
     assert np.linalg.norm(ROBOT.forward(serial)[0] - p) > 50
 
 
+def test_a_guard_that_is_no_cell_is_refused_at_once():
+    # a string other than SELF_ONLY used to be kept as the guard and fail at the first move (AttributeError)
+    with pytest.raises(ValueError, match="guard must be a CellGuard"):
+        SimulatedRobot(POSTURES, guard="self only")
+    assert SimulatedRobot(POSTURES, guard=None).guard is None
+
+
 def test_limits_are_enforced():
     with pytest.raises(ValueError, match="axis 2"):
         SimulatedRobot([[0, 80, 0, 0, 0, 0]])

@@ -7,6 +7,7 @@ long side (``corners[0]`` corners), y along the short side, the board in ``z = 0
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,7 +46,7 @@ class BoardGeometry:
 STATION_BOARD = BoardGeometry(STATION_CORNERS, STATION_SQUARE_MM)
 
 
-def board_corners(corners, square_mm: float) -> np.ndarray:
+def board_corners(corners: Sequence[int], square_mm: float) -> np.ndarray:
     """Inner corners of a ``corners[0] x corners[1]`` board in the target frame, ``(nx*ny, 3)``."""
     nx, ny = int(corners[0]), int(corners[1])
     col, row = np.meshgrid(np.arange(nx), np.arange(ny))

@@ -14,9 +14,11 @@ errors; and then whether it looks like a unit (a factor 10, 25.4, 100 or 1000) o
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 __all__ = ["BoardScale", "SQUARE_TOLERANCE", "SQUARE_SIGMAS", "board_scale", "grid_scales", "judge_square_size"]
 
@@ -56,7 +58,7 @@ class SquareJudgement:
     scale: BoardScale
 
 
-def grid_scales(points_mm, corners) -> np.ndarray:
+def grid_scales(points_mm: npt.ArrayLike, corners: Sequence[int]) -> np.ndarray:
     """The similarity-fit scale of the unit grid to each posture's corners.
 
     Parameters
@@ -85,7 +87,7 @@ def grid_scales(points_mm, corners) -> np.ndarray:
     return d.sum(axis=1) / float(np.sum(grid ** 2))
 
 
-def board_scale(points_mm, corners) -> BoardScale:
+def board_scale(points_mm: npt.ArrayLike, corners: Sequence[int]) -> BoardScale:
     """The session's square size (median of :func:`grid_scales`) and its standard error."""
     scales = grid_scales(points_mm, corners)
     if not np.all(np.isfinite(scales)):
@@ -103,7 +105,7 @@ def _unit_word(ratio: float) -> str | None:
     return None
 
 
-def judge_square_size(points_mm, corners, square_mm: float) -> SquareJudgement:
+def judge_square_size(points_mm: npt.ArrayLike, corners: Sequence[int], square_mm: float) -> SquareJudgement:
     """Whether the corners contradict ``square_mm`` (module docstring), and the one line saying so."""
     scale = board_scale(points_mm, corners)
     seen = scale.square_mm

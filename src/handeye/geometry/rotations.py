@@ -10,6 +10,7 @@ The paper's notation: ``Q * P`` is the quaternion product, ``Q̄`` the conjugate
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 __all__ = [
@@ -32,7 +33,7 @@ __all__ = [
 UNIT_TOLERANCE = 1e-3
 
 
-def check_quaternions(q, tolerance: float = UNIT_TOLERANCE) -> np.ndarray:
+def check_quaternions(q: npt.ArrayLike, tolerance: float = UNIT_TOLERANCE) -> np.ndarray:
     """Return ``q`` as float64 unit quaternions, normalised.
 
     Parameters
@@ -60,7 +61,7 @@ def check_quaternions(q, tolerance: float = UNIT_TOLERANCE) -> np.ndarray:
     return q / norm
 
 
-def canonical_quaternions(q) -> np.ndarray:
+def canonical_quaternions(q: npt.ArrayLike) -> np.ndarray:
     """Flip the sign of ``q`` so that ``w >= 0`` (the written-out convention).
 
     Parameters
@@ -75,7 +76,7 @@ def canonical_quaternions(q) -> np.ndarray:
     return np.where(q[..., :1] < 0.0, -q, q)
 
 
-def quaternion_multiply(p, q) -> np.ndarray:
+def quaternion_multiply(p: npt.ArrayLike, q: npt.ArrayLike) -> np.ndarray:
     """Hamilton product ``p * q``.
 
     Parameters
@@ -102,7 +103,7 @@ def quaternion_multiply(p, q) -> np.ndarray:
     )
 
 
-def quaternion_conjugate(q) -> np.ndarray:
+def quaternion_conjugate(q: npt.ArrayLike) -> np.ndarray:
     """Conjugate ``Q̄`` (the inverse of a unit quaternion).
 
     Parameters
@@ -117,7 +118,7 @@ def quaternion_conjugate(q) -> np.ndarray:
     return q * np.array([1.0, -1.0, -1.0, -1.0])
 
 
-def rotate_vectors(q, v) -> np.ndarray:
+def rotate_vectors(q: npt.ArrayLike, v: npt.ArrayLike) -> np.ndarray:
     """``rot(Q, P) = Q * P * Q̄`` for unit quaternions (eq. 10), without building the product.
 
     Parameters
@@ -139,7 +140,7 @@ def rotate_vectors(q, v) -> np.ndarray:
     return v + w * t + cross3(u, t)
 
 
-def cross3(a, b) -> np.ndarray:
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``a x b`` of 3-vectors along the last axis, shapes broadcast: the same numbers as ``np.cross``
     (the same products and differences), at a third of its cost on the small arrays of the kinematics
     and the rotations (``np.cross`` moves axes for every call).
@@ -157,7 +158,7 @@ def cross3(a, b) -> np.ndarray:
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
-def quaternion_from_axis_angle(axis, angle) -> np.ndarray:
+def quaternion_from_axis_angle(axis: npt.ArrayLike, angle: npt.ArrayLike) -> np.ndarray:
     """``RtoQ(N, θ) = cos(θ/2) + sin(θ/2) N/|N|`` (eq. 9).
 
     Parameters
@@ -177,7 +178,7 @@ def quaternion_from_axis_angle(axis, angle) -> np.ndarray:
     return np.concatenate([np.cos(half)[..., None], np.sin(half)[..., None] * n], axis=-1)
 
 
-def axis_angle_from_quaternion(q) -> tuple[np.ndarray, np.ndarray]:
+def axis_angle_from_quaternion(q: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Unit axis and angle in [0, pi] of unit quaternions.
 
     Parameters
@@ -198,13 +199,13 @@ def axis_angle_from_quaternion(q) -> tuple[np.ndarray, np.ndarray]:
     return safe, angle
 
 
-def rotation_angle(q) -> np.ndarray:
+def rotation_angle(q: npt.ArrayLike) -> np.ndarray:
     """Rotation angle in radians, in [0, pi], of unit quaternions ``(..., 4)``."""
     q = np.asarray(q, dtype=float)
     return 2.0 * np.arctan2(np.linalg.norm(q[..., 1:], axis=-1), np.abs(q[..., 0]))
 
 
-def matrix_from_quaternion(q) -> np.ndarray:
+def matrix_from_quaternion(q: npt.ArrayLike) -> np.ndarray:
     """Rotation matrices of unit quaternions.
 
     Parameters
@@ -228,7 +229,7 @@ def matrix_from_quaternion(q) -> np.ndarray:
     )
 
 
-def quaternion_from_matrix(matrix) -> np.ndarray:
+def quaternion_from_matrix(matrix: npt.ArrayLike) -> np.ndarray:
     """Unit quaternions ``(w, x, y, z)`` with ``w >= 0`` of rotation matrices (via scipy).
 
     Parameters
@@ -245,7 +246,7 @@ def quaternion_from_matrix(matrix) -> np.ndarray:
     return canonical_quaternions(flat.reshape(lead + (4,)))
 
 
-def skew(v) -> np.ndarray:
+def skew(v: npt.ArrayLike) -> np.ndarray:
     """Cross-product matrices ``[v]_x`` of vectors ``(..., 3)``, shape ``(..., 3, 3)``: ``[v]_x w = v x w``."""
     v = np.asarray(v, dtype=float)
     out = np.zeros(v.shape + (3,))

@@ -27,9 +27,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import ClassVar
+from typing import ClassVar, TypeVar, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from .board import STATION_BOARD, BoardGeometry
 from ..base import CalibrationError, brief
@@ -37,6 +38,8 @@ from ..base import Registry
 
 __all__ = ["MIN_CORNERS", "MIN_SPAN_FRACTION", "view_refusal", "CharucoBoard", "CircleGrid", "TargetKind", "TARGETS", "register_target", "target_kind", "target_to_dict",
            "target_from_dict", "parse_target_spec", "STATION_CHARUCO", "STATION_CIRCLES", "partial_ok", "describe"]
+
+_Board = TypeVar("_Board", bound=BoardGeometry)
 
 #: ArUco dictionaries OpenCV predefines (``cv2.aruco.DICT_*``), with their marker counts.
 DICTIONARIES = {f"DICT_{bits}X{bits}_{count}": count for bits in (4, 5, 6, 7) for count in (50, 100, 250, 1000)}
@@ -94,12 +97,12 @@ STATION_CHARUCO = CharucoBoard(STATION_BOARD.corners, STATION_BOARD.square_mm, 2
 STATION_CIRCLES = CircleGrid((4, 11), 40.0)
 
 
-def target_kind(board) -> str:
+def target_kind(board: object) -> str:
     """``checkerboard``, ``charuco``, ``circles`` (or a plug-in's kind) of a board geometry."""
     return getattr(board, "kind", "checkerboard")
 
 
-def partial_ok(board) -> bool:
+def partial_ok(board: object) -> bool:
     """True when a view may hold a subset of the board's corners (ids tell which): ChArUco, not the grids."""
     kind = target_kind(board)
     return kind in TARGETS and TARGETS[kind].partial
@@ -208,7 +211,7 @@ register_target(TargetKind("circles", "OpenCV's asymmetric circle grid, seen who
                            _circles))
 
 
-def target_from_dict(data) -> BoardGeometry:
+def target_from_dict(data: object) -> BoardGeometry:
     """A board from a description ``{type: ..., keys}`` (``type`` missing: checkerboard).
 
     Raises
@@ -228,27 +231,32 @@ def target_from_dict(data) -> BoardGeometry:
     return entry.parse({k: v for k, v in data.items() if k != "type"})
 
 
-def target_to_dict(board) -> dict:
+def target_to_dict(board: BoardGeometry) -> dict:
     """The description of a board (what session.yaml and the station config hold)."""
     kind = target_kind(board)
     if kind == "charuco":
-        return {"type": "charuco", "squares": list(board.squares), "square_mm": float(board.square_mm), "marker_mm": float(board.marker_mm),
-                "dictionary": board.dictionary, "legacy": bool(board.legacy)}
+        charuco = cast(CharucoBoard, board)  # the kind "charuco" is CharucoBoard's (its ClassVar)
+        if charuco.square_mm is None:
+            raise ValueError("a ChArUco board's description needs its square_mm")
+        return {"type": "charuco", "squares": list(charuco.squares), "square_mm": float(charuco.square_mm),
+                "marker_mm": float(charuco.marker_mm), "dictionary": charuco.dictionary, "legacy": bool(charuco.legacy)}
     out = {"type": kind, "corners": [int(c) for c in board.corners]}
     if board.square_mm is not None:
         out["square_mm"] = float(board.square_mm)
-    if kind == "circles" and board.diameter_mm is not None:
-        out["diameter_mm"] = float(board.diameter_mm)
+    diameter = cast(CircleGrid, board).diameter_mm if kind == "circles" else None  # "circles" is CircleGrid's kind
+    if diameter is not None:
+        out["diameter_mm"] = float(diameter)
     return out
 
 
-def describe(board) -> str:
+def describe(board: BoardGeometry) -> str:
     """One line naming a board: ``13x8 checkerboard of 30 mm``, ``ChArUco 14x9 squares of 30 mm, 22 mm DICT_5X5_100``."""
     kind = target_kind(board)
     if kind == "charuco":
-        sx, sy = board.squares
-        return (f"ChArUco {sx}x{sy} squares of {board.square_mm:g} mm, {board.marker_mm:g} mm markers {board.dictionary}"
-                + (" (legacy layout)" if board.legacy else ""))
+        charuco = cast(CharucoBoard, board)  # the kind "charuco" is CharucoBoard's (its ClassVar)
+        sx, sy = charuco.squares
+        return (f"ChArUco {sx}x{sy} squares of {charuco.square_mm:g} mm, {charuco.marker_mm:g} mm markers "
+                f"{charuco.dictionary}" + (" (legacy layout)" if charuco.legacy else ""))
     nx, ny = board.corners
     size = f" of {board.square_mm:g} mm" if board.square_mm else ""
     return f"{nx}x{ny} asymmetric circle grid{size}" if kind == "circles" else f"{nx}x{ny} checkerboard{size}"
@@ -304,7 +312,7 @@ def _spec_value(value: str):
         return value
 
 
-def with_square(board, square_mm: float):
+def with_square(board: _Board, square_mm: float) -> _Board:
     """The same board with another square size (any kind)."""
     return replace(board, square_mm=float(square_mm))
 
@@ -316,7 +324,7 @@ MIN_CORNERS = 6
 MIN_SPAN_FRACTION = 0.25
 
 
-def view_refusal(ids, board) -> str:
+def view_refusal(ids: npt.ArrayLike, board: BoardGeometry) -> str:
     """Why the corners ``ids`` (target indices) of ``board`` cannot fix a board pose ("" when they can)."""
     ids = np.asarray(ids, int)
     if len(ids) < MIN_CORNERS:

@@ -7,6 +7,7 @@ Lengths are millimetres throughout the package; a pose written to disk is
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 from .rotations import canonical_quaternions, check_quaternions, matrix_from_quaternion, quaternion_from_matrix
 
@@ -22,7 +23,7 @@ __all__ = [
 ]
 
 
-def transform_from_rotation_translation(rotation, translation) -> np.ndarray:
+def transform_from_rotation_translation(rotation: npt.ArrayLike, translation: npt.ArrayLike) -> np.ndarray:
     """Stack rotation matrices and translations into 4x4 transforms.
 
     Parameters
@@ -44,7 +45,7 @@ def transform_from_rotation_translation(rotation, translation) -> np.ndarray:
     return out
 
 
-def transform_from_pose(position_mm, quaternion_wxyz) -> np.ndarray:
+def transform_from_pose(position_mm: npt.ArrayLike, quaternion_wxyz: npt.ArrayLike) -> np.ndarray:
     """4x4 transform from a position (mm) and a unit quaternion (w, x, y, z).
 
     Parameters
@@ -70,7 +71,7 @@ def transform_from_pose(position_mm, quaternion_wxyz) -> np.ndarray:
     return transform_from_rotation_translation(matrix_from_quaternion(q), position)
 
 
-def pose_from_transform(transform) -> dict:
+def pose_from_transform(transform: npt.ArrayLike) -> dict:
     """The on-disk pose dictionary of one 4x4 transform (``w >= 0``)."""
     transform = np.asarray(transform, dtype=float)
     q = canonical_quaternions(quaternion_from_matrix(transform[:3, :3]))
@@ -80,7 +81,7 @@ def pose_from_transform(transform) -> dict:
     }
 
 
-def invert_transforms(transform) -> np.ndarray:
+def invert_transforms(transform: npt.ArrayLike) -> np.ndarray:
     """Inverse of rigid transforms, ``(..., 4, 4)``, using ``R^T`` (no general inverse)."""
     transform = np.asarray(transform, dtype=float)
     rotation_t = np.swapaxes(transform[..., :3, :3], -1, -2)
@@ -88,14 +89,14 @@ def invert_transforms(transform) -> np.ndarray:
     return transform_from_rotation_translation(rotation_t, translation)
 
 
-def transform_points(transform, points) -> np.ndarray:
+def transform_points(transform: npt.ArrayLike, points: npt.ArrayLike) -> np.ndarray:
     """Apply transforms ``(..., 4, 4)`` to points ``(..., m, 3)``; returns ``(..., m, 3)``."""
     transform = np.asarray(transform, dtype=float)
     points = np.asarray(points, dtype=float)
     return np.einsum("...ij,...mj->...mi", transform[..., :3, :3], points) + transform[..., None, :3, 3]
 
 
-def rotation_error_deg(transform_a, transform_b) -> np.ndarray:
+def rotation_error_deg(transform_a: npt.ArrayLike, transform_b: npt.ArrayLike) -> np.ndarray:
     """Geodesic angle in degrees between the rotations of two transforms (or 3x3 rotations)."""
     ra = np.asarray(transform_a, dtype=float)[..., :3, :3]
     rb = np.asarray(transform_b, dtype=float)[..., :3, :3]
@@ -110,14 +111,14 @@ def rotation_error_deg(transform_a, transform_b) -> np.ndarray:
     return np.degrees(np.arctan2(sin, cos))
 
 
-def translation_error_mm(transform_a, transform_b) -> np.ndarray:
+def translation_error_mm(transform_a: npt.ArrayLike, transform_b: npt.ArrayLike) -> np.ndarray:
     """Euclidean distance in mm between the translations of two transforms."""
     ta = np.asarray(transform_a, dtype=float)[..., :3, 3]
     tb = np.asarray(transform_b, dtype=float)[..., :3, 3]
     return np.linalg.norm(ta - tb, axis=-1)
 
 
-def rigid_defect(matrix, tolerance: float = 1e-3) -> str | None:
+def rigid_defect(matrix: npt.ArrayLike, tolerance: float = 1e-3) -> str | None:
     """Why ``matrix`` is not a 4x4 rigid transform, in a few words; None when it is one.
 
     Parameters

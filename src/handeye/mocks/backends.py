@@ -59,6 +59,14 @@ def _has_mock(backend) -> bool:
     return backend.mock is not None
 
 
+def _mock_of(name: str) -> MockServer:
+    """The mock of a protocol :func:`mock_protocols` names (those have one)."""
+    mock = CONTROLLERS[name].mock
+    if mock is None:
+        raise ValueError(f"the controller back end {name!r} has no mock")
+    return mock
+
+
 def mock_protocols(loaded: bool = False) -> tuple[str, ...]:
     """The controller back ends a mock serves, in registry order (plug-ins that bring a mock included;
     each plug-in is loaded, under the time bound, to know); with ``loaded``, of those loaded so far only
@@ -81,7 +89,7 @@ def mock_settings(loaded: bool = False) -> dict:
     loaded so far only (:func:`mock_protocols`)."""
     out: dict = {}
     for name in mock_protocols(loaded):
-        for setting in CONTROLLERS[name].mock.settings():
+        for setting in _mock_of(name).settings():
             first, names = out.get(setting.key, (setting, ()))
             out[setting.key] = (first, names + (name,))
     return out
@@ -106,7 +114,10 @@ class MockVariant(str):
     opens the same client back end, with ``label`` (``rws2``) and ``options`` (``{"generation": 2}``)
     that :func:`~handeye.mocks.controller.start_mock_controller` passes to the server."""
 
-    def __new__(cls, protocol: str, label: str, options: dict):
+    label: str
+    options: dict
+
+    def __new__(cls, protocol: str, label: str, options: dict) -> MockVariant:
         obj = super().__new__(cls, protocol)
         obj.label, obj.options = label, dict(options)
         return obj
@@ -115,11 +126,11 @@ class MockVariant(str):
         return self.label
 
 
-def mock_variants() -> tuple:
+def mock_variants() -> tuple[str, ...]:
     """Every mock protocol, and each variant of a mock that has them (RWS 1.0 and 2.0): what the
     contract tests run on. Plain names for mocks without variants, :class:`MockVariant` otherwise."""
     out = []
     for name in mock_protocols():
-        variants = CONTROLLERS[name].mock.variants
+        variants = _mock_of(name).variants
         out += [MockVariant(name, label, options) for label, options in variants] if variants else [name]
     return tuple(out)

@@ -30,16 +30,21 @@ from __future__ import annotations
 import threading
 import time
 from dataclasses import dataclass, replace
-from typing import Callable
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Callable
 
 import cv2
 import numpy as np
+import numpy.typing as npt
 
 from ..drivers import decode_xb3_frame, pack_rgb8
 from ..drivers import CameraError
 from ..drivers import Camera, StereoFrame
 from ..drivers import StereoModel, nominal_xb3_model
 from .world import Lighting, PrintedBoard, hard_lighting
+
+if TYPE_CHECKING:
+    from .printed_targets import Occlusion
 
 __all__ = ["RenderOptions", "ViewRenderer", "StereoRenderer", "MockCamera", "render_views", "render_xb3_frame",
            "hard_options"]
@@ -108,7 +113,7 @@ class ViewRenderer:
         ``(width, height)``.
     """
 
-    def __init__(self, camera_matrix, dist_coeffs, image_size):
+    def __init__(self, camera_matrix: npt.ArrayLike, dist_coeffs: npt.ArrayLike, image_size: Sequence[int]):
         self.k = np.asarray(camera_matrix, float)
         self.d = np.asarray(dist_coeffs, float).ravel()
         self.size = (int(image_size[0]), int(image_size[1]))
@@ -126,10 +131,12 @@ class ViewRenderer:
             xs, ys = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
             pts = np.stack([xs, ys], axis=-1).reshape(-1, 1, 2)
             crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 30, 1e-12)
-            self._ray_cache = cv2.undistortPointsIter(pts, self.k, self.d, None, None, crit).reshape(h, w, 2)
+            # R and P None (identity: normalised coordinates), as OpenCV documents; its stubs do not allow None
+            rays = cv2.undistortPointsIter(pts, self.k, self.d, None, None, crit)  # pyright: ignore[reportCallIssue, reportArgumentType]
+            self._ray_cache = rays.reshape(h, w, 2)
         return self._ray_cache
 
-    def _rays(self, x0, x1, y0, y1):
+    def _rays(self, x0: int, x1: int, y0: int, y1: int) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """Rays ``(xn, yn)`` (float32) of the pixel block, and the constant ray Jacobian per pixel
         for undistorted cameras (``None`` for distorted ones: use the block's differences)."""
         if not self.distorted:
@@ -144,7 +151,8 @@ class ViewRenderer:
         return block[..., 0].astype(np.float32), block[..., 1].astype(np.float32), None
 
     # ---------------------------------------------------------------- scene
-    def render(self, target2view: np.ndarray, board: PrintedBoard, options: RenderOptions, rng, band=None) -> np.ndarray:
+    def render(self, target2view: np.ndarray, board: PrintedBoard, options: RenderOptions, rng: np.random.Generator,
+               band: tuple[float, float] | None = None) -> np.ndarray:
         """Ideal (noise-free, unblurred) image ``(h, w)`` float32 of the board seen from ``target2view``
         (``band``: ``(u0, u1)`` mm of the board covered by an occluder, ``mocks.printed_targets``)."""
         image = self._render(target2view, board, options, rng, band)
@@ -154,9 +162,11 @@ class ViewRenderer:
 
     def _vignetting(self, lighting: Lighting) -> np.ndarray:
         key = ("vignetting", lighting.vignetting)
-        if self._vig_key != key:
-            self._vig_key, self._vig = key, lighting.in_image(*self.size)
-        return self._vig
+        vignetting = self._vig
+        if self._vig_key != key or vignetting is None:
+            vignetting = lighting.in_image(*self.size)
+            self._vig_key, self._vig = key, vignetting
+        return vignetting
 
     def _render(self, target2view, board, options, rng, band=None) -> np.ndarray:
         w, h = self.size
@@ -187,7 +197,7 @@ class ViewRenderer:
         block = np.where(labels == 0, bg, levels[labels])
         lighting = options.lighting
         lit = lighting is not None and not lighting.is_even
-        if lit:  # the light on the sheet, per pixel centre (smooth at the scale of a pixel)
+        if lit and lighting is not None:  # the light on the sheet, per pixel centre (smooth at the scale of a pixel)
             u, v = np.broadcast_arrays(u, v)
             gain, added = lighting.on_board(u, v, board)
             block = np.where(labels == 0, block, block * gain + added)
@@ -325,7 +335,7 @@ def _sensor(image: np.ndarray, options: RenderOptions, rng) -> np.ndarray:
     np.sqrt(sigma, out=sigma)
     noise = np.empty(image.shape, np.float32)
     cv2.setRNGSeed(int(rng.integers(0, 2**31 - 1)))
-    cv2.randn(noise, 0.0, 1.0)
+    cv2.randn(noise, 0.0, 1.0)  # pyright: ignore[reportCallIssue, reportArgumentType]  # scalar mean and sigma, as OpenCV takes them
     noise *= sigma
     noise += image
     np.maximum(noise, 0.0, out=noise)
@@ -336,12 +346,12 @@ class StereoRenderer:
     """Renders the three XB3 views of a board through a :class:`StereoModel` (ray maps kept per camera)."""
 
     def __init__(self, model: StereoModel | None = None, board: PrintedBoard | None = None,
-                 options: RenderOptions | None = None, seed=None):
+                 options: RenderOptions | None = None, seed: int | Sequence[int] | None = None):
         self.model = model or nominal_xb3_model()
         self.board = board or PrintedBoard()
         self.options = options or RenderOptions()
         self.rng = np.random.default_rng(seed)
-        self._views = {}
+        self._views: dict[str, ViewRenderer] = {}
 
     def _renderer(self, view: str) -> ViewRenderer:
         if view not in self._views:
@@ -350,14 +360,14 @@ class StereoRenderer:
         return self._views[view]
 
     #: ``(u0, u1)`` mm of the board covered by an occluder in the next renders (``mock.occlude``), or None.
-    band = None
+    band: tuple[float, float] | None = None
 
     def ideal(self, target2cam: np.ndarray, view: str) -> np.ndarray:
         """Noise-free, unblurred float image of one view."""
         _, _, r, t = self.model.view(view)
         return self._renderer(view).render(_view_pose(target2cam, r, t), self.board, self.options, self.rng, self.band)
 
-    def planes(self, target2cam: np.ndarray, views=VIEWS, options: RenderOptions | None = None) -> dict:
+    def planes(self, target2cam: np.ndarray, views: Sequence[str] = VIEWS, options: RenderOptions | None = None) -> dict:
         """Sensor planes (uint8; GBRG mosaics for a colour head) of ``views``."""
         opts = options or self.options
         return {v: _sensor(self.ideal(target2cam, v), opts, self.rng) for v in views}
@@ -384,10 +394,13 @@ def _jpeg(image: np.ndarray, quality: int) -> np.ndarray:
     if not quality:
         return image
     ok, data = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
-    return cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
+    decoded = cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
+    if not ok or decoded is None:
+        raise ValueError(f"the JPEG round trip at quality {quality} failed")
+    return np.asarray(decoded)
 
 
-def hard_options(rng, board: PrintedBoard | None = None, *, colour: bool = False) -> RenderOptions:
+def hard_options(rng: np.random.Generator, board: PrintedBoard | None = None, *, colour: bool = False) -> RenderOptions:
     """Random render options made hard the way real images are: defocus blur (sigma 0.6-1.6 px),
     uneven light with vignetting, glare or a shadow half of the time (:func:`~handeye.mocks.world.hard_lighting`),
     more sensor noise (read noise 1.5-4 DN), a darker or brighter exposure, and JPEG at quality 60-90."""
@@ -398,14 +411,14 @@ def hard_options(rng, board: PrintedBoard | None = None, *, colour: bool = False
                          jpeg_quality=int(rng.integers(60, 91)))
 
 
-def render_views(target2cam, model: StereoModel | None = None, board: PrintedBoard | None = None,
-                 options: RenderOptions | None = None, seed=None, views=VIEWS) -> dict:
+def render_views(target2cam: npt.ArrayLike, model: StereoModel | None = None, board: PrintedBoard | None = None,
+                 options: RenderOptions | None = None, seed: int | None = None, views: Sequence[str] = VIEWS) -> dict:
     """One-shot rendering: sensor planes of ``views`` for a board at ``target2cam``."""
     return StereoRenderer(model, board, options, seed).planes(np.asarray(target2cam, float), views)
 
 
-def render_xb3_frame(target2cam, model: StereoModel | None = None, board: PrintedBoard | None = None,
-                     options: RenderOptions | None = None, seed=None) -> np.ndarray:
+def render_xb3_frame(target2cam: npt.ArrayLike, model: StereoModel | None = None, board: PrintedBoard | None = None,
+                     options: RenderOptions | None = None, seed: int | None = None) -> np.ndarray:
     """One-shot rendering of a packed XB3 3-sensor RGB8 frame."""
     return StereoRenderer(model, board, options, seed).xb3_frame(np.asarray(target2cam, float))
 
@@ -442,9 +455,11 @@ class MockCamera(Camera):
     name = "mock"
     simulated = True
 
-    def __init__(self, model: StereoModel | None = None, board: PrintedBoard | None = None, target2base=None,
-                 cam2base=None, options: RenderOptions | None = None, seed=None, serial: int = 7_654_321,
-                 output: str = "bgr", render_centre: bool = True, frame_period_s: float = 0.0, occlude=None):
+    def __init__(self, model: StereoModel | None = None, board: PrintedBoard | None = None,
+                 target2base: npt.ArrayLike | None = None, cam2base: npt.ArrayLike | PoseSource | None = None,
+                 options: RenderOptions | None = None, seed: int | Sequence[int] | None = None, serial: int = 7_654_321,
+                 output: str = "bgr", render_centre: bool = True, frame_period_s: float = 0.0,
+                 occlude: Occlusion | None = None):
         self.renderer = StereoRenderer(model, board, options, seed)
         self._occlusion = None
         if occlude is not None:  # mock.occlude: a band over the board at a share of the postures
@@ -472,7 +487,8 @@ class MockCamera(Camera):
     def board(self) -> PrintedBoard:
         return self.renderer.board
 
-    def set_scene(self, *, target2base=None, cam2base=None) -> None:
+    def set_scene(self, *, target2base: npt.ArrayLike | None = None,
+                  cam2base: npt.ArrayLike | PoseSource | None = None) -> None:
         """Change the board pose and/or the camera pose (a 4x4 matrix or a callable returning one)."""
         with self._lock:
             if target2base is not None:

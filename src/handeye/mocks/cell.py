@@ -25,11 +25,13 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import socket
 import socketserver
 import threading
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -39,7 +41,11 @@ from ..drivers import Camera, StereoFrame
 from ..rapid import RapidError
 from ..rapid import ModuleSource
 from .controller.sources import MODULE_SUFFIXES, ControllerProgram
-from .side_port import TOO_LONG, SidePort, read_line
+from .side_port import TOO_LONG, SidePort, _Server, read_line
+
+if TYPE_CHECKING:
+    from .controller import RapidControllerServer
+    from .station import MockStationSpec
 
 __all__ = ["CellService", "CellCamera", "mock_camera", "cell_info", "parse_address", "MAX_MESSAGE"]
 
@@ -60,8 +66,10 @@ def parse_address(text: str, what: str = "camera.mock_arm") -> tuple[str, int]:
 
 # ---------------------------------------------------------------------------------------- the mock's side
 class _Handler(socketserver.StreamRequestHandler):
+    server: _Server  # the side port's
+
     def handle(self) -> None:
-        service = self.server.service
+        service = cast(CellService, self.server.service)  # the camera port's server serves its CellService
         while True:
             line = read_line(self.rfile, MAX_MESSAGE)
             if not line:
@@ -91,7 +99,8 @@ class CellService(SidePort):
         The cell: hidden mount, board, kinematic errors, seed (default: the demo's).
     """
 
-    def __init__(self, controller, host: str = "127.0.0.1", port: int = 0, spec=None):
+    def __init__(self, controller: RapidControllerServer, host: str = "127.0.0.1", port: int = 0,
+                 spec: MockStationSpec | None = None):
         from .station import MockStationSpec, flange_camera
 
         self.controller = controller
@@ -125,8 +134,9 @@ class CellService(SidePort):
     def info(self) -> dict:
         c = self.controller
         where = {"protocol": c.protocol, "host": c.host, "port": c.port}
-        if getattr(c, "url", None) is not None:  # a line behind a URL (pyserial's socket://HOST:PORT)
-            where["url"] = c.url
+        url = getattr(c, "url", None)
+        if url is not None:  # a line behind a URL (pyserial's socket://HOST:PORT)
+            where["url"] = url
         w, h = self.camera.model.image_size
         return {"ok": True, "mock": True, "what": "handeye mock controller", "controller": where,
                 "camera": {"model": "Bumblebee XB3 (mock)", "serial": self.camera.serial, "width": w, "height": h,
@@ -258,16 +268,18 @@ class CellCamera(Camera):
         frame.info = {"model": f"Bumblebee XB3 (mock, rendered by handeye mock controller at {self.mock_arm})"}
         return frame
 
-    def load_program(self, rapid_dir) -> int:
+    def load_program(self, rapid_dir: str | os.PathLike[str]) -> int:
         """Load the modules of ``rapid_dir`` into the mock controller's task (what the operator does on a
         real controller); returns its posture count. Raises CameraError naming a module the mock refused."""
         files = sorted(p for p in Path(rapid_dir).iterdir() if p.suffix.lower() in MODULE_SUFFIXES)
         modules = [{"source": p.name, "text": p.read_text(encoding="latin-1")} for p in files]
+        if self._link is None:
+            raise CameraError("mock: the rehearsal camera is not connected: call connect() or use it in a with-block")
         reply, _ = self._link.ask({"cmd": "load", "modules": modules}, 30.0)
         return int(reply["postures"])
 
 
-def mock_camera(mock_arm: str | None = None, **options):
+def mock_camera(mock_arm: str | None = None, **options: Any) -> Camera:  # options: the camera's own
     """The ``mock`` camera back end: the rehearsal camera of a standalone mock controller when
     ``mock_arm`` is given, else the embedded station's simulated XB3 (:class:`~handeye.mocks.camera.MockCamera`)."""
     if mock_arm:

@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 __all__ = ["StationFaults"]
@@ -61,7 +62,7 @@ class StationFaults:
         """The board in base after the change, shape (4, 4)."""
         return _turned(board2base, self.board_shift_mm, self.board_turn_deg)
 
-    def axes(self, joints_deg) -> np.ndarray:
+    def axes(self, joints_deg: npt.ArrayLike) -> np.ndarray:
         """Where the axes physically stand for the controller angles ``joints_deg`` (dof,)."""
         joints = np.asarray(joints_deg, float)
         return joints + np.asarray(self.joint_zero_deg, float)[: joints.shape[-1]]

@@ -16,10 +16,17 @@ postures are exactly 9, and the same posture revisited is occluded the same way.
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, cast
 
 import cv2
 import numpy as np
+
+from ..geometry import BoardGeometry, CharucoBoard
+
+if TYPE_CHECKING:
+    from .world import PrintedBoard
 
 __all__ = ["PX_PER_MM", "Occlusion", "charuco_print", "printed_labels", "occluded", "OcclusionPicker"]
 
@@ -47,14 +54,14 @@ def _print(geometry, px_per_mm: float) -> np.ndarray:
     return board.generateImage(size, marginSize=0, borderBits=1)
 
 
-def charuco_print(geometry, px_per_mm: float = PX_PER_MM) -> np.ndarray:
+def charuco_print(geometry: CharucoBoard, px_per_mm: float = PX_PER_MM) -> np.ndarray:
     """OpenCV's image ``(h, w)`` uint8 of a :class:`~handeye.geometry.targets.CharucoBoard` (squares only)."""
     return _print(geometry, float(px_per_mm))  # the geometry is a frozen dataclass: the cache key
 
 
-def printed_labels(u, v, front, board) -> np.ndarray:
+def printed_labels(u: np.ndarray, v: np.ndarray, front: np.ndarray, board: PrintedBoard) -> np.ndarray:
     """Labels (0 background, 1 white, 2 black) of a ChArUco sheet at board coordinates ``(u, v)`` mm."""
-    image = charuco_print(board.geometry)
+    image = charuco_print(cast(CharucoBoard, board.geometry))  # called for a sheet of kind charuco only (camera._labels)
     su0, su1, sv0, sv1 = board.sheet_bounds()
     sq = float(board.square_mm)
     on_sheet = front & (u >= su0) & (u <= su1) & (v >= sv0) & (v <= sv1)
@@ -66,7 +73,7 @@ def printed_labels(u, v, front, board) -> np.ndarray:
     return on_sheet.astype(np.uint8) + (black & on_sheet).astype(np.uint8)
 
 
-def occluded(labels: np.ndarray, u, band) -> np.ndarray:
+def occluded(labels: np.ndarray, u: np.ndarray, band: tuple[float, float] | None) -> np.ndarray:
     """``labels`` with the band ``(u0, u1)`` (mm along the board's x) covered by the occluder."""
     if band is None:
         return labels
@@ -77,13 +84,13 @@ def occluded(labels: np.ndarray, u, band) -> np.ndarray:
 class OcclusionPicker:
     """Which camera poses see the band, and where (see the module docstring)."""
 
-    def __init__(self, occlusion: Occlusion, board, seed):
+    def __init__(self, occlusion: Occlusion, board: BoardGeometry, seed: int | Sequence[int] | None):
         self.occlusion = occlusion
         self.board = board
         self.seed = 0 if seed is None else seed
         self._seen: dict = {}
 
-    def band(self, cam2base: np.ndarray):
+    def band(self, cam2base: np.ndarray) -> tuple[float, float] | None:
         """``(u0, u1)`` mm of the band this camera pose sees, or None."""
         key = tuple(np.round(np.asarray(cam2base, float)[:3, 3], 0).tolist())
         if key not in self._seen:
@@ -95,8 +102,10 @@ class OcclusionPicker:
 
     def _draw(self, k: int):
         rng = np.random.default_rng([*np.atleast_1d(self.seed).tolist(), 37, k])
-        nx = int(self.board.corners[0])
-        length = (nx + 1) * float(self.board.square_mm)  # the squares' extent along x
+        nx, square = int(self.board.corners[0]), self.board.square_mm
+        if square is None:
+            raise ValueError("an occluded board needs its square size (square_mm)")
+        length = (nx + 1) * float(square)  # the squares' extent along x
         width = rng.uniform(*self.occlusion.band) * length
-        start = -float(self.board.square_mm) + rng.uniform(0.0, length - width)
+        start = -float(square) + rng.uniform(0.0, length - width)
         return float(start), float(start + width)

@@ -25,9 +25,11 @@ from __future__ import annotations
 import threading
 import time
 from dataclasses import replace
-from typing import Callable
+from collections.abc import Sequence
+from typing import Callable, Protocol
 
 import numpy as np
+import numpy.typing as npt
 
 from ..robot import DEFAULT_CARRIED
 from ..robot import CellGuard
@@ -45,10 +47,26 @@ DEFAULT_TOOL = ToolData((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0), 1.0, (0.0, 0.0, 0
 SELF_ONLY = "self-collision only"
 
 
-def self_guard(model: RobotModel, carried=DEFAULT_CARRIED) -> CellGuard:
+def self_guard(model: RobotModel, carried: Sequence = DEFAULT_CARRIED) -> CellGuard:
     """The arm against itself and what its flange carries, no keep-out volume: touching is refused (margin
     0), moves sampled every 5 mm of motion."""
     return CellGuard(model, [], carried, margin_mm=0.0, step_mm=5.0)
+
+
+class CellViolation(Protocol):
+    """What the cell check finds (:class:`handeye.robot.clearance.Violation`): who came too close to what, where."""
+
+    @property
+    def body(self) -> str: ...
+    @property
+    def volume(self) -> str: ...
+    @property
+    def at(self) -> float: ...
+    @property
+    def kind(self) -> str: ...
+    @property
+    def reason(self) -> str: ...
+    def describe(self) -> str: ...
 
 
 class ZoneViolation(HandEyeError):
@@ -61,7 +79,7 @@ class ZoneViolation(HandEyeError):
     target_deg : ndarray, shape (dof,)
     """
 
-    def __init__(self, violation, target_deg, posture: int = 0):
+    def __init__(self, violation: CellViolation, target_deg: npt.ArrayLike, posture: int = 0):
         where = f"posture {posture}" if posture else "the target"
         if violation.kind == "self":
             text = (f"self-collision: {violation.reason} on the way to {where} ({violation.describe()} at "
@@ -111,8 +129,9 @@ class SimulatedRobot:
         Where :attr:`tool` reads the camera's tool data (the program's PERS tooldata).
     """
 
-    def __init__(self, postures, model: str = "IRB1400", speed_fraction: float = 0.25, time_scale: float = 1.0,
-                 start_joints=None, clock: Callable[[], float] = time.monotonic, guard=SELF_ONLY):
+    def __init__(self, postures: npt.ArrayLike, model: str = "IRB1400", speed_fraction: float = 0.25,
+                 time_scale: float = 1.0, start_joints: npt.ArrayLike | None = None,
+                 clock: Callable[[], float] = time.monotonic, guard: CellGuard | str | None = SELF_ONLY):
         self.model = load_robot(model)
         self.postures = np.array(postures, dtype=float).reshape(-1, self.model.dof)
         for i, row in enumerate(self.postures, start=1):
@@ -145,10 +164,12 @@ class SimulatedRobot:
         self.moves = 0
         #: Simulated seconds of motion so far (what the moves take at full time scale).
         self.motion_s = 0.0
-        self.guard = self_guard(self.model) if isinstance(guard, str) and guard == SELF_ONLY else guard
+        if isinstance(guard, str) and guard != SELF_ONLY:
+            raise ValueError(f"guard must be a CellGuard, SELF_ONLY or None; got {guard!r}")
+        self.guard: CellGuard | None = self_guard(self.model) if isinstance(guard, str) else guard
         self.refusals: list[ZoneViolation] = []
 
-    def load_program(self, postures) -> None:
+    def load_program(self, postures: npt.ArrayLike) -> None:
         """Replace the approved postures, as loading a newly generated RAPID program does.
 
         Raises
@@ -165,12 +186,12 @@ class SimulatedRobot:
             self.postures = plan
 
     # ------------------------------------------------------------------ motion
-    def motion_time(self, target_deg) -> float:
+    def motion_time(self, target_deg: npt.ArrayLike) -> float:
         """Simulated seconds of a synchronised move from the current configuration to ``target_deg``."""
         delta = np.abs(np.asarray(target_deg, dtype=float) - self.current_joints)
         return float(np.max(delta / (self.speed_fraction * self.model.max_speed_deg_s)))
 
-    def start_move(self, target_deg, posture: int = 0) -> float:
+    def start_move(self, target_deg: npt.ArrayLike, posture: int = 0) -> float:
         """Start a synchronised move; returns its wall-clock duration in seconds.
 
         Raises
@@ -182,7 +203,7 @@ class SimulatedRobot:
         """
         return self.start_path(np.asarray(target_deg, dtype=float)[None], posture)
 
-    def start_path(self, configurations, posture: int = 0) -> float:
+    def start_path(self, configurations: npt.ArrayLike, posture: int = 0) -> float:
         """Start a move through the joint configurations ``(n, dof)`` in turn (each step synchronised and
         joint-interpolated; a ``MoveL`` gives the configurations of its samples along the TCP line);
         returns its wall-clock duration in seconds.
@@ -219,7 +240,7 @@ class SimulatedRobot:
             self.moves += 1
             return self._duration
 
-    def jog(self, target_deg) -> tuple[float, object]:
+    def jog(self, target_deg: npt.ArrayLike) -> tuple[float, CellViolation | None]:
         """Jog towards ``target_deg`` (the operator's joystick, here axis-synchronised at the arm's speed);
         returns ``(wall-clock duration, violation or None)``.
 
@@ -239,17 +260,19 @@ class SimulatedRobot:
         with self._lock:
             self._settle()
             start = self._joints_at(self._clock())
+            guard = self.guard
             free = self._leaving_fraction(start, target)  # within the margin already: jogging out is allowed
-            if free is None:
-                return 0.0, self.guard.posture_violation(start)
+            if free is None:  # (only with a guard: without one every jog is clear)
+                return 0.0, guard.posture_violation(start) if guard is not None else None
             clear_from = start + free * (target - start)
             violation = self.path_violation(np.vstack([clear_from, target]))
             if violation is None and free == 0.0:
                 return self.start_move(target), None
             at = 1.0 if violation is None else free + violation.at * (1.0 - free)
-            while violation is not None and at < 1.0 and self.guard.posture_violation(start + at * (target - start)) is None:
+            while (violation is not None and guard is not None and at < 1.0
+                   and guard.posture_violation(start + at * (target - start)) is None):
                 at = min(1.0, at + 0.005)
-            guard, self.guard = self.guard, None  # where supervision stops the arm: the move up to there
+            self.guard = None  # where supervision stops the arm: the move up to there
             try:
                 return self.start_move(start + at * (target - start)), violation
             finally:
@@ -265,7 +288,7 @@ class SimulatedRobot:
                 return float(at)
         return None
 
-    def path_violation(self, configurations):
+    def path_violation(self, configurations: npt.ArrayLike) -> CellViolation | None:
         """The cell check of a path: the first place where the arm, moving joint-interpolated from each
         configuration of ``configurations`` ``(n, dof)`` to the next, comes closer to a volume of the cell
         (``guard``) than its margin; a :class:`~handeye.robot.clearance.Violation` whose ``at`` is

@@ -10,23 +10,41 @@ quietly, never with a traceback on the mock's stderr.
 
 from __future__ import annotations
 
+import enum
 import logging
+import socket
 import socketserver
 import sys
 import threading
+from typing import TYPE_CHECKING, Final, Literal, Protocol
+
+if TYPE_CHECKING:
+    from typing_extensions import Self
 
 __all__ = ["SidePort", "TOO_LONG", "read_line"]
 
 log = logging.getLogger(__name__)
 
+class _TooLong(enum.Enum):
+    """The type of :data:`TOO_LONG`: a single value, so that ``line is TOO_LONG`` tells a type checker which it is."""
+
+    TOO_LONG = "too long"
+
+
 #: What :func:`read_line` returns for a line longer than its limit (the whole line read and dropped).
-TOO_LONG = object()
+TOO_LONG: Final = _TooLong.TOO_LONG
+
+
+class LineStream(Protocol):
+    """A binary stream read by lines (a connection's ``rfile``)."""
+
+    def readline(self, size: int = -1, /) -> bytes: ...
 
 #: A client's hang-up, seen by the server as one of these (nothing to report).
 _HANG_UPS = (ConnectionError, TimeoutError)
 
 
-def read_line(stream, limit: int):
+def read_line(stream: LineStream, limit: int) -> bytes | Literal[_TooLong.TOO_LONG]:
     """The next request line of ``stream`` (bytes with its newline; ``b""`` at the end of the stream), or
     :data:`TOO_LONG` when it has more than ``limit`` bytes before its newline: the rest of that line is
     read and dropped (at most ``limit`` bytes held at a time), so its tail is never taken as a request.
@@ -51,8 +69,9 @@ class _Server(socketserver.ThreadingTCPServer):
     daemon_threads = True
     allow_reuse_address = True
     block_on_close = True
+    service: SidePort  # set by SidePort.__init__: what the handlers serve
 
-    def handle_error(self, request, client_address) -> None:
+    def handle_error(self, request: socket.socket, client_address: tuple[str, int]) -> None:
         """A client that hung up early ends its connection without a word; anything else is the mock's
         fault, logged with its traceback."""
         if isinstance(sys.exc_info()[1], _HANG_UPS):
@@ -74,14 +93,14 @@ class SidePort:
         The thread's name, followed by the port.
     """
 
-    def __init__(self, handler, host: str, port: int, name: str):
+    def __init__(self, handler: type[socketserver.BaseRequestHandler], host: str, port: int, name: str):
         self._server = _Server((host, port), handler, bind_and_activate=True)
         self._server.service = self
         self.host, self.port = self._server.server_address[:2]
         self._name = name
         self._thread: threading.Thread | None = None
 
-    def start(self):
+    def start(self) -> Self:
         """Serve in a daemon thread; returns self."""
         self._thread = threading.Thread(target=self._server.serve_forever, kwargs={"poll_interval": 0.1},
                                         name=f"{self._name}-{self.port}", daemon=True)

@@ -22,8 +22,10 @@ What makes it honest:
 
 from __future__ import annotations
 
+import os
 import secrets
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -39,10 +41,13 @@ from ..drivers import DEFAULT_PROTOCOL
 from ..drivers import ToolData
 from .arm_truth import ArmDeviations, true_arm
 from .camera import MockCamera, RenderOptions
-from .controller import start_mock_controller
+from .controller import ControllerProgram, RapidControllerServer, start_mock_controller
 from .drift import StationFaults
 from .robot import SimulatedRobot
 from .world import PrintedBoard
+
+if TYPE_CHECKING:
+    from .printed_targets import Occlusion
 
 __all__ = ["DEFAULT_BOARD", "DEFAULT_MOUNT", "DEFAULT_START", "MockStation", "MockStationSpec", "perturbed_robot", "cell_guard",
            "flange_camera"]
@@ -143,7 +148,7 @@ class MockStationSpec:
     state_file: str | None = None
     arm: ArmDeviations | None = None
     #: ``mock.occlude``: a band over the board at a share of the postures (``mocks.printed_targets.Occlusion``).
-    occlude: object = None
+    occlude: Occlusion | None = None
 
 
 class MockStation:
@@ -164,7 +169,7 @@ class MockStation:
         start = np.asarray(spec.start_joints_deg, float)
         self.arm = SimulatedRobot([start], model=spec.robot, speed_fraction=spec.speed_fraction,
                                   time_scale=spec.time_scale, start_joints=start, guard=self._cell_guard(spec))
-        self.server = None
+        self.server: RapidControllerServer | None = None
         # The station's key, or one made for this run: the server and the PC's options share it.
         self._write_key = spec.write_key if spec.write_key is not None else secrets.token_hex(16)
         self.state = read_state(spec.state_file)
@@ -194,22 +199,27 @@ class MockStation:
     def __enter__(self) -> MockStation:
         return self.start()
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.stop()
 
     def controller_options(self) -> dict:
         """Keyword arguments for ``drivers.controller.open_controller(spec.protocol, ...)`` (write key included)."""
-        return dict(self.server.client_options())
+        return dict(self._live_server().client_options())
 
     @property
     def write_key(self) -> str:
         """The key its controller's HeKey.sys holds (the station's, or one made for this run)."""
         return self._write_key
 
-    def load_program(self, program) -> None:
+    def load_program(self, program: ControllerProgram | str | os.PathLike[str]) -> None:
         """Load a generated program (a folder of modules, e.g. ``SESSION/rapid``) into the controller and
         run it; HeKey.sys stays loaded."""
-        self.server.load_program(program)
+        self._live_server().load_program(program)
+
+    def _live_server(self) -> RapidControllerServer:
+        if self.server is None:
+            raise RuntimeError("the mock station is not started: call start() or use it in a with-block")
+        return self.server
 
 
 def cell_guard(spec: MockStationSpec, robot: RobotModel | None = None) -> CellGuard:
@@ -225,7 +235,7 @@ def cell_guard(spec: MockStationSpec, robot: RobotModel | None = None) -> CellGu
                      margin_mm=0.0, step_mm=5.0, tcp_zones=zones)
 
 
-def read_state(path) -> dict:
+def read_state(path: str | os.PathLike[str] | None) -> dict:
     """What the embedded controller kept from its earlier runs (``state_file``): ``runs`` and ``tool``
     (its PERS tool data, a ToolData, or None); a missing or unreadable file is a fresh controller."""
     import json
@@ -244,7 +254,7 @@ def read_state(path) -> dict:
         return fresh
 
 
-def write_state(path, tool: ToolData, runs: int) -> None:
+def write_state(path: str | os.PathLike[str], tool: ToolData, runs: int) -> None:
     """Keep the controller's PERS tool data and its run count in ``path`` (written atomically)."""
     import json
 

@@ -8,13 +8,20 @@ z forward). Helpers here place a camera so that it looks at the board the way th
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 from ..geometry import STATION_BOARD, BoardGeometry
 from ..robot import look_at
+
+if TYPE_CHECKING:
+    from ..drivers import StereoModel
+    from .camera import MockCamera
 
 __all__ = ["PrintedBoard", "Lighting", "BoardOperator", "look_at", "board_view", "sample_board_views", "sheet_in_view",
            "hard_lighting"]
@@ -37,6 +44,8 @@ class PrintedBoard:
 
     @property
     def square_mm(self) -> float:
+        if self.geometry.square_mm is None:
+            raise ValueError("a printed board needs its square size (geometry.square_mm)")
         return float(self.geometry.square_mm)
 
     @property
@@ -116,7 +125,7 @@ class Lighting:
         return (self.gradient == 0 and (self.glare_uv_mm is None or self.glare_dn == 0)
                 and self.shadow_line is None and self.vignetting == 0)
 
-    def on_board(self, u, v, board: "PrintedBoard"):
+    def on_board(self, u: np.ndarray, v: np.ndarray, board: PrintedBoard) -> tuple[np.ndarray, np.ndarray]:
         """``(gain, added)`` of the light at board coordinates ``(u, v)`` (arrays of mm, same shape)."""
         gain = np.ones(np.shape(u), np.float32)
         added = np.zeros(np.shape(u), np.float32)
@@ -150,7 +159,7 @@ class Lighting:
         return (1.0 - self.vignetting * r2 ** 2).astype(np.float32)
 
 
-def hard_lighting(rng, board: "PrintedBoard" = None) -> Lighting:
+def hard_lighting(rng: np.random.Generator, board: PrintedBoard | None = None) -> Lighting:
     """Random uneven lighting of a real cell: a gradient across the sheet and vignetting always, a glare
     spot on the squares a third of the time and a shadow across part of them a third of the time."""
     board = board or PrintedBoard()
@@ -167,7 +176,8 @@ def hard_lighting(rng, board: "PrintedBoard" = None) -> Lighting:
 
 
 def board_view(distance_mm: float, tilt_deg: float = 0.0, tilt_azimuth_deg: float = 0.0, roll_deg: float = 0.0,
-               board: PrintedBoard = PrintedBoard(), offset_px=(0.0, 0.0), f_px: float = 983.0) -> np.ndarray:
+               board: PrintedBoard = PrintedBoard(), offset_px: npt.ArrayLike = (0.0, 0.0),
+               f_px: float = 983.0) -> np.ndarray:
     """``target2cam`` of a camera looking at the board centre from ``distance_mm``.
 
     The viewing direction is tilted by ``tilt_deg`` from the board normal (towards azimuth
@@ -183,13 +193,14 @@ def board_view(distance_mm: float, tilt_deg: float = 0.0, tilt_azimuth_deg: floa
     roll = Rotation.from_rotvec([0, 0, np.radians(roll_deg)]).as_matrix()
     cam2target[:3, :3] = cam2target[:3, :3] @ roll
     # Shift the aim so the board centre lands offset_px from the image centre.
-    shift = np.array([offset_px[0], offset_px[1], 0.0]) * distance_mm / f_px
+    offset = np.asarray(offset_px, float)
+    shift = np.array([offset[0], offset[1], 0.0]) * distance_mm / f_px
     cam2target[:3, 3] -= cam2target[:3, :3] @ shift
     return np.linalg.inv(cam2target)
 
 
-def sheet_in_view(target2cam: np.ndarray, model, board: PrintedBoard = PrintedBoard(), views=("left", "right"),
-                  border_px: float = 4.0) -> bool:
+def sheet_in_view(target2cam: np.ndarray, model: StereoModel, board: PrintedBoard = PrintedBoard(),
+                  views: Sequence[str] = ("left", "right"), border_px: float = 4.0) -> bool:
     """Whether the whole sheet (with margin) lies inside every image of ``views``, in front of the camera."""
     outline = board.outline()
     pts = outline @ target2cam[:3, :3].T + target2cam[:3, 3]
@@ -205,9 +216,10 @@ def sheet_in_view(target2cam: np.ndarray, model, board: PrintedBoard = PrintedBo
     return True
 
 
-def sample_board_views(n: int, model, board: PrintedBoard = PrintedBoard(), *, distance_mm=(700.0, 1200.0),
-                       tilt_deg=(0.0, 40.0), roll_deg=45.0, offset_px=80.0, seed=None,
-                       views=("left", "right", "centre"), border_px: float = 4.0,
+def sample_board_views(n: int, model: StereoModel, board: PrintedBoard = PrintedBoard(), *,
+                       distance_mm: tuple[float, float] = (700.0, 1200.0), tilt_deg: tuple[float, float] = (0.0, 40.0),
+                       roll_deg: float = 45.0, offset_px: float = 80.0, seed: int | None = None,
+                       views: Sequence[str] = ("left", "right", "centre"), border_px: float = 4.0,
                        max_tries: int = 10000) -> list[np.ndarray]:
     """``n`` random board poses ``target2cam`` with the whole sheet in view of every camera.
 
@@ -254,7 +266,8 @@ class BoardOperator:
     seed : int, optional
     """
 
-    def __init__(self, model, board: PrintedBoard = PrintedBoard(), distance_mm=(550.0, 1100.0), seed=None):
+    def __init__(self, model: StereoModel, board: PrintedBoard = PrintedBoard(),
+                 distance_mm: tuple[float, float] = (550.0, 1100.0), seed: int | None = None):
         self.model = model
         self.board = board
         self.distance_mm = distance_mm
@@ -268,7 +281,7 @@ class BoardOperator:
         off = (self.rng.uniform(-0.45 * w, 0.45 * w), self.rng.uniform(-0.45 * h, 0.45 * h))
         return board_view(dist, self.rng.uniform(*tilt_range), self.rng.uniform(0, 360), roll, self.board, off, f)
 
-    def pose_for(self, hint, tries: int = 4000) -> np.ndarray:
+    def pose_for(self, hint: object, tries: int = 4000) -> np.ndarray:
         """A board pose satisfying ``hint`` as well as can be found in ``tries`` random poses."""
         from ..drivers import tilt_class  # the class names of the guided loop
 
@@ -297,7 +310,7 @@ class BoardOperator:
         return sample_board_views(1, self.model, self.board, seed=int(self.rng.integers(1 << 30)),
                                   views=("left", "right"))[0]
 
-    def follow(self, camera, hint) -> np.ndarray:
+    def follow(self, camera: MockCamera, hint: object) -> np.ndarray:
         """Move the board of a :class:`~handeye.mocks.camera.MockCamera` (camera frame = base frame) as
         ``hint`` asks; returns the pose."""
         pose = self.pose_for(hint)

@@ -22,8 +22,14 @@ included). A program the interpreter cannot run is refused at start with its mod
 
 from __future__ import annotations
 
+import os
+from collections.abc import Iterable
+from typing import Any
+
+import numpy.typing as npt
+
 from ...drivers import DEFAULT_PROTOCOL
-from ...rapid import default_station
+from ...rapid import RapidStation, default_station
 from ..backends import mock_protocols, mock_server
 from ..robot import SimulatedRobot
 from .faults import Faults
@@ -64,12 +70,16 @@ def _program(protocol, program, station, postures, ack_timeout_s, idle_timeout_s
                              idle_timeout_s=idle_timeout_s, write_key=write_key, pc_address=allowed_client)
 
 
-def start_mock_controller(protocol: str = DEFAULT_PROTOCOL, *, host: str = "127.0.0.1", port: int = 0, postures=None,
+def start_mock_controller(protocol: str = DEFAULT_PROTOCOL, *, host: str = "127.0.0.1", port: int = 0,
+                          postures: npt.ArrayLike | None = None,
                           robot: SimulatedRobot | None = None, time_scale: float = 1.0, speed_fraction: float = 0.25,
                           ack_timeout_s: float | None = 30.0, allowed_client: str | None = None,
                           faults: Faults | None = None,
                           idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None,
-                          program=None, station=None, start: bool = True, signals=(), **server_options):
+                          program: ControllerProgram | str | os.PathLike[str] | None = None,
+                          station: RapidStation | None = None, start: bool = True,
+                          signals: Iterable[tuple[str, str, float]] = (),
+                          **server_options: Any) -> RapidControllerServer:  # options: each server's own
     """A started mock controller of ``protocol`` running its RAPID program.
 
     Parameters

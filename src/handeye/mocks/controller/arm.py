@@ -13,11 +13,21 @@ the arm checks against the cell in one call (:meth:`SimulatedRobot.start_path
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
+import numpy.typing as npt
 
 from ...geometry import transform_from_pose
 from ...rapid import MotionBinding, RapidFatalError
 from ..robot import ZoneViolation
+from .runner import RapidRecord
+
+if TYPE_CHECKING:
+    from ...rapid import Task
+    from ...robot import RobotModel
+    from ..robot import SimulatedRobot
 
 __all__ = ["ArmBinding", "zone_violation", "PATH_SAMPLES"]
 
@@ -38,7 +48,7 @@ def _inside(shape: dict, joints, tcp) -> bool:
     return float(np.hypot(*(tcp[:2] - centre[:2]))) <= shape["radius"] and low <= tcp[2] <= high
 
 
-def zone_violation(zone: dict, joints, tcp) -> bool:
+def zone_violation(zone: dict, joints: Sequence[float], tcp: npt.ArrayLike) -> bool:
     """True when ``joints`` / the TCP position ``tcp`` (mm) break a limiting world zone."""
     inside = _inside(zone["shape"], joints, np.asarray(tcp, float))
     return inside if zone["shape"]["side"] == "inside" else not inside
@@ -54,7 +64,7 @@ class ArmBinding(MotionBinding):
         ``robot.world_zones`` receives the zones the program defines.
     """
 
-    def __init__(self, robot):
+    def __init__(self, robot: SimulatedRobot):
         self.robot = robot
 
     def joints(self) -> list:
@@ -79,7 +89,7 @@ class ArmBinding(MotionBinding):
         q = [frame["rot"].fields[c] for c in ("q1", "q2", "q3", "q4")]
         return (flange @ transform_from_pose(t, q))[:3, 3]
 
-    def model(self):
+    def model(self) -> RobotModel:
         return self.robot.model
 
     def _check_zones(self, path, tool, what: str) -> None:
@@ -101,10 +111,11 @@ class ArmBinding(MotionBinding):
                         f"({zone['shape']['type']}, {zone['shape']['side']}) would be violated "
                         f"{'at the target' if i == len(path) - 1 else 'on the way'}; the robot did not move")
 
-    def move_joints(self, task, joints, speed, zone, tool) -> None:
+    def move_joints(self, task: Task, joints: Sequence[float], speed: dict, zone: dict, tool: RapidRecord) -> None:
         self.move_path(task, [joints], speed, zone, tool, "MoveAbsJ")
 
-    def move_path(self, task, configurations, speed, zone, tool, what: str) -> None:
+    def move_path(self, task: Task, configurations: npt.ArrayLike, speed: dict, zone: dict, tool: RapidRecord,
+                  what: str) -> None:
         path = np.asarray(configurations, float).reshape(-1, self.robot.model.dof)
         self._check_zones(path, tool, what)
         try:
@@ -117,7 +128,7 @@ class ArmBinding(MotionBinding):
             task.idle(max(min(self.robot.time_to_arrival(), 0.05), 0.0005))
         self.robot.update()
 
-    def world_zone(self, number: int, zone) -> None:
+    def world_zone(self, number: int, zone: dict | None) -> None:
         if zone is None:
             self.robot.world_zones.pop(number, None)
         else:

@@ -19,6 +19,7 @@ Set attributes from a test (or the station's demo) and the next requests feel th
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 
 __all__ = ["Faults", "DEFAULT_GARBAGE"]
 
@@ -46,7 +47,7 @@ class Faults:
         for watcher in list(self._watchers):
             watcher(self._stalled)
 
-    def watch_stall(self, watcher) -> None:
+    def watch_stall(self, watcher: Callable[[bool], object]) -> None:
         """Call ``watcher(stalled)`` whenever :attr:`robot_stalled` is set (the server holds its task)."""
         self._watchers.append(watcher)
 

@@ -14,12 +14,18 @@ program never knows.
 from __future__ import annotations
 
 import time
+from typing import TYPE_CHECKING
 
 from ...rapid import RapidError
 from ...rapid import Bindings
+from .faults import Faults
 from .network import MockSockets
 from .serial_line import SerialLine
 from .server import DEFAULT_IDLE_TIMEOUT_S, RapidControllerServer
+from .sources import ControllerProgram
+
+if TYPE_CHECKING:
+    from ..robot import SimulatedRobot
 
 __all__ = ["SocketControllerServer", "SerialControllerServer", "DEFAULT_IDLE_TIMEOUT_S"]
 
@@ -37,8 +43,9 @@ class SocketControllerServer(RapidControllerServer):
 
     kind = "socket"
 
-    def __init__(self, program, robot, host: str = "127.0.0.1", port: int = 0, faults=None, *,
-                 idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None):
+    def __init__(self, program: ControllerProgram, robot: SimulatedRobot, host: str = "127.0.0.1", port: int = 0,
+                 faults: Faults | None = None, *, idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S,
+                 write_key: str | None = None):
         super().__init__(program, robot, host, port, faults, idle_timeout_s=idle_timeout_s, write_key=write_key)
         self.net: MockSockets | None = None
 
@@ -49,24 +56,30 @@ class SocketControllerServer(RapidControllerServer):
     def _close_endpoint(self) -> None:
         pass  # the program's sockets close with its task
 
+    def _sockets(self) -> MockSockets:
+        if self.net is None:
+            raise RapidError("mock socket controller: its endpoint is not open; call start() first")
+        return self.net
+
     def _arming(self) -> None:
-        self.net.listening_event.clear()
+        self._sockets().listening_event.clear()
 
     def _wait_ready(self) -> None:
         """Return once the program listens; else say at once how it ended (or that main ran to its end
         without listening), or after ``_LISTEN_TIMEOUT_S`` that it does not listen."""
         end = time.monotonic() + _LISTEN_TIMEOUT_S
-        while not self.net.listening_event.wait(0.05):
-            if self.runner.end_reason:
-                why = f"{self.runner.end_reason} before it listened"
-            elif self.runner.main_returns:
+        net, runner = self._sockets(), self._live_runner()
+        while not net.listening_event.wait(0.05):
+            if runner.end_reason:
+                why = f"{runner.end_reason} before it listened"
+            elif runner.main_returns:
                 why = "ran main to its end without listening (SocketCreate, SocketBind, SocketListen)"
             elif time.monotonic() > end:
                 why = f"did not listen within {_LISTEN_TIMEOUT_S:g} s"
             else:
                 continue
             raise RapidError(f"mock socket controller: the RAPID program {why}: "
-                             f"{self.fix_hint(error=bool(self.runner.error))}")
+                             f"{self.fix_hint(error=bool(runner.error))}")
 
     @property
     def link_open(self) -> bool | None:
@@ -74,7 +87,8 @@ class SocketControllerServer(RapidControllerServer):
 
     @property
     def allowed_client(self) -> str | None:
-        datum = self.runner.program.datum("HE_PC_ADDRESS", "HeSocket") if self.runner else None
+        program = self.runner.program if self.runner else None
+        datum = program.datum("HE_PC_ADDRESS", "HeSocket") if program is not None else None
         return None if datum is None else datum.box[0]
 
     @property
@@ -99,8 +113,9 @@ class SerialControllerServer(RapidControllerServer):
 
     kind = "serial"
 
-    def __init__(self, program, robot, host: str = "127.0.0.1", port: int = 0, faults=None, *,
-                 idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None):
+    def __init__(self, program: ControllerProgram, robot: SimulatedRobot, host: str = "127.0.0.1", port: int = 0,
+                 faults: Faults | None = None, *, idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S,
+                 write_key: str | None = None):
         super().__init__(program, robot, host, port, faults, idle_timeout_s=idle_timeout_s, write_key=write_key)
         self.line: SerialLine | None = None
         self._port = port

@@ -24,11 +24,16 @@ import logging
 import re
 import threading
 import time
+from typing import TYPE_CHECKING, cast
 
 from ...drivers import load_register_map
 from ...rapid import Bindings, IoBinding, RapidFatalError
 from .faults import Faults
 from .server import DEFAULT_IDLE_TIMEOUT_S, RapidControllerServer
+from .sources import ControllerProgram
+
+if TYPE_CHECKING:
+    from ..robot import SimulatedRobot
 
 __all__ = ["ModbusControllerServer", "GatewayIo"]
 
@@ -163,8 +168,8 @@ class ModbusControllerServer(RapidControllerServer):
 
     kind = "modbus"
 
-    def __init__(self, program, robot, host: str = "127.0.0.1", port: int = 0, faults: Faults | None = None, *,
-                 register_map=None, idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None):
+    def __init__(self, program: ControllerProgram, robot: SimulatedRobot, host: str = "127.0.0.1", port: int = 0,
+                 faults: Faults | None = None, *, register_map: object = None, idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None):
         super().__init__(program, robot, host, port, faults, idle_timeout_s=idle_timeout_s, write_key=write_key)
         #: Connections closed for idleness (for tests).
         self.idle_closes = 0
@@ -233,7 +238,8 @@ class ModbusControllerServer(RapidControllerServer):
             await server.serve_forever(background=True)
             if not server.transport:
                 raise OSError("pymodbus could not listen")
-            self._port = server.transport.sockets[0].getsockname()[1]
+            listener = cast(asyncio.Server, server.transport)  # pymodbus keeps loop.create_server's Server there
+            self._port = listener.sockets[0].getsockname()[1]
             self._started.set()
             watchdog = asyncio.create_task(self._close_idle(server))
             await self._stop_event.wait()

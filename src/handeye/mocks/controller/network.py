@@ -20,9 +20,14 @@ having come).
 from __future__ import annotations
 
 import threading
+from typing import TYPE_CHECKING
 
 from ...rapid import RapidRuntimeError
 from ...rapid import TcpSockets
+from .faults import Faults
+
+if TYPE_CHECKING:
+    from ...rapid import Task
 
 __all__ = ["MockSockets"]
 
@@ -39,7 +44,7 @@ class MockSockets(TcpSockets):
         Where the listener binds (0: a free port, kept for the program's later binds).
     """
 
-    def __init__(self, faults, host: str, port: int):
+    def __init__(self, faults: Faults, host: str, port: int):
         super().__init__()
         self.faults, self.host, self.port = faults, host, port
         self.listening_event = threading.Event()
@@ -58,7 +63,7 @@ class MockSockets(TcpSockets):
     def accepted(self, handle) -> None:
         self._accepts += 1
 
-    def receive(self, task, handle, max_bytes: int, timeout, exact: bool = False) -> bytes:
+    def receive(self, task: Task, handle, max_bytes: int, timeout: float | None, exact: bool = False) -> bytes:
         if not handle.info.get("served"):
             handle.info["served"] = True
             self.connections += 1
@@ -83,7 +88,7 @@ class MockSockets(TcpSockets):
                 return None
         return data
 
-    def sending(self, task, handle, data: bytes) -> bytes | None:
+    def sending(self, task: Task, handle, data: bytes) -> bytes | None:
         faults = self.faults
         if faults.delay_s > 0:
             task.idle(faults.delay_s)

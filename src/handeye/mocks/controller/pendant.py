@@ -23,10 +23,15 @@ from __future__ import annotations
 import logging
 import socketserver
 import threading
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
-from ..side_port import TOO_LONG, SidePort, read_line
+from ..side_port import TOO_LONG, SidePort, _Server, read_line
+
+if TYPE_CHECKING:
+    from .server import RapidControllerServer
 
 __all__ = ["PendantService", "PENDANT_COMMANDS"]
 
@@ -39,8 +44,10 @@ MAX_LINE = 200
 
 
 class _Handler(socketserver.StreamRequestHandler):
+    server: _Server  # the side port's
+
     def handle(self) -> None:
-        service = self.server.service
+        service = cast(PendantService, self.server.service)  # the pendant port's server serves its PendantService
         while True:
             line = read_line(self.rfile, MAX_LINE)
             if not line:
@@ -53,7 +60,7 @@ class _Handler(socketserver.StreamRequestHandler):
             self.wfile.flush()
 
     @staticmethod
-    def _answer(service, line: bytes) -> str:
+    def _answer(service: PendantService, line: bytes) -> str:
         try:
             return service.answer(line.decode("ascii", "replace").strip())
         except Exception as exc:  # one bad request never ends the port
@@ -72,7 +79,7 @@ class PendantService(SidePort):
         Where the port listens (0: a free port).
     """
 
-    def __init__(self, controller, host: str = "127.0.0.1", port: int = 0):
+    def __init__(self, controller: RapidControllerServer, host: str = "127.0.0.1", port: int = 0):
         self.controller = controller
         super().__init__(_Handler, host, port, "mock-pendant")
         self._jog_lock = threading.Lock()
@@ -118,7 +125,7 @@ class PendantService(SidePort):
         keys = ",".join(f"{k}={label}" for k, label in sorted(prompt.keys.items())) if prompt else "-"
         return f"OK {execution} {keys} | {pendant.last_line}"
 
-    def jog(self, args) -> str:
+    def jog(self, args: Sequence[str]) -> str:
         robot = self.controller.robot
         try:
             target = np.array([float(a) for a in args], float)

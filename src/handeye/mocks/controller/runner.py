@@ -12,12 +12,17 @@ from __future__ import annotations
 
 import logging
 import time
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from ...drivers import ToolData
 from ...rapid import RapidError
-from ...rapid import Program, Task, load_program
+from ...rapid import Bindings, Program, Task, load_program
+
+if TYPE_CHECKING:
+    from ..robot import SimulatedRobot
+    from .sources import ControllerProgram
 
 __all__ = ["RapidRunner", "approved_postures", "tooldata_of"]
 
@@ -37,7 +42,13 @@ def approved_postures(program: Program) -> np.ndarray:
     return np.array(rows, float).reshape(-1, 6)
 
 
-def tooldata_of(record) -> ToolData:
+class RapidRecord(Protocol):
+    """A RAPID record value of the interpreter: its components by name (records nest)."""
+
+    fields: dict[str, Any]
+
+
+def tooldata_of(record: RapidRecord) -> ToolData:
     """A RAPID tooldata value as the drivers' :class:`ToolData`."""
     frame, load = record.fields["tframe"].fields, record.fields["tload"].fields
     trans, rot, cog = frame["trans"].fields, frame["rot"].fields, load["cog"].fields
@@ -57,15 +68,15 @@ class RapidRunner:
         What log lines call the controller (``mock socket controller``).
     """
 
-    def __init__(self, robot, bindings, name: str = "mock controller"):
+    def __init__(self, robot: SimulatedRobot, bindings: Bindings, name: str = "mock controller"):
         self.robot, self.bindings, self.name = robot, bindings, name
         self.program: Program | None = None
         self.task: Task | None = None
-        self.loaded = None
+        self.loaded: ControllerProgram | None = None
         self._tool_symbol = None
 
     # ------------------------------------------------------------------ loading
-    def load(self, source) -> Program:
+    def load(self, source: ControllerProgram) -> Program:
         """Link ``source`` (a ControllerProgram); the arm takes its approved postures.
 
         Raises
@@ -93,7 +104,12 @@ class RapidRunner:
 
     def tool(self) -> ToolData:
         """The camera's tool data: the program's PERS tooldata now."""
-        return tooldata_of(self._tool_symbol.box[0])
+        return tooldata_of(self._tool_datum().box[0])
+
+    def _tool_datum(self):
+        if self._tool_symbol is None:
+            raise RapidError(f"{self.name}: the loaded program declares no PERS tooldata (load HeTool)")
+        return self._tool_symbol
 
     @property
     def has_tool(self) -> bool:
@@ -101,7 +117,7 @@ class RapidRunner:
 
     def set_tool(self, tool: ToolData) -> None:
         """Put ``tool`` into the program's PERS tooldata (a value the controller kept from before)."""
-        record = self._tool_symbol.box[0]
+        record = self._tool_datum().box[0]
         frame, load = record.fields["tframe"].fields, record.fields["tload"].fields
         trans, rot, cog = frame["trans"].fields, frame["rot"].fields, load["cog"].fields
         for name, value in zip("xyz", tool.position_mm):
@@ -115,6 +131,8 @@ class RapidRunner:
     # ------------------------------------------------------------------ running
     def start(self, timeout: float = START_TIMEOUT_S) -> None:
         """Run ``main`` until it first waits for the PC (or stops: then raise with the reason)."""
+        if self.program is None or self.loaded is None:
+            raise RapidError(f"{self.name}: no RAPID program is loaded; load one before starting it")
         self.task = Task(self.program, self.bindings)
         self.task.start()
         end = time.monotonic() + timeout
@@ -131,7 +149,7 @@ class RapidRunner:
         if self.task is not None:
             self.task.stop()
 
-    def reload(self, source) -> None:
+    def reload(self, source: ControllerProgram) -> None:
         """Stop the running program, load ``source`` and start it (the arm stays where it is)."""
         self.stop()
         self.load(source)
@@ -169,5 +187,5 @@ class RapidRunner:
         return 0 if self.task is None else self.task.main_returns
 
     @property
-    def pendant(self) -> list:
+    def pendant(self) -> list[str]:
         return [] if self.task is None else list(self.task.pendant)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import base64
 import hashlib
 import secrets
+import threading
 
 from .rws_web import HttpError
 
@@ -19,6 +20,14 @@ REALM = "validusers@robapi.abb"
 
 class RwsAuth:
     """Who asks: the session of a request, its credentials checked (see the module docstring)."""
+
+    # what the mixin uses of the server (set in RwsControllerServer.__init__)
+    sessions: dict[str, dict]
+    nonces: set[str]
+    username: str
+    password: str
+    generation: int
+    _lock: threading.RLock
 
     def _session_of(self, handler) -> str | None:
         cookies = handler.headers.get("Cookie", "")
@@ -74,7 +83,7 @@ class RwsAuth:
         return secrets.compare_digest(expected, fields.get("response", ""))
 
 
-def split_header(text: str) -> list:
+def split_header(text: str) -> list[str]:
     """Comma-separated ``name=value`` items of an Authorization header (commas inside quotes kept)."""
     items, current, quoted = [], "", False
     for ch in text:

@@ -5,11 +5,17 @@ RAPID values (float32 numbers)."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ...drivers import SIMULATION_SYSTEM_NAME
 from ...rapid import format_value
 from .rws_web import HttpError
+
+if TYPE_CHECKING:
+    from ..robot import SimulatedRobot
+    from .runner import RapidRunner
 
 __all__ = ["RwsReads", "rws_text", "rws_num"]
 
@@ -28,13 +34,24 @@ def _unreadable(value):
     raise HttpError(400, f"a {type(value).__name__} cannot be read over RWS")
 
 
-def rws_text(value) -> str:
+def rws_text(value: object) -> str:
     """A RAPID value as RWS prints it (``ValToStr``'s form with RWS's float32 numbers)."""
     return format_value(value, rws_num, _unreadable)
 
 
 class RwsReads:
     """GET answers (see the module docstring)."""
+
+    # what the mixin uses of the server (RwsControllerServer and its base)
+    robot: SimulatedRobot
+    runner: RapidRunner | None
+    sessions: dict[str, dict]
+    generation: int
+    robotware: str
+    opmode: str
+    rmmp_policy: str
+    motors_on: bool
+    running: bool
 
     def _read(self, path: str, query) -> list:
         robot = self.robot

@@ -36,15 +36,20 @@ import socket
 import ssl
 import threading
 import time
+from typing import TYPE_CHECKING, Any
 from urllib.parse import parse_qs, unquote, urlsplit
 
 from ...rapid import Bindings
 from .faults import Faults
 from .rws_auth import DEFAULT_PASSWORD, DEFAULT_USER, REALM, RwsAuth
 from .rws_reads import RwsReads
-from .rws_web import HAL_JSON, HttpError, RwsHttpServer, self_signed_certificate
+from .rws_web import HAL_JSON, HttpError, RwsHandler, RwsHttpServer, self_signed_certificate
 from .rws_writes import RwsWrites
 from .server import DEFAULT_IDLE_TIMEOUT_S, RapidControllerServer
+from .sources import ControllerProgram
+
+if TYPE_CHECKING:
+    from ..robot import SimulatedRobot
 
 __all__ = ["RwsControllerServer", "DEFAULT_USER", "DEFAULT_PASSWORD", "REALM", "self_signed_certificate"]
 
@@ -71,7 +76,7 @@ class RwsControllerServer(RwsAuth, RwsReads, RwsWrites, RapidControllerServer):
 
     kind = "rws"
 
-    def __init__(self, program, robot, host: str = "127.0.0.1", port: int = 0, faults: Faults | None = None, *,
+    def __init__(self, program: ControllerProgram, robot: SimulatedRobot, host: str = "127.0.0.1", port: int = 0, faults: Faults | None = None, *,
                  generation: int = 1, username: str = DEFAULT_USER, password: str = DEFAULT_PASSWORD,
                  idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None):
         super().__init__(program, robot, host, port, faults, idle_timeout_s=idle_timeout_s, write_key=write_key)
@@ -154,7 +159,8 @@ class RwsControllerServer(RwsAuth, RwsReads, RwsWrites, RapidControllerServer):
                 except OSError:
                     pass
         self._httpd.server_close()  # joins the connection threads
-        self._thread.join(10)
+        if self._thread is not None:
+            self._thread.join(10)
         self._httpd, self._thread = None, None
 
     def _track(self, conn, opened: bool) -> None:
@@ -164,11 +170,11 @@ class RwsControllerServer(RwsAuth, RwsReads, RwsWrites, RapidControllerServer):
     def _load(self, program) -> None:
         """Link ``program`` into the task (stopped), its PERS data keeping their values unless their
         module was just loaded from a file, as a controller keeps them."""
-        old = self.runner.program
+        runner = self._live_runner()
+        old = runner.program
         if old is not None:
             self._pers.update(self._pers_values(old))
-        self.runner.load(program)
-        for symbol in self.runner.program.data:
+        for symbol in runner.load(program).data:
             key = (symbol.module.lower(), symbol.name.lower())
             if symbol.storage == "PERS" and key in self._pers and symbol.module.lower() not in self._fresh_modules:
                 symbol.box[0] = self._pers[key]
@@ -178,7 +184,7 @@ class RwsControllerServer(RwsAuth, RwsReads, RwsWrites, RapidControllerServer):
     def _run(self, program) -> None:
         if getattr(self, "_loaded", None) is not program:
             self._load(program)
-        self.runner.start()
+        self._live_runner().start()
 
     @staticmethod
     def _pers_values(program) -> dict:
@@ -214,7 +220,8 @@ class RwsControllerServer(RwsAuth, RwsReads, RwsWrites, RapidControllerServer):
             return query.get("json", [""])[0] == "1"
         return "json" in handler.headers.get("Accept", "")
 
-    def answer(self, handler, query, states: list, links=None):
+    def answer(self, handler: RwsHandler, query: dict[str, list[str]], states: list[dict],
+               links: object = None) -> tuple[bytes, str]:
         base = f"{'https' if self.generation == 2 else 'http'}://{self.host}:{self.port}/"
         if self._wants_json(handler, query):
             if self.generation == 1:
@@ -230,13 +237,13 @@ class RwsControllerServer(RwsAuth, RwsReads, RwsWrites, RapidControllerServer):
                 f'<base href="{base}"/></head><body><div class="state"><ul>{items}</ul></div></body></html>')
         return page.encode(), "application/xhtml+xml;v=2.0" if self.generation == 2 else "application/xhtml+xml"
 
-    def error_body(self, handler, err: HttpError):
+    def error_body(self, handler: RwsHandler, err: HttpError) -> tuple[bytes, str]:
         status = {"code": err.code, "msg": err.message}
         if self.generation == 1:
             return json.dumps({"_embedded": {"status": status}}).encode(), "application/json"
         return json.dumps({"status": status}).encode(), HAL_JSON
 
-    def dispatch(self, handler, method: str, body: bytes):
+    def dispatch(self, handler: RwsHandler, method: str, body: bytes) -> tuple[int, tuple[bytes, str] | None, dict]:
         self.requests += 1
         faults = self.faults
         if faults.busy or faults.take("busy_next"):
@@ -265,6 +272,6 @@ class RwsControllerServer(RwsAuth, RwsReads, RwsWrites, RapidControllerServer):
             raise HttpError(405, f"{method} is not allowed on {path}")
         return self._post(path, action, form, session)
 
-    def symbol_value(self, name: str, module: str | None = None):
+    def symbol_value(self, name: str, module: str | None = None) -> Any:  # any RAPID value
         """The task's current value of module data ``name`` (tests)."""
         return self._symbol(("T_ROB1", module, name)).box[0]

@@ -8,10 +8,15 @@ from __future__ import annotations
 import hashlib
 import logging
 import os
+import socket
 import ssl
 import tempfile
 import threading
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .rws_server import RwsControllerServer
 
 __all__ = ["HttpError", "RwsHandler", "RwsHttpServer", "HAL_JSON", "self_signed_certificate"]
 
@@ -57,7 +62,7 @@ def self_signed_certificate() -> tuple[str, str, str]:
 class HttpError(Exception):
     """An error answer: HTTP status, the controller's code and message."""
 
-    def __init__(self, status: int, message: str, code: int = -1, headers=None):
+    def __init__(self, status: int, message: str, code: int = -1, headers: dict[str, str | list[str]] | None = None):
         super().__init__(message)
         self.status, self.message, self.code, self.headers = status, message, code, headers or {}
 
@@ -66,31 +71,33 @@ class RwsHandler(BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
     server_version = "handeye-mock-RWS"
     disable_nagle_algorithm = True  # headers and body are two writes: no 40 ms Nagle/delayed-ACK stall
+    server: RwsHttpServer  # the server that made this handler (socketserver passes it)
 
-    def log_message(self, fmt, *args):  # quiet: the test output is ours
+    def log_message(self, fmt: str, *args: object) -> None:  # quiet: the test output is ours
         log.debug("mock RWS: " + fmt, *args)
 
-    def setup(self):
-        self.timeout = self.server.owner.idle_timeout_s
+    def setup(self) -> None:
+        # typeshed calls timeout a ClassVar; socketserver reads it per instance in setup(): set per connection
+        self.timeout = self.server.owner.idle_timeout_s  # pyright: ignore[reportAttributeAccessIssue]
         super().setup()
         self.server.owner._track(self.connection, True)
 
-    def finish(self):
+    def finish(self) -> None:
         try:
             super().finish()
         finally:
             self.server.owner._track(self.connection, False)
 
-    def do_GET(self):
+    def do_GET(self) -> None:
         self._serve("GET")
 
-    def do_POST(self):
+    def do_POST(self) -> None:
         self._serve("POST")
 
-    def do_PUT(self):
+    def do_PUT(self) -> None:
         self._serve("PUT")
 
-    def do_DELETE(self):
+    def do_DELETE(self) -> None:
         self._serve("DELETE")
 
     def _serve(self, method: str) -> None:
@@ -112,7 +119,7 @@ class RwsHandler(BaseHTTPRequestHandler):
             status, payload, headers = 200, (owner.faults.garbage, "application/json"), {}
         self._answer(status, payload, headers)
 
-    def _answer(self, status: int, payload, headers: dict) -> None:
+    def _answer(self, status: int, payload: tuple[bytes, str] | None, headers: dict) -> None:
         data, ctype = payload if payload is not None else (b"", None)
         self.send_response(status)
         for name, value in headers.items():
@@ -131,11 +138,11 @@ class RwsHttpServer(ThreadingHTTPServer):
     block_on_close = True
     allow_reuse_address = True
 
-    def __init__(self, address, owner, tls_context=None):
+    def __init__(self, address: tuple[str, int], owner: RwsControllerServer, tls_context: ssl.SSLContext | None = None):
         self.owner, self.tls_context = owner, tls_context
         super().__init__(address, RwsHandler)
 
-    def finish_request(self, request, client_address):
+    def finish_request(self, request: socket.socket, client_address: tuple[str, int]) -> None:  # a TCP server's
         if self.tls_context is not None:  # the handshake in the connection's own thread
             try:
                 request.settimeout(self.owner.idle_timeout_s)
@@ -145,5 +152,5 @@ class RwsHttpServer(ThreadingHTTPServer):
                 return
         super().finish_request(request, client_address)
 
-    def handle_error(self, request, client_address):
+    def handle_error(self, request: socket.socket, client_address: tuple[str, int]) -> None:
         log.debug("mock RWS: connection from %s ended with an error", client_address, exc_info=True)

@@ -6,6 +6,8 @@ the controller's refusals (403 without mastership or RMMP, 409 with the motors o
 from __future__ import annotations
 
 import logging
+import threading
+from typing import TYPE_CHECKING, Any
 
 from ...drivers import parse_rapid_value
 from ...rapid import RapidError
@@ -13,6 +15,10 @@ from ...rapid import ModuleSource, parse_module
 from ...rapid import aggregate, coerce, coerce_array
 from .rws_web import HttpError
 from .sources import ControllerProgram
+
+if TYPE_CHECKING:
+    from .faults import Faults
+    from .runner import RapidRunner
 
 __all__ = ["RwsWrites", "E_MASTERSHIP", "E_RMMP", "E_STATE"]
 
@@ -27,16 +33,44 @@ E_STATE = -1073445865
 class RwsWrites:
     """POST, PUT and DELETE answers (see the module docstring)."""
 
+    # what the mixin uses of the server (RwsControllerServer, its base and RwsReads)
+    runner: RapidRunner | None
+    source: ControllerProgram
+    faults: Faults
+    sessions: dict[str, dict]
+    files: dict[str, bytes]
+    generation: int
+    opmode: str
+    rmmp_policy: str
+    motors_on: bool
+    running: bool
+    master: str | None
+    writes: int
+    _lock: threading.RLock
+    _pers: dict[tuple[str, str], Any]
+    _fresh_modules: set[str]
+    _loaded: ControllerProgram | None
+
+    if TYPE_CHECKING:
+        def _symbol(self, symbol: tuple) -> Any: ...
+        def _symbol_of(self, path: str) -> tuple | None: ...
+        def _load(self, program: ControllerProgram) -> None: ...
+        def _run(self, program: ControllerProgram) -> None: ...
+        def restart(self) -> None: ...
+
     def _set_symbol(self, symbol, text: str) -> None:
         datum = self._symbol(symbol)
+        program = self.runner.program if self.runner is not None else None
+        if program is None:  # _symbol found the datum in the loaded program: never None here
+            raise HttpError(409, "no RAPID program is loaded", E_STATE)
         if datum.storage == "CONST":
             raise HttpError(400, f"{datum.name} is a CONST", -1073442811)
         try:
             value = parse_rapid_value(text)
             if datum.dims:
-                new = coerce_array(aggregate(value), datum.type, datum.dims, self.runner.program.records, datum.name)
+                new = coerce_array(aggregate(value), datum.type, datum.dims, program.records, datum.name)
             else:
-                new = coerce(aggregate(value), datum.type, self.runner.program.records, datum.name)
+                new = coerce(aggregate(value), datum.type, program.records, datum.name)
         except (ValueError, RapidError) as exc:
             raise HttpError(400, f"value {text[:60]!r} for {datum.name}: {exc}", -1073442811) from None
         datum.box[0] = new

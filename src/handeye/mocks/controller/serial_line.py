@@ -12,9 +12,14 @@ program's idle reset).
 from __future__ import annotations
 
 import socket
+from typing import TYPE_CHECKING
 
 from ...rapid import RapidRuntimeError, SerialBinding
 from ...rapid import MAX_STRING
+from .faults import Faults
+
+if TYPE_CHECKING:
+    from ...rapid import Task
 
 __all__ = ["SerialLine"]
 
@@ -22,7 +27,7 @@ __all__ = ["SerialLine"]
 class _Channel:
     """The program's open channel (an ``iodev``)."""
 
-    def __init__(self, line, name: str):
+    def __init__(self, line: SerialLine, name: str):
         self.line, self.name, self.open = line, name, True
 
     def close(self) -> None:
@@ -39,7 +44,7 @@ class SerialLine(SerialBinding):
         Where the TCP endpoint listens (port 0: a free one).
     """
 
-    def __init__(self, faults, host: str = "127.0.0.1", port: int = 0):
+    def __init__(self, faults: Faults, host: str = "127.0.0.1", port: int = 0):
         self.faults, self.host = faults, host
         self.listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         self.listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
@@ -111,13 +116,13 @@ class SerialLine(SerialBinding):
         return [self.listener] + ([self.owner] if self.owner is not None else [])
 
     # ------------------------------------------------------------------ the binding
-    def open(self, task, name: str, binary: bool):
+    def open(self, task: Task, name: str, binary: bool) -> _Channel:
         channel = _Channel(self, name)
         task.resources.append(channel)
         self.channel = channel
         return channel
 
-    def read_line(self, task, handle, timeout) -> bytes:
+    def read_line(self, task: Task, handle: _Channel, timeout: float | None) -> bytes:
         end = None if timeout is None else task.clock() + timeout
         while True:
             self._pump()
@@ -132,7 +137,7 @@ class SerialLine(SerialBinding):
                 raise RapidRuntimeError("ERR_DEV_MAXTIME", "ReadStr: no line end in time")
             task.idle(left, self._readable())
 
-    def write(self, task, handle, data: bytes) -> None:
+    def write(self, task: Task, handle: _Channel, data: bytes) -> None:
         faults = self.faults
         if faults.delay_s > 0:
             task.idle(faults.delay_s)
@@ -152,12 +157,12 @@ class SerialLine(SerialBinding):
             if self.owner is not None:
                 self.owner.setblocking(False)
 
-    def clear(self, handle) -> None:
+    def clear(self, handle: _Channel) -> None:
         self._pump()
         if self.heard:
             self.idle_resets += 1
         self.rx.clear()
         self.heard = False
 
-    def close(self, handle) -> None:
+    def close(self, handle: _Channel) -> None:
         handle.close()

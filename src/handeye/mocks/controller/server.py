@@ -10,15 +10,23 @@ the PC. :meth:`load_program` replaces the program (what loading a capture's modu
 from __future__ import annotations
 
 import logging
+import os
+from typing import TYPE_CHECKING
 
 from ...drivers import check_write_key
-from ...rapid import Bindings
+from ...drivers import ToolData
+from ...rapid import Bindings, RapidError
 from ...rapid import FlexPendant
 from .arm import ArmBinding
 from .faults import Faults
 from .runner import RapidRunner
 from .signals import CellSignals
 from .sources import ControllerProgram, keep_system_modules, program_from_folder
+
+if TYPE_CHECKING:
+    from typing_extensions import Self
+
+    from ..robot import SimulatedRobot
 
 __all__ = ["RapidControllerServer", "DEFAULT_IDLE_TIMEOUT_S"]
 
@@ -47,7 +55,7 @@ class RapidControllerServer:
 
     kind = "controller"
 
-    def __init__(self, program, robot, host: str = "127.0.0.1", port: int = 0, faults: Faults | None = None, *,
+    def __init__(self, program: ControllerProgram, robot: SimulatedRobot, host: str = "127.0.0.1", port: int = 0, faults: Faults | None = None, *,
                  idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None):
         if not (isinstance(idle_timeout_s, (int, float)) and 0 < idle_timeout_s < float("inf")):
             raise ValueError(f"idle_timeout_s must be a positive number of seconds; got {idle_timeout_s!r}")
@@ -64,7 +72,7 @@ class RapidControllerServer:
         #: value): ``kept_tool`` is put into each program loaded (None: the module's own value, until a
         #: program is replaced). Without it each program starts with the value its module declares.
         self.keep_tool = False
-        self.kept_tool = None
+        self.kept_tool: ToolData | None = None
         #: The FlexPendant the program prompts on (TPReadFK, UIMessageBox) and stops for (Stop \NoRegain);
         #: the operator's side is played by a test or the pendant port (``src/handeye/mocks/controller/pendant.py``).
         self.flexpendant = FlexPendant()
@@ -83,16 +91,23 @@ class RapidControllerServer:
     def _wait_ready(self) -> None:
         """Return once the program serves the link (the socket program listens ...)."""
 
-    def _run(self, program) -> None:
+    def _live_runner(self) -> RapidRunner:
+        """The runner of the started server (a stopped one has none)."""
+        if self.runner is None:
+            raise RapidError(f"mock {self.kind} controller: not started; call start() first")
+        return self.runner
+
+    def _run(self, program: ControllerProgram) -> None:
         self._arming()
-        self.runner.load(program)
-        if self.keep_tool and self.kept_tool is not None and self.runner.has_tool:
-            self.runner.set_tool(self.kept_tool)  # a PERS keeps its value when modules are loaded again
-        self.runner.start()
+        runner = self._live_runner()
+        runner.load(program)
+        if self.keep_tool and self.kept_tool is not None and runner.has_tool:
+            runner.set_tool(self.kept_tool)  # a PERS keeps its value when modules are loaded again
+        runner.start()
         self._wait_ready()
 
     # ------------------------------------------------------------------ lifecycle
-    def start(self):
+    def start(self) -> Self:
         if self.runner is not None:
             return self
         bindings = self._open_endpoint()
@@ -118,13 +133,13 @@ class RapidControllerServer:
         self._close_endpoint()
         self.runner = None
 
-    def __enter__(self):
+    def __enter__(self) -> Self:
         return self.start()
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.stop()
 
-    def load_program(self, program) -> None:
+    def load_program(self, program: ControllerProgram | str | os.PathLike[str]) -> None:
         """Stop the running program, load ``program`` (a ControllerProgram, or a folder of modules) and
         start it; the system modules loaded before (HeKey.sys) stay, as on a controller. Loading the
         modules that run already changes nothing (the program is not restarted)."""
@@ -133,9 +148,10 @@ class RapidControllerServer:
         program = keep_system_modules(program, self.source)
         if sorted((m.source, m.text) for m in program.modules) == sorted((m.source, m.text) for m in self.source.modules):
             return  # the same modules are loaded already: the program keeps running (a resumed capture)
-        self.runner.stop()
-        if self.keep_tool and self.runner.has_tool:
-            self.kept_tool = self.runner.tool()
+        runner = self._live_runner()
+        runner.stop()
+        if self.keep_tool and runner.has_tool:
+            self.kept_tool = runner.tool()
         self.source = program
         self._run(program)
 
@@ -148,7 +164,7 @@ class RapidControllerServer:
 
     # ------------------------------------------------------------------ state
     @property
-    def program(self):
+    def program(self) -> RapidRunner | None:
         """The running :class:`~handeye.mocks.controller.runner.RapidRunner`."""
         return self.runner
 
@@ -160,6 +176,11 @@ class RapidControllerServer:
     def program_error(self) -> str | None:
         """Why the RAPID program stopped on an error, if it did."""
         return None if self.runner is None else self.runner.error
+
+    @property
+    def port(self) -> int:
+        """Where the endpoint listens (the port asked for until :meth:`start` binds it)."""
+        raise NotImplementedError
 
     @property
     def link_open(self) -> bool | None:
@@ -192,6 +213,10 @@ class RapidControllerServer:
         writes = ("tool writes need the write key (KEY / tool_key)" if self.has_write_key else
                   "tool writes refused: no write key (start it with --write-key KEY or --config STATION.yaml)")
         return f"idle timeout {idle_timeout_s:g} s; {writes}"
+
+    def client_options(self) -> dict:
+        """Keyword arguments of ``open_controller`` that reach it (its idle timeout and write key included)."""
+        raise NotImplementedError
 
     def client_flags(self) -> str:
         """The ``handeye robot`` flags that reach it."""

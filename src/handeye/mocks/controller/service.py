@@ -13,12 +13,23 @@ from __future__ import annotations
 import ipaddress
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from ...drivers import DEFAULT_PROTOCOL, RAPID_LINKS
 from ...rapid import IDLE_TIMEOUT_RANGE, RapidStation, default_station, load_station
 from ..backends import mock_protocol_choices, mock_server
 from . import start_mock_controller
+from .server import RapidControllerServer
+
+if TYPE_CHECKING:
+    from ...robot import CellModel
+    from ..arm_truth import ArmDeviations
+    from ..cell import CellService
+    from ..drift import StationFaults
+    from ..station import MockStationSpec
+    from .pendant import PendantService
 
 __all__ = ["MockControllerOptions", "run_mock_controller", "is_loopback", "LINK_NOTICE_S"]
 
@@ -92,10 +103,10 @@ class MockControllerOptions:
     program: str | None = None
     camera_port: int | None = None
     pendant_port: int | None = None
-    cell: object = None
+    cell: CellModel | None = None
     signals: tuple = ()
-    faults: object = None
-    arm: object = None
+    faults: StationFaults | None = None
+    arm: ArmDeviations | None = None
 
 
 def is_loopback(host: str) -> bool:
@@ -108,7 +119,7 @@ def is_loopback(host: str) -> bool:
         return False
 
 
-def _banner(server, options: MockControllerOptions, postures: int, idle_timeout_s: float) -> str:
+def _banner(server: RapidControllerServer, options: MockControllerOptions, postures: int, idle_timeout_s: float) -> str:
     runs = f"RAPID from {options.program}" if options.program else f"the RAPID generated for {options.protocol}"
     head = f"mock {options.protocol} controller (simulated IRB 1400 running {runs}, {postures} approved postures)"
     # where it listens, its link and the flags that reach it are the server's own (its protocol's module)
@@ -120,7 +131,8 @@ def _warn(text: str) -> None:
     print(text, file=sys.stderr, flush=True)
 
 
-def run_mock_controller(options: MockControllerOptions, announce=print, warn=_warn) -> int:
+def run_mock_controller(options: MockControllerOptions, announce: Callable[[str], object] = print,
+                        warn: Callable[[str], object] = _warn) -> int:
     """Start the mock, announce where it listens, serve until Ctrl-C (or ``duration_s``); returns 0.
 
     ``warn`` receives one line when the mock listens on an address other machines can reach.
@@ -160,9 +172,9 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
     cell = pendant = None
     try:
         if options.camera_port is not None:
-            cell = _start_cell(server, options, spec)
+            cell = _start_cell(server, options.host, options.camera_port, spec)
         if options.pendant_port is not None:
-            pendant = _start_pendant(server, options)
+            pendant = _start_pendant(server, options.pendant_port)
         announce(_banner(server, options, len(server.robot.postures), idle)
                  + "".join(f"\n{side.banner()}" for side in (cell, pendant) if side is not None))
         failure = _serve(server, options.duration_s, warn)
@@ -180,7 +192,7 @@ def run_mock_controller(options: MockControllerOptions, announce=print, warn=_wa
     return 0
 
 
-def _serve(server, duration_s: float | None, warn=_warn) -> str | None:
+def _serve(server: RapidControllerServer, duration_s: float | None, warn: Callable[[str], object] = _warn) -> str | None:
     """Serve until Ctrl-C or ``duration_s``; ``stopped on an error: ...`` if the RAPID program stopped on one.
 
     ``warn`` gets one line when the program ends by itself (EXIT, Stop) and when it has not opened its
@@ -198,7 +210,7 @@ def _serve(server, duration_s: float | None, warn=_warn) -> str | None:
 class _ProgramWatch:
     """Looks at the mock's running RAPID program and says, once per run, what the operator must know."""
 
-    def __init__(self, server, warn):
+    def __init__(self, server: RapidControllerServer, warn: Callable[[str], object]):
         self.server, self.warn = server, warn
         self.task, self.since, self.said = None, 0.0, set()
 
@@ -206,7 +218,7 @@ class _ProgramWatch:
         """The program's error (``stopped on an error: ...``), or None after saying what is new."""
         runner = self.server.program
         task = runner.task if runner is not None else None
-        if task is None:
+        if runner is None or task is None:
             return None
         if self.server.program_error:
             return runner.end_reason
@@ -228,17 +240,16 @@ class _ProgramWatch:
             self.warn(line)
 
 
-def _cell_spec(options: MockControllerOptions):
+def _cell_spec(options: MockControllerOptions) -> MockStationSpec:
     """The mock cell around the arm: the demo's board and camera, the config's keep-out volumes."""
     from ..station import MockStationSpec
 
-    extra = {} if options.faults is None else {"faults": options.faults}
-    if options.arm is not None:
-        extra["arm"] = options.arm
-    return MockStationSpec(protocol=options.protocol, cell=options.cell, **extra)
+    if options.faults is None:  # the spec's own default (nothing changed)
+        return MockStationSpec(protocol=options.protocol, cell=options.cell, arm=options.arm)
+    return MockStationSpec(protocol=options.protocol, cell=options.cell, faults=options.faults, arm=options.arm)
 
 
-def _rehearsal_arm(station: RapidStation, options: MockControllerOptions, spec):
+def _rehearsal_arm(station: RapidStation, options: MockControllerOptions, spec: MockStationSpec):
     """The arm of a mock with a camera or a cell: standing where the camera sees the board, as an operator
     leaves it; the cell's volumes (if any) guard its moves."""
     from ..robot import SimulatedRobot
@@ -248,21 +259,21 @@ def _rehearsal_arm(station: RapidStation, options: MockControllerOptions, spec):
                           start_joints=DEFAULT_START, guard=cell_guard(spec))
 
 
-def _start_pendant(server, options: MockControllerOptions):
+def _start_pendant(server: RapidControllerServer, port: int) -> PendantService:
     """The FlexPendant's loopback port (``src/handeye/mocks/controller/pendant.py``)."""
     from .pendant import PendantService
 
     try:
-        return PendantService(server, host="127.0.0.1", port=options.pendant_port).start()
+        return PendantService(server, host="127.0.0.1", port=port).start()
     except OSError as exc:
         from ...drivers import InvalidRequest
 
-        raise InvalidRequest(f"cannot listen on 127.0.0.1:{options.pendant_port} for the pendant ({exc}); pick "
+        raise InvalidRequest(f"cannot listen on 127.0.0.1:{port} for the pendant ({exc}); pick "
                              "another --pendant-port (0 = any free port)") from None
 
 
-def _start_cell(server, options: MockControllerOptions, spec):
+def _start_cell(server: RapidControllerServer, host: str, port: int, spec: MockStationSpec) -> CellService:
     """The simulated XB3 on the arm's flange, served for a rehearsal station (``mocks.cell``)."""
     from ..cell import CellService
 
-    return CellService(server, host=options.host, port=options.camera_port, spec=spec).start()
+    return CellService(server, host=host, port=port, spec=spec).start()

@@ -11,6 +11,7 @@ writes them as I/O signals; a test or the pendant sets a digital input with :met
 from __future__ import annotations
 
 import threading
+from collections.abc import Iterable, Mapping
 
 from ...rapid import IoBinding
 
@@ -49,7 +50,8 @@ class CellSignals(IoBinding):
         name -> (type, value at start); default :data:`CELL_SIGNALS`. Extra signals add to it.
     """
 
-    def __init__(self, table=None, extra=()):
+    def __init__(self, table: Mapping[str, tuple[str, float]] | None = None,
+                 extra: Iterable[tuple[str, str, float]] = ()):
         self._table = dict(CELL_SIGNALS if table is None else table)
         for name, kind, value in extra:
             self._table[name] = (kind, value)
@@ -63,6 +65,12 @@ class CellSignals(IoBinding):
         self.inner = inner
         return self
 
+    def _inner(self, name: str) -> IoBinding:
+        """The link's I/O, for a signal that is not the cell's (KeyError, as a dict of signals: none such)."""
+        if self.inner is None:
+            raise KeyError(name)
+        return self.inner
+
     def signals(self) -> dict:
         return {**(self.inner.signals() if self.inner is not None else {}), **self._types}
 
@@ -70,17 +78,17 @@ class CellSignals(IoBinding):
         if name in self._values:
             with self._lock:
                 return self._values[name]
-        return self.inner.read(name)
+        return self._inner(name).read(name)
 
     def write(self, name: str, value: float) -> None:
         if name in self._values:
             with self._lock:
                 self._values[name] = float(value)
             return
-        self.inner.write(name, value)
+        self._inner(name).write(name, value)
 
     def bits(self, name: str) -> int:
-        return 16 if name in self._values else self.inner.bits(name)
+        return 16 if name in self._values else self._inner(name).bits(name)
 
     def set(self, name: str, value: float) -> None:
         """Set a cell input from outside (a test, the pendant): a digital input takes 0 or 1.

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+import os
+from collections.abc import Iterable
 from pathlib import Path
 
 from ...drivers import RAPID_LINKS
@@ -60,7 +62,7 @@ def _link_of(names, origin: str, protocol: str | None = None) -> str | None:
     return found[0] if found else None
 
 
-def generated_program(protocol: str, station: RapidStation | None = None, *, postures=None,
+def generated_program(protocol: str, station: RapidStation | None = None, *, postures: Iterable[Iterable[float]] | None = None,
                       ack_timeout_s: float | None = 30.0, idle_timeout_s: float | None = None,
                       write_key: str | None = None, pc_address: str | None = None) -> ControllerProgram:
     """The modules ``handeye rapid generate`` writes for ``protocol``, with the mock's settings.
@@ -100,7 +102,7 @@ def _rendered(station: RapidStation, protocol: str) -> tuple:
     return tuple(ModuleSource(m.text, m.filename) for m in modules)
 
 
-def program_from_folder(folder, protocol: str | None = None) -> ControllerProgram:
+def program_from_folder(folder: str | os.PathLike[str], protocol: str | None = None) -> ControllerProgram:
     """The modules in ``folder`` (system modules and program modules alike).
 
     Raises
