@@ -43,12 +43,14 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, nargs="+", default=[7])
     parser.add_argument("--json", help="write the rows here")
     parser.add_argument("--only", help="run only the runs whose name starts with this (e.g. charuco)")
+    parser.add_argument("--runs", nargs="+", type=int, help="run only these runs (0-3: checkerboard, occluded "
+                        "checkerboard, charuco, occluded charuco)")
     args = parser.parse_args(argv)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for seed in args.seeds:
-            for name, board, occlude in RUNS:
-                if args.only and not name.startswith(args.only):
+            for k, (name, board, occlude) in enumerate(RUNS):
+                if (args.only and not name.startswith(args.only)) or (args.runs and k not in args.runs):
                     continue
                 row = one_run(name, board, occlude, seed, Path(tmp))
                 rows.append(row)
@@ -56,7 +58,7 @@ def main(argv=None) -> int:
                       f"corners min {row['corners_min']:3d} median {row['corners_median']:3d}; error "
                       f"{row['rotation_error_deg']:.4f} deg, {row['translation_error_mm']:.3f} mm; "
                       f"{'PASS' if row['passed'] else 'FAIL'}", flush=True)
-    for seed in args.seeds if not args.only else ():
+    for seed in args.seeds if not (args.only or args.runs) else ():
         by = {r["run"]: r for r in rows if r["seed"] == seed}
         base, occ = by["checkerboard"], by["charuco, 30 % occluded"]
         print(f"seed {seed}: occluded ChArUco / unoccluded checkerboard: rotation "
