@@ -21,7 +21,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-__all__ = ["PX_PER_MM", "Occlusion", "charuco_print", "printed_labels", "occluded", "OcclusionPicker"]
+__all__ = ["PX_PER_MM", "Occlusion", "charuco_print", "printed_labels", "circle_labels", "circle_diameter_mm", "occluded",
+           "OcclusionPicker"]
 
 #: Resolution of the ChArUco print the renderer samples (pixels per mm).
 PX_PER_MM = 8.0
@@ -63,6 +64,30 @@ def printed_labels(u, v, front, board) -> np.ndarray:
     row = np.floor((v + sq) * PX_PER_MM).astype(np.int64)
     inside = (col >= 0) & (col < w) & (row >= 0) & (row < h)
     black = inside & (image[np.clip(row, 0, h - 1), np.clip(col, 0, w - 1)] < 128)
+    return on_sheet.astype(np.uint8) + (black & on_sheet).astype(np.uint8)
+
+
+def circle_diameter_mm(geometry) -> float:
+    """The printed circles' diameter: the grid's ``diameter_mm``, else half the spacing of a row (OpenCV's
+    sample grid: circles a little over a third of their diagonal neighbours' distance)."""
+    return float(geometry.diameter_mm) if getattr(geometry, "diameter_mm", None) else 0.5 * float(geometry.square_mm)
+
+
+def circle_labels(u, v, front, board) -> np.ndarray:
+    """Labels (0 background, 1 white, 2 black) of an asymmetric circle grid sheet at board coordinates
+    ``(u, v)`` mm: black discs centred on :meth:`~handeye.geometry.targets.CircleGrid.grid`."""
+    geometry = board.geometry
+    half = 0.5 * float(geometry.square_mm)  # row pitch; circles of one row are 2 * half apart
+    per_row, rows = int(geometry.corners[0]), int(geometry.corners[1])
+    radius = 0.5 * circle_diameter_mm(geometry)
+    su0, su1, sv0, sv1 = board.sheet_bounds()
+    on_sheet = front & (u >= su0) & (u <= su1) & (v >= sv0) & (v <= sv1)
+    black = np.zeros(np.broadcast(u, v).shape, bool)
+    for offset in (0.0, 1.0):  # the nearest circle lies in the row below or above (v / half floored)
+        row = np.clip(np.floor(v / half) + offset, 0, rows - 1)
+        col = np.clip(np.round((u / half - row % 2) / 2), 0, per_row - 1)
+        du, dv = u - (2 * col + row % 2) * half, v - row * half
+        black |= du * du + dv * dv <= radius * radius
     return on_sheet.astype(np.uint8) + (black & on_sheet).astype(np.uint8)
 
 
