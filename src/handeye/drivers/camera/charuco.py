@@ -140,16 +140,22 @@ def paint_out_markers(gray: np.ndarray, marker_corners) -> np.ndarray:
     """A copy of ``gray`` ``(h, w)`` uint8 with every detected marker quad (grown by :data:`MARKER_MARGIN_PX`)
     filled with the median grey of a thin ring around it (the white paper between marker and squares)."""
     out = gray.copy()
+    h, w = gray.shape
     for quad in marker_corners if marker_corners is not None else ():
         q = np.asarray(quad, np.float64).reshape(4, 2)
         centre = q.mean(axis=0)
         radial = (q - centre) / np.linalg.norm(q - centre, axis=1, keepdims=True)
-        inner, outer = np.zeros(gray.shape, np.uint8), np.zeros(gray.shape, np.uint8)
-        for mask, grow in ((inner, MARKER_MARGIN_PX), (outer, MARKER_MARGIN_PX + 1.5)):
-            poly = np.round((q + radial * grow * np.sqrt(2.0)) * 16).astype(np.int32)
-            cv2.fillConvexPoly(mask, poly, 1, cv2.LINE_8, 4)
-        ring = gray[(outer > 0) & (inner == 0)]
-        out[inner > 0] = np.uint8(np.median(ring)) if len(ring) else np.uint8(255)
+        grown = [q + radial * grow * np.sqrt(2.0) for grow in (MARKER_MARGIN_PX, MARKER_MARGIN_PX + 1.5)]
+        x0, y0 = np.maximum(np.floor(grown[1].min(axis=0)).astype(int) - 1, 0)
+        x1, y1 = np.minimum(np.ceil(grown[1].max(axis=0)).astype(int) + 2, [w, h])
+        if x1 <= x0 or y1 <= y0:
+            continue
+        inner, outer = (np.zeros((y1 - y0, x1 - x0), np.uint8) for _ in range(2))  # the marker's box only
+        for mask, poly in ((inner, grown[0]), (outer, grown[1])):
+            cv2.fillConvexPoly(mask, np.round((poly - [x0, y0]) * 16).astype(np.int32), 1, cv2.LINE_8, 4)
+        box = gray[y0:y1, x0:x1]
+        ring = box[(outer > 0) & (inner == 0)]
+        out[y0:y1, x0:x1][inner > 0] = np.uint8(np.median(ring)) if len(ring) else np.uint8(255)
     return out
 
 
