@@ -8,7 +8,10 @@ refinement with the markers painted out) and every corner compared with its true
 the error (px) of the checkerboard corners, of the ChArUco corners as OpenCV refines them, and of the
 ChArUco corners as the package returns them.
 
-    python benchmarks/charuco/bench_corners.py [--poses 24] [--seed 1]
+    python benchmarks/charuco/bench_corners.py [--poses 24] [--seed 1] [--colour]
+
+``--colour``: the demo's colour head (GBRG mosaic packed into an XB3 frame and decoded by the driver, through
+``MockCamera.grab``) instead of a mono head's grey plane.
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ from handeye.drivers.camera import charuco
 from handeye.drivers.camera.checkerboard import detect_board
 from handeye.geometry import STATION_BOARD
 from handeye.geometry.targets import STATION_CHARUCO
-from handeye.mocks.camera import StereoRenderer
+from handeye.mocks.camera import MockCamera, StereoRenderer
 from handeye.mocks.world import PrintedBoard
 
 
@@ -38,6 +41,14 @@ def random_pose(rng) -> np.ndarray:
     return pose
 
 
+def colour_left(board, pose: np.ndarray, seed: int) -> np.ndarray:
+    """The left image of a mock colour XB3 frame (``MockCamera.grab``: mosaic, XB3 packing, decode) of ``board``."""
+    camera = MockCamera(board=PrintedBoard(board), seed=seed + 4, render_centre=False)
+    with camera:
+        camera.set_scene(target2base=np.eye(4), cam2base=np.linalg.inv(pose))
+        return camera.grab().left
+
+
 def summary(errors: list) -> dict:
     e = np.linalg.norm(np.concatenate(errors), axis=1)
     return {"corners": int(len(e)), "rms_px": float(np.sqrt(np.mean(e**2))), "median_px": float(np.median(e)),
@@ -48,6 +59,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--poses", type=int, default=24)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--colour", action="store_true", help="the colour head's decoded frames (the demo's)")
     args = parser.parse_args(argv)
     rng = np.random.default_rng(args.seed)
     poses = [random_pose(rng) for _ in range(args.poses)]
@@ -57,8 +69,11 @@ def main(argv=None) -> int:
     original = charuco.refine_without_markers
     for pose in poses:
         truth = plain.model.project(grid @ pose[:3, :3].T + pose[:3, 3], "left")
-        cb = plain.planes(pose, ("left",), replace(plain.options, colour=False))["left"]
-        ch = marked.planes(pose, ("left",), replace(marked.options, colour=False))["left"]
+        if args.colour:
+            cb, ch = (colour_left(b, pose, args.seed) for b in (STATION_BOARD, STATION_CHARUCO))
+        else:
+            cb = plain.planes(pose, ("left",), replace(plain.options, colour=False))["left"]
+            ch = marked.planes(pose, ("left",), replace(marked.options, colour=False))["left"]
         rows["checkerboard"].append(detect_board(cb, STATION_BOARD).corners_px - truth)
         try:
             charuco.refine_without_markers = lambda gray, px, *rest: px  # OpenCV's corners as they come
@@ -68,7 +83,7 @@ def main(argv=None) -> int:
         rows["charuco, OpenCV's refinement"].append(det.corners_px - truth[det.ids])
         det = charuco.detect_charuco(ch, STATION_CHARUCO)
         rows["charuco, markers painted out"].append(det.corners_px - truth[det.ids])
-    print(f"{args.poses} poses (seed {args.seed}), left image, error against the true projection (px):")
+    print(f"{args.poses} poses (seed {args.seed}), {'colour' if args.colour else 'mono'} head, left image, error against the true projection (px):")
     for name, errors in rows.items():
         s = summary(errors)
         print(f"  {name:30s} {s['corners']:5d} corners  RMS {s['rms_px']:.4f}  median {s['median_px']:.4f}  "
