@@ -64,3 +64,32 @@ def test_the_station_config_takes_a_board_section_and_mock_occlude():
         config_from_dict({**MOCK, "mock": {"occlude": {"postures": 2}}})
     with pytest.raises(ConfigError, match="marker_mm"):
         config_from_dict({**MOCK, "board": {"type": "charuco", "marker_mm": 40}})
+
+
+def test_a_circle_grid_frame_is_found_whole_at_the_true_centres():
+    from handeye.geometry.targets import STATION_CIRCLES
+
+    camera = MockCamera(board=PrintedBoard(STATION_CIRCLES), seed=2, render_centre=False)
+    with camera:
+        frame = camera.grab()
+    obs = observe_board(frame.left, frame.right, camera.model, STATION_CIRCLES)
+    truth = frame.info["target2cam_truth"]
+    true_points = STATION_CIRCLES.grid() @ truth[:3, :3].T + truth[:3, 3]
+    assert len(obs.corner_ids) == STATION_CIRCLES.count
+    error = np.linalg.norm(obs.points_mm - true_points[obs.corner_ids], axis=1)
+    assert np.sqrt(np.mean(error**2)) < 0.5
+    assert abs(obs.quality["square_mm_measured"] - STATION_CIRCLES.square_mm) < 0.1
+
+
+def test_the_circle_sheet_is_black_discs_of_half_the_row_spacing_on_white():
+    from handeye.geometry.targets import STATION_CIRCLES
+    from handeye.mocks.printed_targets import circle_labels
+
+    board = PrintedBoard(STATION_CIRCLES)
+    centres = STATION_CIRCLES.grid()
+    r = 0.25 * STATION_CIRCLES.square_mm
+    u = np.concatenate([centres[:, 0] + 0.9 * r, centres[:, 0] + 1.1 * r])
+    v = np.concatenate([centres[:, 1], centres[:, 1]])
+    labels = circle_labels(u, v, np.ones(len(u), bool), board)
+    n = len(centres)
+    assert np.all(labels[:n] == 2) and np.all(labels[n:] == 1)

@@ -282,12 +282,14 @@ def _labels(u, v, front, board: PrintedBoard, band=None) -> np.ndarray:
     """0 = background, 1 = white paper, 2 = black square (3 = the occluder over ``band``); square ``(a, b)``
     (``a = floor(u / sq) + 1``, ``b = floor(v / sq) + 1``) is black when ``a + b`` is even (conventions: the
     square between corners 0, 1, nx, nx + 1 is black). A ChArUco sheet is OpenCV's print
-    (:func:`~handeye.mocks.printed_targets.printed_labels`)."""
+    (:func:`~handeye.mocks.printed_targets.printed_labels`), a circle grid black discs
+    (:func:`~handeye.mocks.printed_targets.circle_labels`)."""
     if band is not None or getattr(board.geometry, "kind", "checkerboard") != "checkerboard":
-        from .printed_targets import occluded, printed_labels  # noqa: PLC0415
+        from .printed_targets import circle_labels, occluded, printed_labels  # noqa: PLC0415
 
-        plain = printed_labels(u, v, front, board) if getattr(board.geometry, "kind", "") == "charuco" else \
-            _labels(u, v, front, board)
+        kind = getattr(board.geometry, "kind", "")
+        plain = printed_labels(u, v, front, board) if kind == "charuco" else circle_labels(u, v, front, board) \
+            if kind == "circles" else _labels(u, v, front, board)
         return occluded(plain, u, band)
     cu0, cu1, cv0, cv1 = board.checker_bounds()
     su0, su1, sv0, sv1 = board.sheet_bounds()

@@ -23,12 +23,13 @@ from typing import TYPE_CHECKING, cast
 import cv2
 import numpy as np
 
-from ..geometry import BoardGeometry, CharucoBoard
+from ..geometry import BoardGeometry, CharucoBoard, CircleGrid
 
 if TYPE_CHECKING:
     from .world import PrintedBoard
 
-__all__ = ["PX_PER_MM", "Occlusion", "charuco_print", "printed_labels", "occluded", "OcclusionPicker"]
+__all__ = ["PX_PER_MM", "Occlusion", "charuco_print", "printed_labels", "circle_labels", "circle_diameter_mm", "occluded",
+           "OcclusionPicker"]
 
 #: Resolution of the ChArUco print the renderer samples (pixels per mm).
 PX_PER_MM = 8.0
@@ -70,6 +71,39 @@ def printed_labels(u: np.ndarray, v: np.ndarray, front: np.ndarray, board: Print
     row = np.floor((v + sq) * PX_PER_MM).astype(np.int64)
     inside = (col >= 0) & (col < w) & (row >= 0) & (row < h)
     black = inside & (image[np.clip(row, 0, h - 1), np.clip(col, 0, w - 1)] < 128)
+    return on_sheet.astype(np.uint8) + (black & on_sheet).astype(np.uint8)
+
+
+def circle_diameter_mm(geometry: BoardGeometry) -> float:
+    """The printed circles' diameter: the grid's ``diameter_mm``, else half the spacing of a row (OpenCV's
+    sample grid: circles a little over a third of their diagonal neighbours' distance)."""
+    spacing = _spacing_mm(geometry)
+    diameter = geometry.diameter_mm if isinstance(geometry, CircleGrid) else None
+    return float(diameter) if diameter else 0.5 * spacing
+
+
+def _spacing_mm(geometry: BoardGeometry) -> float:
+    """The target's ``square_mm`` (a circle grid's spacing); a target without one cannot be printed."""
+    if geometry.square_mm is None:
+        raise ValueError("the target has no square_mm: give the printed spacing in mm in the board: section")
+    return float(geometry.square_mm)
+
+
+def circle_labels(u: np.ndarray, v: np.ndarray, front: np.ndarray, board: PrintedBoard) -> np.ndarray:
+    """Labels (0 background, 1 white, 2 black) of an asymmetric circle grid sheet at board coordinates
+    ``(u, v)`` mm: black discs centred on :meth:`~handeye.geometry.targets.CircleGrid.grid`."""
+    geometry = board.geometry
+    half = 0.5 * _spacing_mm(geometry)  # row pitch; circles of one row are 2 * half apart
+    per_row, rows = int(geometry.corners[0]), int(geometry.corners[1])
+    radius = 0.5 * circle_diameter_mm(geometry)
+    su0, su1, sv0, sv1 = board.sheet_bounds()
+    on_sheet = front & (u >= su0) & (u <= su1) & (v >= sv0) & (v <= sv1)
+    black = np.zeros(np.broadcast(u, v).shape, bool)
+    for offset in (0.0, 1.0):  # the nearest circle lies in the row below or above (v / half floored)
+        row = np.clip(np.floor(v / half) + offset, 0, rows - 1)
+        col = np.clip(np.round((u / half - row % 2) / 2), 0, per_row - 1)
+        du, dv = u - (2 * col + row % 2) * half, v - row * half
+        black |= du * du + dv * dv <= radius * radius
     return on_sheet.astype(np.uint8) + (black & on_sheet).astype(np.uint8)
 
 

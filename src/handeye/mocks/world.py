@@ -56,6 +56,9 @@ class PrintedBoard:
         """``(u_min, u_max, v_min, v_max)`` of the squares (target frame, mm)."""
         nx, ny = self.corners
         s = self.square_mm
+        if getattr(self.geometry, "kind", "") == "circles":  # the circles' extent and a spacing around it
+            hi = self.geometry.grid().max(axis=0)
+            return -s / 2, hi[0] + s / 2, -s / 2, hi[1] + s / 2
         return -s, nx * s, -s, ny * s
 
     def sheet_bounds(self) -> tuple[float, float, float, float]:
@@ -66,6 +69,9 @@ class PrintedBoard:
 
     def centre(self) -> np.ndarray:
         """Centre of the corner grid in the target frame."""
+        if getattr(self.geometry, "kind", "") == "circles":
+            grid = self.geometry.grid()
+            return 0.5 * (grid.min(axis=0) + grid.max(axis=0))
         nx, ny = self.corners
         return np.array([(nx - 1) * self.square_mm / 2, (ny - 1) * self.square_mm / 2, 0.0])
 
