@@ -17,10 +17,15 @@ from collections.abc import Callable
 from contextlib import contextmanager
 from pathlib import Path
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .config.station import StationConfig
+
+if TYPE_CHECKING:
+    from ..drivers import Camera, Controller, StereoModel
+    from ..mocks import MockStation
 
 
 @dataclass
@@ -44,11 +49,11 @@ class StationLink:
         (Robot Web Services); None: the program is left to the operator.
     """
 
-    controller: object
-    camera: object = None
-    stereo_model: object = None
+    controller: Controller
+    camera: Camera | None = None
+    stereo_model: StereoModel | None = None
     load_program: Callable | None = None
-    mock: object = None
+    mock: MockStation | None = None
     rehearsal: str | None = None
     stop_program: Callable | None = None
 

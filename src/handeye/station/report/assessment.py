@@ -23,7 +23,7 @@ import numpy as np
 from ...base import CalibrationError, HandEyeError
 from ...calibration import comparison_methods
 from ...calibration import fixed_points
-from ...calibration import EYE_IN_HAND, HandEyeProblem
+from ...calibration import EYE_IN_HAND, CalibrationResult, HandEyeProblem
 from ...calibration import AxisCoverage, DOrg, kept_postures, result_d_org
 from ...geometry import rotation_error_deg
 from ..calibrate import CalibrationOutcome
@@ -89,7 +89,7 @@ class Assessment:
 
     session_path: Path | str
     problem: HandEyeProblem
-    result: object
+    result: CalibrationResult
     origin: str
     figures: QualityFigures
     verdict: Verdict | None
@@ -294,6 +294,8 @@ def held_out_rms_mm(problem: HandEyeProblem, chosen, result) -> float | None:
                                                                keep=kept_postures(problem, chosen)), "cross-validate")
     except OutOfTime:
         return None
+    if cv is None:  # cross_validate always returns its figures; bounded_for's value is untyped (maybe None)
+        raise CalibrationError(f"the cross-validation of method {result.method} returned nothing")
     return cv.rms_mm if np.isfinite(cv.rms_sq_mm2).any() else None
 
 

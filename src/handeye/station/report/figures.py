@@ -10,11 +10,15 @@ corners in the fixed frame and the per-corner RMS. No two texts of a figure may 
 from __future__ import annotations
 
 import io
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
 from ...calibration import HandEyeProblem
 from ...calibration import D_ORG_ALL_NAME, AxisCoverage
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["BLUE", "RED", "ORANGE", "GREY", "new_figure", "to_png", "style_axes", "plot_residuals", "plot_axis_coverage",
            "plot_method_comparison", "method_comparison_figure", "plot_repeatability", "plot_point_rms"]
@@ -22,7 +26,7 @@ __all__ = ["BLUE", "RED", "ORANGE", "GREY", "new_figure", "to_png", "style_axes"
 BLUE, RED, ORANGE, GREY = "#1f5fa8", "#c62828", "#ef8a17", "#8a8a8a"
 
 
-def new_figure(width: float, height: float, layout: str | None = None):
+def new_figure(width: float, height: float, layout: Literal["constrained", "compressed", "tight"] | None = None) -> Figure:
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(width, height), dpi=100, layout=layout)
@@ -77,10 +81,11 @@ def plot_residuals(result, problem: HandEyeProblem, limit_mm: float | None) -> b
     ax.set_ylim(0, (top * (1.4 if labelled else 1.18)) if top > 0 else 1.0)
     ax.set_xlabel("posture")
     ax.set_ylabel("residual (mm)")
+    from matplotlib.artist import Artist
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    handles = [Patch(color=BLUE, label="used"), Patch(color=RED, label="outlier (left out)")]
+    handles: list[Artist] = [Patch(color=BLUE, label="used"), Patch(color=RED, label="outlier (left out)")]
     if ORANGE in colours:
         handles.append(Patch(color=ORANGE, label="used, over the limit"))
     if off_scale:

@@ -30,7 +30,7 @@ import math
 import sys
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -47,6 +47,9 @@ from ...calibration import (
     result_d_org,
     rotation_axis_coverage,
 )
+
+if TYPE_CHECKING:
+    from .units_advice import UnitsAdvice
 
 __all__ = [
     "CHECK_LABELS",
@@ -351,7 +354,7 @@ class QualityFigures:
 
     d_org: DOrg
     coverage: AxisCoverage
-    units: object | None
+    units: UnitsAdvice | None
 
 
 def quality_figures(problem: HandEyeProblem, result) -> QualityFigures:
