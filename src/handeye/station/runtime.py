@@ -17,7 +17,7 @@ from collections.abc import Callable
 from contextlib import contextmanager
 from pathlib import Path
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol, cast
 
 import numpy as np
 
@@ -146,7 +146,10 @@ def check_rehearsal(config: StationConfig) -> dict:
 
     from ..drivers import CONTROLLERS
 
-    served = cell_info(config.camera.mock_arm)["controller"]
+    arm = config.camera.mock_arm
+    if arm is None:
+        raise ConfigError("not a rehearsal: camera.mock_arm names no mock controller's camera")
+    served = cell_info(arm)["controller"]
     c = config.controller
     options = CONTROLLERS[c.protocol].link_options(c)
     if "url" in options:  # a line behind a URL: the URL is the address
@@ -155,7 +158,7 @@ def check_rehearsal(config: StationConfig) -> dict:
         address = {"host": options.get("host"), "port": options.get("port")}
         named = f"{c.protocol} {address['host']}:{address['port']}"
     same = served["protocol"] == c.protocol and all(
-        _same_host(served.get(key), value) if key == "host" else served.get(key) == value
+        _same_host(str(served.get(key)), str(value)) if key == "host" else served.get(key) == value
         for key, value in address.items())
     if not same:
         where = served.get("url") or f"{served['host']}:{served['port']}"
@@ -163,6 +166,17 @@ def check_rehearsal(config: StationConfig) -> dict:
                           f"controller at {where}, but the controller section names {named}: a rehearsal drives the mock "
                           "controller whose arm the mock camera sees")
     return served
+
+
+class _LoadsPrograms(Protocol):
+    """A rehearsal's camera (``mocks.cell.CellCamera``): it loads a program into its mock controller's task."""
+
+    def load_program(self, rapid_dir) -> int: ...
+
+
+def _rehearsal_camera(camera: Camera) -> _LoadsPrograms:
+    # a rehearsal config's camera back end is ``mock`` on camera.mock_arm: mocks.cell.CellCamera, which has load_program
+    return cast(_LoadsPrograms, camera)
 
 
 @contextmanager
@@ -207,7 +221,7 @@ def open_station(config: StationConfig, mock: bool = False, session_dir=None):
         stop = getattr(controller, "stop_program", None) if loader is not None else None
         if config.is_rehearsal:  # else the mock plays the operator who loads SESSION/rapid into the task
             yield StationLink(controller, camera, model,
-                              loader or (lambda _postures, rapid_dir: camera.load_program(rapid_dir)),
+                              loader or (lambda _postures, rapid_dir: _rehearsal_camera(camera).load_program(rapid_dir)),
                               rehearsal=config.camera.mock_arm, stop_program=stop)
             return
         yield StationLink(controller, camera, model, loader, stop_program=stop)

@@ -341,8 +341,9 @@ def recorded_plan(session: Session, config: StationConfig) -> PosturePlan:
         Naming what the record lacks (``start_joints_deg``: planned by an older handeye).
     """
     record = session.extra.get("capture", {})
-    lacking = [key for key in _PREVIEW_KEYS if key not in record] + (["target"] if session.target is None else [])
-    if lacking:
+    target = session.target
+    lacking = [key for key in _PREVIEW_KEYS if key not in record] + (["target"] if target is None else [])
+    if lacking or target is None:
         raise CaptureError(f"session.yaml records no {', '.join(lacking)}")
     try:
         joints = np.array(record["plan_joints_deg"], float)
@@ -352,7 +353,7 @@ def recorded_plan(session: Session, config: StationConfig) -> PosturePlan:
         score = PlanScore.from_dict(record.get("plan_score", {}))
     except (KeyError, TypeError, ValueError) as exc:
         raise CaptureError(f"its capture record in session.yaml is unreadable ({exc})") from None
-    return PosturePlan(joints, board2base, cam2tool0, score, start, session.target, [], cell_check(config))
+    return PosturePlan(joints, board2base, cam2tool0, score, start, target, [], cell_check(config))
 
 
 def repair_plan(config: StationConfig, session_dir: Path, session: Session, progress) -> Path | None:
@@ -409,7 +410,7 @@ def _session_program(config: StationConfig, plan_joints: np.ndarray, board2base,
     from ...rapid import station_from_dict
 
     data = config.rapid_dict(plan_joints, board2base)
-    if link is not None and link.is_mock and data["controller"]["write_key"] is None:
+    if link is not None and link.mock is not None and data["controller"]["write_key"] is None:
         # the embedded station's controller holds a key of its own (HeKey.sys, handed to the PC): its
         # link module asks HeKey for it. The key itself never goes into the program modules.
         data["controller"]["write_key"] = link.mock.write_key
@@ -654,13 +655,16 @@ def measure_posture(config: StationConfig, link: StationLink, on_grab: Callable 
     """:func:`measure_with_retries` and whether the last grab saw no checkerboard at all:
     ``(result, frame, problem, attempts, absent)``; ``retry_absent=False``: no retry after such a grab
     (retries help a blurred, glaring or badly lit board, not one that is out of view)."""
+    camera = link.camera
+    if camera is None:  # every capturing link is opened with its camera (station.runtime)
+        raise CaptureError("the station link has no camera to measure the board with")
     problem = "no frame"
     result = frame = None
     attempts, absent = 0, False
     for attempts in range(1, config.capture.retries + 2):
         grabbed = None
         try:
-            grabbed = link.camera.grab(config.camera.grab_timeout_s)
+            grabbed = camera.grab(config.camera.grab_timeout_s)
             result, frame = _triangulate(grabbed, link.stereo_model, config.target), grabbed
         except CameraError as exc:
             problem, absent = str(exc), isinstance(exc, NoBoardInView)
@@ -726,6 +730,8 @@ def _capture_posture(config, session_dir, link: StationLink, robot, index, total
                                result.quality if result is not None else {}, attempts, board_absent=absent)
         observer(Verdict(index, SKIPPED, report.message, report.quality))
         return report
+    if result is None:  # measure_posture: no problem means the last grab was measured
+        raise CaptureError(f"posture {index}: no measurement although no problem was reported")
     store_posture(config, session_dir, index, joints, tool02base, result, frame, controller_posture=index + 1)
     report = PostureReport(index, total, True, f"posture {index}: {measurement_line(result.quality)}", result.quality,
                            attempts)

@@ -26,6 +26,7 @@ from ...robot import CellModel
 from ...robot import CellGuard
 from ...geometry import BoardGeometry, board_corners
 from ...robot import RobotModel
+from ..board_square import known_square_mm
 
 __all__ = ["CellCheck", "PostureVeto", "Rejections", "base_problem", "board_problem", "cell_check", "clear_route",
            "start_problem", "view_points"]
@@ -133,7 +134,7 @@ def view_points(board2base, board: BoardGeometry, distance_mm, cone_deg: float) 
         Largest angle of the viewing direction from the board normal (``plan.cone_deg``).
     """
     frame = np.asarray(board2base, float)
-    centre = frame[:3, :3] @ board_corners(board.corners, board.square_mm).mean(axis=0) + frame[:3, 3]
+    centre = frame[:3, :3] @ board_corners(board.corners, known_square_mm(board)).mean(axis=0) + frame[:3, 3]
     cone, turns = np.radians(cone_deg), np.radians(np.arange(0.0, 360.0, 45.0))
     local = np.vstack([[0.0, 0.0, -1.0], np.stack([np.sin(cone) * np.cos(turns), np.sin(cone) * np.sin(turns),
                                                    np.full(turns.shape, -np.cos(cone))], axis=1)])
@@ -157,7 +158,7 @@ def board_problem(model: CellModel, board2base, board: BoardGeometry, distance_m
     """
     views = view_points(board2base, board, distance_mm, cone_deg)
     frame = np.asarray(board2base, float)
-    corners = board_corners(board.corners, board.square_mm) @ frame[:3, :3].T + frame[:3, 3]
+    corners = board_corners(board.corners, known_square_mm(board)) @ frame[:3, :3].T + frame[:3, 3]
     for volume in model.keep_out:
         if np.all(volume.signed_distance(views) < 0):
             holds = " holds the board and" if np.any(volume.signed_distance(corners) < 0) else ""
@@ -190,7 +191,10 @@ def base_problem(robot: RobotModel, volumes, margin_mm: float, keep_out=None) ->
     if not near:
         return None
     volume, gap = min(near, key=lambda pair: pair[1])
-    low, high = base_envelope(robot)
+    box = base_envelope(robot)
+    if box is None:  # the clearances above were measured to the base's capsules: there are some
+        raise ValueError(f"robot {robot.name} has no base capsules to name an envelope by")
+    low, high = box
     where = (f"reaches {-gap:.0f} mm into" if gap < 0 else f"is {gap:.0f} mm from") + " the robot's base"
     envelope = (f"x {low[0]:.0f}..{high[0]:.0f}, y {low[1]:.0f}..{high[1]:.0f}, z up to {high[2]:.0f} mm in base, "
                 f"the robot file's base capsule")

@@ -4,11 +4,15 @@ error that says what was expected (argparse prints it as one line and exits 2)."
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
+from typing import TypeVar
+
+T = TypeVar("T")
 
 __all__ = ["registry_choice", "left_out_lines", "option_word", "load_for_flags", "corners", "positive", "non_negative", "count", "whole_between", "port", "floats", "setting_value"]
 
 
-def _number(text: str, kind=float, what: str = "a number"):
+def _number(text: str, kind: Callable[[str], T] = float, what: str = "a number") -> T:
     try:
         return kind(text)
     except ValueError:

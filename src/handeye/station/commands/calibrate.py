@@ -196,14 +196,15 @@ def _save_result(outcome, units: str):
         return None
 
 
-def _kinematics_sections(kinematics) -> tuple:
+def _kinematics_sections(kinematics: tuple | None) -> tuple:
     """The report's kinematics section (none without ``--kinematics``)."""
     if kinematics is None:
         return ()
     from ..kinematics_report import kinematics_section
     from ..kinematics_step import kinematics_lines
 
-    return (kinematics_section(*kinematics, kinematics_lines(*kinematics)),)
+    ident, standoff = kinematics  # kinematics_step.identify_outcome
+    return (kinematics_section(ident, standoff, kinematics_lines(ident, standoff)),)
 
 
 def _warn_joint_mismatch(session) -> None:

@@ -79,7 +79,7 @@ Example:
 """
 
 
-def _protocols(loaded: bool = False) -> tuple[str, str]:
+def _protocols(loaded: bool = False) -> tuple[tuple[str, ...], str]:
     """The protocols a mock serves (registry order; with ``loaded``, of the back ends loaded so far only) and
     their lines for the epilog."""
     from ...mocks import mock_protocols, mock_server

@@ -101,8 +101,9 @@ def run(args) -> int:
             info, status = controller.info(), controller.status()
             data = {"state": status.state, "posture": status.posture, "postures": info.postures,
                     "program": info.program, "protocol_version": info.protocol_version}
-            if hasattr(controller, "controller_state"):  # RWS: the controller's own state too
-                data["controller"] = controller.controller_state()
+            controller_state = getattr(controller, "controller_state", None)
+            if controller_state is not None:  # RWS: the controller's own state too
+                data["controller"] = controller_state()
             if args.json:
                 print(json.dumps(data))
             else:

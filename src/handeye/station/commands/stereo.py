@@ -4,6 +4,7 @@ calibration into a stereo file (``triclops``)."""
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING, cast
 
 from ...geometry import STATION_CORNERS, STATION_SQUARE_MM
 from . import argtypes
@@ -172,8 +173,11 @@ def _mock_camera(config, seed):
     from ...drivers import open_camera
     from ...mocks import BoardOperator, PrintedBoard
 
+    if TYPE_CHECKING:
+        from ...mocks import MockCamera
+
     board = PrintedBoard(config.board, margin_mm=max(15.0, 0.8 * config.board.square_mm))
-    camera = open_camera("mock", board=board, seed=seed, output="gray", render_centre=False)
+    camera = cast("MockCamera", open_camera("mock", board=board, seed=seed, output="gray", render_centre=False))  # back end "mock"
     operator = BoardOperator(camera.model, board, seed=seed)
     return camera, lambda hint: operator.follow(camera, hint)
 

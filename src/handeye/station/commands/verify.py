@@ -124,7 +124,7 @@ def run(args) -> int:
 
 
 def _check(args, config, link, tag: str) -> str:
-    from ...base import write_text_atomic
+    from ...base import HandEyeError, write_text_atomic
     from ..report.quality import config_thresholds
     from ..verify.check import verify
     from ..verify.history import append_record, check_record, history_path, load_history
@@ -158,7 +158,13 @@ def _check(args, config, link, tag: str) -> str:
         history = load_history(path)
         if history.skipped:
             print(history.skipped_line(), file=sys.stderr)
-        target = args.report or str(outcome.folder / "verify_report.html")
+        folder = outcome.folder
+        if args.report:
+            target = args.report
+        elif folder is not None:
+            target = str(folder / "verify_report.html")
+        else:  # verify() always makes the check's folder
+            raise HandEyeError("the check wrote no folder to put its report in: give --report FILE")
         say(f"report: {write_history_report(target, history, thresholds, data)}")
 
     _after_check(record, "the check was not added to the history")

@@ -53,6 +53,7 @@ from .schema import (
     chosen_of,
     declared_fields,
     numbers,
+    key_rule,
     rule_of,
     schema_keys,
     secret_fields,
@@ -208,6 +209,8 @@ class _DeclaredByBackEnds:
     #: handeye's own back ends (no other plug-in is imported to check a file).
     CHOSEN_BY: ClassVar[str] = ""
     _WHAT: ClassVar[str] = ""
+    #: ``_declared(chosen) -> {key: (Setting, back-end names)}`` (each section's own: a staticmethod).
+    _declared: ClassVar[Callable[[str | None], dict]]
 
     @classmethod
     def extra_settings(cls, chosen: str | None = None) -> tuple:
@@ -702,7 +705,7 @@ def config_from_dict(data: dict, source: str = "configuration") -> StationConfig
     if unknown:
         raise ConfigError(f"unknown section {brief(unknown[0])}; known: {', '.join(sorted(TOP_LEVEL))}")
     context = {"robot": StationConfig.robot}
-    rules = {f.name: rule_of(f) for f in fields(StationConfig)}
+    rules = {f.name: key_rule(f) for f in fields(StationConfig) if rule_of(f) is not None}
     changes = {name: rules[name](data[name], name, context) for name in TOP_LEVEL if name in data}
     config = replace(StationConfig(source=source), **changes)
     _check_quality(config.quality)
@@ -716,7 +719,10 @@ def _required_keys():
     for path, f in schema_keys(StationConfig):
         if f.metadata.get("required"):
             name, key = path.split(".")
-            yield name, key, tuple(c for c in rule_of(f).choices() if c != MOCK)
+            rule = key_rule(f)
+            if not isinstance(rule, Text) or rule.choices is None:  # required keys name a registered back end
+                raise TypeError(f"required key {path} has no choices to name")
+            yield name, key, tuple(c for c in rule.choices() if c != MOCK)
 
 
 def _check_hardware_named(data: dict, config: StationConfig) -> None:
