@@ -146,7 +146,7 @@ def check_camera_offset(cam2tool0, config: StationConfig) -> None:
                              f"({limits.max_camera_offset_mm:g}): check the session's units and set-up; nothing was written")
 
 
-def _verdict_refusal(result: CalibrationResult, verdict_reason: str, session_dir="SESSION") -> str:
+def _verdict_refusal(result: CalibrationResult, verdict_reason: str, session_dir: Path | str = "SESSION") -> str:
     """Why a failed verdict is not written, and what to do: a method without an uncertainty (the classics)
     can never pass the precision checks, so the advice is the default method, not a better session."""
     failed = f"the calibration failed its quality verdict ({verdict_reason})"
