@@ -13,7 +13,7 @@ refused: the mock camera never silently watches a real robot.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from dataclasses import dataclass
@@ -25,7 +25,7 @@ from .config.station import StationConfig
 
 if TYPE_CHECKING:
     from ..drivers import Camera, Controller, StereoModel
-    from ..mocks import MockStation
+    from ..mocks import MockStation, MockStationSpec
 
 
 @dataclass
@@ -88,13 +88,13 @@ def _camera_options(config: StationConfig) -> dict:
 MOCK_STATE_FILE = "mock_controller_state.json"
 
 
-def mock_state_file(session_dir) -> Path | None:
+def mock_state_file(session_dir: str | Path | None) -> Path | None:
     """Where the embedded mock station keeps its controller's PERS values for the sessions beside
     ``session_dir`` (None: no session folder, a fresh controller)."""
     return None if session_dir is None else Path(session_dir).resolve().parent / MOCK_STATE_FILE
 
 
-def mock_spec(config: StationConfig, state_file=None):
+def mock_spec(config: StationConfig, state_file: str | Path | None = None) -> MockStationSpec:
     """The embedded mock station described by the configuration's ``mock`` section (``state_file``: where its
     controller keeps its PERS tool data between runs, :func:`mock_state_file`)."""
     from ..mocks import MockStationSpec
@@ -192,7 +192,7 @@ def _mock_station(config: StationConfig, session_dir=None):
 
 
 @contextmanager
-def open_station(config: StationConfig, mock: bool = False, session_dir=None):
+def open_station(config: StationConfig, mock: bool = False, session_dir: str | Path | None = None) -> Iterator[StationLink]:
     """Yield a :class:`StationLink` with the controller and the camera of ``config`` (real, or the
     embedded mock when ``config.is_mock`` or ``mock``); everything is closed (and the mock stopped)
     on exit. The embedded mock keeps its controller's PERS tool data beside ``session_dir``
@@ -251,7 +251,8 @@ def _program_loader(controller):
 
 
 @contextmanager
-def open_controller_link(config: StationConfig, mock: bool = False, session_dir=None):
+def open_controller_link(config: StationConfig, mock: bool = False,
+                         session_dir: str | Path | None = None) -> Iterator[StationLink]:
     """Yield a :class:`StationLink` holding only the controller of ``config`` (real, or the embedded
     mock station's when ``config.is_mock`` or ``mock``, its PERS values kept beside ``session_dir``):
     what write-back needs, so it works without the camera."""

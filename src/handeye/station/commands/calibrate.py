@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from .argtypes import Subcommands
+
 HELP = "solve a session for the camera pose (cam2tool0, or cam2base eye-to-hand)"
 
 #: How the help introduces each kind of method (``calibration.methods.KINDS``), and the citation its
@@ -87,7 +89,7 @@ Examples:
 """
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     p = sub.add_parser("calibrate", help=HELP, description=HELP, epilog=lambda: methods_help() + EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("session", metavar="SESSION", help="session folder (handeye-session/1)")
@@ -106,7 +108,7 @@ def add_parser(sub):
     return p
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     import sys
 
     from ..report.assessment import assess, comparison_methods

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, cast
 
 from ...geometry import STATION_CORNERS, STATION_SQUARE_MM
 from . import argtypes
+from .argtypes import Subcommands
 
 HELP = "calibrate the stereo head from checkerboard pairs, or read its factory (Triclops) calibration"
 
@@ -96,7 +97,7 @@ def _size(text: str) -> tuple[int, int]:
     return w, h
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     p = sub.add_parser("stereo", help=HELP, description=HELP)
     targets = p.add_subparsers(dest="stereo_action", metavar="ACTION")
     c = targets.add_parser("calibrate", help=CALIBRATE_HELP, description=CALIBRATE_HELP, epilog=CALIBRATE_EPILOG,
@@ -226,7 +227,7 @@ def _triclops(args) -> int:
     return 0
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     action = getattr(args, "stereo_action", None)
     if action == "calibrate":
         return _calibrate(args)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from .argtypes import Subcommands
+
 HELP = "check a calibration on the station: revisit K postures, test for drift, say what changed"
 
 EPILOG = """\
@@ -46,7 +48,7 @@ Examples:
 """
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     p = sub.add_parser("verify", help=HELP, description=HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--config", metavar="STATION.yaml", help="station configuration (controller, camera, cell, mock)")
@@ -83,7 +85,7 @@ def _history(args, config) -> int:
     return 0
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     import sys

@@ -23,7 +23,7 @@ verdict's thresholds, see ``station.report.quality``), ``verify`` (the change a 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, fields, is_dataclass, replace
 from typing import ClassVar
 from pathlib import Path
@@ -612,7 +612,7 @@ class StationConfig:
         return replace(self, controller=replace(self.controller, protocol=MOCK),
                        camera=replace(self.camera, backend=MOCK, mock_arm=None))
 
-    def session_folder(self, session) -> Path:
+    def session_folder(self, session: str | Path) -> Path:
         """Where ``handeye capture --session SESSION`` works: a relative ``SESSION`` inside ``output`` (unless it
         already starts with that folder), an absolute one, or any with ``output`` null, as given."""
         path = Path(session)
@@ -626,7 +626,7 @@ class StationConfig:
         """The controller link actually spoken: the mock station's own protocol when mocked."""
         return self.mock.protocol if self.is_mock else self.controller.protocol
 
-    def rapid_dict(self, postures, board2base=None) -> dict:
+    def rapid_dict(self, postures: np.ndarray | Sequence, board2base: np.ndarray | None = None) -> dict:
         """The mapping ``rapid.station.station_from_dict`` reads, with the given approved postures; with
         ``cell.world_zones`` the keep-out volumes (and the board's stand when ``board2base`` is given)
         as world zones on the camera's nominal TCP."""
@@ -788,7 +788,7 @@ def describe_keys() -> list[str]:
     return lines
 
 
-def load_config(path) -> StationConfig:
+def load_config(path: str | Path) -> StationConfig:
     """Read and validate a station YAML file.
 
     Raises
