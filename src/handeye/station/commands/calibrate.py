@@ -151,7 +151,7 @@ def run(args: argparse.Namespace) -> int:
     assessment = assess(outcome, thresholds, judge=wants_report or bool(args.thresholds),
                         methods=comparison_methods() if wants_report else ())
     written = None
-    if wants_report:
+    if report_path is not None:  # wants_report
         from ..report.document import write_report
 
         title = f"Hand-eye calibration report: {outcome.session_path.resolve().name}"

@@ -18,7 +18,10 @@ from ...calibration import HandEyeProblem
 from ...calibration import D_ORG_ALL_NAME, AxisCoverage
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
+
+    from ...calibration import CalibrationResult
 
 __all__ = ["BLUE", "RED", "ORANGE", "GREY", "new_figure", "to_png", "style_axes", "plot_residuals", "plot_axis_coverage",
            "plot_method_comparison", "method_comparison_figure", "plot_repeatability", "plot_point_rms"]
@@ -34,19 +37,19 @@ def new_figure(width: float, height: float, layout: Literal["constrained", "comp
     return fig
 
 
-def to_png(fig) -> bytes:
+def to_png(fig: Figure) -> bytes:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=100, bbox_inches="tight", facecolor="white")
     return buffer.getvalue()
 
 
-def style_axes(ax):
+def style_axes(ax: Axes) -> None:
     ax.grid(True, alpha=0.25)
     for side in ("top", "right"):
         ax.spines[side].set_visible(False)
 
 
-def plot_residuals(result, problem: HandEyeProblem, limit_mm: float | None) -> bytes:
+def plot_residuals(result: CalibrationResult, problem: HandEyeProblem, limit_mm: float | None) -> bytes:
     """Bar chart of each posture's residual (mm); outliers red, inliers over the limit orange."""
     ids = [int(i) for i in problem.posture_ids]
     values = np.array([result.residuals_mm.get(i, np.nan) for i in ids])
@@ -179,7 +182,7 @@ def plot_method_comparison(rows: list[dict]) -> bytes:
     return to_png(method_comparison_figure(rows))
 
 
-def method_comparison_figure(rows: list[dict]):
+def method_comparison_figure(rows: list[dict]) -> Figure:
     """The figure of :func:`plot_method_comparison` (a matplotlib ``Figure``)."""
     names = [r["method"] + (" (chosen)" if r["chosen"] else "") for r in rows]
     colours = [BLUE if r["chosen"] else GREY for r in rows]
@@ -221,7 +224,7 @@ def _grid_shape(points_2d: np.ndarray):
     return (len(ys), len(xs)) if np.allclose(expected, np.round(points_2d, 6)) else None
 
 
-def plot_repeatability(problem: HandEyeProblem, result, rep: dict) -> tuple[bytes, list]:
+def plot_repeatability(problem: HandEyeProblem, result: CalibrationResult, rep: dict) -> tuple[bytes, list]:
     """Deviations of the board points from their mean in the fixed frame, top and side views.
 
     Returns the PNG and the outlier postures whose board centre lies beyond the plotted frame.
