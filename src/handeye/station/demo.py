@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import shutil
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -20,7 +21,7 @@ from ..geometry import pose_from_transform, rotation_error_deg, translation_erro
 from ..drivers import DEFAULT_PROTOCOL
 from .report.assessment import Assessment, assess, comparison_methods
 from .calibrate import calibrate_session_folder
-from .capture.loop import capture
+from .capture.loop import PostureReport, capture
 from .config.station import StationConfig, default_config
 from .origin import MOCK
 from .report.quality import Verdict, config_thresholds
@@ -62,7 +63,8 @@ def _fresh_folder(path: Path) -> None:
 
 
 def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None = None,
-             progress=lambda message: None, on_posture=lambda report: None) -> dict:
+             progress: Callable[[str], None] = lambda message: None,
+             on_posture: Callable[[PostureReport], None] = lambda report: None) -> dict:
     """Run the demo; returns the JSON mapping of ``handeye demo`` (``mock: true``, then the
     conventions.md keys)."""
     started = time.monotonic()
