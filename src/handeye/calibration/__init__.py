@@ -124,6 +124,12 @@ _EXPORTS = {
     "identify_arm": "arm_identification",
     "predicted_standoff": "standoff",
     "working_volume_joints": "standoff",
+    "CrossValidation": "crossval",
+    "EivSolution": "eiv",
+    "Explanation": "drift_causes",
+    "QuickUpdate": "drift_causes",
+    "Baseline": "verification",
+    "DriftTest": "verification",
 }
 __all__ = list(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
@@ -135,10 +141,10 @@ if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
     from .arm_identification import identify_arm  # noqa: F401
     from .standoff import predicted_standoff, working_volume_joints  # noqa: F401
     from .compact_points import compact_points_from_corners  # noqa: F401
-    from .crossval import cross_validate  # noqa: F401
+    from .crossval import CrossValidation, cross_validate  # noqa: F401
     from .diagnostics import diagnose, find_unit_problems  # noqa: F401
-    from .drift_causes import explain, likelihood_ratio, quick_update, same_effect  # noqa: F401
-    from .eiv import observations, solve_eiv  # noqa: F401
+    from .drift_causes import Explanation, QuickUpdate, explain, likelihood_ratio, quick_update, same_effect  # noqa: F401
+    from .eiv import EivSolution, observations, solve_eiv  # noqa: F401
     from handeye.base import CalibrationError, ConfigError, HandEyeError, OutputError, SessionError  # noqa: F401
     from handeye.geometry import BoardGeometry  # noqa: F401
     from handeye.geometry import pose_from_transform, transform_from_pose  # noqa: F401
@@ -154,5 +160,5 @@ if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
     from .solve import ALL_METHODS, CalibrationResult, bounded_for, calibrate, calibrate_session, calibrate_within, method_row, problem_from_session, truth_from_dict  # noqa: F401
     from .synthetic import NoiseConfig, Scene, SceneConfig, make_scene, sample_session, truth_dict  # noqa: F401
     from .synthetic_poses import opencv_test_problem  # noqa: F401
-    from .verification import DEFAULT_LEVEL, LEVEL_RANGE, MIN_VERIFY_POSTURES, baseline_from_solution, discrepancy, drift_test  # noqa: F401
+    from .verification import Baseline, DriftTest, DEFAULT_LEVEL, LEVEL_RANGE, MIN_VERIFY_POSTURES, baseline_from_solution, discrepancy, drift_test  # noqa: F401
     from .verify_postures import informative_postures  # noqa: F401

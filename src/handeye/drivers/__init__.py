@@ -81,6 +81,7 @@ _EXPORTS = {
     "opencv_board": "camera.charuco",
     "detect_charuco": "camera.charuco",
     "detect_circles": "camera.charuco",
+    "Controller": "controller.interface",
 }
 __all__ = list(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
@@ -103,7 +104,7 @@ if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
     from .controller import read_robot_state  # noqa: F401
     from .controller.backends import CONTROLLERS, ControllerBackend, ControllerLink, DEFAULT_PROTOCOL, LinkSetting, MockServer, RAPID_LINKS, link_settings, rapid_protocol_choices  # noqa: F401
     from .controller.errors import ControllerConnectionError, ControllerRefused, ControllerTimeout, InvalidRequest  # noqa: F401
-    from .controller.interface import open_controller  # noqa: F401
+    from .controller.interface import Controller, open_controller  # noqa: F401
     from .controller.modbus_map import load_register_map  # noqa: F401
     from .controller.rws_client import SIMULATION_SYSTEM_NAME  # noqa: F401
     from .controller.rws_codec import parse_rapid_value  # noqa: F401

@@ -264,7 +264,8 @@ def plot(table: dict, folder: Path) -> list[Path]:
     import matplotlib.pyplot as plt
 
     paths = []
-    colours = plt.get_cmap("tab20").colors
+    tab20 = plt.get_cmap("tab20")
+    colours = [tab20(k) for k in range(tab20.N)]  # its 20 colours (RGBA)
     for sweep, methods in table.items():
         fig, axes = plt.subplots(2, 3, figsize=(18, 9))
         statistic = "mean" if sweep in MEAN_SWEEPS else "median"

@@ -6,6 +6,7 @@ shown is the presenters' (``report_text``, ``report_json``, ``report``).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -37,8 +38,8 @@ class CalibrationOutcome:
     origin: str | None = None
 
 
-def solve_session(session: Session, path, method: str | None = None, truth: dict | None = None,
-                  origin: str | None = None, progress=None) -> CalibrationOutcome:
+def solve_session(session: Session, path: str | Path, method: str | None = None, truth: dict | None = None,
+                  origin: str | None = None, progress: Callable | None = None) -> CalibrationOutcome:
     """Solve a session already read (lengths in mm) with ``method`` (the recommended default when
     ``None``); ``origin`` is read from the session when omitted; ``progress(done, total, label)`` is
     called after each stage of the default estimator."""
@@ -50,7 +51,7 @@ def solve_session(session: Session, path, method: str | None = None, truth: dict
                               session_origin(session, path) if origin is None else origin)
 
 
-def calibrate_session_folder(path, method: str | None = None, units: str = "mm", progress=None) -> CalibrationOutcome:
+def calibrate_session_folder(path: str | Path, method: str | None = None, units: str = "mm", progress: Callable | None = None) -> CalibrationOutcome:
     """Read, validate and solve a session; uses ``truth.yaml`` when present (synthetic sessions).
 
     ``units`` declares the session's length unit (``mm``, the format's own, or ``m``: converted on
@@ -62,6 +63,6 @@ def calibrate_session_folder(path, method: str | None = None, units: str = "mm",
     return solve_session(session, path, method, truth, progress=progress)
 
 
-def report_path_for(session_path, report: str | None) -> Path:
+def report_path_for(session_path: str | Path, report: str | None) -> Path:
     """The report file: ``report`` itself, or ``SESSION/report.html`` when ``report`` is empty."""
     return Path(session_path) / DEFAULT_REPORT_NAME if not report else Path(report)

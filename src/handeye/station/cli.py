@@ -86,7 +86,7 @@ def _command_of(argv) -> str | None:
     return words[0] if words and words[0] in command_names() else None
 
 
-def main(argv=None) -> int:
+def main(argv: list[str] | None = None) -> int:
     command = _command_of(argv)
     parser = build_parser(only=command, words=sys.argv[1:] if argv is None else argv)
     args = parser.parse_args(argv)

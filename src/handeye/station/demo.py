@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import shutil
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -20,10 +21,10 @@ from ..geometry import pose_from_transform, rotation_error_deg, translation_erro
 from ..drivers import DEFAULT_PROTOCOL
 from .report.assessment import Assessment, assess, comparison_methods
 from .calibrate import calibrate_session_folder
-from .capture.loop import capture
+from .capture.loop import PostureReport, capture
 from .config.station import StationConfig, default_config
 from .origin import MOCK
-from .report.quality import config_thresholds
+from .report.quality import Verdict, config_thresholds
 from .report.document import write_report
 from .runtime import open_station
 from .writeback import writeback
@@ -62,7 +63,8 @@ def _fresh_folder(path: Path) -> None:
 
 
 def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None = None,
-             progress=lambda message: None, on_posture=lambda report: None) -> dict:
+             progress: Callable[[str], None] = lambda message: None,
+             on_posture: Callable[[PostureReport], None] = lambda report: None) -> dict:
     """Run the demo; returns the JSON mapping of ``handeye demo`` (``mock: true``, then the
     conventions.md keys)."""
     started = time.monotonic()
@@ -76,12 +78,14 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
     _fresh_folder(folder)
     session_dir = folder / "session"
     with open_station(config, mock=True) as link:
+        if link.camera is None:  # open_station(mock=True): the embedded station, its camera with it
+            raise HandEyeError("the demo's mock station opened without its camera")
         progress(f"mock station up: IRB 1400 on {link.controller.address} ({options.protocol}), XB3 serial "
                  f"{link.camera.serial}")
         summary = capture(config, session_dir, link, progress=progress, on_posture=on_posture)
         captured_s = time.monotonic() - started
         assessment = _assess(session_dir, config, options.report, progress)
-        result, verdict = assessment.result, assessment.verdict
+        result, verdict = assessment.result, _judged(assessment)
         report_path = None
         if options.report:
             report_path = write_report(session_dir / "report.html", assessment, title="handeye demo: mock station")
@@ -89,6 +93,8 @@ def run_demo(options: DemoOptions = DemoOptions(), config: StationConfig | None 
         outcome = writeback(session_dir, config, result, link.controller, verdict_passed=verdict.passed,
                             verdict_reason=verdict.line(), progress=progress, origin=MOCK, mock_controller=True)
         truth = link.truth_cam2tool0
+        if truth is None:  # the embedded mock always knows its hidden mount
+            raise HandEyeError("the mock station did not give its hidden camera mount to compare with")
         hidden = link.mock.truth["dh_deviation"] if link.mock is not None else None
     errors = {"rotation_error_deg": float(rotation_error_deg(result.x, truth)),
               "translation_error_mm": float(translation_error_mm(result.x, truth))}
@@ -129,6 +135,13 @@ def _kinematics(assessment: Assessment, config: StationConfig, options: DemoOpti
     return {"kinematics": entry}
 
 
+def _judged(assessment: Assessment) -> Verdict:
+    """The verdict of an assessment made with thresholds (:func:`_assess` always gives them)."""
+    if assessment.verdict is None:
+        raise HandEyeError(f"the demo's calibration of {assessment.session_path} was not judged")
+    return assessment.verdict
+
+
 def _assess(session_dir: Path, config: StationConfig, compare: bool, progress) -> Assessment:
     """Calibrate the captured session (the default estimator) and assess it against the config's thresholds,
     with the method comparison when the report is wanted."""
@@ -137,12 +150,14 @@ def _assess(session_dir: Path, config: StationConfig, compare: bool, progress) -
     from .result_file import save_result
 
     outcome = calibrate_session_folder(session_dir)
-    result = outcome.result
-    progress(f"calibrated {outcome.problem.n} postures in {result.runtime_s * 1000:.0f} ms (the default estimator), "
+    result, problem = outcome.result, outcome.problem
+    if problem is None:  # calibrate_session_folder solves the session's problem and keeps it
+        raise HandEyeError(f"the calibration of {session_dir} kept no problem")
+    progress(f"calibrated {problem.n} postures in {result.runtime_s * 1000:.0f} ms (the default estimator), "
              f"outliers: {result.outliers or 'none'}; saved in {save_result(outcome)}")
     assessment = assess(outcome, config_thresholds(config), methods=comparison_methods() if compare else (),
                         tooldata_literal=tooldata_literal(result.x, config.tool.mass_kg, config.tool.cog_mm))
     for reason in assessment.comparison_failures.values():  # a plug-in's method that failed or took too long
         progress(f"not compared: {reason}")
-    progress(assessment.verdict.line())
+    progress(_judged(assessment).line())
     return assessment

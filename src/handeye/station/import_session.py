@@ -67,7 +67,8 @@ def _board(options: ImportOptions) -> BoardGeometry | None:
         return None
     if options.square_mm is not None and not options.square_mm > 0:
         raise SessionUsageError(f"--square-mm must be positive; got {options.square_mm}")
-    return BoardGeometry(tuple(int(c) for c in options.board), options.square_mm)
+    nx, ny = (int(c) for c in options.board)
+    return BoardGeometry((nx, ny), options.square_mm)
 
 
 def _compare_with_log_result(session) -> None:

@@ -41,5 +41,5 @@ def solve_opencv(hand, target2cam, name: str) -> np.ndarray:
     h = np.asarray(hand, dtype=float)
     b = np.asarray(target2cam, dtype=float)
     flag = getattr(cv2, f"CALIB_HAND_EYE_{name.upper()}")
-    r, t = cv2.calibrateHandEye(h[:, :3, :3], h[:, :3, 3], b[:, :3, :3], b[:, :3, 3], method=flag)
+    r, t = cv2.calibrateHandEye(list(h[:, :3, :3]), list(h[:, :3, 3]), list(b[:, :3, :3]), list(b[:, :3, 3]), method=flag)
     return transform_from_rotation_translation(r, np.ravel(t))

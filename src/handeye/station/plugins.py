@@ -12,6 +12,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ..base import Registry
 
 __all__ = ["PluginGroup", "PluginRow", "plugin_groups", "installed_plugins", "plugin_lines"]
 
@@ -33,7 +37,7 @@ class PluginGroup:
     """
 
     title: str
-    registry: object
+    registry: Registry
     uses: tuple
     what: Callable
 

@@ -13,14 +13,19 @@ refused: the mock camera never silently watches a real robot.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol, cast
 
 import numpy as np
 
 from .config.station import StationConfig
+
+if TYPE_CHECKING:
+    from ..drivers import Camera, Controller, StereoModel
+    from ..mocks import MockStation, MockStationSpec
 
 
 @dataclass
@@ -44,11 +49,11 @@ class StationLink:
         (Robot Web Services); None: the program is left to the operator.
     """
 
-    controller: object
-    camera: object = None
-    stereo_model: object = None
+    controller: Controller
+    camera: Camera | None = None
+    stereo_model: StereoModel | None = None
     load_program: Callable | None = None
-    mock: object = None
+    mock: MockStation | None = None
     rehearsal: str | None = None
     stop_program: Callable | None = None
 
@@ -83,13 +88,13 @@ def _camera_options(config: StationConfig) -> dict:
 MOCK_STATE_FILE = "mock_controller_state.json"
 
 
-def mock_state_file(session_dir) -> Path | None:
+def mock_state_file(session_dir: str | Path | None) -> Path | None:
     """Where the embedded mock station keeps its controller's PERS values for the sessions beside
     ``session_dir`` (None: no session folder, a fresh controller)."""
     return None if session_dir is None else Path(session_dir).resolve().parent / MOCK_STATE_FILE
 
 
-def mock_spec(config: StationConfig, state_file=None):
+def mock_spec(config: StationConfig, state_file: str | Path | None = None) -> MockStationSpec:
     """The embedded mock station described by the configuration's ``mock`` section (``state_file``: where its
     controller keeps its PERS tool data between runs, :func:`mock_state_file`)."""
     from ..mocks import MockStationSpec
@@ -141,7 +146,10 @@ def check_rehearsal(config: StationConfig) -> dict:
 
     from ..drivers import CONTROLLERS
 
-    served = cell_info(config.camera.mock_arm)["controller"]
+    arm = config.camera.mock_arm
+    if arm is None:
+        raise ConfigError("not a rehearsal: camera.mock_arm names no mock controller's camera")
+    served = cell_info(arm)["controller"]
     c = config.controller
     options = CONTROLLERS[c.protocol].link_options(c)
     if "url" in options:  # a line behind a URL: the URL is the address
@@ -150,7 +158,7 @@ def check_rehearsal(config: StationConfig) -> dict:
         address = {"host": options.get("host"), "port": options.get("port")}
         named = f"{c.protocol} {address['host']}:{address['port']}"
     same = served["protocol"] == c.protocol and all(
-        _same_host(served.get(key), value) if key == "host" else served.get(key) == value
+        _same_host(str(served.get(key)), str(value)) if key == "host" else served.get(key) == value
         for key, value in address.items())
     if not same:
         where = served.get("url") or f"{served['host']}:{served['port']}"
@@ -158,6 +166,17 @@ def check_rehearsal(config: StationConfig) -> dict:
                           f"controller at {where}, but the controller section names {named}: a rehearsal drives the mock "
                           "controller whose arm the mock camera sees")
     return served
+
+
+class _LoadsPrograms(Protocol):
+    """A rehearsal's camera (``mocks.cell.CellCamera``): it loads a program into its mock controller's task."""
+
+    def load_program(self, rapid_dir) -> int: ...
+
+
+def _rehearsal_camera(camera: Camera) -> _LoadsPrograms:
+    # a rehearsal config's camera back end is ``mock`` on camera.mock_arm: mocks.cell.CellCamera, which has load_program
+    return cast(_LoadsPrograms, camera)
 
 
 @contextmanager
@@ -173,7 +192,7 @@ def _mock_station(config: StationConfig, session_dir=None):
 
 
 @contextmanager
-def open_station(config: StationConfig, mock: bool = False, session_dir=None):
+def open_station(config: StationConfig, mock: bool = False, session_dir: str | Path | None = None) -> Iterator[StationLink]:
     """Yield a :class:`StationLink` with the controller and the camera of ``config`` (real, or the
     embedded mock when ``config.is_mock`` or ``mock``); everything is closed (and the mock stopped)
     on exit. The embedded mock keeps its controller's PERS tool data beside ``session_dir``
@@ -202,7 +221,7 @@ def open_station(config: StationConfig, mock: bool = False, session_dir=None):
         stop = getattr(controller, "stop_program", None) if loader is not None else None
         if config.is_rehearsal:  # else the mock plays the operator who loads SESSION/rapid into the task
             yield StationLink(controller, camera, model,
-                              loader or (lambda _postures, rapid_dir: camera.load_program(rapid_dir)),
+                              loader or (lambda _postures, rapid_dir: _rehearsal_camera(camera).load_program(rapid_dir)),
                               rehearsal=config.camera.mock_arm, stop_program=stop)
             return
         yield StationLink(controller, camera, model, loader, stop_program=stop)
@@ -232,7 +251,8 @@ def _program_loader(controller):
 
 
 @contextmanager
-def open_controller_link(config: StationConfig, mock: bool = False, session_dir=None):
+def open_controller_link(config: StationConfig, mock: bool = False,
+                         session_dir: str | Path | None = None) -> Iterator[StationLink]:
     """Yield a :class:`StationLink` holding only the controller of ``config`` (real, or the embedded
     mock station's when ``config.is_mock`` or ``mock``, its PERS values kept beside ``session_dir``):
     what write-back needs, so it works without the camera."""

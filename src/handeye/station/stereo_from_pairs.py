@@ -165,8 +165,9 @@ def find_pairs(images=None, left=None, right=None, swap: bool = False) -> list[t
         if (folder / "images").is_dir() and not any(_key(p, folder) for p in _images_in(folder) if p.parent == folder):
             folder = folder / "images"
         files = _images_in(folder)
-        lefts = {_key(p, folder): p for p in files if re.search("left", str(p.relative_to(folder)), re.I)}
-        rights = {_key(p, folder): p for p in files if re.search("right", str(p.relative_to(folder)), re.I)}
+        # a name with left (right) in it always has a key (_SIDE finds it)
+        lefts = {k: p for p in files if re.search("left", str(p.relative_to(folder)), re.I) and (k := _key(p, folder))}
+        rights = {k: p for p in files if re.search("right", str(p.relative_to(folder)), re.I) and (k := _key(p, folder))}
         where = str(folder)
     elif left and right:
         lfiles = sorted(Path(p) for p in globlib.glob(os.path.expanduser(left), recursive=True) if Path(p).is_file())
@@ -175,7 +176,8 @@ def find_pairs(images=None, left=None, right=None, swap: bool = False) -> list[t
             raise StereoInputError(f"no file matches {left if not lfiles else right!r}: check the pattern (quote it so "
                                    "the shell does not expand it)")
         lkeys, rkeys = [_key(p) for p in lfiles], [_key(p) for p in rfiles]
-        lefts, rights = dict(zip(lkeys, lfiles)), dict(zip(rkeys, rfiles))
+        lefts = {k: p for k, p in zip(lkeys, lfiles) if k is not None}
+        rights = {k: p for k, p in zip(rkeys, rfiles) if k is not None}
         if None in lkeys or None in rkeys or not set(lefts) & set(rights):
             # the names do not say left/right alike: pair in sorted order
             if len(lfiles) != len(rfiles):
@@ -295,6 +297,8 @@ def detect_pairs(pairs, board: BoardGeometry, update: Callable | None = None) ->
             update(k + 1, len(pairs), f"pair {name}")
         if k + 1 == min(EARLY_PAIRS, len(pairs)) and all(v.left is None and v.right is None for v in views):
             raise StereoInputError(_no_board_message(board, views))
+    if size is None:  # find_pairs gives at least one pair
+        raise StereoInputError("no image pairs to find the board in")
     return views, size
 
 
@@ -382,7 +386,8 @@ def capture_live(camera, config: StereoCalibrationConfig, say: Callable = print,
             size = (left.shape[1], left.shape[0])
             coverage, model = Coverage(size), nominal_xb3_model(*size)
             hint = coverage.next_hint()
-            say(f"next: {hint.text}")
+            if hint is not None:  # an empty coverage always has a next place
+                say(f"next: {hint.text}")
             follow(hint)
             continue
         found = _detect_both(left, right, config.board)
@@ -394,7 +399,7 @@ def capture_live(camera, config: StereoCalibrationConfig, say: Callable = print,
             continue
         missing_said = False
         ref = found["left"] if found["left"] is not None else found["right"]
-        if (last is not None and last.shape == ref.shape
+        if (last is not None and size is not None and last.shape == ref.shape
                 and float(np.mean(np.linalg.norm(ref - last, axis=1))) < NOVELTY_FRACTION * float(np.hypot(*size))):
             follow(hint)
             continue  # the same view again: wait for the board to move
@@ -412,7 +417,7 @@ def capture_live(camera, config: StereoCalibrationConfig, say: Callable = print,
         if update:
             update(min(pairs, config.pairs), config.pairs, f"{pairs} pairs")
         follow(hint)
-    if coverage is None:
+    if coverage is None or size is None:  # the first frame sets both
         raise StereoInputError("the camera gave no frame")
     if pairs < config.pairs or not coverage.complete:
         say(f"stopped after {config.max_grabs} frames with {pairs} pair{'' if pairs == 1 else 's'}; {coverage.summary()}")
@@ -535,7 +540,12 @@ def run_stereo_calibration(config: StereoCalibrationConfig, *, say: Callable = p
         from ..drivers import open_camera
 
         own = camera is None
-        cam = open_camera(config.camera) if own else camera
+        if camera is not None:
+            cam = camera
+        elif config.camera:
+            cam = open_camera(config.camera)
+        else:  # the branch is taken with a camera or config.camera
+            raise StereoUsageError("give the camera back end (--camera)")
         try:
             with progress("stereo capture") as update:
                 views, size, _ = capture_live(cam, config, say, follow, update)

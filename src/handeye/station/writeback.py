@@ -22,8 +22,10 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -37,6 +39,9 @@ from ..drivers import ToolData, check_tooldata
 from ..rapid import POSITION_DECIMALS, QUATERNION_DECIMALS, tooldata_literal
 from .config.station import StationConfig
 from .origin import MOCK, SIMULATED
+
+if TYPE_CHECKING:
+    from ..drivers import Controller
 
 __all__ = ["PENDING_FILE", "WritebackError", "check_camera_offset", "check_session_origin", "WritebackOutcome", "side_by_side", "tooldata_from_result", "writeback"]
 
@@ -132,7 +137,7 @@ def check_session_origin(origin: str | None, mock_controller: bool) -> None:
                          "real station (handeye capture --config STATION.yaml) and calibrate that one")
 
 
-def check_camera_offset(cam2tool0, config: StationConfig) -> None:
+def check_camera_offset(cam2tool0: np.ndarray, config: StationConfig) -> None:
     """Refuse a camera frame whose distance from the flange is outside the config's quality limits
     (``min_camera_offset_mm``, ``max_camera_offset_mm``): checked before every write, ``--force`` or not."""
     from .report.quality import camera_too_near, config_thresholds
@@ -146,7 +151,7 @@ def check_camera_offset(cam2tool0, config: StationConfig) -> None:
                              f"({limits.max_camera_offset_mm:g}): check the session's units and set-up; nothing was written")
 
 
-def _verdict_refusal(result: CalibrationResult, verdict_reason: str, session_dir="SESSION") -> str:
+def _verdict_refusal(result: CalibrationResult, verdict_reason: str, session_dir: Path | str = "SESSION") -> str:
     """Why a failed verdict is not written, and what to do: a method without an uncertainty (the classics)
     can never pass the precision checks, so the advice is the default method, not a better session."""
     failed = f"the calibration failed its quality verdict ({verdict_reason})"
@@ -208,9 +213,9 @@ def _previous_outcome(pending: dict, held: ToolData) -> str:
             "from before (someone changed it since?)")
 
 
-def writeback(session_dir, config: StationConfig, result: CalibrationResult, controller=None, *,
+def writeback(session_dir: str | Path, config: StationConfig, result: CalibrationResult, controller: Controller | None = None, *,
               verdict_passed: bool = True, verdict_reason: str = "", force: bool = False,
-              dry_run: bool = False, progress=lambda message: None, origin: str | None = None,
+              dry_run: bool = False, progress: Callable[[str], None] = lambda message: None, origin: str | None = None,
               mock_controller: bool = False) -> WritebackOutcome:
     """Write the calibrated camera frame to the controller (see the module docstring).
 

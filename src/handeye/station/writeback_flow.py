@@ -99,8 +99,9 @@ def run_writeback(request: WritebackRequest, say: Callable[[str], None] = lambda
     from .writeback import side_by_side, writeback
 
     config, session, origin, mock_controller = _station(request)
-    if origin_line(origin):
-        say(origin_line(origin))
+    origin_said = origin_line(origin)
+    if origin_said:
+        say(origin_said)
     result, passed, reason, is_check = writeback_source(request, session, config, origin, say)
     common: dict[str, Any] = dict(verdict_passed=passed, verdict_reason=reason, force=request.force, origin=origin, progress=say)
     if request.dry_run:

@@ -44,6 +44,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -67,6 +68,10 @@ from ..cell.plan import cell_check
 from .planning import PlanScore, PosturePlan, plan_postures
 from ..report.quality import config_thresholds
 from ..runtime import StationLink
+
+if TYPE_CHECKING:
+    from ...drivers import Camera, Controller, StereoFrame, StereoModel
+    from ...robot import RobotModel
 
 __all__ = [
     "CaptureError",
@@ -169,7 +174,7 @@ class CaptureSummary:
         return len(self.captured) + len(self.already) == self.planned
 
 
-def stereo_views(model) -> tuple[PinholeView, PinholeView]:
+def stereo_views(model: StereoModel) -> tuple[PinholeView, PinholeView]:
     """Left and right pinhole views of a stereo model (for planning: distortion ignored)."""
     w, h = model.image_size
     k1, k2 = model.K1, model.K2
@@ -181,7 +186,7 @@ def stereo_views(model) -> tuple[PinholeView, PinholeView]:
     return left, right
 
 
-def measure_board(camera, model, board: BoardGeometry, timeout_s: float = 2.0):
+def measure_board(camera: Camera, model: StereoModel, board: BoardGeometry, timeout_s: float = 2.0):
     """Grab one frame and triangulate the board: ``TriangulationResult`` (raises CameraError)."""
     frame = camera.grab(timeout_s)
     return _triangulate(frame, model, board), frame
@@ -235,8 +240,11 @@ def _new_plan(config: StationConfig, link: StationLink, progress) -> PosturePlan
     if np.max(np.abs(start - here)) > 0.05:
         raise CaptureError(f"the robot stands at {np.round(here, 2).tolist()}, not at plan.start_joints_deg "
                            f"{np.round(start, 2).tolist()}: jog it there (board in view), then run capture again")
+    camera, model = link.camera, link.stereo_model
+    if camera is None or model is None:  # every capturing link is opened with its camera and stereo model
+        raise CaptureError("the station link has no camera (or stereo model) to measure the board with")
     try:
-        measured, _ = measure_board(link.camera, link.stereo_model, config.target, config.camera.grab_timeout_s)
+        measured, _ = measure_board(camera, model, config.target, config.camera.grab_timeout_s)
     except SquareSizeMismatch as exc:
         raise CaptureError(f"at the start posture: {exc}") from None
     except CameraError as exc:
@@ -253,7 +261,7 @@ def _new_plan(config: StationConfig, link: StationLink, progress) -> PosturePlan
     if np.linalg.norm(side) > 1e-6:
         sampling = ViewSampling(**{**sampling.__dict__, "side": tuple(side / np.linalg.norm(side))})
     return plan_postures(robot, start, compact.target2cam[0], config.camera.nominal_mount_transform(), config.target,
-                         p.postures, sampling, stereo_views(link.stereo_model), p.seed,
+                         p.postures, sampling, stereo_views(model), p.seed,
                          thresholds=config_thresholds(config), cell=cell_check(config),
                          partial_views=p.partial_views)
 
@@ -302,7 +310,7 @@ def plan_line(score: PlanScore, postures: int) -> str:
             f"{score.predicted_sigma_deg:.3f} deg (simulated){rejected}")
 
 
-def plan_session(config: StationConfig, session_dir: Path, link: StationLink, progress) -> CaptureRun:
+def plan_session(config: StationConfig, session_dir: Path, link: StationLink, progress: Callable[[str], None]) -> CaptureRun:
     """Plan the postures and create the session with its capture record (``capture.station: mock|real``)."""
     plan = _new_plan(config, link, progress)
     plan_score = plan.score.to_dict()
@@ -346,8 +354,9 @@ def recorded_plan(session: Session, config: StationConfig) -> PosturePlan:
         Naming what the record lacks (``start_joints_deg``: planned by an older handeye).
     """
     record = session.extra.get("capture", {})
-    lacking = [key for key in _PREVIEW_KEYS if key not in record] + (["target"] if session.target is None else [])
-    if lacking:
+    target = session.target
+    lacking = [key for key in _PREVIEW_KEYS if key not in record] + (["target"] if target is None else [])
+    if lacking or target is None:
         raise CaptureError(f"session.yaml records no {', '.join(lacking)}")
     try:
         joints = np.array(record["plan_joints_deg"], float)
@@ -357,10 +366,10 @@ def recorded_plan(session: Session, config: StationConfig) -> PosturePlan:
         score = PlanScore.from_dict(record.get("plan_score", {}))
     except (KeyError, TypeError, ValueError) as exc:
         raise CaptureError(f"its capture record in session.yaml is unreadable ({exc})") from None
-    return PosturePlan(joints, board2base, cam2tool0, score, start, session.target, [], cell_check(config))
+    return PosturePlan(joints, board2base, cam2tool0, score, start, target, [], cell_check(config))
 
 
-def repair_plan(config: StationConfig, session_dir: Path, session: Session, progress) -> Path | None:
+def repair_plan(config: StationConfig, session_dir: Path, session: Session, progress: Callable[[str], None]) -> Path | None:
     """Resume: draw ``SESSION/preview.png`` again when a kill left it out (from :func:`recorded_plan`), or
     say in one line why it cannot be; returns the preview's path when it is there."""
     from ..cell.preview import write_preview
@@ -378,7 +387,7 @@ def repair_plan(config: StationConfig, session_dir: Path, session: Session, prog
     return path
 
 
-def resume_session(config: StationConfig, session_dir: Path, session: Session, progress,
+def resume_session(config: StationConfig, session_dir: Path, session: Session, progress: Callable[[str], None],
                    link: StationLink | None = None) -> CaptureRun:
     """Read the plan of a capture on disk; refuse one made on the other station (mock vs real:
     :func:`~handeye.station.config.station_kind.station_kind` of ``config`` and ``link``)."""
@@ -397,7 +406,7 @@ def resume_session(config: StationConfig, session_dir: Path, session: Session, p
     return CaptureRun(session, plan_joints, record.get("plan_score", {}))
 
 
-def open_capture(config: StationConfig, session_dir: Path, link: StationLink, progress) -> CaptureRun:
+def open_capture(config: StationConfig, session_dir: Path, link: StationLink, progress: Callable[[str], None]) -> CaptureRun:
     """The capture's session: resumed when ``session_dir`` holds a capture, else planned and created."""
     session = _session_record(session_dir)
     if session is None:
@@ -414,7 +423,7 @@ def _session_program(config: StationConfig, plan_joints: np.ndarray, board2base,
     from ...rapid import station_from_dict
 
     data = config.rapid_dict(plan_joints, board2base)
-    if link is not None and link.is_mock and data["controller"]["write_key"] is None:
+    if link is not None and link.mock is not None and data["controller"]["write_key"] is None:
         # the embedded station's controller holds a key of its own (HeKey.sys, handed to the PC): its
         # link module asks HeKey for it. The key itself never goes into the program modules.
         data["controller"]["write_key"] = link.mock.write_key
@@ -428,8 +437,8 @@ def _same_text(path: Path, text: str) -> bool:
         return False
 
 
-def write_program(config: StationConfig, session_dir: Path, plan_joints: np.ndarray, progress,
-                  board2base=None, link: StationLink | None = None) -> Path:
+def write_program(config: StationConfig, session_dir: Path, plan_joints: np.ndarray, progress: Callable[[str], None],
+                  board2base: np.ndarray | None = None, link: StationLink | None = None) -> Path:
     """Write the RAPID program into ``SESSION/rapid`` (with ``cell.world_zones`` the keep-out volumes and
     the stand of the board at ``board2base`` as world zones); returns the folder. On the embedded mock
     station (``link``) the program asks the mock's HeKey for the write key.
@@ -458,7 +467,7 @@ def write_program(config: StationConfig, session_dir: Path, plan_joints: np.ndar
 
 
 def install_program(config: StationConfig, session_dir: Path, plan_joints: np.ndarray, link: StationLink,
-                    progress, board2base=None) -> None:
+                    progress: Callable[[str], None], board2base: np.ndarray | None = None) -> None:
     """Write the RAPID program (:func:`write_program`), load it when the station can, and wait until the
     controller runs a program with the plan's posture count."""
     rapid_dir = write_program(config, session_dir, plan_joints, progress, board2base, link)
@@ -469,7 +478,7 @@ def install_program(config: StationConfig, session_dir: Path, plan_joints: np.nd
     _wait_for_program(link.controller, len(plan_joints), rapid_dir, progress)
 
 
-def release_waiting_posture(controller, done: set, progress) -> None:
+def release_waiting_posture(controller: Controller, done: set, progress: Callable[[str], None]) -> None:
     """Resume: a robot still waiting at a posture whose file is on disk (a run stopped between the
     grab and the ACK) is acknowledged, so the program takes the next request."""
     status = controller.status()
@@ -482,7 +491,7 @@ def release_waiting_posture(controller, done: set, progress) -> None:
             progress(f"posture {k - 1} was already on disk: acknowledged")
 
 
-def visit_postures(config: StationConfig, session_dir: Path, run: CaptureRun, link: StationLink, on_posture,
+def visit_postures(config: StationConfig, session_dir: Path, run: CaptureRun, link: StationLink, on_posture: Callable,
                    stop_after: int | None = None, observer: Callable | None = None,
                    stop_when: Callable[[PostureReport], bool] | None = None) -> tuple[list, dict]:
     """The posture loop: move, measure, write each posture not yet on disk, record skips, acknowledge.
@@ -528,7 +537,7 @@ def visit_postures(config: StationConfig, session_dir: Path, run: CaptureRun, li
 
 def capture(
     config: StationConfig,
-    session_dir,
+    session_dir: str | Path,
     link: StationLink,
     progress: Callable[[str], None] = lambda message: None,
     on_posture: Callable[[PostureReport], None] = lambda report: None,
@@ -596,7 +605,7 @@ def capture(
 
 
 def confirm_motion(config: StationConfig, session_dir: Path, run: CaptureRun, link: StationLink,
-                   confirm: Callable[[str], bool] | None, progress) -> None:
+                   confirm: Callable[[str], bool] | None, progress: Callable[[str], None]) -> None:
     """Before the first move of a run: a real station asks the operator (``confirm``) and refuses without a
     yes; the embedded mock moves without asking and says so. Nothing to move: nothing asked."""
     left = len(run.plan_joints) - len(run.done)
@@ -633,7 +642,7 @@ def _wait_for_program(controller, total: int, rapid_dir: Path, progress, timeout
     raise CaptureError(f"the controller never reported the plan's {total} postures; load {rapid_dir}/*.mod and retry")
 
 
-def read_flange(config: StationConfig, link: StationLink, robot, label: str) -> tuple[np.ndarray, np.ndarray]:
+def read_flange(config: StationConfig, link: StationLink, robot: RobotModel, label: str) -> tuple[np.ndarray, np.ndarray]:
     """Joints and flange pose (``tool02base``) of the robot at rest, the pose checked against our kinematics
     of the joints (CaptureError naming ``label`` when they disagree)."""
     joints = link.controller.read_joints()
@@ -647,7 +656,7 @@ def read_flange(config: StationConfig, link: StationLink, robot, label: str) -> 
     return joints, tool02base
 
 
-def measure_with_retries(config: StationConfig, link: StationLink, on_grab: Callable | None = None):
+def measure_with_retries(config: StationConfig, link: StationLink, on_grab: Callable | None = None) -> tuple:
     """Grab and triangulate until the quality holds (``capture.retries`` more tries): ``(result, frame,
     problem, attempts)``, ``problem`` None when the measurement is good. ``on_grab(result, frame, problem)``,
     when given, after every grab (``result`` None when the board was not measured)."""
@@ -655,17 +664,20 @@ def measure_with_retries(config: StationConfig, link: StationLink, on_grab: Call
 
 
 def measure_posture(config: StationConfig, link: StationLink, on_grab: Callable | None = None,
-                    retry_absent: bool = True):
+                    retry_absent: bool = True) -> tuple:
     """:func:`measure_with_retries` and whether the last grab saw no checkerboard at all:
     ``(result, frame, problem, attempts, absent)``; ``retry_absent=False``: no retry after such a grab
     (retries help a blurred, glaring or badly lit board, not one that is out of view)."""
+    camera = link.camera
+    if camera is None:  # every capturing link is opened with its camera (station.runtime)
+        raise CaptureError("the station link has no camera to measure the board with")
     problem = "no frame"
     result = frame = None
     attempts, absent = 0, False
     for attempts in range(1, config.capture.retries + 2):
         grabbed = None
         try:
-            grabbed = link.camera.grab(config.camera.grab_timeout_s)
+            grabbed = camera.grab(config.camera.grab_timeout_s)
             result, frame = _triangulate(grabbed, link.stereo_model, config.target), grabbed
         except CameraError as exc:
             problem, absent = str(exc), isinstance(exc, NoBoardInView)
@@ -683,8 +695,8 @@ def measure_posture(config: StationConfig, link: StationLink, on_grab: Callable 
     return result, frame, problem, attempts, absent
 
 
-def store_posture(config: StationConfig, session_dir: Path, index: int, joints, tool02base, result, frame,
-                  **extra) -> None:
+def store_posture(config: StationConfig, session_dir: Path, index: int, joints: np.ndarray, tool02base: np.ndarray,
+                  result, frame: StereoFrame | None, **extra: object) -> None:
     """Write posture ``index`` (0-based) of the session atomically: pose, joints, corners, quality, ``extra``
     (and the images when ``capture.save_images``)."""
     extra = {"quality": {key: (round(v, 4) if isinstance(v, float) else v) for key, v in result.quality.items()},
@@ -708,7 +720,7 @@ def measurement_line(quality: dict) -> str:
             f"{quality['row_disagreement_max_px']:.2f} px, plane {quality['plane_rms_mm']:.2f} mm")
 
 
-def grab_observer(observer: Callable | None, index: int, tool02base) -> Callable | None:
+def grab_observer(observer: Callable | None, index: int, tool02base: np.ndarray) -> Callable | None:
     """``on_grab`` of :func:`measure_with_retries` that hands each grab to ``observer`` as a ``Measured`` event."""
     if observer is None:
         return None
@@ -731,6 +743,8 @@ def _capture_posture(config, session_dir, link: StationLink, robot, index, total
                                result.quality if result is not None else {}, attempts, board_absent=absent)
         observer(Verdict(index, SKIPPED, report.message, report.quality))
         return report
+    if result is None:  # measure_posture: no problem means the last grab was measured
+        raise CaptureError(f"posture {index}: no measurement although no problem was reported")
     store_posture(config, session_dir, index, joints, tool02base, result, frame, controller_posture=index + 1)
     report = PostureReport(index, total, True, f"posture {index}: {measurement_line(result.quality)}", result.quality,
                            attempts)

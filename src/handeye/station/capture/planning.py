@@ -29,13 +29,14 @@ from types import SimpleNamespace
 import numpy as np
 
 from ...geometry import BoardGeometry, board_corners
-from ...base import HandEyeError
+from ...base import CalibrationError, HandEyeError
 from ...robot import RobotModel
 from ...calibration import hand_axis_coverage
 from ...calibration import calibrate, problem_from_session
 from ...calibration import NoiseConfig, Scene, SceneConfig, sample_session
 from ...geometry import invert_transforms
 from ...robot import NOMINAL_XB3, ViewSampling, sample_eye_in_hand_postures
+from ..board_square import known_square_mm
 from ..cell.plan import CellCheck, PostureVeto, Rejections, base_problem, board_problem, clear_route, start_problem
 from ..report.quality import QualityThresholds, motion_shortfalls
 from .partial_plan import number_partial_postures, widen_with_partial_views
@@ -193,15 +194,18 @@ def score_plan(robot: RobotModel, joints: np.ndarray, board2base: np.ndarray, ca
     coverage = hand_axis_coverage(robot.forward_transform(joints), "tool0")  # eye-in-hand: hand = tool02base
     nodes = np.vstack([np.asarray(start, float)[None], joints])
     total = float(motion_time_s(robot, nodes[:-1], nodes[1:]).sum())
-    scene = Scene(SceneConfig(postures=len(joints), corners=board.corners, square_mm=board.square_mm, robot=robot.name),
+    scene = Scene(SceneConfig(postures=len(joints), corners=board.corners, square_mm=known_square_mm(board), robot=robot.name),
                   robot, cam2tool0, board2base, np.asarray(joints, float), board)
     errors_mm, errors_deg = [], []
     for trial in range(trials):
         session = sample_session(scene, NoiseConfig(noise.sigma_rob_deg, noise.sigma_cam_mm, noise.camera_model,
                                                     noise.joint_offset_deg, seed=trial))
         result = calibrate(problem_from_session(session), None, {"x": cam2tool0, "target2fixed": board2base})
-        errors_mm.append(result.truth_errors["translation_error_mm"])
-        errors_deg.append(result.truth_errors["rotation_error_deg"])
+        errors = result.truth_errors
+        if errors is None:  # calibrate judges against the truth it is given
+            raise CalibrationError("the plan's simulated calibration came back without its errors against the truth")
+        errors_mm.append(errors["translation_error_mm"])
+        errors_deg.append(errors["rotation_error_deg"])
     return PlanScore(coverage.spread_deg, coverage.min_angle_deg, coverage.median_angle_deg,
                      float(np.sqrt(np.mean(np.square(errors_mm)))),
                      float(np.sqrt(np.mean(np.square(errors_deg)))), total)
@@ -266,7 +270,7 @@ def plan_postures(
         side = -np.array([centre[0], centre[1], 0.0])
         side = side / np.linalg.norm(side) if np.linalg.norm(side) > 1e-6 else np.array([-1.0, 0.0, 0.0])
         sampling = ViewSampling(side=tuple(side))
-    corners = board_corners(board.corners, board.square_mm)
+    corners = board_corners(board.corners, known_square_mm(board))
     rng = np.random.default_rng(seed)
     thresholds = thresholds or QualityThresholds()
     widen = _widener(robot, cam2tool0_nominal, board2base, board, corners, rng, sampling, views, start, partial_views)
@@ -355,7 +359,7 @@ def board_distance_and_tilt(plan: PosturePlan, robot: RobotModel) -> np.ndarray:
     """Per planned posture: camera-to-board-centre distance (mm) and board tilt (deg), ``(n, 2)``."""
     cams = robot.forward_transform(plan.joints_deg) @ plan.cam2tool0
     target2cam = invert_transforms(cams) @ plan.board2base
-    centre = board_corners(plan.board.corners, plan.board.square_mm).mean(axis=0)
+    centre = board_corners(plan.board.corners, known_square_mm(plan.board)).mean(axis=0)
     distance = np.linalg.norm(target2cam[:, :3, :3] @ centre + target2cam[:, :3, 3], axis=1)
     tilt = np.degrees(np.arccos(np.clip(np.abs(target2cam[:, 2, 2]), 0, 1)))
     return np.stack([distance, tilt], axis=1)

@@ -11,6 +11,7 @@ A row outside the joint limits is not clear (``closest``: ``joint limits``) and 
 from __future__ import annotations
 
 import csv
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
@@ -43,7 +44,7 @@ class JointRows(NamedTuple):
     header: tuple | None = None
 
 
-def read_joints_csv(path, dof: int) -> JointRows:
+def read_joints_csv(path: str | Path, dof: int) -> JointRows:
     """Rows ``(n, dof)`` of axis angles (deg), their line numbers and the header line skipped, if any.
 
     Blank lines and ``#`` comments are skipped; the first other line is a header only when none of its
@@ -126,7 +127,8 @@ def _move_closest(guard: CellGuard, a, b):
     return replace(found, at=float(k) / max(len(samples) - 1, 1))
 
 
-def check_joints(robot: RobotModel, guard: CellGuard, joints, lines=None, moves: bool = False) -> CellCheckResult:
+def check_joints(robot: RobotModel, guard: CellGuard, joints: np.ndarray, lines: Sequence | None = None,
+                 moves: bool = False) -> CellCheckResult:
     """Check postures ``(n, k)`` (deg) and, with ``moves``, the moves between consecutive ones.
 
     Returns

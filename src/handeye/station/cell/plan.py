@@ -16,8 +16,9 @@ The planner (``station.capture.planning``) asks three things of this module:
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -26,6 +27,10 @@ from ...robot import CellModel
 from ...robot import CellGuard
 from ...geometry import BoardGeometry, board_corners
 from ...robot import RobotModel
+from ..board_square import known_square_mm
+
+if TYPE_CHECKING:
+    from ..config.station import StationConfig
 
 __all__ = ["CellCheck", "PostureVeto", "Rejections", "base_problem", "board_problem", "cell_check", "clear_route",
            "start_problem", "view_points"]
@@ -56,7 +61,7 @@ class CellCheck:
     step_mm: float = 10.0
     zone_tcp_mm: tuple | None = None
 
-    def guard(self, robot: RobotModel, board2base=None, board: BoardGeometry | None = None) -> CellGuard:
+    def guard(self, robot: RobotModel, board2base: np.ndarray | None = None, board: BoardGeometry | None = None) -> CellGuard:
         """The guard for a board at ``board2base`` (its stand included)."""
         zones = None
         if self.zone_tcp_mm is not None:
@@ -65,7 +70,7 @@ class CellCheck:
                          tcp_zones=zones)
 
 
-def cell_check(config) -> CellCheck:
+def cell_check(config: StationConfig) -> CellCheck:
     """The :class:`CellCheck` of a station config (its ``cell`` section; with ``cell.world_zones`` the
     camera's nominal mount is the TCP the zones watch)."""
     c = config.cell
@@ -111,14 +116,14 @@ class PostureVeto:
             self.rejections.postures[violation.reason] += 1
         return violation is None
 
-    def pose(self, tool02base) -> bool:
+    def pose(self, tool02base: np.ndarray) -> bool:
         return self._counted(self.guard.flange_violation(tool02base))
 
     def __call__(self, joints) -> bool:
         return self._counted(self.guard.posture_violation(joints))
 
 
-def view_points(board2base, board: BoardGeometry, distance_mm, cone_deg: float) -> np.ndarray:
+def view_points(board2base: np.ndarray, board: BoardGeometry, distance_mm: Sequence[float], cone_deg: float) -> np.ndarray:
     """Where a camera viewing the board stands at the least and the greatest distance, straight on and
     at the cone's rim (8 directions): ``(18, 3)`` points in base (mm).
 
@@ -133,7 +138,7 @@ def view_points(board2base, board: BoardGeometry, distance_mm, cone_deg: float) 
         Largest angle of the viewing direction from the board normal (``plan.cone_deg``).
     """
     frame = np.asarray(board2base, float)
-    centre = frame[:3, :3] @ board_corners(board.corners, board.square_mm).mean(axis=0) + frame[:3, 3]
+    centre = frame[:3, :3] @ board_corners(board.corners, known_square_mm(board)).mean(axis=0) + frame[:3, 3]
     cone, turns = np.radians(cone_deg), np.radians(np.arange(0.0, 360.0, 45.0))
     local = np.vstack([[0.0, 0.0, -1.0], np.stack([np.sin(cone) * np.cos(turns), np.sin(cone) * np.sin(turns),
                                                    np.full(turns.shape, -np.cos(cone))], axis=1)])
@@ -141,7 +146,8 @@ def view_points(board2base, board: BoardGeometry, distance_mm, cone_deg: float) 
     return np.concatenate([centre + d * directions for d in distance_mm])
 
 
-def board_problem(model: CellModel, board2base, board: BoardGeometry, distance_mm=(700.0, 1200.0),
+def board_problem(model: CellModel, board2base: np.ndarray, board: BoardGeometry,
+                  distance_mm: Sequence[float] = (700.0, 1200.0),
                   cone_deg: float = 35.0) -> str | None:
     """Why no view of the board can be planned because one configured keep-out volume fills the space the
     camera must stand in to see it (every point of :func:`view_points`), or None.
@@ -157,7 +163,7 @@ def board_problem(model: CellModel, board2base, board: BoardGeometry, distance_m
     """
     views = view_points(board2base, board, distance_mm, cone_deg)
     frame = np.asarray(board2base, float)
-    corners = board_corners(board.corners, board.square_mm) @ frame[:3, :3].T + frame[:3, 3]
+    corners = board_corners(board.corners, known_square_mm(board)) @ frame[:3, :3].T + frame[:3, 3]
     for volume in model.keep_out:
         if np.all(volume.signed_distance(views) < 0):
             holds = " holds the board and" if np.any(volume.signed_distance(corners) < 0) else ""
@@ -169,7 +175,7 @@ def board_problem(model: CellModel, board2base, board: BoardGeometry, distance_m
     return None
 
 
-def base_problem(robot: RobotModel, volumes, margin_mm: float, keep_out=None) -> str | None:
+def base_problem(robot: RobotModel, volumes: Sequence, margin_mm: float, keep_out: Sequence | None = None) -> str | None:
     """Why the cell cannot be planned in because a keep-out volume comes within the margin of the robot's
     base, which never moves (``robot.base_clearance``; volumes wholly at or below the mounting plane,
     base z 0, carry the robot and are left out), or None. The nearest such volume is named.
@@ -190,7 +196,10 @@ def base_problem(robot: RobotModel, volumes, margin_mm: float, keep_out=None) ->
     if not near:
         return None
     volume, gap = min(near, key=lambda pair: pair[1])
-    low, high = base_envelope(robot)
+    box = base_envelope(robot)
+    if box is None:  # the clearances above were measured to the base's capsules: there are some
+        raise ValueError(f"robot {robot.name} has no base capsules to name an envelope by")
+    low, high = box
     where = (f"reaches {-gap:.0f} mm into" if gap < 0 else f"is {gap:.0f} mm from") + " the robot's base"
     envelope = (f"x {low[0]:.0f}..{high[0]:.0f}, y {low[1]:.0f}..{high[1]:.0f}, z up to {high[2]:.0f} mm in base, "
                 f"the robot file's base capsule")
@@ -203,7 +212,7 @@ def base_problem(robot: RobotModel, volumes, margin_mm: float, keep_out=None) ->
             "place the board farther from the robot's foot, or lower cell.stand_margin_mm")
 
 
-def start_problem(guard: CellGuard, start) -> str | None:
+def start_problem(guard: CellGuard, start: np.ndarray) -> str | None:
     """Why the start posture cannot start a plan (inside a volume, or closer than the margin), or None."""
     violation = guard.posture_violation(start)
     if violation is None:
@@ -243,8 +252,9 @@ class _BlockedMoves:
         return blocked, why
 
 
-def clear_route(robot: RobotModel, guard: CellGuard, start, joints, redraw: Callable[[int], np.ndarray],
-                rejections: Rejections, order_for_short_motions) -> np.ndarray:
+def clear_route(robot: RobotModel, guard: CellGuard, start: np.ndarray, joints: np.ndarray,
+                redraw: Callable[[int], np.ndarray], rejections: Rejections,
+                order_for_short_motions: Callable) -> np.ndarray:
     """The postures in a visiting order whose every move, from ``start`` on, is clear of the cell.
 
     Parameters

@@ -22,6 +22,7 @@ import numpy as np
 from ...robot import Box, Cylinder, Floor
 from ...robot import CellGuard
 from ...robot import RobotModel
+from ..board_square import known_square_mm
 from ..capture.planning import PosturePlan
 
 __all__ = ["plan_preview_figure", "plan_preview_png", "posture_labels", "write_preview"]
@@ -187,7 +188,7 @@ def plan_preview_figure(robot: RobotModel, plan: PosturePlan):
     flanges = robot.forward_transform(plan.joints_deg)[:, :3, 3]
     start = robot.forward_transform(plan.start_joints_deg)[:3, 3]
     cols, rows = plan.board.corners
-    s = plan.board.square_mm
+    s = known_square_mm(plan.board)
     outline = np.array([[-s, -s, 0], [cols * s, -s, 0], [cols * s, rows * s, 0], [-s, rows * s, 0], [-s, -s, 0]])
     board = outline @ plan.board2base[:3, :3].T + plan.board2base[:3, 3]
     arm, arm_radii = _arm_at(robot, guard, plan.start_joints_deg)

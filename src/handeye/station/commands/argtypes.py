@@ -4,11 +4,27 @@ error that says what was expected (argparse prints it as one line and exits 2)."
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable, Iterable
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
-__all__ = ["registry_choice", "left_out_lines", "option_word", "load_for_flags", "corners", "positive", "non_negative", "count", "whole_between", "port", "floats", "setting_value"]
+if TYPE_CHECKING:
+    from ...base import Registry
+    from ...drivers import Setting
+    from ...geometry import BoardGeometry
+
+T = TypeVar("T")
 
 
-def _number(text: str, kind=float, what: str = "a number"):
+class Subcommands(Protocol):
+    """What a command's ``add_parser`` gets: the ``handeye`` parser's ``add_subparsers()``, whose parsers are
+    ``cli.OneLineParser`` (an ``epilog`` may be a callable that writes it when the help is printed)."""
+
+    def add_parser(self, name: str, **options: Any) -> argparse.ArgumentParser: ...
+
+__all__ = ["Subcommands", "registry_choice", "left_out_lines", "option_word", "load_for_flags", "corners", "positive", "non_negative", "count", "whole_between", "port", "floats", "setting_value"]
+
+
+def _number(text: str, kind: Callable[[str], T] = float, what: str = "a number") -> T:
     try:
         return kind(text)
     except ValueError:
@@ -30,7 +46,7 @@ def corners(text: str) -> tuple[int, int]:
     return a, b
 
 
-def whole_between(low: int, high: int, why: str = ""):
+def whole_between(low: int, high: int, why: str = "") -> Callable[[str], int]:
     """A type for a whole number in ``low..high`` (``why`` explains the bound in the error)."""
 
     def convert(text: str) -> int:
@@ -79,12 +95,12 @@ def floats(text: str) -> tuple:
         raise argparse.ArgumentTypeError(f"expected comma-separated numbers; got {text!r}") from None
 
 
-def setting_value(setting):
+def setting_value(setting: Setting) -> Callable[[str], object]:
     """A type for a back end's described setting (``drivers.controller.backends.LinkSetting``): its
     type (text, whole number, number) within its ``low..high``."""
     kinds = {int: (int, "a whole number"), float: (float, "a number")}
 
-    def convert(text: str):
+    def convert(text: str) -> object:
         if setting.type not in kinds:
             return text
         kind, what = kinds[setting.type]
@@ -97,7 +113,7 @@ def setting_value(setting):
     return convert
 
 
-def registry_choice(choices):
+def registry_choice(choices) -> Callable[[str], str]:
     """A type for one name of a registry's :class:`~handeye.base.registry.Choices`: checking it loads
     that plug-in only; a name that is not a choice is refused saying why (an installed plug-in that lacks
     what the command needs, or did not load) and what the choices are."""
@@ -121,7 +137,7 @@ def left_out_lines(choices, what: str) -> str:
     return f"\nInstalled plug-ins left out of {what}:\n" + "\n".join(f"  {why}" for why in left.values()) + "\n"
 
 
-def option_word(words, option: str) -> str | None:
+def option_word(words: Iterable[str] | None, option: str) -> str | None:
     """The value ``words`` (a command line) gives ``option`` (``--protocol X`` or ``--protocol=X``; the
     last one wins, as argparse's): ``""`` when it gives none, ``None`` when the help is asked for (every
     choice is then described). What a parser is built for, before it parses."""
@@ -136,7 +152,7 @@ def option_word(words, option: str) -> str | None:
     return found
 
 
-def load_for_flags(registry, wanted: str | None) -> None:
+def load_for_flags(registry: Registry, wanted: str | None) -> None:
     """Load (under the time bound, quietly: the option's check says why one fails) the plug-ins whose own
     flags a parser must offer: the one ``wanted`` names, or every one when ``wanted`` is None (the help).
     A name that is not a plug-in's loads nothing."""
@@ -149,7 +165,7 @@ def load_for_flags(registry, wanted: str | None) -> None:
                 registry.get(name)
 
 
-def target_spec(text: str):
+def target_spec(text: str) -> BoardGeometry:
     """``--board``: ``13x8`` (checkerboard corners), ``charuco``, ``circles``, or a kind with keys
     (``charuco:squares=14x9,square_mm=30``): :func:`~handeye.geometry.targets.parse_target_spec`."""
     from ...base import CalibrationError
@@ -167,7 +183,7 @@ def target_spec(text: str):
     return board
 
 
-def corners_or_target(text: str):
+def corners_or_target(text: str) -> BoardGeometry | tuple[int, int]:
     """``--board`` of ``stereo calibrate``: ``13x8`` as before (a checkerboard's inner corners), or a target kind
     (``charuco``, ``charuco:squares=10x7,...``: :func:`target_spec`)."""
     if text.split(":")[0].lower() in ("charuco", "circles", "checkerboard"):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from . import argtypes
+from .argtypes import Subcommands
 
 HELP = "compare every method over sweeps of robot noise, camera noise, posture count and pose noise"
 
@@ -29,7 +30,7 @@ Examples:
 """
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     p = sub.add_parser("benchmark", help=HELP, description=HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("-o", "--output", default="benchmark_results", help="output folder (default benchmark_results)")
@@ -49,7 +50,7 @@ def add_parser(sub):
     return p
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from ...base import UsageError
     from ..benchmark import BenchmarkOptions, benchmark
     from ..progress import progress_bar

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from .argtypes import Subcommands
+
 HELP = "solve a session for the camera pose (cam2tool0, or cam2base eye-to-hand)"
 
 #: How the help introduces each kind of method (``calibration.methods.KINDS``), and the citation its
@@ -87,7 +89,7 @@ Examples:
 """
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     p = sub.add_parser("calibrate", help=HELP, description=HELP, epilog=lambda: methods_help() + EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("session", metavar="SESSION", help="session folder (handeye-session/1)")
@@ -106,7 +108,7 @@ def add_parser(sub):
     return p
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     import sys
 
     from ..report.assessment import assess, comparison_methods
@@ -150,7 +152,7 @@ def run(args) -> int:
     assessment = assess(outcome, thresholds, judge=wants_report or bool(args.thresholds),
                         methods=comparison_methods() if wants_report else ())
     written = None
-    if wants_report:
+    if report_path is not None:  # wants_report
         from ..report.document import write_report
 
         title = f"Hand-eye calibration report: {outcome.session_path.resolve().name}"
@@ -214,14 +216,15 @@ def _save_standoff(outcome, standoff) -> None:
               "compare against it", file=sys.stderr)
 
 
-def _kinematics_sections(kinematics) -> tuple:
+def _kinematics_sections(kinematics: tuple | None) -> tuple:
     """The report's kinematics section (none without ``--kinematics``)."""
     if kinematics is None:
         return ()
     from ..kinematics_report import kinematics_section
     from ..kinematics_step import kinematics_lines
 
-    return (kinematics_section(*kinematics, kinematics_lines(*kinematics)),)
+    ident, standoff = kinematics  # kinematics_step.identify_outcome
+    return (kinematics_section(ident, standoff, kinematics_lines(ident, standoff)),)
 
 
 def _warn_joint_mismatch(session) -> None:

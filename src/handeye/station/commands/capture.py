@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from .argtypes import Subcommands
+
 HELP = "visit the planned postures (or the operator's, --guided), measure the board at each, write the session (resumes)"
 
 EPILOG = """\
@@ -23,6 +25,7 @@ camera against link 3, ...) as far apart; postures or moves that do not are repl
 reordered, and the plan line says how many were rejected and why ("camera against link 3"). A start
 posture inside (or within the margin of) a volume is refused. SESSION/preview.png shows the cell
 from above and from the side with the arm, the flange path and the numbered postures; --plan-only writes the plan, the preview and the RAPID program and stops.
+
 At a real station the first move waits for your yes (or --yes, for scripts); the mock says it moves
 without asking.
 
@@ -83,7 +86,7 @@ Examples:
 """
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     p = sub.add_parser("capture", help=HELP, description=HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--config", metavar="STATION.yaml", help="station configuration (see src/handeye/station/config/example_station.yaml)")
@@ -176,7 +179,7 @@ class _Say:
         return contextlib.nullcontext(link)
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from ...base import UsageError

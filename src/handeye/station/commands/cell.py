@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from .argtypes import Subcommands
+
 HELP = "check robot targets (axis angles) against the cell's keep-out volumes and the arm's own links"
 
 EPILOG = """\
@@ -34,7 +36,7 @@ Examples:
 """
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     p = sub.add_parser("cell", help=HELP, description=HELP)
     actions = p.add_subparsers(dest="action", metavar="ACTION")
     check = actions.add_parser("check", help=HELP, description=HELP, epilog=EPILOG,
@@ -47,7 +49,7 @@ def add_parser(sub):
     return p
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from ...base import UsageError
     from ...robot import load_robot
     from ..cell.plan import cell_check

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from .argtypes import Subcommands
+
 HELP = "run the whole station job on the embedded mock robot and camera, and check it against the truth"
 
 EPILOG = """\
@@ -25,7 +27,7 @@ Examples:
 """
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     from ...drivers import DEFAULT_PROTOCOL
     from ...mocks import mock_protocol_choices
     from . import argtypes
@@ -54,7 +56,7 @@ def add_parser(sub):
     return p
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from ...base import UsageError
     from ..demo import DemoOptions, run_demo
     from ..output import check_output_file, write_json

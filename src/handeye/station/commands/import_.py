@@ -11,6 +11,8 @@ import argparse
 from . import argtypes
 import sys
 
+from .argtypes import Subcommands
+
 HELP = "turn any hand-eye log (MoveIt, ViSP, camodocal, easy_handeye, streams, CSV/JSON/YAML tables) into a session"
 
 EPILOG = """\
@@ -81,7 +83,7 @@ Examples:
 FORMAT_NAMES = ("moveit", "visp", "opencv", "stream", "plain", "easy_handeye", "log")
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     p = sub.add_parser("import", help=HELP, description=HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("sources", nargs="+", metavar="SOURCE", help="input file(s) or folder")
@@ -121,7 +123,7 @@ def add_parser(sub):
     return p
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from ..import_session import ImportOptions, import_summary, import_to_session
     from ..importers.ambiguity import AmbiguousReading
 

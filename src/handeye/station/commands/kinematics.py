@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from .argtypes import Subcommands
+
 HELP = "the arm's kinematics identified with the camera: export joint offsets and a corrected RAPID program"
 
 EPILOG = """\
@@ -20,7 +22,7 @@ station). Nothing is written to the controller. Refused when the zeros of J2-J5 
 """
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     p = sub.add_parser("kinematics", help=HELP, description=HELP)
     actions = p.add_subparsers(dest="action", metavar="ACTION")
     export = actions.add_parser("export", help=HELP, description=HELP, epilog=EPILOG,
@@ -32,7 +34,7 @@ def add_parser(sub):
     return p
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from ...base import UsageError

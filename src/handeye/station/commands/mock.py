@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+from typing import cast
 
 from . import argtypes
+from .argtypes import Subcommands
 
 HELP = "run a mock (simulated IRB 1400 controller on 127.0.0.1) until Ctrl-C"
 
@@ -79,7 +81,7 @@ Example:
 """
 
 
-def _protocols(loaded: bool = False) -> tuple[str, str]:
+def _protocols(loaded: bool = False) -> tuple[tuple[str, ...], str]:
     """The protocols a mock serves (registry order; with ``loaded``, of the back ends loaded so far only) and
     their lines for the epilog."""
     from ...mocks import mock_protocols, mock_server
@@ -99,7 +101,7 @@ def _server_options(parser) -> None:
                             metavar=setting.metavar or key.upper(), help=f"{', '.join(names)}: {setting.help}")
 
 
-def add_parser(sub, words=None):
+def add_parser(sub: Subcommands, words: list[str] | None = None) -> argparse.ArgumentParser:
     """``words``: the command line; only the plug-in its ``--protocol`` names is loaded (for its mock's own
     flags), every one for ``--help`` or when None (the whole parser)."""
     from ...drivers import CONTROLLERS
@@ -110,7 +112,7 @@ def add_parser(sub, words=None):
     load_for_flags(CONTROLLERS, wanted)
     names, _ = _protocols(loaded=True)
     p = sub.add_parser("mock", help=HELP, description=HELP)
-    targets = p.add_subparsers(dest="mock_target", metavar="TARGET")
+    targets = cast(Subcommands, p.add_subparsers(dest="mock_target", metavar="TARGET"))  # a OneLineParser's parsers: a callable epilog is theirs
     controller_help = CONTROLLER_HELP.format(protocols=", ".join(names))
     protocols = mock_protocol_choices()
 
@@ -220,7 +222,7 @@ def _run_pendant(args) -> int:
     return status
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     if getattr(args, "mock_target", None) == "pendant":
         return _run_pendant(args)
     if getattr(args, "mock_target", None) != "controller":

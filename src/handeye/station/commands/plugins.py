@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 
+from .argtypes import Subcommands
+
 HELP = "list the installed plug-ins (methods, controller protocols, camera back ends) and what each can do"
 
 EPILOG = """\
@@ -24,14 +26,14 @@ Examples:
 """
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     p = sub.add_parser("plugins", help=HELP, description=HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--json", metavar="FILE", help="write the list as JSON ('-' = stdout)")
     return p
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from ...base import plugin_time_s
     from ..output import check_output_file, write_json
     from ..plugins import installed_plugins, plugin_lines

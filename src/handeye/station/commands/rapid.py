@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import argparse
+from typing import cast
+
+from .argtypes import Subcommands
 
 HELP = "write the RAPID modules for the robot controller"
 
@@ -52,12 +55,12 @@ Example:
 """
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     from ...drivers import rapid_protocol_choices
     from .argtypes import left_out_lines, registry_choice
 
     p = sub.add_parser("rapid", help=HELP, description=HELP)
-    what = p.add_subparsers(dest="rapid_command", metavar="COMMAND")
+    what = cast(Subcommands, p.add_subparsers(dest="rapid_command", metavar="COMMAND"))  # a OneLineParser's parsers: a callable epilog is theirs
     from ..backend_help import link_module_lines
 
     protocols = rapid_protocol_choices()  # a name is checked when given: no plug-in is imported to build this
@@ -81,7 +84,7 @@ def add_parser(sub):
     return p
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     if getattr(args, "rapid_command", None) != "generate":
         args._rapid_parser.print_help()
         return 2

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+from typing import cast
 
 from . import argtypes
+from .argtypes import Subcommands
 
 HELP = "read the robot through the controller link (joints, flange pose, status)"
 
@@ -46,7 +48,7 @@ def _link_options(p, backends) -> None:
                         "that long plus --timeout while the controller frees itself from a silent client")
 
 
-def add_parser(sub, words=None):
+def add_parser(sub: Subcommands, words: list[str] | None = None) -> argparse.ArgumentParser:
     """``words``: the command line; only the plug-in its ``--protocol`` names is loaded (for its own link
     flags), every one for ``--help`` or when None (the whole parser)."""
     from ...drivers import CONTROLLERS
@@ -55,7 +57,7 @@ def add_parser(sub, words=None):
     load_for_flags(CONTROLLERS, None if words is None else option_word(words, "--protocol"))
     p = sub.add_parser("robot", help=HELP, description=HELP, epilog=_epilog,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    what = p.add_subparsers(dest="robot_command", metavar="COMMAND")
+    what = cast(Subcommands, p.add_subparsers(dest="robot_command", metavar="COMMAND"))  # a OneLineParser's parsers: a callable epilog is theirs
     j = what.add_parser("joints", help="joint angles and tool0 pose", description="read CJointT and CRobT(tool0, wobj0)",
                         epilog=_epilog, formatter_class=argparse.RawDescriptionHelpFormatter)
     _link_options(j, CONTROLLERS)
@@ -78,7 +80,7 @@ def _options(args) -> dict:
     return {**CONTROLLERS[args.protocol].link_options(link), **options}
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     if getattr(args, "robot_command", None) not in ("joints", "status"):
         args._robot_parser.print_help()
         return 2
@@ -101,8 +103,9 @@ def run(args) -> int:
             info, status = controller.info(), controller.status()
             data = {"state": status.state, "posture": status.posture, "postures": info.postures,
                     "program": info.program, "protocol_version": info.protocol_version}
-            if hasattr(controller, "controller_state"):  # RWS: the controller's own state too
-                data["controller"] = controller.controller_state()
+            controller_state = getattr(controller, "controller_state", None)
+            if controller_state is not None:  # RWS: the controller's own state too
+                data["controller"] = controller_state()
             if args.json:
                 print(json.dumps(data))
             else:

@@ -6,6 +6,7 @@ import argparse
 
 from ..simulate import MAX_POSTURES, SimulateOptions
 from . import argtypes
+from .argtypes import Subcommands
 
 HELP = "write a synthetic session (IRB 1400, 13x8 board, chosen noise) with its truth"
 
@@ -26,7 +27,7 @@ Example:
 WHY = " (a calibration uses 15-60 postures; sampling takes about 0.05 s each)"
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     p = sub.add_parser("simulate", help=HELP, description=HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("-o", "--output", required=True, metavar="SESSION", help="session folder to create")
@@ -47,7 +48,7 @@ def add_parser(sub):
     return p
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from ..simulate import SimulateOptions, simulate_session
 
     options = SimulateOptions(

@@ -4,9 +4,11 @@ calibration into a stereo file (``triclops``)."""
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING, cast
 
 from ...geometry import STATION_CORNERS, STATION_SQUARE_MM
 from . import argtypes
+from .argtypes import Subcommands
 
 HELP = "calibrate the stereo head from checkerboard pairs, or read its factory (Triclops) calibration"
 
@@ -95,7 +97,7 @@ def _size(text: str) -> tuple[int, int]:
     return w, h
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     p = sub.add_parser("stereo", help=HELP, description=HELP)
     targets = p.add_subparsers(dest="stereo_action", metavar="ACTION")
     c = targets.add_parser("calibrate", help=CALIBRATE_HELP, description=CALIBRATE_HELP, epilog=CALIBRATE_EPILOG,
@@ -172,8 +174,11 @@ def _mock_camera(config, seed):
     from ...drivers import open_camera
     from ...mocks import BoardOperator, PrintedBoard
 
+    if TYPE_CHECKING:
+        from ...mocks import MockCamera
+
     board = PrintedBoard(config.board, margin_mm=max(15.0, 0.8 * config.board.square_mm))
-    camera = open_camera("mock", board=board, seed=seed, output="gray", render_centre=False)
+    camera = cast("MockCamera", open_camera("mock", board=board, seed=seed, output="gray", render_centre=False))  # back end "mock"
     operator = BoardOperator(camera.model, board, seed=seed)
     return camera, lambda hint: operator.follow(camera, hint)
 
@@ -222,7 +227,7 @@ def _triclops(args) -> int:
     return 0
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     action = getattr(args, "stereo_action", None)
     if action == "calibrate":
         return _calibrate(args)

@@ -6,6 +6,7 @@ import argparse
 
 from ...geometry import STATION_CORNERS
 from . import argtypes
+from .argtypes import Subcommands
 
 HELP = "board corners in mm (camera frame) from a stereo image pair or a raw XB3 frame"
 
@@ -40,7 +41,7 @@ Example:
 """
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     p = sub.add_parser("triangulate", help=HELP, description=HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--left", metavar="L.png", help="left image (camera 1)")
@@ -57,7 +58,7 @@ def add_parser(sub):
     return p
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from ...drivers import triangulate_files
     from ..output import write_json
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from .argtypes import Subcommands
+
 HELP = "check a calibration on the station: revisit K postures, test for drift, say what changed"
 
 EPILOG = """\
@@ -46,7 +48,7 @@ Examples:
 """
 
 
-def add_parser(sub):
+def add_parser(sub: Subcommands) -> argparse.ArgumentParser:
     p = sub.add_parser("verify", help=HELP, description=HELP, epilog=EPILOG,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--config", metavar="STATION.yaml", help="station configuration (controller, camera, cell, mock)")
@@ -83,7 +85,7 @@ def _history(args, config) -> int:
     return 0
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     import sys
@@ -124,7 +126,7 @@ def run(args) -> int:
 
 
 def _check(args, config, link, tag: str) -> str:
-    from ...base import write_text_atomic
+    from ...base import HandEyeError, write_text_atomic
     from ..report.quality import config_thresholds
     from ..verify.check import verify
     from ..verify.history import append_record, check_record, history_path, load_history
@@ -158,7 +160,13 @@ def _check(args, config, link, tag: str) -> str:
         history = load_history(path)
         if history.skipped:
             print(history.skipped_line(), file=sys.stderr)
-        target = args.report or str(outcome.folder / "verify_report.html")
+        folder = outcome.folder
+        if args.report:
+            target = args.report
+        elif folder is not None:
+            target = str(folder / "verify_report.html")
+        else:  # verify() always makes the check's folder
+            raise HandEyeError("the check wrote no folder to put its report in: give --report FILE")
         say(f"report: {write_history_report(target, history, thresholds, data)}")
 
     _after_check(record, "the check was not added to the history")

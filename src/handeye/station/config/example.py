@@ -116,7 +116,7 @@ def example_problem(path=None) -> str | None:
             f"setting was added or changed): run {REGENERATE}")
 
 
-def main(argv=None) -> int:
+def main(argv: list[str] | None = None) -> int:
     """Rewrite the example file's generated part (``--check``: only say whether it is out of date)."""
     from .station import EXAMPLE_FILE  # noqa: PLC0415
 

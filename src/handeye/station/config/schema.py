@@ -14,13 +14,14 @@ from __future__ import annotations
 
 import math
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from typing import Protocol
 from dataclasses import dataclass, field, fields, replace
 
 from ...base import ConfigError, brief
 
 __all__ = ["Rule", "Number", "Numbers", "Range", "Text", "Flag", "Optional", "Custom", "Section", "setting", "section",
-           "rule_of", "check_section", "chosen_of", "declared_fields", "schema_keys", "secret_fields", "number", "numbers", "text"]
+           "rule_of", "key_rule", "NameChoices", "check_section", "chosen_of", "declared_fields", "schema_keys", "secret_fields", "number", "numbers", "text"]
 
 #: Largest finite float: ``abs(v) <= _FLOAT_MAX`` is false for NaN, inf and integers too large for a
 #: float (where ``math.isfinite`` would raise OverflowError).
@@ -108,12 +109,21 @@ class Range(Rule):
         return pair
 
 
+class NameChoices(Protocol):
+    """What a :class:`Text` may be: a tuple of names, or a registry's ``base.registry.Choices`` (which also
+    says why a name is refused and lists its names itself)."""
+
+    def __contains__(self, value: object, /) -> bool: ...
+
+    def __iter__(self) -> Iterator[str]: ...
+
+
 @dataclass(frozen=True)
 class Text(Rule):
     """A non-empty text; ``choices`` (a callable returning them: registries grow) limits it; ``what``
     says what it holds when it is left empty."""
 
-    choices: Callable[[], tuple] | None = None
+    choices: Callable[[], NameChoices] | None = None
     what: str = ""
 
     def __call__(self, value, key, context):
@@ -209,6 +219,14 @@ def rule_of(f) -> Rule | None:
     return f.metadata.get("rule")
 
 
+def key_rule(f) -> Rule:
+    """The rule of a config key's field (made by :func:`setting`; :func:`rule_of` where one must be)."""
+    rule = rule_of(f)
+    if rule is None:
+        raise TypeError(f"field {f.name} is not a config key (it was not made with setting())")
+    return rule
+
+
 def declared_fields(cls, chosen: str | None = None) -> list:
     """The config keys of ``cls``: its :func:`setting` fields, then the keys declared elsewhere that
     its section takes (``cls.extra_settings(chosen)``, fields made with :func:`setting` and named: the
@@ -241,7 +259,7 @@ def check_section(cls, data, name: str, context: dict) -> dict:
     section = data if data is not None else {}
     if not isinstance(section, dict):
         raise ConfigError(f"{name} must be a mapping of keys; got {brief(section)}")
-    rules = {f.name: rule_of(f) for f in declared_fields(cls, _chosen(cls, section))}
+    rules = {f.name: key_rule(f) for f in declared_fields(cls, _chosen(cls, section))}
     allowed = set(rules)
     unknown = sorted(set(section) - allowed, key=brief)
     if unknown:

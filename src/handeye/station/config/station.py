@@ -23,9 +23,9 @@ verdict's thresholds, see ``station.report.quality``), ``verify`` (the change a 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, fields, is_dataclass, replace
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +41,9 @@ from ...drivers import DEFAULT_PROTOCOL
 from ..cell.plan import base_problem
 from .cell import CellSettings, GuidedSettings
 from ..plant.settings import PlantSettings, plant_rule
+if TYPE_CHECKING:
+    from ...mocks import Occlusion
+
 from .schema import (
     Custom,
     Flag,
@@ -53,6 +56,7 @@ from .schema import (
     chosen_of,
     declared_fields,
     numbers,
+    key_rule,
     rule_of,
     schema_keys,
     secret_fields,
@@ -208,6 +212,8 @@ class _DeclaredByBackEnds:
     #: handeye's own back ends (no other plug-in is imported to check a file).
     CHOSEN_BY: ClassVar[str] = ""
     _WHAT: ClassVar[str] = ""
+    #: ``_declared(chosen) -> {key: (Setting, back-end names)}`` (each section's own: a staticmethod).
+    _declared: ClassVar[Callable[[str | None], dict]]
 
     @classmethod
     def extra_settings(cls, chosen: str | None = None) -> tuple:
@@ -373,7 +379,7 @@ def _squares(value, key: str, context) -> tuple:
     return tuple(value)
 
 
-def _occlude(value, key: str, context):
+def _occlude(value: object, key: str, context) -> Occlusion:
     """``mock.occlude``: ``{postures: share 0..1, band: [min, max] fraction of the board}`` (``mocks.printed_targets``)."""
     from ...mocks import Occlusion
 
@@ -544,7 +550,7 @@ class MockSettings:
     time_scale: float = setting(0.02, Number(1e-4, 10), "wall-clock seconds per simulated second of motion")
     faults: FaultSettings = section(FaultSettings, "what changed since the calibration (handeye verify)")
     arm: ArmSettings = section(ArmSettings, "the arm's true kinematic deviations (null: random)")
-    occlude: object = setting(None, Optional(Custom(_occlude)), "a band over the board at a share of the postures "
+    occlude: Occlusion | None = setting(None, Optional(Custom(_occlude)), "a band over the board at a share of the postures "
                               "({postures: 0.3, band: [0.2, 0.4]}; null: none)")
 
 
@@ -611,7 +617,7 @@ class StationConfig:
         return replace(self, controller=replace(self.controller, protocol=MOCK),
                        camera=replace(self.camera, backend=MOCK, mock_arm=None))
 
-    def session_folder(self, session) -> Path:
+    def session_folder(self, session: str | Path) -> Path:
         """Where ``handeye capture --session SESSION`` works: a relative ``SESSION`` inside ``output`` (unless it
         already starts with that folder), an absolute one, or any with ``output`` null, as given."""
         path = Path(session)
@@ -625,7 +631,7 @@ class StationConfig:
         """The controller link actually spoken: the mock station's own protocol when mocked."""
         return self.mock.protocol if self.is_mock else self.controller.protocol
 
-    def rapid_dict(self, postures, board2base=None) -> dict:
+    def rapid_dict(self, postures: np.ndarray | Sequence, board2base: np.ndarray | None = None) -> dict:
         """The mapping ``rapid.station.station_from_dict`` reads, with the given approved postures; with
         ``cell.world_zones`` the keep-out volumes (and the board's stand when ``board2base`` is given)
         as world zones on the camera's nominal TCP."""
@@ -704,7 +710,7 @@ def config_from_dict(data: dict, source: str = "configuration") -> StationConfig
     if unknown:
         raise ConfigError(f"unknown section {brief(unknown[0])}; known: {', '.join(sorted(TOP_LEVEL))}")
     context = {"robot": StationConfig.robot}
-    rules = {f.name: rule_of(f) for f in fields(StationConfig)}
+    rules = {f.name: key_rule(f) for f in fields(StationConfig) if rule_of(f) is not None}
     changes = {name: rules[name](data[name], name, context) for name in TOP_LEVEL if name in data}
     config = replace(StationConfig(source=source), **changes)
     _check_quality(config.quality)
@@ -718,7 +724,10 @@ def _required_keys():
     for path, f in schema_keys(StationConfig):
         if f.metadata.get("required"):
             name, key = path.split(".")
-            yield name, key, tuple(c for c in rule_of(f).choices() if c != MOCK)
+            rule = key_rule(f)
+            if not isinstance(rule, Text) or rule.choices is None:  # required keys name a registered back end
+                raise TypeError(f"required key {path} has no choices to name")
+            yield name, key, tuple(c for c in rule.choices() if c != MOCK)
 
 
 def _check_hardware_named(data: dict, config: StationConfig) -> None:
@@ -784,7 +793,7 @@ def describe_keys() -> list[str]:
     return lines
 
 
-def load_config(path) -> StationConfig:
+def load_config(path: str | Path) -> StationConfig:
     """Read and validate a station YAML file.
 
     Raises

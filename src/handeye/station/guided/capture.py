@@ -261,6 +261,8 @@ class _GuidedRun:
         self.observer = observer or (lambda event: None)
         self.robot = load_robot(config.robot)
         self.thresholds = config_thresholds(config)
+        if link.stereo_model is None:  # every capturing link is opened with its stereo model
+            raise CaptureError("the station link has no stereo model to judge the views with")
         self.view = stereo_views(link.stereo_model)[0]
         self.session = _open_guided(config, session_dir, progress, self.how_to_capture(), link)
         self.state = _Captured()

@@ -19,6 +19,7 @@ import threading
 import time
 from collections.abc import Callable
 from contextlib import contextmanager
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -30,6 +31,9 @@ from ..config.station import StationConfig
 from ..capture.planning import plan_postures
 from ..report.quality import config_thresholds
 from ..runtime import StationLink
+
+if TYPE_CHECKING:
+    from ...mocks import MockStation
 
 __all__ = ["PATIENCE_S", "MockOperator", "guided_refusal", "mock_operator", "operator_postures"]
 
@@ -44,13 +48,21 @@ def guided_refusal(config: StationConfig) -> str | None:
     return None
 
 
+def _embedded(link: StationLink) -> MockStation:
+    """The embedded mock station the simulated operator works on (refused on any other station)."""
+    if link.mock is None:
+        raise HandEyeError("the simulated operator jogs the embedded mock arm: this station is not the embedded mock")
+    return link.mock
+
+
 def operator_postures(config: StationConfig, link: StationLink) -> np.ndarray:
     """Joint angles ``(n, dof)`` (deg) the simulated operator jogs to, in order: ``plan.postures`` postures
     around the mock's board, planned from where the arm stands, clear of the cell."""
     robot = load_robot(config.robot)
-    start = np.asarray(link.mock.arm.current_joints, float)
+    mock = _embedded(link)
+    start = np.asarray(mock.arm.current_joints, float)
     mount = config.camera.nominal_mount_transform()
-    board2base = np.asarray(link.mock.truth["board2base"], float)  # the operator sees where the board is
+    board2base = np.asarray(mock.truth["board2base"], float)  # the operator sees where the board is
     view = invert_transforms(robot.forward_transform(start) @ mount) @ board2base
     plan = plan_postures(robot, start, view, mount, config.target, config.plan.postures, seed=config.plan.seed,
                          thresholds=config_thresholds(config), cell=cell_check(config))
@@ -76,7 +88,7 @@ class MockOperator:
 
     def __init__(self, config: StationConfig, link: StationLink, postures, stop: threading.Event,
                  progress: Callable[[str], None] = lambda message: None):
-        self.config, self.arm, self.postures = config, link.mock.arm, np.asarray(postures, float)
+        self.config, self.arm, self.postures = config, _embedded(link).arm, np.asarray(postures, float)
         self.stop, self.progress = stop, progress
         self._taken = threading.Event()
         self._thread = threading.Thread(target=self._run, name="mock-operator", daemon=True)

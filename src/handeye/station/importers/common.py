@@ -240,7 +240,9 @@ def quaternion_side(name: str, positions, quaternions, declared_order: str | Non
     """
     p = np.asarray(positions, dtype=float).reshape(-1, 3)
     q = np.asarray(quaternions, dtype=float).reshape(-1, 4)
-    orders = [declared_order] if named else list(QUATERNION_ORDERS)
+    if named and declared_order is None:  # the column names are what declares the order
+        raise ValueError(f"{name}: quaternion columns named by component but no order read from them")
+    orders = [declared_order] if named and declared_order is not None else list(QUATERNION_ORDERS)
     readings = []
     for order in orders:
         poses = np.tile(np.eye(4), (len(p), 1, 1))
@@ -436,7 +438,7 @@ def build_session(
                               conventions_given=conventions_given)
     inference, postures = _inferred_postures(where, robot_side, camera_side, constraints, labels)
     unit_info = _units_record(inference, robot_side, camera_side, units, documented_units, notes)
-    notes += inference.notes
+    notes.extend(inference.notes)
     read = _import_record(source, inference, unit_info, notes, dropped)
     record = {"format": format_name, "setup_how": _setup_how(inference, setup, declared_setup, default_setup),
               "entries_read": int(entries_read if entries_read is not None else n + dropped.total),

@@ -68,7 +68,9 @@ def read_easy_handeye(path, *, setup=None, units=None, board=None, skip_invalid:
     data = parse_yaml(text, path)
     if not isinstance(data, dict) or not isinstance(data.get("samples"), list):
         raise SessionError(f"{path}: expected easy_handeye2 samples (a 'samples' list of robot/tracking transforms)")
-    parameters = data.get("parameters") if isinstance(data.get("parameters"), dict) else {}
+    parameters = data.get("parameters")
+    if not isinstance(parameters, dict):
+        parameters = {}
     kind = parameters.get("calibration_type") or ""
     if not isinstance(kind, str) or kind.strip() not in ("", *_TYPES):
         raise SessionError(f"{path}: parameters.calibration_type {brief(kind)} is neither eye_in_hand nor eye_on_base")

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...base import SessionError
+from ...calibration import Session
 from .log_group import Group
 
 __all__ = ["Candidate", "choose_layout", "CONE_MAX_DEG", "CONE_FACTOR", "NOISE_FACTOR"]
@@ -49,7 +50,7 @@ class Candidate:
     cost: int = 0
     robot_first: bool = True
     swap: int | None = None
-    session: object = None
+    session: Session | None = None
     stage: int = 0
     documented: bool = False
     extra: dict | None = None
@@ -62,9 +63,16 @@ class Candidate:
         name = "".join(ch for ch in self.robot_name.lower() if ch.isalpha())
         return bool(name) and name == want
 
+    @property
+    def read(self) -> Session:
+        """The session this pairing was read as (only pairings that were read are compared)."""
+        if self.session is None:
+            raise SessionError(f"the pairing {self.words} was not read as a session")
+        return self.session
+
     def badness(self) -> float:
         """The chosen reading's worst misfit against its floor (``readings.badness``, from the record)."""
-        scores = self.session.extra["import"]["inference"]["scores"]
+        scores = self.read.extra["import"]["inference"]["scores"]
         values = [scores.get("angle_gap_deg"), (scores.get("axis_misfit_deg") or 0.0) / 2.0,
                   (scores.get("translation_misfit") or 0.0) / 0.08]
         values = [np.inf if v is None else float(v) for v in values]
@@ -72,12 +80,12 @@ class Candidate:
 
     def cone_deg(self) -> float:
         """Widest angle (deg) between a board position in the camera and the camera's axis (+z)."""
-        t = np.array([p.target_in_camera[:3, 3] for p in self.session.postures])
+        t = np.array([p.target_in_camera[:3, 3] for p in self.read.postures])
         cos = t[:, 2] / np.maximum(np.linalg.norm(t, axis=1), 1e-12)
         return float(np.degrees(np.max(np.arccos(np.clip(cos, -1.0, 1.0)))))
 
     def poses(self) -> tuple:
-        s = self.session
+        s = self.read
         return (s.setup, np.array([p.tool0_in_base for p in s.postures]), np.array([p.target_in_camera for p in s.postures]))
 
 

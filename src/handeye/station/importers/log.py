@@ -41,7 +41,7 @@ from .readings import GAP_MAX_DEG, Constraints, screen, side_units
 from .layout_choice import Candidate, choose_layout
 from .layout_search import one_side_lists, propose
 from .layout_text import tokenise
-from .log_folder import parse_document, plan_folder
+from .log_folder import FolderPlan, parse_document, plan_folder
 from .log_group import Group
 from .log_result import frame_hints, own_result
 from .log_text import Table, matrices_from_rows, parse_table
@@ -292,10 +292,10 @@ def _matrix_groups(path: Path, table: Table) -> list:
     matrices = matrices_from_rows(table.rows)
     if not matrices:
         raise SessionError(f"{path}: rows of 4 numbers that do not group into 4x4 (or 3x4) matrices")
-    blocks: dict = {}
+    by_key: dict = {}
     for m in matrices:
-        blocks.setdefault(m[2], []).append(m)
-    blocks = list(blocks.values())
+        by_key.setdefault(m[2], []).append(m)
+    blocks = list(by_key.values())
 
     def group(items, label=None):
         return Group(np.array([m[1] for m in items], dtype=float), [f"{path.name}: line {m[0]}" for m in items],
@@ -451,7 +451,7 @@ def _take(group: Group, index: list) -> Group:
 # --------------------------------------------------------------------------- the reader
 
 
-def _sources(paths) -> tuple[list, object]:
+def _sources(paths) -> tuple[list, FolderPlan | None]:
     """``(files, folder plan or None)``: the one or two files to read (a folder's side files), or the folder
     itself when it holds one file per posture (``log_folder.plan_folder``)."""
     if isinstance(paths, (str, Path)):

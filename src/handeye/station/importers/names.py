@@ -65,7 +65,8 @@ def _frame(word: str) -> str | None:
     return None
 
 
-_DIRECTIONS = {("flange", "base"): "flange_in_base", ("base", "flange"): "base_in_flange",
+#: ``(frame, in frame) -> direction``; a frame a name does not state (``None``) finds none.
+_DIRECTIONS: dict[tuple[str | None, str | None], str] = {("flange", "base"): "flange_in_base", ("base", "flange"): "base_in_flange",
                ("target", "camera"): "target_in_camera", ("camera", "target"): "camera_in_target"}
 
 

@@ -146,7 +146,7 @@ class Reading:
     scale: float = float("nan")
     view: dict = field(default_factory=dict, repr=False)
     usable_pairs: int = 0
-    misfits: np.ndarray = field(default=None, repr=False)  # (n, 3) per posture, ``noise_test.posture_misfits``
+    misfits: np.ndarray | None = field(default=None, repr=False)  # (n, 3) per posture, ``noise_test.posture_misfits``
 
 
 def median_length(poses) -> float:

@@ -35,6 +35,7 @@ import numpy as np
 
 from ...base import SessionError, SessionUsageError
 from ...calibration import Session
+from ...geometry import BoardGeometry
 from ...base import parse_yaml
 from .common import Dropped, EntryErrors, build_session, flat_numbers, read_text, transform_from_rotvec
 from .visp_images import (find_images, measure_board_pose, measure_tag_pose, read_apriltag_data, read_chessboard_data,
@@ -182,6 +183,14 @@ def read_visp(path, *, setup=None, units=None, board=None, skip_invalid: bool = 
                          robot_pose=robot_pose, camera_pose=camera_pose, robot_words=THETA_U, camera_words=THETA_U)
 
 
+def _known_board(board: BoardGeometry | None, where) -> BoardGeometry:
+    """The chessboard the images are measured with: :func:`_read_with_images` reads it (ViSP's
+    chessboard-data.txt) or refuses the images without one when no AprilTag is given."""
+    if board is None:
+        raise SessionError(f"{where}: no chessboard (--board, --square-mm) to measure the images with")
+    return board
+
+
 def _read_with_images(where, source, files, robot_files, images, setup, units, board, skip_invalid, robot_pose=None,
                       camera_pose=None, tag_mm=None) -> Session:
     """Robot pose files + images: measure the board (chessboard or AprilTag) poses, then build the session."""
@@ -226,7 +235,7 @@ def _read_with_images(where, source, files, robot_files, images, setup, units, b
             if tag_mm is not None:
                 result = measure_tag_pose(images[number], tag_mm, camera)
             else:
-                result = measure_board_pose(images[number], board, camera)
+                result = measure_board_pose(images[number], _known_board(board, where), camera)
         except ValueError as exc:
             dropped.add(f"{target.split(' of ')[0]} not measured ({exc})", images[number].name)
             continue
@@ -237,8 +246,11 @@ def _read_with_images(where, source, files, robot_files, images, setup, units, b
         rms.append(result["rms_px"])
         turned += result.get("turned", False)
         labels.append(f"{robot_files[number].name} + {images[number].name} (measured, {result['rms_px']:.3f} px rms)")
-    what = (f"AprilTag 36h11, {tag_mm:g} mm" if tag_mm is not None
-            else f"chessboard {board.corners[0]}x{board.corners[1]}, {board.square_mm:g} mm squares")
+    if tag_mm is not None:
+        what = f"AprilTag 36h11, {tag_mm:g} mm"
+    else:
+        chessboard = _known_board(board, where)
+        what = f"chessboard {chessboard.corners[0]}x{chessboard.corners[1]}, {chessboard.square_mm:g} mm squares"
     notes = [f"{'tag' if tag_mm is not None else 'board'} poses measured from {len(measured)} images with OpenCV "
              f"({what}, intrinsics from {xml[0].name})"]
     if turned:

@@ -223,6 +223,8 @@ def measure_board_pose(image_path, board: BoardGeometry, camera: CameraIntrinsic
     corners = cv2.cornerSubPix(image, corners, (5, 5), (-1, -1),
                                (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-3)).reshape(-1, 2)
     corners, turned = canonical_corner_order(image, corners, pattern)
+    if board.square_mm is None:
+        raise ValueError(f"the {pattern[0]}x{pattern[1]} board's square size is unknown")
     pose, rms = _pnp(board_corners(pattern, board.square_mm), corners, camera, cv2.SOLVEPNP_ITERATIVE)
     return {"pose": pose, "rms_px": rms, "turned": bool(turned)}
 

@@ -25,10 +25,11 @@ class PlantLinkError(HandEyeError):
 def make_client(broker, client_id: str, clean_session: bool = True):
     """A paho client (MQTT 3.1.1) with the TLS and credentials of ``broker`` (``BrokerSettings``), not connected."""
     import paho.mqtt.client as mqtt
+    from paho.mqtt.enums import CallbackAPIVersion
 
     from .settings import broker_password
 
-    client = mqtt.Client(mqtt.CallbackAPIVersion.VERSION2, client_id=client_id, protocol=mqtt.MQTTv311,
+    client = mqtt.Client(CallbackAPIVersion.VERSION2, client_id=client_id, protocol=mqtt.MQTTv311,
                          clean_session=clean_session)
     if broker.username is not None:
         client.username_pw_set(broker.username, broker_password(broker))

@@ -24,7 +24,7 @@ def recorded_plant(session):
     capture = (getattr(session, "extra", None) or {}).get("capture")
     recorded = capture.get("config") if isinstance(capture, dict) else None
     data = recorded.get("plant") if isinstance(recorded, dict) else None
-    if not isinstance(data, dict):
+    if not isinstance(recorded, dict) or not isinstance(data, dict):
         return None, {}
     from .settings import plant_rule
 

@@ -38,7 +38,7 @@ class FleetSubscriber:
         else:  # a look (--json) beside it: what the history holds, and what comes meanwhile
             client_id, clean = f"{mqtt.client_id or 'handeye-fleet'}-look-{os.getpid()}", True
         self.client = make_client(mqtt, client_id, clean_session=clean)
-        self.client.reconnect_delay_set(0.2, 2.0)
+        self.client.reconnect_delay_set(0.2, 2.0)  # pyright: ignore[reportArgumentType] (paho's hint says int; the back-off takes float seconds)
         self.client.on_message = self._message
         self.client.on_disconnect = lambda *a, **k: self.connected.clear()
         connect(self.client, mqtt, timeout_s)

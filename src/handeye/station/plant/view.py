@@ -78,5 +78,5 @@ class FleetServer(ViewServer):
 
     def page(self) -> bytes:
         if self._page is None:
-            self._page = resources.files(__package__).joinpath("fleet_page.html").read_bytes()
+            self._page = resources.files(__name__.rpartition(".")[0]).joinpath("fleet_page.html").read_bytes()
         return self._page

@@ -17,17 +17,21 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...base import CalibrationError, HandEyeError
 from ...calibration import comparison_methods
 from ...calibration import fixed_points
-from ...calibration import EYE_IN_HAND, HandEyeProblem
+from ...calibration import EYE_IN_HAND, CalibrationResult, HandEyeProblem
 from ...calibration import AxisCoverage, DOrg, kept_postures, result_d_org
 from ...geometry import rotation_error_deg
 from ..calibrate import CalibrationOutcome
 from .quality import QualityFigures, QualityThresholds, Verdict, quality_figures, verdict
+
+if TYPE_CHECKING:
+    from .units_advice import UnitsAdvice
 
 __all__ = [
     "COMPARISON_METHODS",
@@ -89,7 +93,7 @@ class Assessment:
 
     session_path: Path | str
     problem: HandEyeProblem
-    result: object
+    result: CalibrationResult
     origin: str
     figures: QualityFigures
     verdict: Verdict | None
@@ -127,7 +131,7 @@ class Assessment:
         return verdict_scope(self.verdict, self.result)
 
     @property
-    def units(self):
+    def units(self) -> UnitsAdvice | None:
         """The units advice (``station.report.units_advice.UnitsAdvice``), or ``None``."""
         return self.figures.units
 
@@ -206,7 +210,7 @@ def _findings(problem: HandEyeProblem) -> list | None:
         return None
 
 
-def comparison_results(problem: HandEyeProblem, methods=None, truth: dict | None = None,
+def comparison_results(problem: HandEyeProblem, methods: Sequence[str] | None = None, truth: dict | None = None,
                        known: dict | None = None, failures: dict | None = None) -> dict:
     """Solve ``problem`` with several methods: ``{method: CalibrationResult}``.
 
@@ -243,7 +247,7 @@ def comparison_results(problem: HandEyeProblem, methods=None, truth: dict | None
     return out
 
 
-def method_comparison(problem: HandEyeProblem, chosen, comparison: dict) -> list[dict]:
+def method_comparison(problem: HandEyeProblem, chosen: CalibrationResult, comparison: dict) -> list[dict]:
     """One row per method, ranked by the held-out error: pose, differences from ``chosen``, d_org.
 
     ``held_out_mm`` (:func:`held_out_rms_mm`) is the cross-validated RMS error of the board points:
@@ -273,7 +277,7 @@ def method_comparison(problem: HandEyeProblem, chosen, comparison: dict) -> list
     return sorted(rows, key=lambda row: (row["held_out_mm"] is None, row["held_out_mm"] or 0.0))
 
 
-def held_out_rms_mm(problem: HandEyeProblem, chosen, result) -> float | None:
+def held_out_rms_mm(problem: HandEyeProblem, chosen: CalibrationResult, result: CalibrationResult) -> float | None:
     """The cross-validated RMS error (mm) of the board points of ``result``'s method.
 
     ``calibration.crossval`` with its default folds over the postures the CHOSEN result kept, so every
@@ -294,6 +298,8 @@ def held_out_rms_mm(problem: HandEyeProblem, chosen, result) -> float | None:
                                                                keep=kept_postures(problem, chosen)), "cross-validate")
     except OutOfTime:
         return None
+    if cv is None:  # cross_validate always returns its figures; bounded_for's value is untyped (maybe None)
+        raise CalibrationError(f"the cross-validation of method {result.method} returned nothing")
     return cv.rms_mm if np.isfinite(cv.rms_sq_mm2).any() else None
 
 
@@ -314,7 +320,7 @@ def _systematic(result) -> bool:
     return bool((getattr(result, "cross_validation", None) or {}).get("systematic"))
 
 
-def rank_note(rows: list[dict], result) -> str | None:
+def rank_note(rows: list[dict], result: CalibrationResult) -> str | None:
     """One line on why the chosen method is not first by the held-out error (``None`` when it is).
 
     The held-out error scores how well each X carries the board points of these postures through the
@@ -342,7 +348,7 @@ def rank_note(rows: list[dict], result) -> str | None:
             "camera pose in every noise regime; compare those differences with its one-sigma.")
 
 
-def verdict_scope(verdict, result) -> str | None:
+def verdict_scope(verdict: Verdict | None, result: CalibrationResult) -> str | None:
     """What a PASS does not cover when the robot's errors are systematic; ``None`` otherwise."""
     if verdict is None or not verdict.passed or not _systematic(result):
         return None
@@ -351,7 +357,7 @@ def verdict_scope(verdict, result) -> str | None:
             "from the calibration postures.")
 
 
-def corner_repeatability(problem: HandEyeProblem, result) -> dict:
+def corner_repeatability(problem: HandEyeProblem, result: CalibrationResult) -> dict:
     """Board points in the fixed frame, their deviations from the mean over the inliers, per-point RMS.
 
     Returns

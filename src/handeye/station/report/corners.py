@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from ...calibration import HandEyeProblem
 
 __all__ = ["corners_section"]
 
 
-def corners_section(problem) -> str:
+def corners_section(problem: HandEyeProblem) -> str:
     """An HTML section listing the corners seen per posture when some postures saw part of the board
     (``problem.seen``); "" when every posture saw every corner (a checkerboard session: unchanged report)."""
     seen = getattr(problem, "seen", None)

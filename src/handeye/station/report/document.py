@@ -46,7 +46,7 @@ from .summary import summary_section
 __all__ = ["write_report"]
 
 
-def write_report(path_html, assessment: Assessment, title: str = "Hand-eye calibration report",
+def write_report(path_html: str | Path, assessment: Assessment, title: str = "Hand-eye calibration report",
                  extra_sections: tuple = ()) -> Path:
     """Write the calibration report of an assessment as one self-contained HTML file.
 

@@ -10,11 +10,18 @@ corners in the fixed frame and the per-corner RMS. No two texts of a figure may 
 from __future__ import annotations
 
 import io
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
 from ...calibration import HandEyeProblem
 from ...calibration import D_ORG_ALL_NAME, AxisCoverage
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from ...calibration import CalibrationResult
 
 __all__ = ["BLUE", "RED", "ORANGE", "GREY", "new_figure", "to_png", "style_axes", "plot_residuals", "plot_axis_coverage",
            "plot_method_comparison", "method_comparison_figure", "plot_repeatability", "plot_point_rms"]
@@ -22,7 +29,7 @@ __all__ = ["BLUE", "RED", "ORANGE", "GREY", "new_figure", "to_png", "style_axes"
 BLUE, RED, ORANGE, GREY = "#1f5fa8", "#c62828", "#ef8a17", "#8a8a8a"
 
 
-def new_figure(width: float, height: float, layout: str | None = None):
+def new_figure(width: float, height: float, layout: Literal["constrained", "compressed", "tight"] | None = None) -> Figure:
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(width, height), dpi=100, layout=layout)
@@ -30,19 +37,19 @@ def new_figure(width: float, height: float, layout: str | None = None):
     return fig
 
 
-def to_png(fig) -> bytes:
+def to_png(fig: Figure) -> bytes:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=100, bbox_inches="tight", facecolor="white")
     return buffer.getvalue()
 
 
-def style_axes(ax):
+def style_axes(ax: Axes) -> None:
     ax.grid(True, alpha=0.25)
     for side in ("top", "right"):
         ax.spines[side].set_visible(False)
 
 
-def plot_residuals(result, problem: HandEyeProblem, limit_mm: float | None) -> bytes:
+def plot_residuals(result: CalibrationResult, problem: HandEyeProblem, limit_mm: float | None) -> bytes:
     """Bar chart of each posture's residual (mm); outliers red, inliers over the limit orange."""
     ids = [int(i) for i in problem.posture_ids]
     values = np.array([result.residuals_mm.get(i, np.nan) for i in ids])
@@ -77,10 +84,11 @@ def plot_residuals(result, problem: HandEyeProblem, limit_mm: float | None) -> b
     ax.set_ylim(0, (top * (1.4 if labelled else 1.18)) if top > 0 else 1.0)
     ax.set_xlabel("posture")
     ax.set_ylabel("residual (mm)")
+    from matplotlib.artist import Artist
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    handles = [Patch(color=BLUE, label="used"), Patch(color=RED, label="outlier (left out)")]
+    handles: list[Artist] = [Patch(color=BLUE, label="used"), Patch(color=RED, label="outlier (left out)")]
     if ORANGE in colours:
         handles.append(Patch(color=ORANGE, label="used, over the limit"))
     if off_scale:
@@ -174,7 +182,7 @@ def plot_method_comparison(rows: list[dict]) -> bytes:
     return to_png(method_comparison_figure(rows))
 
 
-def method_comparison_figure(rows: list[dict]):
+def method_comparison_figure(rows: list[dict]) -> Figure:
     """The figure of :func:`plot_method_comparison` (a matplotlib ``Figure``)."""
     names = [r["method"] + (" (chosen)" if r["chosen"] else "") for r in rows]
     colours = [BLUE if r["chosen"] else GREY for r in rows]
@@ -216,7 +224,7 @@ def _grid_shape(points_2d: np.ndarray):
     return (len(ys), len(xs)) if np.allclose(expected, np.round(points_2d, 6)) else None
 
 
-def plot_repeatability(problem: HandEyeProblem, result, rep: dict) -> tuple[bytes, list]:
+def plot_repeatability(problem: HandEyeProblem, result: CalibrationResult, rep: dict) -> tuple[bytes, list]:
     """Deviations of the board points from their mean in the fixed frame, top and side views.
 
     Returns the PNG and the outlier postures whose board centre lies beyond the plotted frame.

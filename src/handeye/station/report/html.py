@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import base64
 import html
+from collections.abc import Iterable
 
 __all__ = ["CSS", "FOOTER", "escape", "img", "num", "kv"]
 
@@ -44,7 +45,7 @@ footer{color:#666;font-size:12.5px;margin-top:18px}
 """
 
 
-def escape(text) -> str:
+def escape(text: object) -> str:
     return html.escape(str(text), quote=True)
 
 
@@ -52,11 +53,11 @@ def img(png: bytes, alt: str) -> str:
     return f'<img alt="{escape(alt)}" src="data:image/png;base64,{base64.b64encode(png).decode("ascii")}">'
 
 
-def num(value, fmt="{:.3f}") -> str:
+def num(value: float | None, fmt: str = "{:.3f}") -> str:
     return "n/a" if value is None else fmt.format(value)
 
 
-def kv(pairs) -> str:
+def kv(pairs: Iterable[tuple[object, object]]) -> str:
     return '<div class="kv">' + "".join(f"<div>{escape(k)}</div><div>{v}</div>" for k, v in pairs) + "</div>"
 
 

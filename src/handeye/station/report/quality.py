@@ -30,7 +30,7 @@ import math
 import sys
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -47,6 +47,11 @@ from ...calibration import (
     result_d_org,
     rotation_axis_coverage,
 )
+
+if TYPE_CHECKING:
+    from ...calibration import CalibrationResult
+    from ..config.station import StationConfig
+    from .units_advice import UnitsAdvice
 
 __all__ = [
     "CHECK_LABELS",
@@ -143,7 +148,7 @@ class QualityThresholds:
         _check_pair(self.min_camera_offset_mm, self.max_camera_offset_mm)
 
     @classmethod
-    def from_dict(cls, mapping, source: str = "thresholds") -> QualityThresholds:
+    def from_dict(cls, mapping: object, source: str = "thresholds") -> QualityThresholds:
         """Thresholds from a mapping; keys left out keep their defaults.
 
         Parameters
@@ -204,7 +209,7 @@ def _check_value(key: str, value, source: str = "thresholds"):
     return float(value)
 
 
-def load_thresholds(path) -> QualityThresholds:
+def load_thresholds(path: str | Path) -> QualityThresholds:
     """Thresholds from a YAML file: a mapping of threshold keys, or a station config whose ``quality``
     section holds them (the rest of such a file is ignored here).
 
@@ -223,7 +228,7 @@ def load_thresholds(path) -> QualityThresholds:
     return QualityThresholds.from_dict(data if data is not None else {}, str(path))
 
 
-def direction_name(direction, frame: str) -> str:
+def direction_name(direction: np.ndarray, frame: str) -> str:
     """``'tool0 z'`` when a unit vector lies within 30 deg of a frame axis, else its components."""
     direction = np.asarray(direction, float)
     k = int(np.argmax(np.abs(direction)))
@@ -262,7 +267,7 @@ CHECK_LABELS = {
 }
 
 
-def format_check_value(name: str, value) -> str:
+def format_check_value(name: str, value: object) -> str:
     """A check's value (or limit) as the report prints it, with its unit."""
     if value is None:
         return "n/a"
@@ -351,10 +356,10 @@ class QualityFigures:
 
     d_org: DOrg
     coverage: AxisCoverage
-    units: object | None
+    units: UnitsAdvice | None
 
 
-def quality_figures(problem: HandEyeProblem, result) -> QualityFigures:
+def quality_figures(problem: HandEyeProblem, result: CalibrationResult) -> QualityFigures:
     """:class:`QualityFigures` of ``result`` on ``problem``."""
     from .units_advice import units_advice
 
@@ -362,12 +367,12 @@ def quality_figures(problem: HandEyeProblem, result) -> QualityFigures:
                           rotation_axis_coverage(problem, kept_postures(problem, result)), units_advice(problem))
 
 
-def config_thresholds(config) -> QualityThresholds:
+def config_thresholds(config: StationConfig) -> QualityThresholds:
     """The thresholds of a station configuration's ``quality`` section (defaults for keys left out)."""
     return QualityThresholds.from_dict(config.quality)
 
 
-def verdict(result, problem: HandEyeProblem, thresholds: QualityThresholds | None = None,
+def verdict(result: CalibrationResult, problem: HandEyeProblem, thresholds: QualityThresholds | None = None,
             figures: QualityFigures | None = None) -> Verdict:
     """Judge a calibration against thresholds.
 

@@ -186,7 +186,7 @@ def preview_section(png: bytes | None, missing: str | None = None) -> str:
             + img(png, "capture plan preview: the cell from above and from the side") + "</section>")
 
 
-def findings_section(findings, postures: int) -> str:
+def findings_section(findings: list, postures: int) -> str:
     items = "".join(f"<li>{escape(f)}</li>" for f in findings)
     body = f"<ul>{items}</ul>" if findings else '<p class="note">Nothing odd found in the poses.</p>'
     pairs = pairs_used(len(bounded_pairs(postures)), postures)

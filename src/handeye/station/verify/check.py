@@ -23,6 +23,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -53,6 +54,12 @@ from .plan import (
     path_time_along,
     verify_folder,
 )
+
+if TYPE_CHECKING:
+    from ...calibration import Baseline, DriftTest, EivSolution, HandEyeProblem, QuickUpdate
+    from ..report.assessment import Assessment
+    from .reference import Reference
+    from .tolerance import DriftSize, DriftTolerance
 
 __all__ = ["OK", "DRIFT", "INCONCLUSIVE", "EXIT_CODES", "VerifyOutcome", "SessionBaseline", "check_request",
            "session_baseline", "verify"]
@@ -107,16 +114,16 @@ class VerifyOutcome:
     folder: Path | None = None
     postures: list = field(default_factory=list)
     measured: int = 0
-    test: object = None
+    test: DriftTest | None = None
     explanations: list = field(default_factory=list)
     tool_finding: dict | None = None
-    update: object = None
+    update: QuickUpdate | None = None
     motion_s: float | None = None
-    baseline: object = None
+    baseline: SessionBaseline | None = None
     capture_motion_s: float | None = None
-    tolerance: object = None
-    size: object = None
-    reference: object = None
+    tolerance: DriftTolerance | None = None
+    size: DriftSize | None = None
+    reference: Reference | None = None
     standoff: dict | None = None
 
     @property
@@ -176,10 +183,10 @@ def _check_joints(session, session_dir: Path) -> None:
 class SessionBaseline:
     """SESSION solved again: its assessment, the ML solution, the baseline of the check and its problem."""
 
-    assessment: object
-    solution: object
-    baseline: object
-    problem: object
+    assessment: Assessment
+    solution: EivSolution
+    baseline: Baseline
+    problem: HandEyeProblem
 
 
 def session_baseline(config: StationConfig, session, session_dir: Path, progress=lambda m: None) -> SessionBaseline:
@@ -200,10 +207,12 @@ def session_baseline(config: StationConfig, session, session_dir: Path, progress
         raise VerifyError(f"{session_dir} has no calibration result ({exc}): capture more postures and calibrate it "
                           "before verifying") from None
     assessment = assess(outcome, config_thresholds(config))
-    if not assessment.verdict.passed:
-        raise VerifyError(f"{session_dir}'s calibration failed its quality verdict ({assessment.verdict.line()}): "
+    verdict, problem = assessment.verdict, outcome.problem
+    if verdict is None or problem is None:  # assess judges with the thresholds given; current_outcome reads the problem
+        raise VerifyError(f"{session_dir}'s calibration could not be judged: calibrate it again (handeye calibrate)")
+    if not verdict.passed:
+        raise VerifyError(f"{session_dir}'s calibration failed its quality verdict ({verdict.line()}): "
                           "there is no good calibration to verify; recalibrate (handeye capture, calibrate)")
-    problem = outcome.problem
     if problem.excluded:
         problem = problem.subset(~problem.excluded_mask)
     solution = solve_eiv(problem, folds=0)
@@ -255,6 +264,8 @@ def _chosen(config, session, base: SessionBaseline, robot, here, count: int, pro
             break
         budget *= TIME_TIGHTEN
     took, numbers = best
+    if numbers is None:  # TIME_TRIES >= 1: the loop always made a choice
+        raise VerifyError(f"no choice of {count} postures was tried (TIME_TRIES = {TIME_TRIES})")
     if took > TIME_LIMIT * full:
         progress(f"the check's {count} postures take {took / max(full, 1e-9):.0%} of the capture's robot time from where "
                  f"the robot stands ({len(plan)} postures in the session; the aim is {TIME_BUDGET:.0%})")
@@ -342,8 +353,9 @@ def verify(config: StationConfig, session_dir, link: StationLink, postures: int 
     session.path = session_dir
     reference = follow(session_dir)  # the latest deliberate write-back: SESSION's result or its quick update
     base = base if base is not None else session_baseline(config, session, session_dir, progress)
-    if reference.line():
-        progress(reference.line())
+    following = reference.line()
+    if following:
+        progress(following)
     base = replace(base, baseline=reference.apply(base.baseline))
     robot = load_robot(config.robot)
     tool = _tool_finding(config, link, base, reference)
@@ -352,16 +364,17 @@ def verify(config: StationConfig, session_dir, link: StationLink, postures: int 
     progress(f"revisiting postures {', '.join(map(str, numbers))} of {session_dir.name}")
     folder = verify_folder(session_dir)
     measured, failure = _revisit(config, link, folder, session, numbers, joints, progress, confirm, on_posture)
+    tolerance = drift_tolerance(config)
     outcome = VerifyOutcome(INCONCLUSIVE, failure or "", folder, numbers, measured,
                             tool_finding=tool, motion_s=path_time_along(robot, here, joints), baseline=base,
-                            capture_motion_s=capture_time(robot, session.extra["capture"]), tolerance=drift_tolerance(config),
+                            capture_motion_s=capture_time(robot, session.extra["capture"]), tolerance=tolerance,
                             reference=reference)
     if failure is None:
         judge(outcome, folder, base, robot, level, numbers, session_dir)
     if tool is not None and tool["difference"].beyond and outcome.verdict != INCONCLUSIVE:
         outcome.verdict = DRIFT
         outcome.reason = (f"the controller's camera tooldata differs from {session_dir.name}'s by "
-                          f"{tool['difference'].text()}, beyond the tolerance {outcome.tolerance.text()}; the board "
+                          f"{tool['difference'].text()}, beyond the tolerance {tolerance.text()}; the board "
                           f"check: {outcome.reason}")
     return outcome
 
@@ -379,6 +392,9 @@ def judge(outcome: VerifyOutcome, folder: Path, base: SessionBaseline, robot, le
         outcome.reason = (f"{outcome.measured} of {len(numbers)} postures measured (the board was not seen at the "
                           f"others); the test needs {MIN_VERIFY_POSTURES}: check the view and run verify again")
         return
+    tolerance = outcome.tolerance
+    if tolerance is None:  # verify() sets it before judging
+        raise VerifyError("the check's drift tolerance was not set before judging its measurements")
     problem = problem_from_session(read_session(folder), check_consistency=False)
     obs = observations(problem)
     disc = discrepancy(base.baseline, obs, problem.joints_deg)
@@ -388,9 +404,9 @@ def judge(outcome: VerifyOutcome, folder: Path, base: SessionBaseline, robot, le
 
         outcome.standoff = standoff_comparison(session_dir, problem, base.baseline, numbers)
     outcome.explanations = explain(disc, base.baseline, robot)
-    outcome.size = drift_size(outcome.explanations, outcome.test, outcome.tolerance)
+    outcome.size = drift_size(outcome.explanations, outcome.test, tolerance)
     outcome.verdict = DRIFT if outcome.size is not None and outcome.size.beyond else OK
-    outcome.reason = verdict_reason(outcome.test, outcome.size, outcome.tolerance)
+    outcome.reason = verdict_reason(outcome.test, outcome.size, tolerance)
     best = next((e for e in outcome.explanations if e.cause != "none"), None) if outcome.verdict == DRIFT else None
     if best is not None and best.cause == "camera":
         outcome.update = quick_update(base.baseline, obs, problem.joints_deg)

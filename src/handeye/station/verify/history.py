@@ -194,7 +194,7 @@ def trend_png(records: list[dict], limit_mm: float, limit_deg: float) -> bytes:
     for ax, key, limit, unit in ((axes[0], "translation_mm", limit_mm, "mm"), (axes[1], "rotation_deg", limit_deg, "deg")):
         ax.plot(when, [float(r.get(key) or 0.0) for r in checks], color=GREY, linewidth=0.8)
         for t, r in zip(when, checks):
-            ax.plot([t], [float(r.get(key) or 0.0)], marker="o", color=colour.get(r.get("verdict"), GREY))
+            ax.plot([t], [float(r.get(key) or 0.0)], marker="o", color=colour.get(str(r.get("verdict")), GREY))
         ax.axhline(limit, color=RED, linestyle="--", linewidth=1.0, label=f"threshold {limit:g} {unit}")
         ax.set_ylabel(f"change ({unit})")
         style_axes(ax)

@@ -19,10 +19,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...base import HandEyeError
+
+if TYPE_CHECKING:
+    from ...calibration import CalibrationResult
 
 __all__ = ["Reference", "follow", "lineage", "written_record"]
 
@@ -79,7 +83,7 @@ class Reference:
 
     kind: str
     record: dict | None = None
-    result: object = None
+    result: CalibrationResult | None = None
     covariance: np.ndarray | None = None
 
     @property
@@ -89,7 +93,7 @@ class Reference:
     def line(self) -> str | None:
         """What the check follows, in one line (None when it is SESSION's own result)."""
         if self.kind == "update":
-            return (f"checking against the quick update written from {self.folder} at {self.record.get('time', '?')} "
+            return (f"checking against the quick update written from {self.folder} at {(self.record or {}).get('time', '?')} "
                     "(the latest write-back in the history), not the session's own result")
         return None
 
@@ -97,6 +101,10 @@ class Reference:
         """The ``calibration.verification.Baseline`` of the check: SESSION's, with the update's X."""
         if self.kind != "update":
             return baseline
+        if self.result is None:  # follow() builds every update with its result and covariance
+            from .plan import VerifyError
+
+            raise VerifyError("the quick update the check follows has no result")
         cov = np.array(baseline.covariance, float)
         cov[:6, :] = 0.0
         cov[:, :6] = 0.0

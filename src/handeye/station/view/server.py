@@ -52,8 +52,8 @@ def _handler(server: "ViewServer"):
                 self._send(200, server.page(), "text/html; charset=utf-8")
             elif url.path == "/events":
                 self._events()
-            elif url.path == "/preview.png" and server.preview_path() is not None:
-                self._send(200, server.preview_path().read_bytes(), "image/png")
+            elif url.path == "/preview.png" and (preview := server.preview_path()) is not None:
+                self._send(200, preview.read_bytes(), "image/png")
             else:
                 self._send(404, b"not found\n", "text/plain; charset=utf-8")
 
@@ -128,7 +128,7 @@ class ViewServer:
 
     def page(self) -> bytes:
         if self._page is None:
-            self._page = resources.files(__package__).joinpath("page.html").read_bytes()
+            self._page = resources.files(__name__.rpartition(".")[0]).joinpath("page.html").read_bytes()
         return self._page
 
     def preview_path(self) -> Path | None:
