@@ -102,9 +102,11 @@ class CrossValidation:
                           "by the flange pose and X into the fixed frame, from the mean of the training postures' points "
                           "(eq. 21-22 out of sample)",
         }
+        ratio = self.ratio
         if self.predicted_rms_mm is not None:
             out["predicted_rms_mm"] = round(float(self.predicted_rms_mm), 6)
-            out["ratio"] = round(float(self.ratio), 4)
+        if ratio is not None:
+            out["ratio"] = round(float(ratio), 4)
             out["systematic"] = bool(self.systematic)
             if self.systematic:
                 out["advice"] = SYSTEMATIC_ADVICE

@@ -36,7 +36,7 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
+from scipy.spatial import KDTree
 from scipy.spatial.transform import Rotation
 
 from ..base import brief
@@ -310,7 +310,7 @@ def _close_pairs(a, b, distance_mm: float) -> np.ndarray:
     for poses in (a, b):
         finite = np.flatnonzero(np.all(np.isfinite(poses[:, :3, 3]), axis=1))
         if len(finite) > 1:
-            close = cKDTree(poses[finite, :3, 3]).query_pairs(distance_mm, output_type="ndarray")
+            close = KDTree(poses[finite, :3, 3]).query_pairs(distance_mm, output_type="ndarray")
             found.append(np.sort(finite[close], axis=1).reshape(-1, 2))
     pairs = np.concatenate(found)
     key = np.sort(pairs[:, 0].astype(np.int64) * len(a) + pairs[:, 1])

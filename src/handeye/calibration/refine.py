@@ -139,7 +139,7 @@ def refine_point_consistency(hand, points_cam, x0, loss: str = "soft_l1", f_scal
         return jac.reshape(n * p * 3, -1)
 
     theta0 = np.concatenate([np.zeros(3), x0[:3, 3], g0.ravel()])
-    fit = least_squares(residual, theta0, jac=jacobian, loss=loss, f_scale=f_scale, method="trf",
+    fit = least_squares(residual, theta0, jac=jacobian, loss=loss, f_scale=f_scale, method="trf",  # pyright: ignore[reportArgumentType]  (scipy leaves jac unannotated; its default '2-point' makes pyright infer str)
                         x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200)
     rotation, translation, g = unpack(fit.x)
     x = np.eye(4)

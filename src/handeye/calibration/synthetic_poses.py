@@ -32,7 +32,7 @@ __all__ = ["OPENCV_TEST_NOISE", "random_pose", "opencv_test_problem"]
 OPENCV_TEST_NOISE = (0.002, 5.0, 0.001, 1.0)
 
 
-def random_pose(rng: np.random.Generator, theta_deg, t_mm) -> np.ndarray:
+def random_pose(rng: np.random.Generator, theta_deg: tuple[float, float], t_mm: tuple[float, float]) -> np.ndarray:
     """One pose as OpenCV's ``generatePose`` with random signs; ``theta_deg``, ``t_mm``: (low, high)."""
     axis = rng.uniform(-1.0, 1.0, 3)
     theta = np.radians(rng.uniform(*theta_deg)) * np.sign(rng.uniform(-1.0, 1.0))

@@ -230,6 +230,8 @@ def triplet_candidates(problem: HandEyeProblem, motions: RelativeMotions | None 
     motions = motions if motions is not None else relative_motions(problem)
     triplets = triplet_indices(problem.n)
     lookup = motions.pair_lookup
+    if lookup is None:
+        raise ValueError("triplet candidates need the motions of all pairs (relative_motions without pairs)")
     i, j, k = triplets[:, 0], triplets[:, 1], triplets[:, 2]
     pair_rows = np.stack([lookup[i, j], lookup[i, k], lookup[j, k]], axis=1)  # (c, 3)
     v_a = motions.q_a[pair_rows, 1:]

@@ -405,6 +405,8 @@ def constrained_null_combination(v1, v2) -> np.ndarray:
         norm = np.linalg.norm(x[:4])
         if best is None or norm > best[0]:
             best = (norm, x)
+    if best is None:
+        raise CalibrationError("no candidate combination of the two null vectors")  # candidates is never empty
     norm, x = best
     if not norm > 1e-12:
         raise CalibrationError("the dual quaternion system is degenerate; rotate the flange about at least two different axes")

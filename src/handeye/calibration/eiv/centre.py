@@ -131,7 +131,7 @@ def _centred_fit(obs: "Observations", centre, current: "MLFit", theta0, keep, ki
     return found if np.isfinite(found.loglik) and np.all(np.isfinite(found.theta)) else None
 
 
-def _centre_test(obs: "Observations", fit: "MLFit", keep, kinematic: bool):
+def _centre_test(obs: Observations, fit: MLFit, keep: np.ndarray, kinematic: bool) -> tuple[Observations, MLFit, dict]:
     """Board rotation noise about a fitted centre (sessions of board poses), kept when the likelihood
     ratio of the restricted likelihoods exceeds :data:`CENTRE_LR`; the centre and the fit are found
     alternately (twice). Returns the observations and the fit to go on with, and the report."""

@@ -182,8 +182,9 @@ def observations(problem: HandEyeProblem, stereo: tuple | None = None) -> Observ
     """
     pts, model, corners = _board_data(problem)
     n = problem.n
-    start = problem.target2cam if corners else None
-    if not corners:  # board poses from the three compact points (Horn, eq. 24-29)
+    if corners:
+        start = problem.target2cam
+    else:  # board poses from the three compact points (Horn, eq. 24-29)
         from ..absolute_orientation import absolute_orientation  # noqa: PLC0415
         from ...geometry import matrix_from_quaternion  # noqa: PLC0415
 
@@ -193,7 +194,7 @@ def observations(problem: HandEyeProblem, stereo: tuple | None = None) -> Observ
         start[:, :3, 3] = fit.translation
     notes: dict = {}
     hand_comps, kin = _hand_components(problem, notes)
-    kin_fields = {"notes": notes} if kin is None else {"kinematic": kin[0], "kinematic_kinds": kin[1], "notes": notes}
+    kinematic, kinematic_kinds = (None, None) if kin is None else kin
     if corners:
         f_px, baseline = stereo if stereo is not None else (None, None)
         kwargs = {} if f_px is None else {"f_px": f_px, "baseline_mm": baseline}
@@ -213,9 +214,9 @@ def observations(problem: HandEyeProblem, stereo: tuple | None = None) -> Observ
         cov = noise.covariances(shapes)
         board_cov = np.linalg.inv(fit.information)
         return Observations(problem.hand, fit.target2cam, board_cov, hand_comps, "corners", noise, pts, model, cov,
-                            **kin_fields)
+                            kinematic=kinematic, kinematic_kinds=kinematic_kinds, notes=notes)
     return Observations(problem.hand, start, np.zeros((n, 6, 6)), _pose_components(hand_comps, start, model), "poses",
-                        None, pts, model, **kin_fields)
+                        None, pts, model, kinematic=kinematic, kinematic_kinds=kinematic_kinds, notes=notes)
 
 
 def _pose_components(hand_comps: tuple, target2cam: np.ndarray, model: np.ndarray) -> tuple:

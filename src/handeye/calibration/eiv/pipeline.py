@@ -65,6 +65,8 @@ def _noise_report(obs: Observations, fit: MLFit) -> dict:
     if obs.corner is not None:
         out["camera"]["corner_isotropic_mm"] = float(np.sqrt(obs.corner.isotropic_mm2))
         out["camera"]["stereo_pixel_px"] = float(np.sqrt(obs.corner.pixel_px2))
+        if obs.point_cov is None:
+            raise ValueError("corner observations without corner covariances (eiv.model.observations sets both)")
         out["camera"]["corner_rms_mm"] = float(np.sqrt(np.mean(np.trace(obs.point_cov, axis1=-2, axis2=-1))))
         out["camera"]["degrees_of_freedom"] = int(obs.corner.dof)
     board_cov = obs.board_cov.copy()
@@ -148,9 +150,11 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
     lr = centre = None
     for rounds in range(1, MAX_ROUNDS + 2):
         keep = ~flags
-        warm = {} if fit is None else {"t0": fit.target, "theta0": fit.theta, "kinematic0": fit.kinematic,
-                                       "kinematic_var0": fit.kinematic_var}
-        fit = fit_ml(obs, x, keep=keep, kinematic=kinematic, **warm)
+        if fit is None:
+            fit = fit_ml(obs, x, keep=keep, kinematic=kinematic)
+        else:  # warm start from the previous round
+            fit = fit_ml(obs, x, fit.target, fit.theta, keep=keep, kinematic=kinematic, kinematic0=fit.kinematic,
+                         kinematic_var0=fit.kinematic_var)
         if not tested:
             # Kinematic deviations of the arm (the same at every posture): kept only when they raise
             # the restricted likelihood significantly (likelihood ratio above KINEMATIC_LR).
@@ -167,6 +171,8 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
         if n - new_flags.sum() < MIN_POSTURES or np.array_equal(new_flags, flags) or rounds > MAX_ROUNDS:
             break
         flags = new_flags
+    if fit is None or centre is None:  # the loop runs at least once and sets both
+        raise RuntimeError("the ML fit ran no round")
     keep = ~flags
     residual_mm = _compact_residuals(problem, fit.x, fit.target)
     uncertainty = _uncertainty(fit, kinematic)
