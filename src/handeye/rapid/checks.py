@@ -275,7 +275,7 @@ def _check_module(module, tokens, global_data, routines, external, approved, mod
             dtype, var = tokens[i + 1], tokens[i + 2]
             if dtype.text.lower() not in _DATA_TYPES:
                 out.append(Finding(module, dtype.line, f"unknown data type {dtype.text!r}"))
-            scope = local_scope if in_routine else module_scope
+            scope = local_scope if local_scope is not None else module_scope  # set exactly while in_routine
             if var.text.lower() in scope:
                 out.append(Finding(module, var.line, f"{var.text!r} declared twice"))
             if len(var.text) > MAX_IDENTIFIER:

@@ -42,6 +42,7 @@ from __future__ import annotations
 import ipaddress
 import math
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -52,7 +53,7 @@ from ..robot import load_robot
 from ..base import WRITE_KEY_PATTERN
 from .cell import check_world_zones
 from .errors import ConfigError
-from .links import BUILT_IN_LINKS, PROTOCOLS
+from .links import BUILT_IN_LINKS, PROTOCOLS, RapidLink
 
 __all__ = ["PROTOCOLS", "RapidStation", "default_station", "load_station", "station_from_dict", "check_postures",
            "DEFAULT_STATION_FILE", "RAPID_IDENTIFIER", "WRITE_KEY_PATTERN", "IDLE_TIMEOUT_RANGE"]
@@ -95,7 +96,7 @@ class RapidStation:
     zone_tcp: tuple | None = None
     #: Protocol -> its RAPID link module (``rapid.links.RapidLink``): the package's own, or what the
     #: caller hands over from the controller registry (plug-ins included).
-    links: object = field(default_factory=lambda: BUILT_IN_LINKS, compare=False, repr=False)
+    links: Mapping[str, RapidLink] = field(default_factory=lambda: BUILT_IN_LINKS, compare=False, repr=False)
 
     @property
     def postures_array(self) -> np.ndarray:

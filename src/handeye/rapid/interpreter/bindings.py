@@ -14,9 +14,14 @@ wait. Failures a program can handle are raised as ``RapidRuntimeError("ERR_...")
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from .errors import RapidFatalError
+
+if TYPE_CHECKING:
+    from .pendant import FlexPendant
 
 __all__ = ["Bindings", "SocketBinding", "SerialBinding", "IoBinding", "MotionBinding", "MemoryIo", "FixedArm"]
 
@@ -135,10 +140,10 @@ class Bindings:
     serial: SerialBinding | None = None
     io: IoBinding | None = None
     motion: MotionBinding | None = None
-    pendant: object = None  # callable(text) for TPWrite, or None to log it
+    pendant: Callable[[str], object] | None = None  # callable(text) for TPWrite, or None to log it
     #: The operator's pendant (``rapid.interpreter.pendant.FlexPendant``): TPReadFK, UIMessageBox and
     #: Stop \NoRegain wait for it; None: nobody answers (they stop the program; Stop ends it).
-    flexpendant: object = None
+    flexpendant: FlexPendant | None = None
     sysinfo: dict = field(default_factory=lambda: {"LanIp": "127.0.0.1", "SystemName": "handeye",
                                                     "RobotType": "IRB 1400", "SWVersion": "6.0",
                                                     "CtrlId": "handeye-interpreter", "SerialNo": "0"})

@@ -36,8 +36,14 @@ class TcpHandle:
         if self.state != "closed":
             self.owner._close(self)
 
+    def os_socket(self) -> socket.socket:
+        """The OS socket, set from SocketBind (or accept) until the handle is closed."""
+        if self.sock is None:
+            raise RapidRuntimeError("ERR_SOCK_CLOSED", f"the socket is {self.state}")
+        return self.sock
+
     def fileno(self) -> int:
-        return self.sock.fileno()
+        return self.os_socket().fileno()
 
 
 class TcpSockets(SocketBinding):
@@ -102,8 +108,8 @@ class TcpSockets(SocketBinding):
     def listen(self, handle: TcpHandle) -> None:
         if handle.state != "bound":
             raise RapidFatalError(f"SocketListen: the socket is {handle.state} (SocketBind first)")
-        handle.sock.listen(8)
-        handle.sock.setblocking(False)
+        handle.os_socket().listen(8)
+        handle.os_socket().setblocking(False)
         handle.state = "listening"
         if self.listening is not None:
             self.listening(handle)
@@ -114,7 +120,7 @@ class TcpSockets(SocketBinding):
         end = None if timeout is None else task.clock() + timeout
         while True:
             try:
-                conn, addr = handle.sock.accept()
+                conn, addr = handle.os_socket().accept()
             except (BlockingIOError, InterruptedError):
                 left = None if end is None else end - task.clock()
                 if left is not None and left <= 0:
@@ -151,7 +157,7 @@ class TcpSockets(SocketBinding):
     def _read(self, handle: TcpHandle) -> bool:
         """Move what the OS holds into ``handle.rx``; True if anything came (or the peer closed)."""
         try:
-            chunk = handle.sock.recv(4096)
+            chunk = handle.os_socket().recv(4096)
         except (BlockingIOError, InterruptedError):
             return False
         except OSError:
@@ -175,9 +181,10 @@ class TcpSockets(SocketBinding):
             self._close(handle, by_peer=True)
             raise RapidRuntimeError("ERR_SOCK_CLOSED", "SocketSend: the connection was closed")
         try:
-            handle.sock.setblocking(True)
-            handle.sock.settimeout(5.0)
-            handle.sock.sendall(out)
+            sock = handle.os_socket()
+            sock.setblocking(True)
+            sock.settimeout(5.0)
+            sock.sendall(out)
         except OSError:
             self._close(handle, by_peer=True)
             raise RapidRuntimeError("ERR_SOCK_CLOSED", "SocketSend: the connection was closed") from None

@@ -8,6 +8,7 @@ for operand types RAPID does not combine (the compiler refuses most of those at 
 from __future__ import annotations
 
 import math
+from typing import TypeGuard
 
 from .errors import RapidFatalError, RapidRuntimeError
 from .values import MAX_STRING, Record, TYPES, describe
@@ -28,7 +29,7 @@ def _xyz(r: Record) -> tuple:
     return f["x"], f["y"], f["z"]
 
 
-def _is(v, name: str) -> bool:
+def _is(v: object, name: str) -> TypeGuard[Record]:
     return isinstance(v, Record) and v.type.name == name
 
 

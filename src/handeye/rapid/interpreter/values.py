@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import struct
 from dataclasses import dataclass
+from typing import TypeVar, overload
 
 from .errors import RapidFatalError, RapidRuntimeError
 
@@ -24,6 +25,7 @@ __all__ = ["TypeInfo", "Record", "Array", "Aggregate", "Handle", "TYPES", "type_
 MAX_STRING = 80
 _F32 = struct.Struct("f")
 _F32_MAX = 3.4028234663852886e38
+_V = TypeVar("_V")
 
 
 def to_num(value: float) -> float:
@@ -139,6 +141,14 @@ def type_info(name: str, records: dict | None = None) -> TypeInfo | None:
     return TYPES.get(key)
 
 
+def _known_type(name: str, records: dict | None) -> TypeInfo:
+    """:func:`type_info` of a record field's type, which the program must know."""
+    t = type_info(name, records)
+    if t is None:
+        raise RapidFatalError(f"unknown data type {name!r}")
+    return t
+
+
 def _types_of(records):
     return lambda name: type_info(name, records)
 
@@ -149,12 +159,18 @@ def default_value(t: TypeInfo, records: dict | None = None, dims: tuple = ()):
         return Array([default_value(t, records, dims[1:]) for _ in range(int(dims[0]))],
                      t if len(dims) == 1 else TypeInfo(t.name, "array"))
     if t.kind == "record":
-        return Record(t, {name.lower(): default_value(type_info(ftype, records), records) for name, ftype in t.fields})
+        return Record(t, {name.lower(): default_value(_known_type(ftype, records), records) for name, ftype in t.fields})
     if t.kind == "handle":
         return Handle(t.name)
     return {"num": 0.0, "dnum": 0.0, "bool": False, "string": ""}[t.key]
 
 
+@overload
+def copy_value(value: Record) -> Record: ...
+@overload
+def copy_value(value: Array) -> Array: ...
+@overload
+def copy_value(value: _V) -> _V: ...
 def copy_value(value):
     """A deep copy of a record or array (atomic values and handles are shared)."""
     if isinstance(value, Record):
@@ -215,7 +231,7 @@ def _coerce_record(value, t: TypeInfo, records, what: str) -> Record:
     if isinstance(value, Aggregate):
         if len(value) != len(t.fields):
             raise RapidFatalError(f"{what}: a {t.name} has {len(t.fields)} components, the aggregate {len(value)}")
-        return Record(t, {name.lower(): coerce(v, type_info(ftype, records), records, f"{what}.{name}")
+        return Record(t, {name.lower(): coerce(v, _known_type(ftype, records), records, f"{what}.{name}")
                           for (name, ftype), v in zip(t.fields, value)})
     raise RapidFatalError(f"{what}: expected a {t.name}, got {describe(value)}")
 
