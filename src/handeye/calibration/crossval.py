@@ -22,6 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .metrics import fixed_points
 
@@ -118,7 +119,7 @@ def fold_assignment(n: int, folds: int = DEFAULT_FOLDS) -> np.ndarray:
     return np.arange(n) % max(1, min(folds, n))
 
 
-def held_out_errors(hand, x, points_cam, reference) -> tuple[np.ndarray, np.ndarray]:
+def held_out_errors(hand: np.ndarray, x: np.ndarray, points_cam: np.ndarray, reference: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per posture: mean and mean-square distance of ``hand_i X points_i`` from ``reference``.
 
     Parameters
@@ -150,7 +151,7 @@ def board_points(problem) -> np.ndarray:
     return problem.compact.points
 
 
-def cross_validate(problem, solver, folds: int = DEFAULT_FOLDS, keep=None) -> CrossValidation:
+def cross_validate(problem, solver, folds: int = DEFAULT_FOLDS, keep: ArrayLike | None = None) -> CrossValidation:
     """k-fold posture cross-validation of any solver.
 
     Parameters

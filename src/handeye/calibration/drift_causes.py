@@ -155,7 +155,7 @@ class QuickUpdate:
     reduced_chi2: float = 1.0
 
 
-def quick_update(baseline: Baseline, obs, joints_deg=None, iterations: int = 3) -> QuickUpdate:
+def quick_update(baseline: Baseline, obs, joints_deg: np.ndarray | None = None, iterations: int = 3) -> QuickUpdate:
     """The camera's new ``X`` from the revisited postures, the session's board and arm as prior.
 
     Gauss-Newton on the camera explanation: ``X_(k+1) = X_k ⊕ p̂`` with ``p̂`` the GLS fit of

@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .noise import twist_between
 
@@ -56,7 +57,7 @@ class JointMismatch:
                 f"(at most {JOINT_MATCH_MM:g} mm / {JOINT_MATCH_DEG:g} deg)")
 
 
-def joint_mismatch(robot, joints_deg, tool02base, posture_ids=None) -> JointMismatch | None:
+def joint_mismatch(robot, joints_deg: ArrayLike, tool02base: ArrayLike, posture_ids=None) -> JointMismatch | None:
     """The postures whose ``robot.forward_transform(joints_deg)`` is off their flange pose, or None.
 
     Parameters

@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..geometry import SQUARE_TOLERANCE, judge_square_size
 from ..base import CalibrationError, brief
@@ -72,7 +73,7 @@ class Implausibility:
     postures: tuple = ()
 
 
-def corner_spacing_mm(points_mm, corners) -> float:
+def corner_spacing_mm(points_mm: ArrayLike, corners) -> float:
     """Median distance between neighbouring corners of measured boards.
 
     Parameters
@@ -129,7 +130,7 @@ def _robot_reach_mm(name) -> tuple[str, float] | None:
     return robot.name, float(np.linalg.norm(robot.base_offset) + np.sum(np.linalg.norm(robot.links, axis=1)))
 
 
-def implausibilities(session, tool02base) -> list:
+def implausibilities(session, tool02base: np.ndarray) -> list:
     """Every implausible length of a session (an empty list when the lengths look like millimetres).
 
     Parameters
@@ -188,7 +189,7 @@ def _square_size(session) -> list:
     return []
 
 
-def check_plausible(session, tool02base) -> None:
+def check_plausible(session, tool02base: np.ndarray) -> None:
     """Refuse a session whose lengths are not plausible millimetres.
 
     Raises

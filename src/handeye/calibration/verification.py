@@ -27,6 +27,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.stats import f as f_dist
 
 from .noise import adjoint, flange_jacobian, retract, twist_between
@@ -147,7 +148,7 @@ def _block_diagonal(blocks: np.ndarray) -> np.ndarray:
     return out
 
 
-def discrepancy(baseline: Baseline, obs, joints_deg=None) -> Discrepancy:
+def discrepancy(baseline: Baseline, obs, joints_deg: ArrayLike | None = None) -> Discrepancy:
     """``d``, ``Σ`` and ``J`` of the revisited postures (an ``eiv.Observations`` of them, and their
     controller angles ``joints_deg`` (K, dof) for the joints' hypotheses).
 

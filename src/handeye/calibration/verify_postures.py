@@ -16,7 +16,7 @@ from .verification import Baseline, discrepancy, hypothesis_jacobians
 __all__ = ["informative_postures"]
 
 
-def informative_postures(baseline: Baseline, obs, joints_deg, robot, count: int, allowed=None, path_time=None,
+def informative_postures(baseline: Baseline, obs, joints_deg: np.ndarray, robot, count: int, allowed=None, path_time=None,
                          budget: float = np.inf) -> np.ndarray:
     """Indices (into ``obs``) of ``count`` postures chosen for diagnostic power, in the order chosen.
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..noise import (
     CornerNoise,
@@ -99,7 +100,7 @@ class Observations:
     def n(self) -> int:
         return int(self.hand.shape[0])
 
-    def subset(self, keep) -> "Observations":
+    def subset(self, keep: ArrayLike) -> "Observations":
         keep = np.asarray(keep)
         comps = tuple(replace(c, structure=c.structure[keep]) for c in self.components)
         return replace(self, hand=self.hand[keep], board=self.board[keep], board_cov=self.board_cov[keep],
@@ -131,7 +132,7 @@ def _hand_components(problem: HandEyeProblem, notes: dict) -> tuple:
     robot, mismatch = _robot_for(problem, tool02base)
     if mismatch is not None:
         notes["joint_mismatch"] = mismatch.line()
-    if robot is not None:
+    if robot is not None and problem.joints_deg is not None:  # _robot_for gives a robot only with joints
         jac = flange_jacobian(robot, problem.joints_deg)
         g = to_hand @ (jac @ np.swapaxes(jac, 1, 2)) @ np.swapaxes(to_hand, 1, 2)
         kin, kinds = kinematic_jacobian(robot, problem.joints_deg)
