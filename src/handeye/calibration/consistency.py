@@ -31,6 +31,7 @@ board's place. Physics tells them apart, and so does this check, only where it i
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -230,7 +231,7 @@ def _gross_reason(gap: float, pitch: float, typical_gap: float, typical_pitch: f
             f"or a posture of another session; check its file")
 
 
-def consistent_majority(hand: np.ndarray, target2cam: np.ndarray, setup: str, ids=None,
+def consistent_majority(hand: np.ndarray, target2cam: np.ndarray, setup: str, ids: Iterable[int] | None = None,
                         limits: ConsistencyLimits = ConsistencyLimits()) -> dict:
     """The gross postures to leave out so that the rest fits a rigid camera mount, with the reason.
 

@@ -32,6 +32,7 @@ translations whose size does not fit millimetres.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 import warnings
 from dataclasses import dataclass, field
 
@@ -44,6 +45,9 @@ from ..base import brief
 from .invariants import bounded_pairs, posture_medians as posture_median_gaps, relative_transforms
 from .problem import EYE_IN_HAND, EYE_TO_HAND, SETUPS, hand_poses
 from ..geometry import rotation_error_deg
+
+if TYPE_CHECKING:
+    from .session import Session
 
 __all__ = [
     "Finding",
@@ -382,7 +386,7 @@ def _stale_finding(ids, f: dict, moved: dict) -> Finding:
                                                            "robot_deg": moved["robot_deg"]})
 
 
-def find_duplicates(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, ids=None,
+def find_duplicates(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, ids: ArrayLike | None = None,
                     limits: DiagnosticLimits = DiagnosticLimits()) -> list:
     """Robot poses taken more than once, and board poses repeated while the robot moved (stale frames).
 
@@ -417,7 +421,7 @@ def find_duplicates(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, ids
 _PLAUSIBLE_MM = {"robot": (20.0, 20000.0), "camera": (20.0, 20000.0)}
 
 
-def find_unit_problems(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, ids=None,
+def find_unit_problems(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, ids: ArrayLike | None = None,
                        limits: DiagnosticLimits = DiagnosticLimits()) -> list:
     """Translations whose size does not fit millimetres, or robot and camera in different units.
 
@@ -461,7 +465,7 @@ def find_unit_problems(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, 
     return findings
 
 
-def find_inconsistent_postures(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, ids=None,
+def find_inconsistent_postures(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, ids: ArrayLike | None = None,
                                limits: DiagnosticLimits = DiagnosticLimits()) -> list:
     """Postures whose median angle gap stands out; says when a 180 deg board flip explains it.
 
@@ -568,7 +572,7 @@ def find_model_mismatch(tool0_in_base: np.ndarray, target_in_camera: np.ndarray,
         (), {**fit, "ratio": ratio})]
 
 
-def diagnose(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, setup: str, ids=None,
+def diagnose(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, setup: str, ids: ArrayLike | None = None,
              limits: DiagnosticLimits = DiagnosticLimits()) -> list:
     """Every check on pose arrays (mm); a list of :class:`Finding` (empty when nothing is odd).
 
@@ -592,7 +596,7 @@ def diagnose(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, setup: str
     return findings
 
 
-def diagnose_session(session, limits: DiagnosticLimits = DiagnosticLimits()) -> list:
+def diagnose_session(session: Session, limits: DiagnosticLimits = DiagnosticLimits()) -> list:
     """:func:`diagnose` on a session (postures with joints or corner points are converted first).
 
     Raises

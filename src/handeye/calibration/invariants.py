@@ -202,7 +202,7 @@ def _rotvecs(transforms) -> np.ndarray:
     return Rotation.from_matrix(np.asarray(transforms)[:, :3, :3]).as_rotvec()
 
 
-def screw_pitches(motions) -> tuple[np.ndarray, np.ndarray]:
+def screw_pitches(motions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rotation angle (deg) and translation along the rotation axis ``d = n . t`` of motions ``(m, 4, 4)``.
 
     ``d`` is the same for a motion and its inverse (the axis turns round with the translation), so

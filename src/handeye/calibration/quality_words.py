@@ -65,6 +65,7 @@ posture residual (mm)
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 import math
 from dataclasses import dataclass
 
@@ -76,6 +77,9 @@ from .metrics import d_org, fixed_points
 from .metrics import posture_residuals as metrics_posture_residuals
 from .problem import EYE_IN_HAND, HandEyeProblem
 from ..geometry import canonical_quaternions, quaternion_conjugate, quaternion_from_matrix, quaternion_multiply
+
+if TYPE_CHECKING:
+    from .solve import CalibrationResult
 
 __all__ = [
     "AXIS_SPREAD_NAME",
@@ -365,7 +369,7 @@ def image_cells(points_px: ArrayLike, width: int, height: int) -> set:
 
 
 # ------------------------------------------------------------------------------------------ d_org
-def kept_postures(problem: HandEyeProblem, result) -> np.ndarray:
+def kept_postures(problem: HandEyeProblem, result: CalibrationResult) -> np.ndarray:
     """Boolean mask ``(n,)`` of the postures ``result`` kept (all but its outliers)."""
     outliers = {int(i) for i in result.outliers}
     return np.array([int(i) not in outliers for i in problem.posture_ids], dtype=bool)
@@ -409,7 +413,7 @@ class DOrg:
         return f"{postures}, {points}"
 
 
-def result_d_org(problem: HandEyeProblem, result, x: ArrayLike | None = None) -> DOrg:
+def result_d_org(problem: HandEyeProblem, result: CalibrationResult, x: ArrayLike | None = None) -> DOrg:
     """THE d_org: eq. 22 over the postures ``result`` kept, on every board point of the session.
 
     Parameters

@@ -370,7 +370,7 @@ def _warm_up_numerics() -> None:
 
 
 def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | None = None,
-              progress=None) -> CalibrationResult:
+              progress: Callable[[int, int, str], object] | None = None) -> CalibrationResult:
     """Solve ``AX = XB`` with one method.
 
     Parameters
@@ -417,7 +417,7 @@ def bounded_for(method: str, function: Callable[[], _T], what: str = "solve") ->
 
 
 def calibrate_within(problem: HandEyeProblem, method: str | None, truth: dict | None = None,
-                     progress=None) -> CalibrationResult:
+                     progress: Callable[[int, int, str], object] | None = None) -> CalibrationResult:
     """:func:`calibrate`, another package's method under the time bound (:func:`bounded_for`): what the
     report's comparison and a user's own ``--method`` solve with, so a hanging plug-in is named in one line
     instead of hanging the command (``method`` None: :data:`DEFAULT_METHOD`, handeye's own).
@@ -639,6 +639,6 @@ def _with_excluded(problem: HandEyeProblem, result: CalibrationResult) -> Calibr
 
 
 def calibrate_session(session: Session, method: str | None = None, truth: dict | None = None,
-                      progress=None) -> CalibrationResult:
+                      progress: Callable[[int, int, str], object] | None = None) -> CalibrationResult:
     """:func:`calibrate` on a session read from disk."""
     return calibrate(problem_from_session(session), method, truth, progress)

@@ -145,7 +145,7 @@ class NoiseConfig:
     seed: int = 0
 
 
-def camera_noise(rng: np.random.Generator, shape, sigma_mm: float, model: str = "paper") -> np.ndarray:
+def camera_noise(rng: np.random.Generator, shape: int | tuple[int, ...], sigma_mm: float, model: str = "paper") -> np.ndarray:
     """Noise vectors ``shape + (3,)`` for measured points.
 
     ``paper``: ``N(0, sigma) * U/|U|`` with ``U`` uniform in ``[-1, 1]^3`` (section 4);

@@ -46,7 +46,7 @@ def _noisy(rng, pose, sigma_rad, sigma_mm) -> np.ndarray:
                                                pose[:3, 3] + rng.normal(0.0, sigma_mm, 3))
 
 
-def opencv_test_problem(rng: np.random.Generator, poses: int = 10, noise=OPENCV_TEST_NOISE,
+def opencv_test_problem(rng: np.random.Generator, poses: int = 10, noise: tuple[float, float, float, float] | None = OPENCV_TEST_NOISE,
                         robot_noise: bool = True) -> tuple[HandEyeProblem, dict]:
     """An eye-in-hand problem of board poses only, drawn as OpenCV's test does.
 

@@ -3,6 +3,7 @@ loop, the kinematic-deviation and board-centre tests, covariance and cross-valid
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,6 +15,9 @@ from .fit import MLFit, fit_ml, initial_board_pose
 from .model import Observations, observations
 from .outliers import _outlier_flags
 from .start import _compact_residuals, _start, board_pose_angle_gaps_deg
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
 
 
 @dataclass(frozen=True)
@@ -116,7 +120,7 @@ def _uncertainty(fit: MLFit, kinematic: bool) -> dict:
     }
 
 
-def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) -> EivSolution:
+def solve_eiv(problem: HandEyeProblem, progress: Callable[[int, int, str], object] | None = None, folds: int | None = None) -> EivSolution:
     """The default estimator: robust start, ML fit with outlier loop, covariance and cross-validation.
 
     Parameters
