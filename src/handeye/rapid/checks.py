@@ -21,10 +21,13 @@ and are not a full RAPID parser.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from collections.abc import Sequence
 import re
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..robot import load_robot
 from .interpreter.errors import RapidLoadError
@@ -159,7 +162,7 @@ def _collect_globals(modules) -> tuple[dict, dict]:
     return data, routines
 
 
-def check_program(modules, approved=None, robot: str = "IRB1400", external=(), move_tools=("tool0",)) -> list[Finding]:
+def check_program(modules: Sequence[tuple[str, str]], approved: ArrayLike | None = None, robot: str = "IRB1400", external: Iterable[str] = (), move_tools: Iterable[str] = ("tool0",)) -> list[Finding]:
     """Findings of the checks on a set of modules (empty: all pass).
 
     Parameters

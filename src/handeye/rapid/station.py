@@ -47,6 +47,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..base import parse_yaml, read_text_file
 from ..robot import load_robot
@@ -107,7 +108,7 @@ class RapidStation:
         return _checked(replace(self, **changes))
 
 
-def check_postures(postures, robot: str = "IRB1400", source: str = "postures") -> np.ndarray:
+def check_postures(postures: ArrayLike, robot: str = "IRB1400", source: str = "postures") -> np.ndarray:
     """Approved postures as an (n, dof) array (dof: the robot's axes); refused if empty, NaN, or outside
     the joint limits.
 
@@ -210,7 +211,7 @@ def _checked(station: RapidStation) -> RapidStation:
 
 
 def station_from_dict(data: dict, source: str = "station config", base: RapidStation | None = None,
-                      links=None) -> RapidStation:
+                      links: Mapping[str, RapidLink] | None = None) -> RapidStation:
     """A checked station from the YAML structure; missing keys come from ``base`` (default: built-in).
 
     ``links``: protocol -> ``RapidLink`` of every protocol the station may name (default: ``base``'s,
@@ -241,7 +242,7 @@ def station_from_dict(data: dict, source: str = "station config", base: RapidSta
     return _checked(replace(station, **changes))
 
 
-def load_station(path, links=None) -> RapidStation:
+def load_station(path: str | Path, links: Mapping[str, RapidLink] | None = None) -> RapidStation:
     """Read a station YAML file (see the module docstring); ``links`` as in :func:`station_from_dict`."""
     file = Path(path)
     text = read_text_file(file, "station config", ConfigError,

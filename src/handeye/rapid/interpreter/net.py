@@ -10,11 +10,15 @@ faults and counts there.
 
 from __future__ import annotations
 
+from typing import Any, TYPE_CHECKING
 import errno
 import socket
 
 from .bindings import SocketBinding
 from .errors import RapidFatalError, RapidRuntimeError
+
+if TYPE_CHECKING:
+    from .runtime import Task
 
 __all__ = ["TcpSockets", "TcpHandle"]
 
@@ -76,7 +80,7 @@ class TcpSockets(SocketBinding):
         """Bytes read from the peer; returns what the program gets (None: the connection is dropped)."""
         return data
 
-    def sending(self, task, handle: TcpHandle, data: bytes) -> bytes | None:
+    def sending(self, task: Task, handle: TcpHandle, data: bytes) -> bytes | None:
         """Bytes the program sends; returns what goes out (None: the connection is dropped instead)."""
         return data
 
@@ -84,7 +88,7 @@ class TcpSockets(SocketBinding):
         """The program closes ``handle``."""
 
     # ------------------------------------------------------------------ the binding
-    def create(self, task):
+    def create(self, task: Task) -> TcpHandle:
         handle = TcpHandle(self)
         task.resources.append(handle)
         return handle
@@ -114,7 +118,7 @@ class TcpSockets(SocketBinding):
         if self.listening is not None:
             self.listening(handle)
 
-    def accept(self, task, handle: TcpHandle, timeout):
+    def accept(self, task: Task, handle: TcpHandle, timeout: float | None) -> tuple[TcpHandle, str]:
         if handle.state != "listening":
             raise RapidFatalError(f"SocketAccept: the socket is {handle.state} (SocketListen first)")
         end = None if timeout is None else task.clock() + timeout
@@ -135,10 +139,10 @@ class TcpSockets(SocketBinding):
             self.accepted(client)
             return client, addr[0]
 
-    def connect(self, task, handle, address: str, port: int, timeout) -> None:
+    def connect(self, task: Task, handle: Any, address: str, port: int, timeout: float | None) -> None:
         raise RapidFatalError("SocketConnect is not supported by this controller's socket binding")
 
-    def receive(self, task, handle: TcpHandle, max_bytes: int, timeout, exact: bool = False) -> bytes:
+    def receive(self, task: Task, handle: TcpHandle, max_bytes: int, timeout: float | None, exact: bool = False) -> bytes:
         if handle.state != "connected" and not handle.rx:
             raise RapidRuntimeError("ERR_SOCK_CLOSED", "SocketReceive: the socket is not connected")
         end = None if timeout is None else task.clock() + timeout
@@ -173,7 +177,7 @@ class TcpSockets(SocketBinding):
         handle.rx += data
         return True
 
-    def send(self, task, handle: TcpHandle, data: bytes) -> None:
+    def send(self, task: Task, handle: TcpHandle, data: bytes) -> None:
         if handle.state != "connected":
             raise RapidRuntimeError("ERR_SOCK_CLOSED", "SocketSend: the socket is not connected")
         out = self.sending(task, handle, data)

@@ -13,9 +13,9 @@
 
 from __future__ import annotations
 
+from typing import Any, TypeVar, overload
 import struct
 from dataclasses import dataclass
-from typing import TypeVar, overload
 
 from .errors import RapidFatalError, RapidRuntimeError
 
@@ -171,7 +171,7 @@ def copy_value(value: Record) -> Record: ...
 def copy_value(value: Array) -> Array: ...
 @overload
 def copy_value(value: _V) -> _V: ...
-def copy_value(value):
+def copy_value(value: Any):
     """A deep copy of a record or array (atomic values and handles are shared)."""
     if isinstance(value, Record):
         return Record(value.type, {k: copy_value(v) for k, v in value.fields.items()})
@@ -189,7 +189,7 @@ def compatible(target: TypeInfo | None, source: TypeInfo | None) -> bool:
     return target.key == source.key
 
 
-def coerce(value, t: TypeInfo, records: dict | None = None, what: str = "value"):
+def coerce(value: Any, t: TypeInfo, records: dict | None = None, what: str = "value"):
     """``value`` as type ``t``: num rounded to float32, aggregates made records or arrays, records copied.
 
     Raises
@@ -236,7 +236,7 @@ def _coerce_record(value, t: TypeInfo, records, what: str) -> Record:
     raise RapidFatalError(f"{what}: expected a {t.name}, got {describe(value)}")
 
 
-def coerce_array(value, element: TypeInfo, dims: tuple, records=None, what: str = "value") -> Array:
+def coerce_array(value: Any, element: TypeInfo, dims: tuple, records=None, what: str = "value") -> Array:
     """``value`` (an array or an aggregate) as an array of ``dims`` elements of type ``element``."""
     if not isinstance(value, (Array, Aggregate, list)) or len(value) != int(dims[0]):
         raise RapidFatalError(f"{what}: expected an array of {int(dims[0])} {element.name}")
@@ -245,7 +245,7 @@ def coerce_array(value, element: TypeInfo, dims: tuple, records=None, what: str 
     return Array([coerce_array(v, element, dims[1:], records, what) for v in value], TypeInfo(element.name, "array"))
 
 
-def describe(value) -> str:
+def describe(value: Any) -> str:
     """A short name of what ``value`` is, for messages."""
     if isinstance(value, bool):
         return "a bool"
@@ -272,7 +272,7 @@ def format_num(value: float) -> str:
     return text.replace("e+", "E+").replace("e-", "E-")
 
 
-def format_value(value, number=None, other=repr) -> str:
+def format_value(value: Any, number=None, other=repr) -> str:
     """``ValToStr`` of any value: ``[1,2,3]``, ``"text"``, ``TRUE``.
 
     ``number(float) -> str`` writes a num (default :func:`format_num`, ValToStr's 6 significant
@@ -291,7 +291,7 @@ def format_value(value, number=None, other=repr) -> str:
     return other(value)
 
 
-def aggregate(value):
+def aggregate(value: Any):
     """Nested Python lists as nested :class:`Aggregate` literals (what a parsed ``[...]`` gives)."""
     return Aggregate(aggregate(v) for v in value) if isinstance(value, list) else value
 
