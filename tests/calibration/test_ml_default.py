@@ -299,6 +299,13 @@ def test_a_large_cross_validation_ratio_is_called_systematic():
     assert not CrossValidation(5, errors, "corners", errors**2, predicted_rms_mm=2.0).systematic
 
 
+def test_a_zero_predicted_error_has_no_ratio():
+    # A noise model that predicts 0 mm (exact data) gives no ratio; to_dict used to call float(None) on it.
+    errors = np.full(10, 2.0)
+    out = CrossValidation(5, errors, "corners", errors**2, predicted_rms_mm=0.0).to_dict()
+    assert out["predicted_rms_mm"] == 0.0 and "ratio" not in out and "systematic" not in out
+
+
 # --------------------------------------------------------------------------------- noise models
 def test_stereo_shape_is_the_triangulation_jacobian():
     f, b = 983.0, 239.98

@@ -91,6 +91,21 @@ def test_selection_is_the_exact_minimiser(criterion, metric, fast_screen, monkey
     assert sel.score == pytest.approx(brute.min(), rel=1e-10)
 
 
+@pytest.mark.parametrize("criterion", ["mcr", "mct"])
+def test_a_criterion_without_its_inputs_says_what_it_needs(criterion):
+    # select_candidate promises a ValueError; without the motions mcr and mct used to fail on None.q_b
+    prob, _, _ = problem(8, seed=4)
+    cands = triplet_candidates(prob, relative_motions(prob))
+    with pytest.raises(ValueError, match=f"{criterion} needs the relative motions"):
+        select_candidate(criterion, cands, CandidateScorer(prob.hand, prob.compact.points))
+
+
+def test_triplets_need_the_motions_of_all_pairs():
+    prob, _, _ = problem(6, seed=4)
+    with pytest.raises(ValueError, match="motions of all pairs"):
+        triplet_candidates(prob, relative_motions(prob, pair_indices(6)[:4]))
+
+
 def test_mcb_screening_scores_few_candidates_exactly():
     prob, _, _ = problem(20, sigma_cam=5.0, seed=1)
     result = calibrate(prob, "mcb")

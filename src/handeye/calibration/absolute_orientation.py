@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..base import WORKERS, map_chunks
 from ..geometry import canonical_quaternions, rotate_vectors
@@ -46,7 +47,7 @@ class AbsoluteOrientation:
     eigen_gap: np.ndarray
 
 
-def horn_matrix(source, target, weights=None) -> np.ndarray:
+def horn_matrix(source: ArrayLike, target: ArrayLike, weights: ArrayLike | None = None) -> np.ndarray:
     """Horn's symmetric 4x4 matrix ``N`` for the correlation of source and target vectors.
 
     Parameters
@@ -97,7 +98,7 @@ def _top_eigenvector(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return canonical_quaternions(top), gap
 
 
-def rotation_between_vectors(source, target, weights=None) -> AbsoluteOrientation:
+def rotation_between_vectors(source: ArrayLike, target: ArrayLike, weights: np.ndarray | None = None) -> AbsoluteOrientation:
     """Rotation ``q`` minimising ``sum_i w_i |target_i - rot(q, source_i)|^2`` (no translation).
 
     This is ``absROT(V_B, V_A)`` of eq. 30 when the vectors are the vector parts of relative
@@ -123,7 +124,7 @@ def rotation_between_vectors(source, target, weights=None) -> AbsoluteOrientatio
     return AbsoluteOrientation(q, np.zeros(q.shape[:-1] + (3,)), rms, gap)
 
 
-def absolute_orientation(source, target) -> AbsoluteOrientation:
+def absolute_orientation(source: ArrayLike, target: ArrayLike) -> AbsoluteOrientation:
     """Rigid motion carrying source points onto target points (Horn 1987; eq. 24-29).
 
     Parameters

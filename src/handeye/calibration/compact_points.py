@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..geometry import STATION_BOARD, BoardGeometry, board_corners
 from ..geometry import transform_from_rotation_translation
@@ -44,7 +45,7 @@ class CompactPoints:
     square_mm: float | None = None
 
 
-def compact_points_from_corners(corners_cam, board: BoardGeometry) -> CompactPoints:
+def compact_points_from_corners(corners_cam: ArrayLike, board: BoardGeometry) -> CompactPoints:
     """Fit the board plane and pose to measured corners and return the compact points.
 
     Parameters
@@ -88,7 +89,7 @@ def compact_points_from_corners(corners_cam, board: BoardGeometry) -> CompactPoi
     return CompactPoints(points, target_points, transform_from_rotation_translation(rotation, origin), plane_rms, square)
 
 
-def compact_points_from_poses(target2cam, length_mm: float = 100.0) -> CompactPoints:
+def compact_points_from_poses(target2cam: ArrayLike, length_mm: float = 100.0) -> CompactPoints:
     """Compact points of sessions that hold board poses only: origin, (L, 0, 0) and (0, L, 0).
 
     Parameters

@@ -31,9 +31,11 @@ board's place. Physics tells them apart, and so does this check, only where it i
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from ..base import CalibrationError
@@ -99,7 +101,7 @@ class InconsistentPosesError(CalibrationError):
 _PAIRS = 2000
 
 
-def consistency_figures(hand, target2cam) -> dict:
+def consistency_figures(hand: np.ndarray, target2cam: np.ndarray) -> dict:
     """The invariant misfits under the session's set-up and with the hand poses inverted (the other
     set-up, or robot poses stored the other way round).
 
@@ -139,7 +141,7 @@ def consistency_figures(hand, target2cam) -> dict:
             "board_from_x_deg": float(np.degrees(np.arccos(np.clip(direction[0], -1, 1))))}
 
 
-def check_consistent(hand, target2cam, setup: str, limits: ConsistencyLimits = ConsistencyLimits()) -> None:
+def check_consistent(hand: np.ndarray, target2cam: np.ndarray, setup: str, limits: ConsistencyLimits = ConsistencyLimits()) -> None:
     """Refuse poses that no rigid camera mount fits, naming the likely cause.
 
     Raises
@@ -193,7 +195,7 @@ def check_consistent(hand, target2cam, setup: str, limits: ConsistencyLimits = C
             f"well; {fix} (--camera-pose, --setup)")
 
 
-def posture_gaps(hand, target2cam, pairs=None) -> tuple[np.ndarray, np.ndarray]:
+def posture_gaps(hand: ArrayLike, target2cam: ArrayLike, pairs: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Two X-free figures per posture: how far its relative motions to the others break ``AX = XB``.
 
     Parameters
@@ -229,7 +231,7 @@ def _gross_reason(gap: float, pitch: float, typical_gap: float, typical_pitch: f
             f"or a posture of another session; check its file")
 
 
-def consistent_majority(hand, target2cam, setup: str, ids=None,
+def consistent_majority(hand: np.ndarray, target2cam: np.ndarray, setup: str, ids: Iterable[int] | None = None,
                         limits: ConsistencyLimits = ConsistencyLimits()) -> dict:
     """The gross postures to leave out so that the rest fits a rigid camera mount, with the reason.
 

@@ -19,11 +19,18 @@ the honest check of a calibration's accuracy figure.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .metrics import fixed_points
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+    from .problem import HandEyeProblem
 
 __all__ = [
     "DEFAULT_FOLDS",
@@ -89,7 +96,7 @@ class CrossValidation:
         ratio = self.ratio
         return ratio is not None and ratio > SYSTEMATIC_RATIO
 
-    def to_dict(self, posture_ids=None) -> dict:
+    def to_dict(self, posture_ids: Iterable[int] | None = None) -> dict:
         """The ``cross_validation`` mapping of the result JSON."""
         ids = range(len(self.errors_mm)) if posture_ids is None else posture_ids
         out = {
@@ -102,9 +109,11 @@ class CrossValidation:
                           "by the flange pose and X into the fixed frame, from the mean of the training postures' points "
                           "(eq. 21-22 out of sample)",
         }
+        ratio = self.ratio
         if self.predicted_rms_mm is not None:
             out["predicted_rms_mm"] = round(float(self.predicted_rms_mm), 6)
-            out["ratio"] = round(float(self.ratio), 4)
+        if ratio is not None:
+            out["ratio"] = round(float(ratio), 4)
             out["systematic"] = bool(self.systematic)
             if self.systematic:
                 out["advice"] = SYSTEMATIC_ADVICE
@@ -116,7 +125,7 @@ def fold_assignment(n: int, folds: int = DEFAULT_FOLDS) -> np.ndarray:
     return np.arange(n) % max(1, min(folds, n))
 
 
-def held_out_errors(hand, x, points_cam, reference) -> tuple[np.ndarray, np.ndarray]:
+def held_out_errors(hand: np.ndarray, x: np.ndarray, points_cam: np.ndarray, reference: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per posture: mean and mean-square distance of ``hand_i X points_i`` from ``reference``.
 
     Parameters
@@ -135,7 +144,7 @@ def held_out_errors(hand, x, points_cam, reference) -> tuple[np.ndarray, np.ndar
     return dist.mean(axis=1), (dist**2).mean(axis=1)
 
 
-def board_points(problem) -> np.ndarray:
+def board_points(problem: HandEyeProblem) -> np.ndarray:
     """The fitted board points of every posture in the camera frame, ``(n, m, 3)``.
 
     The board grid (``problem.target_points``) under the fitted pose ``target2cam`` when the
@@ -148,7 +157,7 @@ def board_points(problem) -> np.ndarray:
     return problem.compact.points
 
 
-def cross_validate(problem, solver, folds: int = DEFAULT_FOLDS, keep=None) -> CrossValidation:
+def cross_validate(problem: HandEyeProblem, solver: Callable[[HandEyeProblem], np.ndarray], folds: int = DEFAULT_FOLDS, keep: ArrayLike | None = None) -> CrossValidation:
     """k-fold posture cross-validation of any solver.
 
     Parameters

@@ -32,17 +32,22 @@ translations whose size does not fit millimetres.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
+from numpy.typing import ArrayLike
+from scipy.spatial import KDTree
 from scipy.spatial.transform import Rotation
 
 from ..base import brief
 from .invariants import bounded_pairs, posture_medians as posture_median_gaps, relative_transforms
 from .problem import EYE_IN_HAND, EYE_TO_HAND, SETUPS, hand_poses
 from ..geometry import rotation_error_deg
+
+if TYPE_CHECKING:
+    from .session import Session
 
 __all__ = [
     "Finding",
@@ -136,7 +141,7 @@ def _check_poses(tool0_in_base, target_in_camera) -> tuple[np.ndarray, np.ndarra
     return a, b
 
 
-def relative_angle_gaps(tool0_in_base, target_in_camera) -> np.ndarray:
+def relative_angle_gaps(tool0_in_base: np.ndarray, target_in_camera: np.ndarray) -> np.ndarray:
     """``|angle(A_ij) - angle(B_ij)|`` in degrees for every pair of postures.
 
     The angle of ``A_ij`` is the same for both set-ups, so no set-up is needed.
@@ -159,12 +164,12 @@ def relative_angle_gaps(tool0_in_base, target_in_camera) -> np.ndarray:
     return gaps
 
 
-def posture_angle_gaps(gaps) -> np.ndarray:
+def posture_angle_gaps(gaps: ArrayLike) -> np.ndarray:
     """Median over ``j != i`` of a gap matrix ``(n, n)``; returns ``(n,)`` degrees."""
     return np.nanmedian(np.asarray(gaps, dtype=float), axis=1)
 
 
-def pair_angle_gaps(tool0_in_base, target_in_camera, pairs) -> np.ndarray:
+def pair_angle_gaps(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, pairs: ArrayLike) -> np.ndarray:
     """``|angle(A_ij) - angle(B_ij)|`` in degrees for the given pairs (as :func:`relative_angle_gaps`).
 
     Parameters
@@ -195,7 +200,7 @@ def _align(target_vectors, source_vectors) -> np.ndarray:
         return Rotation.align_vectors(target_vectors, source_vectors)[0].as_matrix()
 
 
-def screw_pitch_scale(tool0_in_base, target_in_camera, limits: DiagnosticLimits = DiagnosticLimits()) -> float | None:
+def screw_pitch_scale(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, limits: DiagnosticLimits = DiagnosticLimits()) -> float | None:
     """Length ratio robot / camera from the screw pitches of the relative motions.
 
     ``d = n . t`` of ``A_ij`` equals that of ``B_ij`` whatever ``X`` and whatever the set-up, when
@@ -227,7 +232,7 @@ def screw_pitch_scale(tool0_in_base, target_in_camera, limits: DiagnosticLimits 
     return float(np.sum(d_a * d_b) / denominator)
 
 
-def setup_rotation_residuals(tool0_in_base, target_in_camera,
+def setup_rotation_residuals(tool0_in_base: np.ndarray, target_in_camera: np.ndarray,
                              limits: DiagnosticLimits = DiagnosticLimits()) -> dict:
     """Median rotation residual of ``A_ij R_X = R_X B_ij`` under each set-up, degrees.
 
@@ -262,7 +267,7 @@ def setup_rotation_residuals(tool0_in_base, target_in_camera,
     return out
 
 
-def hand_eye_fit(tool0_in_base, target_in_camera, setup: str,
+def hand_eye_fit(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, setup: str,
                  limits: DiagnosticLimits = DiagnosticLimits()) -> dict:
     """A quick linear fit of ``AX = XB`` under one set-up, and how well it fits.
 
@@ -310,7 +315,7 @@ def _close_pairs(a, b, distance_mm: float) -> np.ndarray:
     for poses in (a, b):
         finite = np.flatnonzero(np.all(np.isfinite(poses[:, :3, 3]), axis=1))
         if len(finite) > 1:
-            close = cKDTree(poses[finite, :3, 3]).query_pairs(distance_mm, output_type="ndarray")
+            close = KDTree(poses[finite, :3, 3]).query_pairs(distance_mm, output_type="ndarray")
             found.append(np.sort(finite[close], axis=1).reshape(-1, 2))
     pairs = np.concatenate(found)
     key = np.sort(pairs[:, 0].astype(np.int64) * len(a) + pairs[:, 1])
@@ -381,7 +386,7 @@ def _stale_finding(ids, f: dict, moved: dict) -> Finding:
                                                            "robot_deg": moved["robot_deg"]})
 
 
-def find_duplicates(tool0_in_base, target_in_camera, ids=None,
+def find_duplicates(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, ids: ArrayLike | None = None,
                     limits: DiagnosticLimits = DiagnosticLimits()) -> list:
     """Robot poses taken more than once, and board poses repeated while the robot moved (stale frames).
 
@@ -416,7 +421,7 @@ def find_duplicates(tool0_in_base, target_in_camera, ids=None,
 _PLAUSIBLE_MM = {"robot": (20.0, 20000.0), "camera": (20.0, 20000.0)}
 
 
-def find_unit_problems(tool0_in_base, target_in_camera, ids=None,
+def find_unit_problems(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, ids: ArrayLike | None = None,
                        limits: DiagnosticLimits = DiagnosticLimits()) -> list:
     """Translations whose size does not fit millimetres, or robot and camera in different units.
 
@@ -460,7 +465,7 @@ def find_unit_problems(tool0_in_base, target_in_camera, ids=None,
     return findings
 
 
-def find_inconsistent_postures(tool0_in_base, target_in_camera, ids=None,
+def find_inconsistent_postures(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, ids: ArrayLike | None = None,
                                limits: DiagnosticLimits = DiagnosticLimits()) -> list:
     """Postures whose median angle gap stands out; says when a 180 deg board flip explains it.
 
@@ -510,7 +515,7 @@ def find_inconsistent_postures(tool0_in_base, target_in_camera, ids=None,
     return findings
 
 
-def find_setup_mismatch(tool0_in_base, target_in_camera, setup: str,
+def find_setup_mismatch(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, setup: str,
                         limits: DiagnosticLimits = DiagnosticLimits()) -> list:
     """A finding when the data fit the other set-up clearly better than ``setup``.
 
@@ -545,7 +550,7 @@ def find_setup_mismatch(tool0_in_base, target_in_camera, setup: str,
         f"(camera in target instead of target in camera), which looks the same", (), values)]
 
 
-def find_model_mismatch(tool0_in_base, target_in_camera, setup: str,
+def find_model_mismatch(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, setup: str,
                         limits: DiagnosticLimits = DiagnosticLimits()) -> list:
     """A finding when the rotations fit ``AX = XB`` under ``setup`` but the translations do not.
 
@@ -567,7 +572,7 @@ def find_model_mismatch(tool0_in_base, target_in_camera, setup: str,
         (), {**fit, "ratio": ratio})]
 
 
-def diagnose(tool0_in_base, target_in_camera, setup: str, ids=None,
+def diagnose(tool0_in_base: np.ndarray, target_in_camera: np.ndarray, setup: str, ids: ArrayLike | None = None,
              limits: DiagnosticLimits = DiagnosticLimits()) -> list:
     """Every check on pose arrays (mm); a list of :class:`Finding` (empty when nothing is odd).
 
@@ -591,7 +596,7 @@ def diagnose(tool0_in_base, target_in_camera, setup: str, ids=None,
     return findings
 
 
-def diagnose_session(session, limits: DiagnosticLimits = DiagnosticLimits()) -> list:
+def diagnose_session(session: Session, limits: DiagnosticLimits = DiagnosticLimits()) -> list:
     """:func:`diagnose` on a session (postures with joints or corner points are converted first).
 
     Raises

@@ -23,12 +23,17 @@ covariance of the old ``X`` left out: it is replaced).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .noise import retract
 from .verification import Baseline, Discrepancy, discrepancy, hypothesis_jacobians
+
+if TYPE_CHECKING:
+    from ..robot import RobotModel
+    from .eiv.model import Observations
 
 __all__ = ["SAME_EFFECT_CHI2", "Explanation", "QuickUpdate", "explain", "likelihood_ratio", "quick_update", "same_effect"]
 
@@ -96,7 +101,7 @@ def _in_parent(frame: np.ndarray, twist: np.ndarray) -> tuple[np.ndarray, np.nda
     return rot @ twist[:3], np.degrees(rot @ twist[3:])
 
 
-def explain(disc: Discrepancy, baseline: Baseline, robot=None) -> list[Explanation]:
+def explain(disc: Discrepancy, baseline: Baseline, robot: RobotModel | None = None) -> list[Explanation]:
     """Every explanation fitted, best (lowest BIC) first; ``none`` among them.
 
     Parameters
@@ -155,7 +160,7 @@ class QuickUpdate:
     reduced_chi2: float = 1.0
 
 
-def quick_update(baseline: Baseline, obs, joints_deg=None, iterations: int = 3) -> QuickUpdate:
+def quick_update(baseline: Baseline, obs: Observations, joints_deg: np.ndarray | None = None, iterations: int = 3) -> QuickUpdate:
     """The camera's new ``X`` from the revisited postures, the session's board and arm as prior.
 
     Gauss-Newton on the camera explanation: ``X_(k+1) = X_k ⊕ p̂`` with ``p̂`` the GLS fit of

@@ -28,6 +28,7 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from ..geometry import invert_transforms
@@ -125,7 +126,7 @@ def bounded_pairs(n: int, seed: int = 0) -> np.ndarray:
     return np.stack([key // n, key % n], axis=1).astype(np.intp)
 
 
-def posture_medians(gaps, pairs, n: int) -> np.ndarray:
+def posture_medians(gaps: ArrayLike, pairs: ArrayLike, n: int) -> np.ndarray:
     """Per posture, the median of the (non-NaN) values ``gaps`` of the pairs it is part of, shape ``(n,)``
     (NaN for a posture in no pair): the row medians of the symmetric ``(n, n)`` matrix of the values,
     without building it.
@@ -162,7 +163,7 @@ def pairs_used(count: int, n: int) -> str:
     return f"{int(count)} of {total} posture pairs (neighbours in time and a fixed random sample)"
 
 
-def relative_angles_deg(rotations, pairs) -> np.ndarray:
+def relative_angles_deg(rotations: ArrayLike, pairs: ArrayLike) -> np.ndarray:
     """Rotation angle of ``R_i^T R_j`` for each pair, degrees (the same as that of ``R_i R_j^T``).
 
     Parameters
@@ -180,13 +181,13 @@ def relative_angles_deg(rotations, pairs) -> np.ndarray:
     return np.degrees(np.arccos(np.clip((trace - 1.0) / 2.0, -1.0, 1.0)))
 
 
-def angle_gap_deg(angles_a, angles_b) -> float:
+def angle_gap_deg(angles_a: ArrayLike, angles_b: ArrayLike) -> float:
     """Median ``|angle(A_ij) - angle(B_ij)|`` over pairs, degrees (``inf`` when there is no pair)."""
     gaps = np.abs(np.asarray(angles_a, float) - np.asarray(angles_b, float))
     return float(np.median(gaps)) if gaps.size else float("inf")
 
 
-def relative_transforms(hand, target2cam, pairs) -> tuple[np.ndarray, np.ndarray]:
+def relative_transforms(hand: ArrayLike, target2cam: ArrayLike, pairs: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """``A_ij = H_i^-1 H_j`` and ``B_ij = B_i B_j^-1`` for each pair, shapes ``(m, 4, 4)``: the relative
     motions as transforms of the poses (``triplets.relative_motions`` is Algorithm 1's step 2: hand
     quaternions and the compact points' rotations, of a problem)."""
@@ -201,7 +202,7 @@ def _rotvecs(transforms) -> np.ndarray:
     return Rotation.from_matrix(np.asarray(transforms)[:, :3, :3]).as_rotvec()
 
 
-def screw_pitches(motions) -> tuple[np.ndarray, np.ndarray]:
+def screw_pitches(motions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rotation angle (deg) and translation along the rotation axis ``d = n . t`` of motions ``(m, 4, 4)``.
 
     ``d`` is the same for a motion and its inverse (the axis turns round with the translation), so
@@ -268,7 +269,7 @@ def _align(target_vectors, source_vectors) -> np.ndarray:
         return Rotation.align_vectors(target_vectors, source_vectors)[0].as_matrix()
 
 
-def fit_hand_eye(hand, target2cam, pairs=None, min_motion_deg: float = MIN_MOTION_DEG) -> InvariantFit:
+def fit_hand_eye(hand: ArrayLike, target2cam: ArrayLike, pairs: ArrayLike | None = None, min_motion_deg: float = MIN_MOTION_DEG) -> InvariantFit:
     """Fit ``H_i X B_i = G`` linearly and measure how well every invariant holds.
 
     The rotation ``R_X`` from the rotation axes (Park and Martin 1994), the translation by linear

@@ -11,11 +11,17 @@ disagree (an edited file, the joints of another posture, another robot model) is
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .noise import twist_between
+
+if TYPE_CHECKING:
+    from ..robot import RobotModel
+    from .session import Session
 
 __all__ = ["JOINT_MATCH_DEG", "JOINT_MATCH_MM", "JointMismatch", "joint_mismatch", "session_joint_mismatch"]
 
@@ -56,7 +62,7 @@ class JointMismatch:
                 f"(at most {JOINT_MATCH_MM:g} mm / {JOINT_MATCH_DEG:g} deg)")
 
 
-def joint_mismatch(robot, joints_deg, tool02base, posture_ids=None) -> JointMismatch | None:
+def joint_mismatch(robot: RobotModel, joints_deg: ArrayLike, tool02base: ArrayLike, posture_ids: ArrayLike | None = None) -> JointMismatch | None:
     """The postures whose ``robot.forward_transform(joints_deg)`` is off their flange pose, or None.
 
     Parameters
@@ -79,7 +85,7 @@ def joint_mismatch(robot, joints_deg, tool02base, posture_ids=None) -> JointMism
     return JointMismatch(tuple(int(i) for i in ids[bad]), gap_mm[bad], gap_deg[bad], len(joints), robot.name)
 
 
-def session_joint_mismatch(session) -> JointMismatch | None:
+def session_joint_mismatch(session: Session) -> JointMismatch | None:
     """:func:`joint_mismatch` over a session's postures that hold both readings (None when the session
     names no robot model that loads, or no posture holds both)."""
     from ..robot import load_robot  # noqa: PLC0415

@@ -99,7 +99,10 @@ class Method:
 
     def load(self) -> Callable | None:
         """The solver (imports its module now when it is named by a string)."""
-        return load_target(self.solver)
+        solver = load_target(self.solver)
+        if solver is not None and not callable(solver):
+            raise TypeError(f"method {self.name!r}: its solver {self.solver!r} names no function")
+        return solver
 
     @property
     def reference(self) -> str:

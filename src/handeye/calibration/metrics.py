@@ -8,6 +8,7 @@ Conventions: lengths in mm; rotation metrics in radians unless the name ends in 
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from ..geometry import invert_transforms, rotation_error_deg, translation_error_mm
@@ -30,7 +31,7 @@ __all__ = [
 ]
 
 
-def axxb_residuals(hand, target2cam, x, pairs) -> tuple[np.ndarray, np.ndarray]:
+def axxb_residuals(hand: np.ndarray, target2cam: np.ndarray, x: np.ndarray, pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per-pair ``δR = ||R_A R_X - R_X R_B||_F`` and ``δt = |R_A t_X + t_A - R_X t_B - t_X|`` (eq. 16).
 
     Parameters
@@ -57,7 +58,7 @@ def axxb_residuals(hand, target2cam, x, pairs) -> tuple[np.ndarray, np.ndarray]:
     return delta_r, delta_t
 
 
-def lp_distance(t_r, t_s, p: float = 2.0) -> np.ndarray:
+def lp_distance(t_r: ArrayLike, t_s: ArrayLike, p: float = 2.0) -> np.ndarray:
     """``L_p`` distance between positions (eq. 17); ``p = inf`` gives the largest coordinate gap."""
     diff = np.abs(np.asarray(t_r, float) - np.asarray(t_s, float))
     if np.isinf(p):
@@ -65,42 +66,42 @@ def lp_distance(t_r, t_s, p: float = 2.0) -> np.ndarray:
     return np.sum(diff**p, axis=-1) ** (1.0 / p)
 
 
-def d_geod_matrix(r_r, r_s) -> np.ndarray:
+def d_geod_matrix(r_r: np.ndarray, r_s: np.ndarray) -> np.ndarray:
     """``||log(R_r^-1 R_s)||`` (eq. 18): the rotation angle between two rotations, radians."""
     return np.radians(rotation_error_deg(r_r, r_s))
 
 
-def d_hyper(r_r, r_s) -> np.ndarray:
+def d_hyper(r_r: ArrayLike, r_s: ArrayLike) -> np.ndarray:
     """``||log(R_r) - log(R_s)||`` (eq. 18) with ``log`` as the rotation vector, radians."""
     a = Rotation.from_matrix(np.asarray(r_r, float)).as_rotvec()
     b = Rotation.from_matrix(np.asarray(r_s, float)).as_rotvec()
     return np.linalg.norm(a - b, axis=-1)
 
 
-def d_frob(r_r, r_s) -> np.ndarray:
+def d_frob(r_r: ArrayLike, r_s: ArrayLike) -> np.ndarray:
     """``||R_r - R_s||_F`` (eq. 18)."""
     return np.linalg.norm(np.asarray(r_r, float) - np.asarray(r_s, float), axis=(-2, -1))
 
 
-def d_1(q_r, q_s) -> np.ndarray:
+def d_1(q_r: ArrayLike, q_s: ArrayLike) -> np.ndarray:
     """``1 - |q_r . q_s|`` (eq. 19), in [0, 1]."""
     return 1.0 - np.abs(np.sum(np.asarray(q_r, float) * np.asarray(q_s, float), axis=-1))
 
 
-def d_2(q_r, q_s) -> np.ndarray:
+def d_2(q_r: ArrayLike, q_s: ArrayLike) -> np.ndarray:
     """``min(|q_r - q_s|, |q_r + q_s|)`` (eq. 19), in [0, sqrt(2)]."""
     q_r = np.asarray(q_r, float)
     q_s = np.asarray(q_s, float)
     return np.minimum(np.linalg.norm(q_r - q_s, axis=-1), np.linalg.norm(q_r + q_s, axis=-1))
 
 
-def d_geod_quaternion(q_r, q_s) -> np.ndarray:
+def d_geod_quaternion(q_r: ArrayLike, q_s: ArrayLike) -> np.ndarray:
     """``2 acos(|q_r . q_s|)`` (eq. 19), in [0, pi]: equals :func:`d_geod_matrix`."""
     dot = np.abs(np.sum(np.asarray(q_r, float) * np.asarray(q_s, float), axis=-1))
     return 2.0 * np.arccos(np.clip(dot, 0.0, 1.0))
 
 
-def fixed_points(hand, x, points_cam) -> np.ndarray:
+def fixed_points(hand: np.ndarray, x: np.ndarray, points_cam: np.ndarray) -> np.ndarray:
     """Board points in the fixed frame, ``hand_i @ X @ points_i`` (eq. 13).
 
     Parameters
@@ -117,18 +118,18 @@ def fixed_points(hand, x, points_cam) -> np.ndarray:
     return np.einsum("nij,nmj->nmi", chain[:, :3, :3], points_cam) + chain[:, None, :3, 3]
 
 
-def mean_point(fixed) -> np.ndarray:
+def mean_point(fixed: ArrayLike) -> np.ndarray:
     """Mean position of each point over the postures (eq. 21): ``(n, m, 3) -> (m, 3)``."""
     return np.asarray(fixed, float).mean(axis=0)
 
 
-def d_org(fixed) -> float:
+def d_org(fixed: ArrayLike) -> float:
     """Mean distance of the points from their mean point (eq. 22), averaged over the points, mm."""
     fixed = np.asarray(fixed, float)
     return float(np.linalg.norm(fixed - fixed.mean(axis=0), axis=-1).mean())
 
 
-def d_back(fixed, pairs=None) -> float:
+def d_back(fixed: ArrayLike, pairs: ArrayLike | None = None) -> float:
     """Mean distance between the same point seen from two postures (eq. 23), averaged over points, mm.
 
     Parameters
@@ -149,7 +150,7 @@ def d_back(fixed, pairs=None) -> float:
     return total / (len(pairs) * fixed.shape[1])
 
 
-def posture_residuals(fixed, kept=None) -> np.ndarray:
+def posture_residuals(fixed: ArrayLike, kept: ArrayLike | None = None) -> np.ndarray:
     """Per posture: mean distance of its points from the mean points (eq. 21-22 per posture), mm.
 
     Parameters
@@ -170,7 +171,7 @@ def posture_residuals(fixed, kept=None) -> np.ndarray:
     return np.linalg.norm(fixed - reference, axis=-1).mean(axis=1)
 
 
-def errors_against_truth(x, x_true) -> dict:
+def errors_against_truth(x: np.ndarray, x_true: np.ndarray) -> dict:
     """Rotation (deg) and translation (mm) errors of ``X`` against a known truth."""
     return {
         "rotation_error_deg": float(rotation_error_deg(x, x_true)),

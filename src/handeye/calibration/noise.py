@@ -36,6 +36,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from ..robot import RobotModel
@@ -68,7 +69,7 @@ XB3_BASELINE_MM = 239.98
 VARIANCE_FLOOR = 1e-18
 
 
-def adjoint(transform) -> np.ndarray:
+def adjoint(transform: ArrayLike) -> np.ndarray:
     """``Ad_P = [[R, [t]x R], [0, R]]`` of poses ``(..., 4, 4)``: shape ``(..., 6, 6)``, twists ``(ρ, φ)``."""
     p = np.asarray(transform, dtype=float)
     r, t = p[..., :3, :3], p[..., :3, 3]
@@ -79,7 +80,7 @@ def adjoint(transform) -> np.ndarray:
     return out
 
 
-def retract(transform, twist) -> np.ndarray:
+def retract(transform: ArrayLike, twist: ArrayLike) -> np.ndarray:
     """``P ⊕ ξ = (R exp([φ]x), t + R ρ)`` for poses ``(..., 4, 4)`` and local twists ``(..., 6)``."""
     p = np.asarray(transform, dtype=float)
     xi = np.asarray(twist, dtype=float)
@@ -93,7 +94,7 @@ def retract(transform, twist) -> np.ndarray:
     return out
 
 
-def twist_between(reference, transform) -> np.ndarray:
+def twist_between(reference: ArrayLike, transform: ArrayLike) -> np.ndarray:
     """The local twist ``ξ`` with ``transform = reference ⊕ ξ`` (exact inverse of :func:`retract`).
 
     Parameters
@@ -117,7 +118,7 @@ def twist_between(reference, transform) -> np.ndarray:
     return out
 
 
-def matrix_from_rotvec(rotvec) -> np.ndarray:
+def matrix_from_rotvec(rotvec: ArrayLike) -> np.ndarray:
     """Rodrigues' formula for rotation vectors ``(..., 3)`` (radians): matrices ``(..., 3, 3)``."""
     v = np.asarray(rotvec, dtype=float)
     angle = np.linalg.norm(v, axis=-1)[..., None, None]
@@ -130,7 +131,7 @@ def matrix_from_rotvec(rotvec) -> np.ndarray:
     return np.eye(3) + sin_term * k + cos_term * (k @ k)
 
 
-def rotvec_from_matrix(matrix) -> np.ndarray:
+def rotvec_from_matrix(matrix: ArrayLike) -> np.ndarray:
     """Rotation vectors ``(..., 3)`` of rotation matrices ``(..., 3, 3)`` (scipy near a half turn)."""
     r = np.asarray(matrix, dtype=float)
     cos = np.clip((np.trace(r, axis1=-2, axis2=-1) - 1.0) * 0.5, -1.0, 1.0)
@@ -145,7 +146,7 @@ def rotvec_from_matrix(matrix) -> np.ndarray:
     return out
 
 
-def stereo_point_shape(points_cam, f_px: float = XB3_FOCAL_PX, baseline_mm: float = XB3_BASELINE_MM) -> np.ndarray:
+def stereo_point_shape(points_cam: ArrayLike, f_px: float = XB3_FOCAL_PX, baseline_mm: float = XB3_BASELINE_MM) -> np.ndarray:
     """Covariance ``S_p`` (mm² per px² of pixel noise) of points triangulated by a rectified pair.
 
     Parameters
@@ -192,7 +193,7 @@ class BoardFit:
     information: np.ndarray
 
 
-def fit_board_poses(points_cam, model_points, start, weights=None, iterations: int = 3) -> BoardFit:
+def fit_board_poses(points_cam: ArrayLike, model_points: ArrayLike, start: ArrayLike, weights: ArrayLike | None = None, iterations: int = 3) -> BoardFit:
     """Weighted least-squares rigid fit of a known board to measured points, every posture at once.
 
     Parameters
@@ -257,13 +258,13 @@ class CornerNoise:
         return float(np.sqrt(np.mean(np.trace(self.covariances(shapes), axis1=-2, axis2=-1))))
 
 
-def shape_eigen(shapes) -> tuple[np.ndarray, np.ndarray]:
+def shape_eigen(shapes: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Eigen-decomposition ``S_p = U diag(λ) U^T`` of stereo shapes ``(..., 3, 3)``: ``λ (..., 3)``, ``U (..., 3, 3)``."""
     lam, vec = np.linalg.eigh(np.asarray(shapes, dtype=float))
     return np.maximum(lam, 0.0), vec
 
 
-def corner_noise(residuals, eigen, iterations: int = 30, seen=None) -> CornerNoise:
+def corner_noise(residuals: ArrayLike, eigen: tuple[np.ndarray, np.ndarray], iterations: int = 30, seen: ArrayLike | None = None) -> CornerNoise:
     """REML-type estimate of ``(a, b)`` in ``Σ_p = a I + b S_p`` from board-fit residuals (Fisher scoring).
 
     Parameters
@@ -335,14 +336,14 @@ def _masked_corner_noise(e, lam, vec, seen, iterations: int) -> CornerNoise:
     return CornerNoise(float(theta[0]), float(theta[1]), int(dof))
 
 
-def inverse_covariances(noise: CornerNoise, eigen) -> np.ndarray:
+def inverse_covariances(noise: CornerNoise, eigen: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
     """``(a I + b S_p)^-1`` from :func:`shape_eigen` of the shapes; shape ``(..., 3, 3)``."""
     lam, vec = eigen
     inv = 1.0 / (noise.isotropic_mm2 + noise.pixel_px2 * lam)
     return np.einsum("...ik,...k,...jk->...ij", vec, inv, vec)
 
 
-def flange_jacobian(robot: RobotModel, joints_deg) -> np.ndarray:
+def flange_jacobian(robot: RobotModel, joints_deg: np.ndarray) -> np.ndarray:
     """Local twist of tool0 per degree of each controller angle, from the chain of eq. 11-12.
 
     Parameters
@@ -378,7 +379,7 @@ def flange_jacobian(robot: RobotModel, joints_deg) -> np.ndarray:
     return serial @ robot.coupling * (np.pi / 180.0)
 
 
-def kinematic_jacobian(robot: RobotModel, joints_deg) -> tuple[np.ndarray, np.ndarray]:
+def kinematic_jacobian(robot: RobotModel, joints_deg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Local twist of tool0 per unit deviation of every entry of the robot's DH table.
 
     A real arm is never exactly its table: its ``d, a`` (mm), ``alpha`` and ``theta`` offsets

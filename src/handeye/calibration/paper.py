@@ -7,12 +7,16 @@ its row of the methods table (``calibration.methods``).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 import numpy as np
 
 from ..base import CalibrationError
 from .problem import HandEyeProblem
 from .selection import CandidateScorer, select_candidate
 from .triplets import all_postures_solution, relative_motions, triplet_candidates
+
+if TYPE_CHECKING:
+    from .selection import Criterion
 
 __all__ = ["solve_paper", "truth_board_points"]
 
@@ -25,7 +29,7 @@ def truth_board_points(problem: HandEyeProblem, truth: dict | None) -> np.ndarra
     return problem.compact.target_points @ t[:3, :3].T + t[:3, 3]
 
 
-def solve_paper(problem: HandEyeProblem, criterion=None, truth_points: np.ndarray | None = None) -> tuple[np.ndarray, dict]:
+def solve_paper(problem: HandEyeProblem, criterion: str | Criterion | None = None, truth_points: np.ndarray | None = None) -> tuple[np.ndarray, dict]:
     """``X`` by Algorithm 1 and what the result reports of it.
 
     Parameters

@@ -21,12 +21,17 @@ in metres is converted only when asked (:func:`session_in_mm`, ``--units m``).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 from dataclasses import dataclass, replace
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..geometry import SQUARE_TOLERANCE, judge_square_size
 from ..base import CalibrationError, brief
+
+if TYPE_CHECKING:
+    from .session import Session
 
 __all__ = [
     "MIN_DISTANCE_MM",
@@ -72,7 +77,7 @@ class Implausibility:
     postures: tuple = ()
 
 
-def corner_spacing_mm(points_mm, corners) -> float:
+def corner_spacing_mm(points_mm: ArrayLike, corners: tuple[int, int]) -> float:
     """Median distance between neighbouring corners of measured boards.
 
     Parameters
@@ -129,7 +134,7 @@ def _robot_reach_mm(name) -> tuple[str, float] | None:
     return robot.name, float(np.linalg.norm(robot.base_offset) + np.sum(np.linalg.norm(robot.links, axis=1)))
 
 
-def implausibilities(session, tool02base) -> list:
+def implausibilities(session: Session, tool02base: np.ndarray) -> list:
     """Every implausible length of a session (an empty list when the lengths look like millimetres).
 
     Parameters
@@ -188,7 +193,7 @@ def _square_size(session) -> list:
     return []
 
 
-def check_plausible(session, tool02base) -> None:
+def check_plausible(session: Session, tool02base: np.ndarray) -> None:
     """Refuse a session whose lengths are not plausible millimetres.
 
     Raises
@@ -202,7 +207,7 @@ def check_plausible(session, tool02base) -> None:
         raise UnitsError(found[0].message + more)
 
 
-def session_in_mm(session, units: str = "mm"):
+def session_in_mm(session: Session, units: str = "mm") -> Session:
     """The session with its lengths converted from ``units`` to mm (a copy; ``mm`` returns it as is).
 
     Positions of ``tool0_in_base``, ``points_mm`` and the translation of ``target_in_camera`` are

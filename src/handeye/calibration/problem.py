@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .compact_points import CompactPoints
 from ..geometry import invert_transforms
@@ -27,7 +28,7 @@ SETUPS = (EYE_IN_HAND, EYE_TO_HAND)
 MIN_POSTURES = 3
 
 
-def hand_poses(tool02base, setup: str) -> np.ndarray:
+def hand_poses(tool02base: ArrayLike, setup: str) -> np.ndarray:
     """Hand poses ``(n, 4, 4)`` of the frame-neutral problem for a setup."""
     if setup == EYE_IN_HAND:
         return np.asarray(tool02base, dtype=float)
@@ -92,7 +93,7 @@ class HandEyeProblem:
     def target2cam(self) -> np.ndarray:
         return self.compact.target2cam
 
-    def subset(self, keep) -> "HandEyeProblem":
+    def subset(self, keep: ArrayLike) -> "HandEyeProblem":
         """The problem restricted to the postures ``keep`` (boolean mask or index array)."""
         keep = np.asarray(keep)
         c = self.compact

@@ -65,16 +65,21 @@ posture residual (mm)
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .invariants import bounded_pairs
 from .metrics import d_org, fixed_points
 from .metrics import posture_residuals as metrics_posture_residuals
 from .problem import EYE_IN_HAND, HandEyeProblem
 from ..geometry import canonical_quaternions, quaternion_conjugate, quaternion_from_matrix, quaternion_multiply
+
+if TYPE_CHECKING:
+    from .solve import CalibrationResult
 
 __all__ = [
     "AXIS_SPREAD_NAME",
@@ -135,7 +140,7 @@ MEDIAN_ANGLE_NAME = "relative rotation angle (median)"
 
 
 # ------------------------------------------------------------------------------ relative rotations
-def relative_rotation_quaternions(hand, pairs=None) -> np.ndarray:
+def relative_rotation_quaternions(hand: ArrayLike, pairs: ArrayLike | None = None) -> np.ndarray:
     """``Q_A^ij = conj(Q_i) * Q_j`` (Algorithm 1, step 2) of every pair ``i < j``, ``w >= 0``.
 
     Parameters
@@ -155,7 +160,7 @@ def relative_rotation_quaternions(hand, pairs=None) -> np.ndarray:
     return canonical_quaternions(quaternion_multiply(quaternion_conjugate(q[i]), q[j]))
 
 
-def relative_rotation_angles_deg(q_rel) -> np.ndarray:
+def relative_rotation_angles_deg(q_rel: ArrayLike) -> np.ndarray:
     """Relative rotation angles ``a = 2 acos(S_A)`` in [0, 180] deg.
 
     Parameters
@@ -170,7 +175,7 @@ def relative_rotation_angles_deg(q_rel) -> np.ndarray:
     return np.degrees(2.0 * np.arccos(np.clip(np.asarray(q_rel, float)[:, 0], -1.0, 1.0)))
 
 
-def usable_axes(q_rel) -> np.ndarray:
+def usable_axes(q_rel: ArrayLike) -> np.ndarray:
     """Unit rotation axes ``n`` of the pairs turning at least :data:`MIN_AXIS_ANGLE_DEG`.
 
     Parameters
@@ -187,7 +192,7 @@ def usable_axes(q_rel) -> np.ndarray:
 
 
 # ------------------------------------------------------------------------------------ axis words
-def rotation_axis_spread(q_rel) -> tuple[float, np.ndarray]:
+def rotation_axis_spread(q_rel: ArrayLike) -> tuple[float, np.ndarray]:
     """The rotation-axis spread (deg) and the least exercised direction (see the module's words).
 
     Parameters
@@ -216,7 +221,7 @@ def rotation_axis_spread(q_rel) -> tuple[float, np.ndarray]:
     return math.degrees(math.asin(math.sqrt(min(max(eigenvalues[0], 0.0), 1.0)))), weakest
 
 
-def rotation_axis_divergence_deg(axes) -> float:
+def rotation_axis_divergence_deg(axes: ArrayLike) -> float:
     """The rotation-axis divergence (deg): how far unit axes stray from one line (sign-free).
 
     Parameters
@@ -284,7 +289,7 @@ def hand_frame(setup: str) -> str:
     return "tool0" if setup == EYE_IN_HAND else "base"
 
 
-def hand_axis_coverage(hand, frame: str = "tool0") -> AxisCoverage:
+def hand_axis_coverage(hand: np.ndarray, frame: str = "tool0") -> AxisCoverage:
     """:class:`AxisCoverage` of hand poses.
 
     Parameters
@@ -305,7 +310,7 @@ def hand_axis_coverage(hand, frame: str = "tool0") -> AxisCoverage:
     return AxisCoverage(usable_axes(q), angles[keep], angles, spread, weakest, rms, frame)
 
 
-def rotation_axis_coverage(problem: HandEyeProblem, kept=None) -> AxisCoverage:
+def rotation_axis_coverage(problem: HandEyeProblem, kept: ArrayLike | None = None) -> AxisCoverage:
     """:class:`AxisCoverage` of a problem's hand motions, over the postures ``kept`` (all by default).
 
     Parameters
@@ -324,7 +329,7 @@ IMAGE_CELL_NAMES = (("upper left", "upper middle", "upper right"), ("middle left
                     ("lower left", "lower middle", "lower right"))
 
 
-def board_distances_mm(points_cam) -> np.ndarray:
+def board_distances_mm(points_cam: ArrayLike) -> np.ndarray:
     """Camera-to-board-centre distance of each posture, mm.
 
     Parameters
@@ -339,13 +344,13 @@ def board_distances_mm(points_cam) -> np.ndarray:
     return np.linalg.norm(np.asarray(points_cam, float).mean(axis=1), axis=1)
 
 
-def distance_spread_mm(distances_mm) -> float:
+def distance_spread_mm(distances_mm: ArrayLike) -> float:
     """The distance spread: ``max - min`` of the camera-to-board distances (0 for fewer than two)."""
     d = np.asarray(distances_mm, float)
     return float(d.max() - d.min()) if d.size >= 2 else 0.0
 
 
-def image_cells(points_px, width: int, height: int) -> set:
+def image_cells(points_px: ArrayLike, width: int, height: int) -> set:
     """The cells ``(row, col)`` of the 3 x 3 image grid that image points fall in (points outside the
     image or behind the camera count for none).
 
@@ -364,7 +369,7 @@ def image_cells(points_px, width: int, height: int) -> set:
 
 
 # ------------------------------------------------------------------------------------------ d_org
-def kept_postures(problem: HandEyeProblem, result) -> np.ndarray:
+def kept_postures(problem: HandEyeProblem, result: CalibrationResult) -> np.ndarray:
     """Boolean mask ``(n,)`` of the postures ``result`` kept (all but its outliers)."""
     outliers = {int(i) for i in result.outliers}
     return np.array([int(i) not in outliers for i in problem.posture_ids], dtype=bool)
@@ -408,7 +413,7 @@ class DOrg:
         return f"{postures}, {points}"
 
 
-def result_d_org(problem: HandEyeProblem, result, x=None) -> DOrg:
+def result_d_org(problem: HandEyeProblem, result: CalibrationResult, x: ArrayLike | None = None) -> DOrg:
     """THE d_org: eq. 22 over the postures ``result`` kept, on every board point of the session.
 
     Parameters
@@ -445,7 +450,7 @@ def residual_points(problem: HandEyeProblem) -> str:
     return "corners" if problem.points_cam.shape[1] > 3 else "compact"
 
 
-def posture_residuals(problem: HandEyeProblem, x, kept=None) -> np.ndarray:
+def posture_residuals(problem: HandEyeProblem, x: ArrayLike, kept: np.ndarray | None = None) -> np.ndarray:
     """THE posture residual of every posture, for any method's ``X`` (see the module's words).
 
     Parameters

@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
@@ -83,13 +84,13 @@ def _fixed(hand: np.ndarray, rotation: np.ndarray, translation: np.ndarray, poin
     return np.einsum("nij,npj->npi", hand[:, :3, :3], cam_in_hand) + hand[:, None, :3, 3]
 
 
-def posture_residuals_to(hand, x, points_cam, fixed_points) -> np.ndarray:
+def posture_residuals_to(hand: np.ndarray, x: np.ndarray, points_cam: np.ndarray, fixed_points: np.ndarray) -> np.ndarray:
     """Mean distance per posture of ``hand_i X points_i`` from given fixed-frame points; ``(n,)``."""
     pts = _fixed(hand, x[:3, :3], x[:3, 3], points_cam)
     return np.linalg.norm(pts - fixed_points[None], axis=-1).mean(axis=1)
 
 
-def refine_point_consistency(hand, points_cam, x0, loss: str = "soft_l1", f_scale: float | None = None) -> Refinement:
+def refine_point_consistency(hand: ArrayLike, points_cam: ArrayLike, x0: np.ndarray, loss: str = "soft_l1", f_scale: float | None = None) -> Refinement:
     """Robust nonlinear least squares of point consistency over X and the fixed board points.
 
     Parameters
@@ -139,7 +140,7 @@ def refine_point_consistency(hand, points_cam, x0, loss: str = "soft_l1", f_scal
         return jac.reshape(n * p * 3, -1)
 
     theta0 = np.concatenate([np.zeros(3), x0[:3, 3], g0.ravel()])
-    fit = least_squares(residual, theta0, jac=jacobian, loss=loss, f_scale=f_scale, method="trf",
+    fit = least_squares(residual, theta0, jac=jacobian, loss=loss, f_scale=f_scale, method="trf",  # pyright: ignore[reportArgumentType]  (scipy leaves jac unannotated; its default '2-point' makes pyright infer str)
                         x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200)
     rotation, translation, g = unpack(fit.x)
     x = np.eye(4)
@@ -190,7 +191,7 @@ def robust_outliers(values: np.ndarray, floor: float = 0.0, z: float = OUTLIER_Z
     return (score > z) & (values > ratio * median) & (values > floor)
 
 
-def at_most_half(flags, score) -> np.ndarray:
+def at_most_half(flags: np.ndarray, score: np.ndarray) -> np.ndarray:
     """``flags``, or, when they hold more than half of the postures, the worse half by ``score`` (the
     rule of every outlier loop: never more than half the postures are outliers).
 
@@ -208,7 +209,7 @@ def at_most_half(flags, score) -> np.ndarray:
     return flags
 
 
-def keep_majority(flags, minimum: int = 3) -> np.ndarray:
+def keep_majority(flags: np.ndarray, minimum: int = 3) -> np.ndarray:
     """``flags`` when the postures left keep a majority (at least half, and ``minimum``), else none.
 
     Parameters

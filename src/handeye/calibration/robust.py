@@ -5,6 +5,7 @@ outlier detection until the inlier set is stable, and a one-sigma uncertainty.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,6 +25,9 @@ from .refine import (
 )
 from .selection import least_d_back
 from .triplets import relative_motions
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
 
 __all__ = ["MAX_OUTLIER_ROUNDS", "RobustSolution", "solve_robust"]
 
@@ -57,7 +61,7 @@ class RobustSolution:
     cross_validation: dict | None = None
 
 
-def solve_robust(problem: HandEyeProblem, progress=None) -> RobustSolution:
+def solve_robust(problem: HandEyeProblem, progress: Callable[[int, int, str], object] | None = None) -> RobustSolution:
     """mcb on the postures that keep the rotation-angle invariant, then alternate robust refinement
     and outlier detection until the inlier set is stable; never drops more than half the postures.
     ``progress`` is accepted for the estimator signature and not called."""

@@ -27,6 +27,7 @@ the function):
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable, overload
 
 import numpy as np
 
@@ -102,6 +103,10 @@ class SelectionInputs:
     motions: RelativeMotions | None = None
     centres_cam: np.ndarray | None = None
     truth_points: np.ndarray | None = None
+
+
+#: A selection criterion: ``criterion(theta (12, c), inputs) -> Selection`` (the ``solver`` of a paper row).
+Criterion = Callable[[np.ndarray, SelectionInputs], Selection]
 
 
 class CandidateScorer:
@@ -214,7 +219,12 @@ def _icosahedral_axes() -> tuple[np.ndarray, float]:
 _ICOSAHEDRAL_AXES, _ICOSAHEDRAL_C = _icosahedral_axes()
 
 
-def _chunked(fn, theta: np.ndarray, chunk: int = CHUNK):
+@overload
+def _chunked(fn: Callable[[np.ndarray], np.ndarray], theta: np.ndarray, chunk: int = CHUNK) -> np.ndarray: ...
+@overload
+def _chunked(fn: Callable[[np.ndarray], tuple[np.ndarray, ...]], theta: np.ndarray,
+             chunk: int = CHUNK) -> tuple[np.ndarray, ...]: ...
+def _chunked(fn: Callable, theta: np.ndarray, chunk: int = CHUNK) -> np.ndarray | tuple[np.ndarray, ...]:
     outs = map_chunks(fn, [theta[:, s:s + chunk] for s in range(0, theta.shape[1], chunk)])
     if isinstance(outs[0], tuple):
         return tuple(np.concatenate(parts, axis=-1) for parts in zip(*outs))
@@ -249,7 +259,7 @@ def _translation_form(motions: RelativeMotions, centres_cam: np.ndarray, r_b: np
 
 
 def select_candidate(
-    criterion,
+    criterion: str | Criterion,
     candidates: Candidates,
     scorer: CandidateScorer,
     motions: RelativeMotions | None = None,
@@ -293,7 +303,7 @@ def select_candidate(
     return Selection(int(valid[chosen.index]), float(chosen.score), scores, int(chosen.exact_evaluations))
 
 
-def _criterion(criterion):
+def _criterion(criterion: str | Criterion) -> Criterion:
     """The criterion function of ``criterion`` (a function, or the name of its row in the methods table)."""
     if callable(criterion):
         return criterion
@@ -301,7 +311,10 @@ def _criterion(criterion):
     if row is None or row.kind != "paper" or row.solver is None:
         named = method_names("paper", lambda m: m.solver is not None)
         raise ValueError(f"unknown selection criterion {criterion!r}; use one of {', '.join(named)}")
-    return row.load()
+    solver = row.load()
+    if solver is None:
+        raise ValueError(f"selection criterion {criterion!r} has no solver")
+    return solver
 
 
 def _least(values: np.ndarray) -> Selection:
@@ -313,6 +326,8 @@ def _least(values: np.ndarray) -> Selection:
 def least_rotation_residual(theta: np.ndarray, inputs: SelectionInputs) -> Selection:
     """``mcr``: the least rotational error δR of AX = XB (eq. 16), RMS over all pairs."""
     motions = inputs.motions
+    if motions is None:
+        raise ValueError("mcr needs the relative motions of the posture pairs")
     k = _rotation_form(motions, matrix_from_quaternion(motions.q_b))
     u = theta[:9]
     total = 6.0 * len(motions.pairs) - 2.0 * np.einsum("ic,ij,jc->c", u, k, u)
@@ -321,8 +336,10 @@ def least_rotation_residual(theta: np.ndarray, inputs: SelectionInputs) -> Selec
 
 def least_translation_residual(theta: np.ndarray, inputs: SelectionInputs) -> Selection:
     """``mct``: the least translational error δt of AX = XB (eq. 16), RMS over all pairs, mm."""
-    motions = inputs.motions
-    h, g, c = _translation_form(motions, inputs.centres_cam, matrix_from_quaternion(motions.q_b))
+    motions, centres_cam = inputs.motions, inputs.centres_cam
+    if motions is None or centres_cam is None:
+        raise ValueError("mct needs the relative motions of the posture pairs and the board centres")
+    h, g, c = _translation_form(motions, centres_cam, matrix_from_quaternion(motions.q_b))
     total = np.einsum("ic,ij,jc->c", theta, h, theta) + 2.0 * g @ theta + c
     return _least(np.sqrt(np.maximum(total, 0.0) / len(motions.pairs)))
 
@@ -334,9 +351,10 @@ def least_d_org(theta: np.ndarray, inputs: SelectionInputs) -> Selection:
 
 def least_truth_distance(theta: np.ndarray, inputs: SelectionInputs) -> Selection:
     """``mcy``: the least mean distance to the true board points, mm (synthetic sessions only)."""
-    if inputs.truth_points is None:
+    truth_points = inputs.truth_points
+    if truth_points is None:
         raise ValueError("mcy needs the true board points (synthetic sessions only)")
-    return _least(_chunked(lambda t: inputs.scorer.distance_to(t, inputs.truth_points), theta))
+    return _least(_chunked(lambda t: inputs.scorer.distance_to(t, truth_points), theta))
 
 
 def _stage_one(theta: np.ndarray, scorer: CandidateScorer) -> tuple[np.ndarray, np.ndarray]:

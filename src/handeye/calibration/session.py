@@ -15,6 +15,7 @@ Reading validates every value and reports the first problem naming the posture a
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,6 +27,9 @@ from ..base import SessionError, brief
 from ..base import make_folder, parse_yaml, read_text_file, write_failure, write_text_atomic, write_texts_atomic
 from .problem import SETUPS
 from ..geometry import pose_from_transform, transform_from_pose
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
 
 __all__ = [
     "FORMAT",
@@ -150,7 +154,7 @@ def write_yaml_atomic(path: Path, data: dict) -> None:
     write_text_atomic(path, _yaml_text(data))
 
 
-def create_session(path, session: Session, overwrite: bool = False) -> Path:
+def create_session(path: str | Path, session: Session, overwrite: bool = False) -> Path:
     """Create ``path/session.yaml`` and ``path/postures/``.
 
     Raises
@@ -177,18 +181,18 @@ def create_session(path, session: Session, overwrite: bool = False) -> Path:
     return path
 
 
-def posture_file(path, index: int) -> Path:
+def posture_file(path: str | Path, index: int) -> Path:
     return Path(path) / "postures" / f"{int(index):03d}.yaml"
 
 
-def write_posture(path, posture: Posture) -> Path:
+def write_posture(path: str | Path, posture: Posture) -> Path:
     """Write one posture file atomically; returns its path."""
     target = posture_file(path, posture.index)
     write_yaml_atomic(target, posture.to_dict())
     return target
 
 
-def write_postures(path, postures) -> list:
+def write_postures(path: str | Path, postures: Iterable[Posture]) -> list:
     """Write many posture files, each atomically, with one flush to disk for all
     (``files.write_texts_atomic``); returns their paths."""
     return write_texts_atomic((posture_file(path, p.index), _yaml_text(p.to_dict())) for p in postures)
@@ -348,7 +352,7 @@ def _parse_target(value) -> BoardGeometry | None:
     return BoardGeometry((int(corners[0]), int(corners[1])), square)
 
 
-def read_session(path) -> Session:
+def read_session(path: str | Path) -> Session:
     """Read and validate a session folder.
 
     Raises
@@ -396,12 +400,12 @@ def read_session(path) -> Session:
     return Session(setup=setup, robot=robot, target=target, postures=postures, path=path, extra=extra)
 
 
-def write_truth(path, truth: dict) -> None:
+def write_truth(path: str | Path, truth: dict) -> None:
     """Write ``truth.yaml`` beside a synthetic session (the answer, for checks and ``mcy``)."""
     write_yaml_atomic(Path(path) / "truth.yaml", truth)
 
 
-def read_truth(path) -> dict | None:
+def read_truth(path: str | Path) -> dict | None:
     """The synthetic truth of a session, or ``None`` when the session has none."""
     file = Path(path) / "truth.yaml"
     if not file.exists():

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field, replace
+from typing import Callable, TypeVar, cast
 
 import numpy as np
 
@@ -34,6 +35,8 @@ from .session import Session
 from ..base import TIME_VARIABLE, OutOfTime, call_within
 from ..geometry import pose_from_transform, rigid_defect, transform_from_pose
 from .triplets import relative_motions
+
+_T = TypeVar("_T")
 
 __all__ = [
     "PAPER_METHODS",
@@ -261,6 +264,8 @@ def _partial_problem(session: Session, hand, ids, joints) -> HandEyeProblem:
     from .partial_views import board_arrays, compact_points_from_fit  # noqa: PLC0415
 
     board = session.target
+    if board is None:  # calibrate's caller checks it; the partial-view path needs the board's geometry
+        raise CalibrationError("the postures hold points_mm but session.yaml has no target; add the board")
     square = board.square_mm
     if square is None:
         raise CalibrationError("session.yaml: target.square_mm is needed for views of part of the board")
@@ -365,7 +370,7 @@ def _warm_up_numerics() -> None:
 
 
 def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | None = None,
-              progress=None) -> CalibrationResult:
+              progress: Callable[[int, int, str], object] | None = None) -> CalibrationResult:
     """Solve ``AX = XB`` with one method.
 
     Parameters
@@ -395,7 +400,7 @@ def calibrate(problem: HandEyeProblem, method: str | None = None, truth: dict | 
     return result
 
 
-def bounded_for(method: str, function, what: str = "solve"):
+def bounded_for(method: str, function: Callable[[], _T], what: str = "solve") -> _T:
     """``function()``, under the time bound when ``method`` is another package's (an entry point's, or
     registered in code from outside handeye: :func:`~handeye.base.time_bound.call_within`); handeye's
     own methods run as they are.
@@ -408,11 +413,11 @@ def bounded_for(method: str, function, what: str = "solve"):
     row = method_row(method)
     if _method_provider(row) is None:
         return function()
-    return call_within(function, f"{what}-{row.name}")
+    return cast(_T, call_within(function, f"{what}-{row.name}"))  # what function() returned (call_within is untyped)
 
 
 def calibrate_within(problem: HandEyeProblem, method: str | None, truth: dict | None = None,
-                     progress=None) -> CalibrationResult:
+                     progress: Callable[[int, int, str], object] | None = None) -> CalibrationResult:
     """:func:`calibrate`, another package's method under the time bound (:func:`bounded_for`): what the
     report's comparison and a user's own ``--method`` solve with, so a hanging plug-in is named in one line
     instead of hanging the command (``method`` None: :data:`DEFAULT_METHOD`, handeye's own).
@@ -490,9 +495,9 @@ class _Solved:
 
     x: np.ndarray
     details: dict
-    outliers: None = None
-    uncertainty: None = None
-    cross_validation: None = None
+    outliers: np.ndarray | None = None
+    uncertainty: dict | None = None
+    cross_validation: dict | None = None
 
 
 def _by_estimator(row: Method, solver, problem: HandEyeProblem, truth, progress):
@@ -634,6 +639,6 @@ def _with_excluded(problem: HandEyeProblem, result: CalibrationResult) -> Calibr
 
 
 def calibrate_session(session: Session, method: str | None = None, truth: dict | None = None,
-                      progress=None) -> CalibrationResult:
+                      progress: Callable[[int, int, str], object] | None = None) -> CalibrationResult:
     """:func:`calibrate` on a session read from disk."""
     return calibrate(problem_from_session(session), method, truth, progress)

@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..geometry import STATION_BOARD, BoardGeometry, board_corners
+from ..geometry import STATION_BOARD, STATION_SQUARE_MM, BoardGeometry, board_corners
 from ..robot import RobotModel, inverse_kinematics, load_robot
 from ..robot import NOMINAL_XB3_LEFT, ViewSampling, board_visible, ik_from_standard_seeds, look_at, sample_eye_in_hand_postures
 from .problem import EYE_IN_HAND, SETUPS
@@ -75,7 +75,7 @@ class SceneConfig:
 
     postures: int = 30
     corners: tuple = STATION_BOARD.corners
-    square_mm: float = STATION_BOARD.square_mm
+    square_mm: float = STATION_SQUARE_MM
     setup: str = EYE_IN_HAND
     robot: str = "IRB1400"
     distance_mm: tuple = (700.0, 1200.0)
@@ -145,7 +145,7 @@ class NoiseConfig:
     seed: int = 0
 
 
-def camera_noise(rng: np.random.Generator, shape, sigma_mm: float, model: str = "paper") -> np.ndarray:
+def camera_noise(rng: np.random.Generator, shape: int | tuple[int, ...], sigma_mm: float, model: str = "paper") -> np.ndarray:
     """Noise vectors ``shape + (3,)`` for measured points.
 
     ``paper``: ``N(0, sigma) * U/|U|`` with ``U`` uniform in ``[-1, 1]^3`` (section 4);
@@ -285,7 +285,10 @@ def sample_session(scene: Scene, noise: NoiseConfig = NoiseConfig()) -> Session:
     rng = np.random.default_rng(noise.seed)
     true_joints = scene.joints_deg
     target2cam = scene.target2cam()
-    corners = board_corners(scene.board.corners, scene.board.square_mm)
+    square_mm = scene.board.square_mm
+    if square_mm is None:  # make_scene always sets it
+        raise ValueError("the scene's board has no square_mm")
+    corners = board_corners(scene.board.corners, square_mm)
     points = np.einsum("nij,mj->nmi", target2cam[:, :3, :3], corners) + target2cam[:, None, :3, 3]
     points = points + camera_noise(rng, points.shape[:2], noise.sigma_cam_mm, noise.camera_model)
     reported = true_joints + np.asarray(noise.joint_offset_deg, float)

@@ -32,7 +32,7 @@ __all__ = ["OPENCV_TEST_NOISE", "random_pose", "opencv_test_problem"]
 OPENCV_TEST_NOISE = (0.002, 5.0, 0.001, 1.0)
 
 
-def random_pose(rng: np.random.Generator, theta_deg, t_mm) -> np.ndarray:
+def random_pose(rng: np.random.Generator, theta_deg: tuple[float, float], t_mm: tuple[float, float]) -> np.ndarray:
     """One pose as OpenCV's ``generatePose`` with random signs; ``theta_deg``, ``t_mm``: (low, high)."""
     axis = rng.uniform(-1.0, 1.0, 3)
     theta = np.radians(rng.uniform(*theta_deg)) * np.sign(rng.uniform(-1.0, 1.0))
@@ -46,7 +46,7 @@ def _noisy(rng, pose, sigma_rad, sigma_mm) -> np.ndarray:
                                                pose[:3, 3] + rng.normal(0.0, sigma_mm, 3))
 
 
-def opencv_test_problem(rng: np.random.Generator, poses: int = 10, noise=OPENCV_TEST_NOISE,
+def opencv_test_problem(rng: np.random.Generator, poses: int = 10, noise: tuple[float, float, float, float] | None = OPENCV_TEST_NOISE,
                         robot_noise: bool = True) -> tuple[HandEyeProblem, dict]:
     """An eye-in-hand problem of board poses only, drawn as OpenCV's test does.
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .absolute_orientation import rotation_between_vectors
 from .invariants import pair_indices
@@ -84,7 +85,7 @@ class RelativeMotions:
         return np.degrees(2.0 * np.arccos(np.clip(self.q_b[:, 0], -1.0, 1.0)))
 
 
-def relative_motions(problem: HandEyeProblem, pairs=None) -> RelativeMotions:
+def relative_motions(problem: HandEyeProblem, pairs: ArrayLike | None = None) -> RelativeMotions:
     """Algorithm 1, step 2, for all pairs ``i < j``, or for the given ``pairs`` (shape ``(p, 2)``,
     ``i < j``; then without ``pair_lookup``, which the triplets need: a check of the motion, not a solve)."""
     n = problem.n
@@ -230,6 +231,8 @@ def triplet_candidates(problem: HandEyeProblem, motions: RelativeMotions | None 
     motions = motions if motions is not None else relative_motions(problem)
     triplets = triplet_indices(problem.n)
     lookup = motions.pair_lookup
+    if lookup is None:
+        raise ValueError("triplet candidates need the motions of all pairs (relative_motions without pairs)")
     i, j, k = triplets[:, 0], triplets[:, 1], triplets[:, 2]
     pair_rows = np.stack([lookup[i, j], lookup[i, k], lookup[j, k]], axis=1)  # (c, 3)
     v_a = motions.q_a[pair_rows, 1:]

@@ -24,13 +24,20 @@ observations of the revisited postures; ``calibration.drift_causes`` explains a 
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.stats import f as f_dist
 
 from .noise import adjoint, flange_jacobian, retract, twist_between
 from ..geometry import invert_transforms
+
+if TYPE_CHECKING:
+    from ..robot import RobotModel
+    from .eiv.model import Observations
+    from .eiv.pipeline import EivSolution
 
 __all__ = ["DEFAULT_LEVEL", "LEVEL_RANGE", "MIN_VERIFY_POSTURES", "Baseline", "Discrepancy", "DriftTest", "baseline_from_solution",
            "discrepancy", "drift_test", "hypothesis_jacobians"]
@@ -79,7 +86,7 @@ class Baseline:
         return int(len(self.kinematic))
 
 
-def baseline_from_solution(solution) -> Baseline:
+def baseline_from_solution(solution: EivSolution) -> Baseline:
     """The :class:`Baseline` of an ``eiv.EivSolution`` (its fit over the inliers).
 
     The covariance is the inverse of the mixed-model normal matrix over the inliers with the kinematic
@@ -147,7 +154,7 @@ def _block_diagonal(blocks: np.ndarray) -> np.ndarray:
     return out
 
 
-def discrepancy(baseline: Baseline, obs, joints_deg=None) -> Discrepancy:
+def discrepancy(baseline: Baseline, obs: Observations, joints_deg: ArrayLike | None = None) -> Discrepancy:
     """``d``, ``Σ`` and ``J`` of the revisited postures (an ``eiv.Observations`` of them, and their
     controller angles ``joints_deg`` (K, dof) for the joints' hypotheses).
 
@@ -211,7 +218,7 @@ def drift_test(disc: Discrepancy, baseline: Baseline, level: float = DEFAULT_LEV
     return DriftTest(q, m, p, float(level), p < level)
 
 
-def hypothesis_jacobians(disc: Discrepancy, x: np.ndarray, robot=None) -> dict:
+def hypothesis_jacobians(disc: Discrepancy, x: np.ndarray, robot: RobotModel | None = None) -> dict:
     """How each change of the world moves ``d`` (first order): name -> ``(6 K, p)``.
 
     - ``camera``: the camera moved on the flange, ``X' = X ⊕ p``: ``d_j`` moves by ``-Ad_{B_j^-1} p``;

@@ -9,14 +9,21 @@ distances where the explanations differ.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 import numpy as np
 
 from .verification import Baseline, discrepancy, hypothesis_jacobians
 
+if TYPE_CHECKING:
+    from ..robot import RobotModel
+    from collections.abc import Callable
+    from .eiv.model import Observations
+    from numpy.typing import ArrayLike
+
 __all__ = ["informative_postures"]
 
 
-def informative_postures(baseline: Baseline, obs, joints_deg, robot, count: int, allowed=None, path_time=None,
+def informative_postures(baseline: Baseline, obs: Observations, joints_deg: np.ndarray, robot: RobotModel, count: int, allowed: ArrayLike | None = None, path_time: Callable[[list[int]], float] | None = None,
                          budget: float = np.inf) -> np.ndarray:
     """Indices (into ``obs``) of ``count`` postures chosen for diagnostic power, in the order chosen.
 

@@ -20,6 +20,7 @@ keeps that TCP clear of the zones as the controller sees them, so a plan never t
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 import math
 import string
 from pathlib import Path
@@ -29,6 +30,9 @@ import numpy as np
 from ..geometry import transform_from_pose
 from .errors import ConfigError
 from .literals import POSITION_DECIMALS, format_num, tooldata_literal
+
+if TYPE_CHECKING:
+    from .station import RapidStation
 
 __all__ = ["CELL_MODULE", "MAX_WORLD_ZONES", "ZONE_TOOL", "check_world_zones", "needs_cell_module", "render_cell_text"]
 
@@ -98,7 +102,7 @@ def check_world_zones(data, source: str) -> tuple[tuple, tuple | None]:
     return tuple(_zone(z, i, source) for i, z in enumerate(zones)), (position, quaternion)
 
 
-def needs_cell_module(station) -> bool:
+def needs_cell_module(station: RapidStation) -> bool:
     """True when the station's program needs ``HeCell`` (a speed override, or world zones)."""
     return station.speed_override_pct < 100 or station.zone_tcp is not None
 
@@ -125,7 +129,7 @@ def _zone_lines(zones) -> tuple[list, list]:
     return data, setup
 
 
-def render_cell_text(station, header: str) -> str:
+def render_cell_text(station: RapidStation, header: str) -> str:
     """The text of ``HeCell`` for a station that :func:`needs_cell_module`."""
     data, setup = [], ["    VAR shapedata heShape;", "", "    VelSet HE_SPEED_OVERRIDE, HE_MAX_TCP;"]
     if station.zone_tcp is not None:

@@ -21,10 +21,13 @@ and are not a full RAPID parser.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from collections.abc import Sequence
 import re
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..robot import load_robot
 from .interpreter.errors import RapidLoadError
@@ -159,7 +162,7 @@ def _collect_globals(modules) -> tuple[dict, dict]:
     return data, routines
 
 
-def check_program(modules, approved=None, robot: str = "IRB1400", external=(), move_tools=("tool0",)) -> list[Finding]:
+def check_program(modules: Sequence[tuple[str, str]], approved: ArrayLike | None = None, robot: str = "IRB1400", external: Iterable[str] = (), move_tools: Iterable[str] = ("tool0",)) -> list[Finding]:
     """Findings of the checks on a set of modules (empty: all pass).
 
     Parameters
@@ -275,7 +278,7 @@ def _check_module(module, tokens, global_data, routines, external, approved, mod
             dtype, var = tokens[i + 1], tokens[i + 2]
             if dtype.text.lower() not in _DATA_TYPES:
                 out.append(Finding(module, dtype.line, f"unknown data type {dtype.text!r}"))
-            scope = local_scope if in_routine else module_scope
+            scope = local_scope if local_scope is not None else module_scope  # set exactly while in_routine
             if var.text.lower() in scope:
                 out.append(Finding(module, var.line, f"{var.text!r} declared twice"))
             if len(var.text) > MAX_IDENTIFIER:

@@ -26,6 +26,7 @@ joint limits are refused.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 import os
 import string
 import tempfile
@@ -33,6 +34,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..base import write_text_atomic
 from ..base import write_key_code
@@ -120,7 +122,7 @@ def _header(station: RapidStation, *extra: str) -> str:
     return "\n".join(f"  ! {line}" for line in lines)
 
 
-def render_main(station: RapidStation, postures=None) -> RapidModule:
+def render_main(station: RapidStation, postures: ArrayLike | None = None) -> RapidModule:
     """``HeMain``: main routine, approved postures, speed. Refuses postures outside the joint limits."""
     arr = check_postures(station.postures if postures is None else postures, station.robot,
                          "postures to render")
@@ -221,7 +223,7 @@ def render_guide(station: RapidStation, prompt: str = "fk") -> RapidModule:
     return RapidModule(GUIDE_MODULE, text)
 
 
-def render_tool(station: RapidStation, cam2tool0=None, comments=()) -> RapidModule:
+def render_tool(station: RapidStation, cam2tool0: ArrayLike | None = None, comments: Sequence[str] = ()) -> RapidModule:
     """``HeTool``: the camera's ``PERS tooldata`` (frame ``cam2tool0``, identity when None)."""
     frame = np.eye(4) if cam2tool0 is None else np.asarray(cam2tool0, dtype=float)
     if frame.shape != (4, 4) or not np.all(np.isfinite(frame)):
@@ -257,8 +259,8 @@ def render_key(station: RapidStation) -> RapidModule:
     return module
 
 
-def render_program(station: RapidStation | None = None, postures=None, protocol: str | None = None,
-                   cam2tool0=None) -> list[RapidModule]:
+def render_program(station: RapidStation | None = None, postures: ArrayLike | None = None, protocol: str | None = None,
+                   cam2tool0: ArrayLike | None = None) -> list[RapidModule]:
     """``[HeMain, link module, HeTool]`` (and ``HeCell`` when the station needs it) for the station
     (default: the built-in one), checked.
 
@@ -285,7 +287,7 @@ def render_program(station: RapidStation | None = None, postures=None, protocol:
 
 
 def render_guided_program(station: RapidStation | None = None, protocol: str | None = None, prompt: str = "fk",
-                          cam2tool0=None) -> list[RapidModule]:
+                          cam2tool0: ArrayLike | None = None) -> list[RapidModule]:
     """``[HeGuide, link module, HeTool]`` of the guided capture (``rapid generate --guided``), checked.
 
     Raises
@@ -303,7 +305,7 @@ def render_guided_program(station: RapidStation | None = None, protocol: str | N
     return modules
 
 
-def write_modules(modules, directory) -> list[Path]:
+def write_modules(modules: Sequence[RapidModule], directory: str | Path) -> list[Path]:
     """Write each module to ``directory/<name>.mod`` (atomically); returns the paths."""
     folder = Path(directory)
     try:
@@ -335,7 +337,7 @@ def _write_secret(path: Path, text: str) -> Path:
     return path
 
 
-def generate_station_modules(output, config=None, protocol: str | None = None, guided: bool = False,
+def generate_station_modules(output: str | Path, config=None, protocol: str | None = None, guided: bool = False,
                              prompt: str = "fk") -> list[Path]:
     """Render the station's program (``config``: a station YAML path; None: the built-in station) into ``output``;
     ``guided``: the guided capture's (:func:`render_guided_program`, prompting with ``prompt``).

@@ -15,6 +15,7 @@ publishing period and key gate; the RWS poll rate. A template uses those it need
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 import string
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -23,6 +24,9 @@ from types import MappingProxyType
 
 from .errors import RapidError
 
+if TYPE_CHECKING:
+    from .station import RapidStation
+
 __all__ = ["RapidLink", "BUILT_IN_LINKS", "LINK_MODULES", "PROTOCOLS", "TEMPLATES", "read_template",
            "HE_SOCKET", "HE_SERIAL", "HE_IO", "HE_RWS"]
 
@@ -30,7 +34,7 @@ __all__ = ["RapidLink", "BUILT_IN_LINKS", "LINK_MODULES", "PROTOCOLS", "TEMPLATE
 TEMPLATES = Path(__file__).with_name("templates")
 
 
-def read_template(name) -> string.Template:
+def read_template(name: str | Path) -> string.Template:
     """The template ``name`` (a file name in :data:`TEMPLATES`, or a path)."""
     path = Path(name)
     if not path.is_absolute():
@@ -63,12 +67,12 @@ class RapidLink:
     """
 
     module: str
-    template: object = None
+    template: str | Path | None = None
     render: Callable | None = None
     write_key: bool = True
     help: str = ""
 
-    def text(self, station, fields: Mapping) -> str:
+    def text(self, station: RapidStation, fields: Mapping) -> str:
         """The module's text for ``station``, from the common ``fields``."""
         if self.render is not None:
             return self.render(station, fields)

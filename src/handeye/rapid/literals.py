@@ -6,9 +6,11 @@ and quaternion components to 1e-6, which float32 holds exactly enough for calibr
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..geometry import canonical_quaternions, quaternion_from_matrix
 
@@ -39,7 +41,7 @@ def format_num(value: float, decimals: int) -> str:
     return "0" if text in ("-0", "") else text
 
 
-def rounded_pose(transform) -> tuple[list, list]:
+def rounded_pose(transform: ArrayLike) -> tuple[list, list]:
     """Position (mm) and quaternion ``(q1..q4)`` of a 4x4 transform, rounded as RAPID keeps them."""
     transform = np.asarray(transform, dtype=float)
     q = canonical_quaternions(quaternion_from_matrix(transform[:3, :3]))
@@ -48,7 +50,7 @@ def rounded_pose(transform) -> tuple[list, list]:
     return position, quaternion
 
 
-def pose_literal(transform) -> str:
+def pose_literal(transform: ArrayLike) -> str:
     """``[[x,y,z],[q1,q2,q3,q4]]`` of a 4x4 transform (mm), ready for a RAPID ``pose``/``tframe``."""
     position, quaternion = rounded_pose(transform)
     pos = ",".join(format_num(v, POSITION_DECIMALS) for v in position)
@@ -60,7 +62,7 @@ def _nums(values, decimals: int) -> str:
     return ",".join(format_num(float(v), decimals) for v in values)
 
 
-def tooldata_literal(transform, mass_kg: float, cog_mm=(0.0, 0.0, 0.0), robhold: bool = True) -> str:
+def tooldata_literal(transform: ArrayLike, mass_kg: float, cog_mm: Sequence[float] = (0.0, 0.0, 0.0), robhold: bool = True) -> str:
     """A RAPID ``tooldata`` literal for a tool whose frame in tool0 is ``transform``.
 
     ``[robhold,[[x,y,z],[q1,q2,q3,q4]],[mass,[cx,cy,cz],[1,0,0,0],0,0,0]]``: tframe from the 4x4
@@ -100,7 +102,7 @@ def tooldata_literal(transform, mass_kg: float, cog_mm=(0.0, 0.0, 0.0), robhold:
 ROBJOINT_AXES = 6
 
 
-def jointtarget_literal(joints_deg) -> str:
+def jointtarget_literal(joints_deg: ArrayLike) -> str:
     """``[[j1,...,j6],[9E9,9E9,9E9,9E9,9E9,9E9]]`` (degrees, 0.0001 deg; external axes unused)."""
     joints = np.asarray(joints_deg, dtype=float)
     if joints.shape != (ROBJOINT_AXES,):

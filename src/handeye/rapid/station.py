@@ -42,17 +42,19 @@ from __future__ import annotations
 import ipaddress
 import math
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..base import parse_yaml, read_text_file
 from ..robot import load_robot
 from ..base import WRITE_KEY_PATTERN
 from .cell import check_world_zones
 from .errors import ConfigError
-from .links import BUILT_IN_LINKS, PROTOCOLS
+from .links import BUILT_IN_LINKS, PROTOCOLS, RapidLink
 
 __all__ = ["PROTOCOLS", "RapidStation", "default_station", "load_station", "station_from_dict", "check_postures",
            "DEFAULT_STATION_FILE", "RAPID_IDENTIFIER", "WRITE_KEY_PATTERN", "IDLE_TIMEOUT_RANGE"]
@@ -95,7 +97,7 @@ class RapidStation:
     zone_tcp: tuple | None = None
     #: Protocol -> its RAPID link module (``rapid.links.RapidLink``): the package's own, or what the
     #: caller hands over from the controller registry (plug-ins included).
-    links: object = field(default_factory=lambda: BUILT_IN_LINKS, compare=False, repr=False)
+    links: Mapping[str, RapidLink] = field(default_factory=lambda: BUILT_IN_LINKS, compare=False, repr=False)
 
     @property
     def postures_array(self) -> np.ndarray:
@@ -106,7 +108,7 @@ class RapidStation:
         return _checked(replace(self, **changes))
 
 
-def check_postures(postures, robot: str = "IRB1400", source: str = "postures") -> np.ndarray:
+def check_postures(postures: ArrayLike, robot: str = "IRB1400", source: str = "postures") -> np.ndarray:
     """Approved postures as an (n, dof) array (dof: the robot's axes); refused if empty, NaN, or outside
     the joint limits.
 
@@ -209,7 +211,7 @@ def _checked(station: RapidStation) -> RapidStation:
 
 
 def station_from_dict(data: dict, source: str = "station config", base: RapidStation | None = None,
-                      links=None) -> RapidStation:
+                      links: Mapping[str, RapidLink] | None = None) -> RapidStation:
     """A checked station from the YAML structure; missing keys come from ``base`` (default: built-in).
 
     ``links``: protocol -> ``RapidLink`` of every protocol the station may name (default: ``base``'s,
@@ -240,7 +242,7 @@ def station_from_dict(data: dict, source: str = "station config", base: RapidSta
     return _checked(replace(station, **changes))
 
 
-def load_station(path, links=None) -> RapidStation:
+def load_station(path: str | Path, links: Mapping[str, RapidLink] | None = None) -> RapidStation:
     """Read a station YAML file (see the module docstring); ``links`` as in :func:`station_from_dict`."""
     file = Path(path)
     text = read_text_file(file, "station config", ConfigError,

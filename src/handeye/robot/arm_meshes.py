@@ -16,10 +16,12 @@ text: ``link,x_mm,y_mm,z_mm`` rows after ``#`` comment lines (source and licence
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 import re
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .kinematics import RobotModel, dh_transforms
 
@@ -29,7 +31,7 @@ __all__ = ["home_link_frames", "place_link_meshes", "read_ascii_stl", "read_asci
 _VERTEX = re.compile(r"^\s*vertex\s+(\S+)\s+(\S+)\s+(\S+)\s*$", re.MULTILINE)
 
 
-def read_ascii_stl(path, scale: float = 1.0) -> np.ndarray:
+def read_ascii_stl(path: str | Path, scale: float = 1.0) -> np.ndarray:
     """The distinct vertices ``(n, 3)`` of an ASCII STL file, times ``scale`` (1000: metres to mm).
 
     Raises
@@ -44,7 +46,7 @@ def read_ascii_stl(path, scale: float = 1.0) -> np.ndarray:
     return np.unique(np.array(rows, float), axis=0) * float(scale)
 
 
-def read_ascii_stl_faces(path) -> np.ndarray:
+def read_ascii_stl_faces(path: str | Path) -> np.ndarray:
     """The facets of an ASCII STL file as rows ``(m, 3)`` of indices into :func:`read_ascii_stl`'s vertices.
 
     Raises
@@ -69,7 +71,7 @@ def home_link_frames(robot: RobotModel) -> np.ndarray:
     return np.array(frames)
 
 
-def place_link_meshes(robot: RobotModel, meshes) -> list:
+def place_link_meshes(robot: RobotModel, meshes: Sequence[ArrayLike]) -> list:
     """Meshes ``[(n_i, 3)]`` (mm, mesh ``i`` in DH frame ``i``) in base with every axis at 0, ``[(n_i, 3)]``.
 
     Mesh 0 (the base) is lifted so its lowest vertex lies at base z 0 (the robot's foot on the mounting
@@ -85,7 +87,7 @@ def place_link_meshes(robot: RobotModel, meshes) -> list:
     return placed
 
 
-def write_vertex_table(path, points_by_link, header_lines=()) -> None:
+def write_vertex_table(path: str | Path, points_by_link: Sequence[ArrayLike], header_lines: Sequence[str] = ()) -> None:
     """Write ``[(n_i, 3)]`` (mm) as ``link,x_mm,y_mm,z_mm`` rows at 0.01 mm, after ``# `` header lines."""
     lines = [f"# {line}".rstrip() for line in header_lines] + ["link,x_mm,y_mm,z_mm"]
     for link, points in enumerate(points_by_link):
@@ -93,7 +95,7 @@ def write_vertex_table(path, points_by_link, header_lines=()) -> None:
     Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
-def read_vertex_table(path) -> list:
+def read_vertex_table(path: str | Path) -> list:
     """The points of :func:`write_vertex_table`, ``[(n_i, 3)]`` by link (links 0 .. the largest named)."""
     rows = [line for line in Path(path).read_text(encoding="utf-8").splitlines() if line and not line.startswith("#")]
     if not rows or rows[0] != "link,x_mm,y_mm,z_mm":

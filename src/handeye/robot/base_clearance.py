@@ -13,10 +13,12 @@ distance returned (the sampled one less half the spacing) is never above it. Len
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 import math
 
 import numpy as np
 
+from .cell import KeepOut
 from .kinematics import RobotModel
 
 __all__ = ["BASE_STEP_MM", "base_capsules", "base_clearances", "base_envelope", "carries_the_robot"]
@@ -41,12 +43,12 @@ def base_envelope(robot: RobotModel) -> tuple[np.ndarray, np.ndarray] | None:
     return low, high
 
 
-def carries_the_robot(volume) -> bool:
+def carries_the_robot(volume: KeepOut) -> bool:
     """True for a volume wholly at or below the robot's mounting plane (base z 0): the floor, a foundation."""
     return volume.top_mm <= 0.0
 
 
-def base_clearances(robot: RobotModel, volumes) -> list:
+def base_clearances(robot: RobotModel, volumes: Sequence[KeepOut]) -> list:
     """``[(volume, distance_mm)]``: how far the base is from each volume that does not carry the robot.
 
     Parameters

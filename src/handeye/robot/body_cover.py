@@ -11,7 +11,10 @@ on axis 4, holds link 4's tube: axis 4 turns it into itself). Lengths in mm.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .capsules import point_segment_distance
 from .clearance import CellGuard, arm_capsules
@@ -52,7 +55,7 @@ def _dh_frames(robot: RobotModel, joints_deg) -> np.ndarray:
     return np.stack(frames, axis=1)
 
 
-def outside_counts(robot: RobotModel, points_by_link, joints_deg, chunk: int = 200) -> list:
+def outside_counts(robot: RobotModel, points_by_link: Sequence[ArrayLike], joints_deg: ArrayLike, chunk: int = 200) -> list:
     """``[(count outside, worst excess mm)]`` per link over the postures ``(n, k)``.
 
     Parameters

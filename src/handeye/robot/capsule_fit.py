@@ -23,10 +23,12 @@ Lengths in mm.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.cluster.vq import kmeans2
 from scipy.optimize import minimize
 from scipy.spatial import ConvexHull, QhullError
@@ -48,11 +50,11 @@ class Capsule:
     end: np.ndarray
     radius: float
 
-    def distances(self, points) -> np.ndarray:
+    def distances(self, points: ArrayLike) -> np.ndarray:
         """Distance of points ``(n, 3)`` from the axis, ``(n,)``."""
         return point_segment_distance(np.asarray(points, float), self.start, self.end)
 
-    def contains(self, points, tolerance_mm: float = 1e-9) -> np.ndarray:
+    def contains(self, points: ArrayLike, tolerance_mm: float = 1e-9) -> np.ndarray:
         """True where a point ``(n, 3)`` is inside (or on) the capsule, ``(n,)``."""
         return self.distances(points) <= self.radius + tolerance_mm
 
@@ -89,7 +91,8 @@ def _overshoot(capsule: Capsule, bounds) -> float:
     return float(np.sum(np.maximum(bounds[0] - low, 0.0)) + np.sum(np.maximum(high - bounds[1], 0.0)))
 
 
-def fit_capsule(points, line=None, bounds=None) -> Capsule:
+def fit_capsule(points: ArrayLike, line: tuple[ArrayLike, ArrayLike] | None = None,
+                bounds: tuple[ArrayLike, ArrayLike] | None = None) -> Capsule:
     """The least-volume capsule around points ``(n, 3)``; on ``line`` ``(origin (3,), direction (3,))`` if given.
 
     ``bounds`` ``(low (3,), high (3,))``: a box the capsule should not reach beyond (each mm beyond costs
@@ -138,7 +141,8 @@ def fit_capsule(points, line=None, bounds=None) -> Capsule:
     return at(best)
 
 
-def fit_capsules(points, count: int, line=None, seed: int = 0, rounds: int = 6, slack_mm=None) -> list:
+def fit_capsules(points: ArrayLike, count: int, line: tuple[ArrayLike, ArrayLike] | None = None, seed: int = 0,
+                 rounds: int = 6, slack_mm: float | None = None) -> list:
     """``count`` capsules whose union holds points ``(n, 3)``: ``[(Capsule, member indices)]``.
 
     Parameters
@@ -177,7 +181,7 @@ def fit_capsules(points, count: int, line=None, seed: int = 0, rounds: int = 6, 
     return best
 
 
-def grown(capsule: Capsule, points, margin_mm: float) -> Capsule:
+def grown(capsule: Capsule, points: ArrayLike, margin_mm: float) -> Capsule:
     """The capsule with its ends rounded to whole mm and its radius the largest distance of ``points``
     ``(n, 3)`` from the rounded axis plus ``margin_mm``, rounded up to whole mm."""
     start, end = np.round(capsule.start), np.round(capsule.end)
@@ -197,7 +201,7 @@ def surface_gap(spacing_mm: float) -> float:
     return float(spacing_mm) / math.sqrt(3.0)
 
 
-def facet_samples(facets, spacing_mm: float) -> tuple[np.ndarray, np.ndarray]:
+def facet_samples(facets: ArrayLike, spacing_mm: float) -> tuple[np.ndarray, np.ndarray]:
     """Points ``(n, 3)`` on facets ``(m, 3, 3)`` and the facet of each ``(n,)``: a barycentric grid of ``k``
     steps along each edge, ``k = ceil(longest edge / spacing_mm)``, corners included."""
     facets = np.asarray(facets, float).reshape(-1, 3, 3)
@@ -230,7 +234,7 @@ def _grid_triangles(k: int) -> tuple[np.ndarray, np.ndarray]:
     return weights, triangles
 
 
-def facet_grid(facets, spacing_mm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def facet_grid(facets: ArrayLike, spacing_mm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Facets ``(m, 3, 3)`` cut into sub-triangles with edges at most ``spacing_mm``.
 
     Each facet is cut by the barycentric grid of :func:`facet_samples` (``k`` steps along each edge) into
@@ -267,7 +271,8 @@ def _kmeans_labels(centres: np.ndarray, count: int, seed: int, sample: int = 200
     return np.argmin([np.sum((centres - m) ** 2, axis=1) for m in means], axis=0)
 
 
-def fit_surface_capsules(facets, count: int, line=None, seed: int = 0, rounds: int = 8, slack_mm=None,
+def fit_surface_capsules(facets: ArrayLike, count: int, line: tuple[ArrayLike, ArrayLike] | None = None, seed: int = 0,
+                         rounds: int = 8, slack_mm: float | None = None,
                          spacing_mm: float = 5.0) -> tuple[list, np.ndarray]:
     """``count`` capsules whose union holds the surface of facets ``(m, 3, 3)``, not only their corners.
 
@@ -312,7 +317,7 @@ def _depths(capsules, points) -> np.ndarray:
     return np.array([c.radius - c.distances(points) for c in capsules]).reshape(len(capsules), len(points))
 
 
-def facet_depths(capsules, facets, spacing_mm: float = 5.0, enough_mm: float = np.inf) -> np.ndarray:
+def facet_depths(capsules: Sequence[Capsule], facets: ArrayLike, spacing_mm: float = 5.0, enough_mm: float = np.inf) -> np.ndarray:
     """A lower bound ``(m,)`` on how deep each facet ``(m, 3, 3)`` lies inside the union of ``capsules``, mm.
 
     The larger of the best single capsule's least depth at the facet's corners (the depth in one capsule
@@ -340,7 +345,7 @@ def facet_depths(capsules, facets, spacing_mm: float = 5.0, enough_mm: float = n
     return bound
 
 
-def cover_facets(capsules, facets, margin_mm: float, spacing_mm: float = 5.0) -> list:
+def cover_facets(capsules: Sequence[Capsule], facets: ArrayLike, margin_mm: float, spacing_mm: float = 5.0) -> list:
     """The capsules with radii grown (to whole mm) until every facet ``(m, 3, 3)`` is ``margin_mm`` deep by
     :func:`facet_depths`: each sample of a facet short of it goes to the capsule it is deepest in, whose
     radius then holds it ``margin_mm`` plus :func:`surface_gap` deep."""

@@ -7,13 +7,14 @@ both radii (negative: they overlap). Used by the self-collision check (``robot.c
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["point_segment_distance", "segment_distance"]
 
 _TINY = 1e-12
 
 
-def point_segment_distance(p, a, b) -> np.ndarray:
+def point_segment_distance(p: ArrayLike, a: ArrayLike, b: ArrayLike) -> np.ndarray:
     """Distance of points ``p`` from segments ``a b``, all ``(..., 3)`` broadcast together; ``(...)``."""
     p, a, b = (np.asarray(x, float) for x in (p, a, b))
     d, offset = b - a, p - a
@@ -23,7 +24,7 @@ def point_segment_distance(p, a, b) -> np.ndarray:
     return np.sqrt(np.einsum("...i,...i->...", away, away))
 
 
-def segment_distance(p0, p1, q0, q1) -> np.ndarray:
+def segment_distance(p0: ArrayLike, p1: ArrayLike, q0: ArrayLike, q1: ArrayLike) -> np.ndarray:
     """Least distance between segments ``p0 p1`` and ``q0 q1``, all ``(..., 3)`` broadcast; ``(...)``.
 
     The closest points ``p0 + s d1`` and ``q0 + t d2`` with ``s, t`` in [0, 1] (Ericson, *Real-Time

@@ -19,10 +19,12 @@ Frames as in conventions.md: ``base``, ``tool0``, ``target``; lengths in mm.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import cast
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..geometry import BoardGeometry
 
@@ -32,6 +34,7 @@ __all__ = [
     "CellModel",
     "Cylinder",
     "Floor",
+    "KeepOut",
     "Sphere",
     "WORLD_ZONE_REACH_MM",
     "board_stand",
@@ -42,7 +45,7 @@ __all__ = [
 WORLD_ZONE_REACH_MM = 10000.0
 
 
-def _points(points) -> np.ndarray:
+def _points(points: ArrayLike) -> np.ndarray:
     return np.asarray(points, dtype=float)
 
 
@@ -71,7 +74,7 @@ class Box:
 
     kind = "box"
 
-    def signed_distance(self, points) -> np.ndarray:
+    def signed_distance(self, points: ArrayLike) -> np.ndarray:
         """Distance (mm) of points ``(..., 3)`` in the parent frame from the box, negative inside; ``(...)``."""
         p = _points(points)
         if self.box2parent is not None:
@@ -133,7 +136,7 @@ class Cylinder:
 
     kind = "cylinder"
 
-    def signed_distance(self, points) -> np.ndarray:
+    def signed_distance(self, points: ArrayLike) -> np.ndarray:
         """Distance (mm) of points ``(..., 3)`` in base from the cylinder, negative inside; ``(...)``."""
         p = _points(points)
         radial = np.linalg.norm(p[..., :2] - np.asarray(self.centre_mm, float), axis=-1) - self.radius_mm
@@ -174,7 +177,7 @@ class Floor:
 
     kind = "floor"
 
-    def signed_distance(self, points) -> np.ndarray:
+    def signed_distance(self, points: ArrayLike) -> np.ndarray:
         """Height (mm) of points ``(..., 3)`` in base above the floor, negative below; ``(...)``."""
         return _points(points)[..., 2] - self.z_mm
 
@@ -190,6 +193,10 @@ class Floor:
 
     def to_dict(self) -> dict:
         return {"type": "floor", "name": self.name, "z_mm": self.z_mm}
+
+
+#: A keep-out volume of the cell (``CellModel.keep_out``).
+KeepOut = Box | Cylinder | Floor
 
 
 @dataclass(frozen=True)
@@ -219,13 +226,13 @@ DEFAULT_CARRIED = (Box("camera", (-136.0, 11.0, 58.0), (-94.0, 288.0, 100.0)),
                    Box("bracket", (-140.0, -45.0, 0.0), (45.0, 45.0, 58.0)))
 
 
-def floor_height(volumes) -> float | None:
+def floor_height(volumes: Sequence[KeepOut]) -> float | None:
     """The highest :class:`Floor` among ``volumes`` (None when there is none)."""
     floors = [v.z_mm for v in volumes if isinstance(v, Floor)]
     return max(floors) if floors else None
 
 
-def board_stand(board2base, board: BoardGeometry, margin_mm: float, depth_mm: float, floor_z_mm: float | None = None,
+def board_stand(board2base: ArrayLike, board: BoardGeometry, margin_mm: float, depth_mm: float, floor_z_mm: float | None = None,
                 name: str = "board stand") -> list:
     """The board's stand as keep-out boxes, from the board's pose.
 
@@ -284,14 +291,14 @@ class CellModel:
     stand_margin_mm: float | None = 50.0
     stand_depth_mm: float = 100.0
 
-    def volumes(self, board2base=None, board: BoardGeometry | None = None) -> list:
+    def volumes(self, board2base: ArrayLike | None = None, board: BoardGeometry | None = None) -> list:
         """Every keep-out volume: the configured ones, and the board's stand when the board's pose is given."""
         out = list(self.keep_out)
         if board2base is not None and board is not None and self.stand_margin_mm is not None:
             out += board_stand(board2base, board, self.stand_margin_mm, self.stand_depth_mm, floor_height(self.keep_out))
         return out
 
-    def world_zone_volumes(self, board2base=None, board: BoardGeometry | None = None) -> list:
+    def world_zone_volumes(self, board2base: ArrayLike | None = None, board: BoardGeometry | None = None) -> list:
         """The volumes as the controller's world zones see them: floors as they are, boxes axis-aligned in
         base (a box of a frame of its own: its bounding box), cylinders as they are."""
         out = []

@@ -35,12 +35,14 @@ their axis-aligned bounding box there), so the plan never makes the controller s
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from .cell import Box, Sphere
+from .cell import Box, KeepOut, Sphere
 from .kinematics import RobotModel
 from .self_check import SelfCheck
 
@@ -102,7 +104,7 @@ class Violation:
         return f"{self.body} is {self.clearance_mm:.0f} mm from '{self.volume}'"
 
 
-def link_spheres(robot: RobotModel):
+def link_spheres(robot: RobotModel) -> list[tuple[int, int, float, float, str]]:
     """Spheres along the wrist's capsules (:attr:`RobotModel.bodies`): ``(start, end, t, radius, body name)``,
     one row per sphere. A sphere's centre is ``(1 - t) P(start) + t P(end)`` of :meth:`RobotModel.chain_points`."""
     home = robot.chain_points(np.zeros(robot.dof))
@@ -134,7 +136,7 @@ def arm_capsules(robot: RobotModel) -> list:
     return out
 
 
-def carried_spheres(carried) -> list:
+def carried_spheres(carried: Iterable[Box | Sphere]) -> list:
     """``(centre in tool0 (3,), radius, body name)`` of the spheres covering the carried bodies."""
     out = []
     for body in carried:
@@ -190,8 +192,9 @@ class CellGuard:
         Check the robot's self-collision pairs too (default).
     """
 
-    def __init__(self, robot: RobotModel, volumes, carried=(), margin_mm: float = 30.0, step_mm: float = 10.0,
-                 tcp_zones=None, self_collision: bool = True):
+    def __init__(self, robot: RobotModel, volumes: Iterable[KeepOut], carried: Iterable[Box | Sphere] = (),
+                 margin_mm: float = 30.0, step_mm: float = 10.0,
+                 tcp_zones: tuple[ArrayLike, Iterable[KeepOut]] | None = None, self_collision: bool = True):
         if not step_mm > 0:
             raise ValueError(f"step_mm must be > 0; got {step_mm}")
         self.robot = robot
@@ -232,7 +235,7 @@ class CellGuard:
         return bool((len(self.radii) and len(self.volumes)) or self.self_check)
 
     # ----------------------------------------------------------------------------- geometry
-    def capsule_segments(self, joints_deg) -> np.ndarray:
+    def capsule_segments(self, joints_deg: ArrayLike) -> np.ndarray:
         """The axes ``(n, B, 2, 3)`` in base of the arm's ``B`` capsules (:func:`arm_capsules`) at ``(n, k)``."""
         joints = np.atleast_2d(np.asarray(joints_deg, float))
         rotations, pivots = self.robot.link_frames(joints)
@@ -242,7 +245,7 @@ class CellGuard:
     def _tool_centres_at(self, tool02base: np.ndarray) -> np.ndarray:
         return np.einsum("nij,mj->nmi", tool02base[:, :3, :3], self._tool_centres) + tool02base[:, None, :3, 3]
 
-    def sphere_centres(self, joints_deg) -> np.ndarray:
+    def sphere_centres(self, joints_deg: ArrayLike) -> np.ndarray:
         """Centres ``(n, m, 3)`` in base of the ``m`` spheres at configurations ``(n, k)``."""
         joints = np.atleast_2d(np.asarray(joints_deg, float))
         segments = self.capsule_segments(joints)
@@ -269,7 +272,7 @@ class CellGuard:
             volume = np.where(better, v, volume)
         return best, sphere, volume
 
-    def clearances(self, joints_deg) -> tuple[np.ndarray, np.ndarray]:
+    def clearances(self, joints_deg: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Least clearance of each configuration ``(n, k)`` from the cell and between the self-collision
         pairs: ``(cell (n,), self (n,))`` in mm (``inf`` where nothing is watched)."""
         cell, _, _, own, *_ = self._evaluate(joints_deg)
@@ -303,19 +306,19 @@ class CellGuard:
             return Violation(body, other, float(own), float(at), "self")
         return Violation(self.bodies[sphere], self.volumes[volume].name, float(cell), float(at))
 
-    def closest(self, joints_deg) -> Violation | None:
+    def closest(self, joints_deg: ArrayLike) -> Violation | None:
         """The closest approach of one posture ``(k,)`` (to the cell or between the pairs), whatever the
         margin; None when nothing is watched."""
         evaluated = self._evaluate(np.asarray(joints_deg, float)[None])
         return self._closest(evaluated, 0) if np.isfinite(min(evaluated[0][0], evaluated[3][0])) else None
 
     # ----------------------------------------------------------------------------- postures
-    def posture_violation(self, joints_deg) -> Violation | None:
+    def posture_violation(self, joints_deg: ArrayLike) -> Violation | None:
         """The closest approach of one posture ``(k,)`` when below the margin, else None."""
         found = self.closest(joints_deg)
         return found if found is not None and found.clearance_mm < self.margin_mm else None
 
-    def flange_violation(self, tool02base) -> Violation | None:
+    def flange_violation(self, tool02base: ArrayLike) -> Violation | None:
         """What the flange carries (and the world zones' TCP) closer than the margin to the cell at a flange
         pose ``(4, 4)``, else None: the part of :meth:`posture_violation` that needs no joints (a cheap
         test before the inverse kinematics)."""
@@ -334,22 +337,22 @@ class CellGuard:
         return Violation(self.bodies[best[1]], self.volumes[best[2]].name, best[0])
 
     # ----------------------------------------------------------------------------- moves
-    def sample_count(self, a, b) -> int:
+    def sample_count(self, a: ArrayLike, b: ArrayLike) -> int:
         """Samples (both ends included) of the move ``a -> b`` so no centre moves more than ``step_mm``."""
         delta = np.abs(self.robot.coupling @ np.radians(np.asarray(b, float) - np.asarray(a, float)))
         return max(2, math.ceil(float(self._lever @ delta) / self.step_mm) + 1)
 
-    def path_samples(self, a, b) -> np.ndarray:
+    def path_samples(self, a: ArrayLike, b: ArrayLike) -> np.ndarray:
         """Configurations ``(s, k)`` along the joint-interpolated move from ``a`` to ``b`` (ends included)."""
         a, b = np.asarray(a, float), np.asarray(b, float)
         s = np.linspace(0.0, 1.0, self.sample_count(a, b))[:, None]
         return a + s * (b - a)
 
-    def path_violation(self, a, b) -> Violation | None:
+    def path_violation(self, a: ArrayLike, b: ArrayLike) -> Violation | None:
         """The first place along the move ``a -> b`` closer than the margin, else None."""
         return self.moves_violations([(a, b)])[0]
 
-    def moves_violations(self, moves) -> list:
+    def moves_violations(self, moves: Sequence[tuple[ArrayLike, ArrayLike]]) -> list:
         """:meth:`path_violation` of many moves ``[(a, b), ...]``, advanced together.
 
         Each move is walked from its start by conservative advancement: from a sample of clearance
@@ -410,7 +413,7 @@ class CellGuard:
         low = np.flatnonzero(np.minimum(evaluated[0], evaluated[3]) < self.margin_mm)
         return self._closest(evaluated, int(low[0]), float(s[low[0]])) if len(low) else None
 
-    def pairwise_violations(self, nodes) -> dict:
+    def pairwise_violations(self, nodes: ArrayLike) -> dict:
         """``{(i, j): Violation}`` of the moves between every two configurations ``(n, k)``, ``i < j``
         (a move and its reverse sweep the same path); pairs that are clear are left out."""
         nodes = np.asarray(nodes, float)

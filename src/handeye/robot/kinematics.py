@@ -14,11 +14,13 @@ IRB 1400 the serial angle of axis 3 is controller axis 3 minus controller axis 2
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
@@ -41,7 +43,7 @@ __all__ = [
 ROBOTS_DIR = Path(__file__).with_name("robots")
 
 
-def dh_transforms(dh_table, theta_rad) -> np.ndarray:
+def dh_transforms(dh_table: ArrayLike, theta_rad: ArrayLike) -> np.ndarray:
     """Standard DH link transforms ``Rz(θ) Tz(d) Tx(a) Rx(α)``.
 
     Parameters
@@ -167,8 +169,10 @@ class RobotModel:
         return int(self.axes.shape[0])
 
     @classmethod
-    def from_dh(cls, name, dh, coupling_rows=(), joint_limits_deg=None, max_speed_deg_s=None, bodies=(),
-                link_bodies=(), self_pairs=()) -> "RobotModel":
+    def from_dh(cls, name: str, dh: ArrayLike, coupling_rows: Sequence[Sequence[float]] = (),
+                joint_limits_deg: ArrayLike | None = None, max_speed_deg_s: ArrayLike | None = None,
+                bodies: Sequence[LinkBody | Mapping] = (), link_bodies: Sequence[FrameBody | Mapping] = (),
+                self_pairs: Sequence[Sequence[str]] = ()) -> "RobotModel":
         """Build the chain from a standard DH table (rows ``d, a, alpha_deg, theta_offset_deg``);
         ``bodies``: :class:`LinkBody` capsules, or mappings ``{name, from, to, radius_mm}``;
         ``link_bodies``: :class:`FrameBody` capsules, or mappings ``{name, link, from_mm, to_mm, radius_mm}``;
@@ -202,12 +206,12 @@ class RobotModel:
             self_pairs=_self_pairs(self_pairs, bodies, link_bodies),
         )
 
-    def serial_angles_rad(self, joints_deg) -> np.ndarray:
+    def serial_angles_rad(self, joints_deg: ArrayLike) -> np.ndarray:
         """Serial chain angles (radians) of controller angles ``(..., k)`` in degrees."""
         joints = np.asarray(joints_deg, dtype=float)
         return np.radians(np.einsum("ij,...j->...i", self.coupling, joints))
 
-    def forward(self, joints_deg) -> tuple[np.ndarray, np.ndarray]:
+    def forward(self, joints_deg: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """tool0 in base for controller angles, by eq. 11-12.
 
         Parameters
@@ -238,7 +242,7 @@ class RobotModel:
         starts = np.broadcast_to(self.base_offset, lead + (1, 3))  # P(0) = D_0
         return rotations, np.cumsum(np.concatenate([starts, steps], axis=-2), axis=-2)
 
-    def chain_points(self, joints_deg) -> np.ndarray:
+    def chain_points(self, joints_deg: ArrayLike) -> np.ndarray:
         """Points of the chain in base: ``P(0)`` on axis 1 (``D_0``), ``P(i)`` on axis ``i + 1``
         (eq. 12), ``P(k)`` the tool0 origin.
 
@@ -254,7 +258,7 @@ class RobotModel:
         """
         return self._chain(joints_deg)[1]
 
-    def link_frames(self, joints_deg) -> tuple[np.ndarray, np.ndarray]:
+    def link_frames(self, joints_deg: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Where each part of the arm is: rotations ``(..., k + 1, 3, 3)`` and pivots ``(..., k + 1, 3)``.
 
         Part 0 is the base (identity, pivot ``P(0)``); part ``i`` the link turned by axis ``i``:
@@ -273,12 +277,12 @@ class RobotModel:
         points = self.chain_points(np.zeros(self.dof))
         return np.vstack([points[:1], points[:-1]])
 
-    def forward_transform(self, joints_deg) -> np.ndarray:
+    def forward_transform(self, joints_deg: ArrayLike) -> np.ndarray:
         """tool02base ``(..., 4, 4)`` for controller angles ``(..., k)`` in degrees."""
         p, q = self.forward(joints_deg)
         return transform_from_rotation_translation(matrix_from_quaternion(q), p)
 
-    def may_reach(self, position_mm) -> bool:
+    def may_reach(self, position_mm: ArrayLike) -> bool:
         """False when tool0 certainly cannot be at ``position_mm``: farther from the circle the second
         axis sweeps about a vertical first axis than the rest of the arm is long. A quick test to
         skip hopeless inverse kinematics; True when it cannot tell (first axis not vertical)."""
@@ -291,14 +295,14 @@ class RobotModel:
         gap = np.hypot(np.linalg.norm(p[:2]) - radius, p[2] - shoulder[2])
         return bool(gap <= reach)
 
-    def within_limits(self, joints_deg, margin_deg: float = 0.0) -> np.ndarray:
+    def within_limits(self, joints_deg: ArrayLike, margin_deg: float = 0.0) -> np.ndarray:
         """True where every axis is inside its limits shrunk by ``margin_deg``; shape ``(...)``."""
         joints = np.asarray(joints_deg, dtype=float)
         low = self.joint_limits_deg[:, 0] + margin_deg
         high = self.joint_limits_deg[:, 1] - margin_deg
         return np.all((joints >= low) & (joints <= high), axis=-1)
 
-    def limit_violations(self, joints_deg, margin_deg: float = 0.0) -> list[str]:
+    def limit_violations(self, joints_deg: ArrayLike, margin_deg: float = 0.0) -> list[str]:
         """Readable list of the axes of one posture outside their limits (empty when inside)."""
         joints = np.asarray(joints_deg, dtype=float)
         out = []
@@ -440,8 +444,8 @@ _FD_STEP = float(np.finfo(float).eps ** 0.5)
 
 def inverse_kinematics(
     robot: RobotModel,
-    tool02base,
-    seed_deg,
+    tool02base: ArrayLike,
+    seed_deg: ArrayLike,
     margin_deg: float = 0.0,
     tolerance_mm: float = 1e-3,
     tolerance_deg: float = 1e-4,

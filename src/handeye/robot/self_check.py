@@ -14,9 +14,11 @@ Lengths in mm; negative distances: the bodies overlap.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .capsules import point_segment_distance, segment_distance
 from .cell import Box, Sphere
@@ -57,8 +59,9 @@ class SelfCheck:
         the flange's. They give :attr:`label_parts`: only the axes between a pair's parts change its distance.
     """
 
-    def __init__(self, pairs, capsule_names, capsule_radii, capsule_lengths, carried=(), fine_within_mm: float = 150.0,
-                 capsule_parts=None, carried_part: int = 0):
+    def __init__(self, pairs: Iterable[Sequence[str]], capsule_names: Iterable[str], capsule_radii: ArrayLike,
+                 capsule_lengths: Sequence[float] | np.ndarray, carried: Iterable[Box | Sphere] = (), fine_within_mm: float = 150.0,
+                 capsule_parts: ArrayLike | None = None, carried_part: int = 0):
         self.fine_within_mm = float(fine_within_mm)
         capsule_names, carried = list(capsule_names), list(carried)
         carried_names = [body.name for body in carried]
@@ -129,7 +132,7 @@ class SelfCheck:
             out[:, rows] = gap
         return out
 
-    def clearances(self, segments, tool02base) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def clearances(self, segments: np.ndarray, tool02base: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Least distance of the pairs at each configuration, which pair (an index of :attr:`labels`), and
         the least distance of each pair.
 

@@ -10,9 +10,11 @@ head sees the whole board.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from .kinematics import RobotModel, inverse_kinematics
@@ -53,18 +55,18 @@ class PinholeView:
     cy: float
     view2camera: np.ndarray = field(default_factory=lambda: np.eye(4))
 
-    def project(self, points_cam) -> np.ndarray:
+    def project(self, points_cam: ArrayLike) -> np.ndarray:
         """Pixel coordinates ``(m, 2)`` of points ``(m, 3)`` in the reference camera frame (NaN behind)."""
         pts = np.asarray(points_cam, float)
         local = (pts - self.view2camera[:3, 3]) @ self.view2camera[:3, :3]
         z = np.where(local[:, 2] > 1e-9, local[:, 2], np.nan)
         return np.stack([self.f_px * local[:, 0] / z + self.cx, self.f_px * local[:, 1] / z + self.cy], axis=1)
 
-    def sees(self, points_cam, margin_px: float = 25.0, min_depth_mm: float = 100.0) -> bool:
+    def sees(self, points_cam: ArrayLike, margin_px: float = 25.0, min_depth_mm: float = 100.0) -> bool:
         """True when every point is in front (beyond ``min_depth_mm``) and inside the image margin."""
         return bool(np.all(self.sees_each(points_cam, margin_px, min_depth_mm)))
 
-    def sees_each(self, points_cam, margin_px: float = 25.0, min_depth_mm: float = 100.0) -> np.ndarray:
+    def sees_each(self, points_cam: ArrayLike, margin_px: float = 25.0, min_depth_mm: float = 100.0) -> np.ndarray:
         """Bool ``(m,)``: which points ``(m, 3)`` are in front (beyond ``min_depth_mm``) and inside the margin."""
         pts = np.asarray(points_cam, float)
         local_z = ((pts - self.view2camera[:3, 3]) @ self.view2camera[:3, :3])[:, 2]
@@ -82,7 +84,8 @@ NOMINAL_XB3_RIGHT = PinholeView(1280, 960, 983.0, 643.6, 493.4,
 NOMINAL_XB3 = (NOMINAL_XB3_LEFT, NOMINAL_XB3_RIGHT)
 
 
-def look_at(camera_position, target_position, roll_rad: float, up=(0.0, 0.0, 1.0)) -> np.ndarray:
+def look_at(camera_position: ArrayLike, target_position: ArrayLike, roll_rad: float,
+            up: Sequence[float] = (0.0, 0.0, 1.0)) -> np.ndarray:
     """cam2base with z towards the target, x right and y down in the image, rolled about z."""
     z = np.asarray(target_position, float) - np.asarray(camera_position, float)
     z /= np.linalg.norm(z)
@@ -96,13 +99,15 @@ def look_at(camera_position, target_position, roll_rad: float, up=(0.0, 0.0, 1.0
     return transform_from_rotation_translation(base @ roll, camera_position)
 
 
-def board_visible(target2cam, corners_target, views=(NOMINAL_XB3_LEFT,), margin_px: float = 25.0) -> bool:
+def board_visible(target2cam: ArrayLike, corners_target: ArrayLike, views: Sequence[PinholeView] = (NOMINAL_XB3_LEFT,),
+                  margin_px: float = 25.0) -> bool:
     """True when every view sees every corner ``(m, 3)`` (target frame) of a board at ``target2cam``."""
     pts = np.asarray(corners_target, float) @ np.asarray(target2cam)[:3, :3].T + np.asarray(target2cam)[:3, 3]
     return all(view.sees(pts, margin_px) for view in views)
 
 
-def corners_in_view(target2cam, corners_target, views=(NOMINAL_XB3_LEFT,), margin_px: float = 25.0) -> np.ndarray:
+def corners_in_view(target2cam: ArrayLike, corners_target: ArrayLike, views: Sequence[PinholeView] = (NOMINAL_XB3_LEFT,),
+                    margin_px: float = 25.0) -> np.ndarray:
     """Bool ``(m,)``: the corners ``(m, 3)`` (target frame) of a board at ``target2cam`` that every view sees
     (a partial view of a ChArUco board holds these)."""
     pts = np.asarray(corners_target, float) @ np.asarray(target2cam)[:3, :3].T + np.asarray(target2cam)[:3, 3]
@@ -150,7 +155,7 @@ class ViewSampling:
 SEED_CONFIGURATIONS = ([0, 10, 20, 0, 60, 0], [0, 0, 0, 0, 45, 0], [0, 20, 30, 0, -60, 180], [0, -10, 10, 90, 60, -90])
 
 
-def ik_from_standard_seeds(robot: RobotModel, tool02base: np.ndarray, margin_deg: float):
+def ik_from_standard_seeds(robot: RobotModel, tool02base: np.ndarray, margin_deg: float) -> np.ndarray | None:
     """Joints reaching ``tool02base`` from a few standard seeds (least wrist twist wins), or ``None``."""
     best = None
     for seed in SEED_CONFIGURATIONS:
@@ -207,19 +212,19 @@ def _view_ok(target2cam, corners, views, margin_px: float, accept_view) -> bool:
 
 def sample_eye_in_hand_postures(
     robot: RobotModel,
-    cam2tool0,
-    target2base,
-    corners_target,
+    cam2tool0: ArrayLike,
+    target2base: ArrayLike,
+    corners_target: ArrayLike,
     count: int,
     rng: np.random.Generator,
     sampling: ViewSampling = ViewSampling(),
-    views=(NOMINAL_XB3_LEFT,),
-    seed_joints=None,
+    views: Sequence[PinholeView] = (NOMINAL_XB3_LEFT,),
+    seed_joints: ArrayLike | None = None,
     max_attempts: int | None = None,
-    veto=None,
+    veto: Callable[[np.ndarray], bool] | None = None,
     min_count: int | None = None,
-    pose_veto=None,
-    accept_view=None,
+    pose_veto: Callable[[np.ndarray], bool] | None = None,
+    accept_view: Callable[[np.ndarray], bool] | None = None,
 ) -> np.ndarray:
     """Controller angles ``(count, k)`` of postures from which ``views`` see the whole board (or what ``accept_view`` takes).
 

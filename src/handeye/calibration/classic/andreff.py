@@ -26,7 +26,7 @@ from .common import prepare_motions, rotation_from_scaled_matrix, solution_trans
 __all__ = ["solve_andreff"]
 
 
-def solve_andreff(hand, target2cam, pairs=None) -> np.ndarray:
+def solve_andreff(hand: np.ndarray, target2cam: np.ndarray, pairs: np.ndarray | None = None) -> np.ndarray:
     """Hand-eye ``X`` by Andreff, Horaud & Espiau (1999), linear in ``(vec R_X, t_X)``.
 
     Minimises the algebraic residual of the stacked system above (rotation rows unitless,

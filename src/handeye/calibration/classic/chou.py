@@ -25,7 +25,7 @@ from .common import left_matrix, prepare_motions, quaternions, right_matrix, sol
 __all__ = ["solve_chou"]
 
 
-def solve_chou(hand, target2cam, pairs=None) -> np.ndarray:
+def solve_chou(hand: np.ndarray, target2cam: np.ndarray, pairs: np.ndarray | None = None) -> np.ndarray:
     """Hand-eye ``X`` by Chou & Kamel (1991), quaternion SVD then translation.
 
     Minimises ``Σ |q_A * q - q * q_B|^2`` over unit quaternions ``q``: per pair this is

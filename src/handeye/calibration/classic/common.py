@@ -34,6 +34,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from ...base import CalibrationError
@@ -119,7 +120,7 @@ class Motions:
         return len(self.pairs)
 
 
-def check_poses(hand, target2cam) -> tuple[np.ndarray, np.ndarray]:
+def check_poses(hand: np.ndarray, target2cam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Validate the two pose stacks; return them as float64 with exactly orthonormal rotations.
 
     Parameters
@@ -188,7 +189,7 @@ def consecutive_pairs(n: int) -> np.ndarray:
     return np.stack([i, i + 1], axis=1)
 
 
-def check_pairs(pairs, n: int) -> np.ndarray:
+def check_pairs(pairs: ArrayLike | None, n: int) -> np.ndarray:
     """Validate user-given pairs; ``None`` gives :func:`default_pairs`.
 
     Raises
@@ -213,7 +214,7 @@ def check_pairs(pairs, n: int) -> np.ndarray:
     return arr
 
 
-def rotation_angles_deg(rotation) -> np.ndarray:
+def rotation_angles_deg(rotation: ArrayLike) -> np.ndarray:
     """Rotation angles in degrees, in [0, 180], of rotation matrices ``(..., 3, 3)``."""
     rotation = np.asarray(rotation, dtype=float)
     lead = rotation.shape[:-2]
@@ -226,7 +227,7 @@ def _unit_axes(rotation) -> np.ndarray:
     return axes / np.linalg.norm(axes, axis=1, keepdims=True)
 
 
-def prepare_motions(hand, target2cam, pairs=None) -> Motions:
+def prepare_motions(hand: np.ndarray, target2cam: np.ndarray, pairs: np.ndarray | None = None) -> Motions:
     """Check the input, build the relative motions, normalise lengths and drop degenerate pairs.
 
     Parameters
@@ -283,7 +284,7 @@ def prepare_motions(hand, target2cam, pairs=None) -> Motions:
     )
 
 
-def translation_least_squares(rot_x, motions: Motions) -> np.ndarray:
+def translation_least_squares(rot_x: ArrayLike, motions: Motions) -> np.ndarray:
     """``t_X`` (normalised units) from ``(R_A - I) t_X = R_X t_B - t_A`` stacked over the pairs.
 
     The common second step of the separable methods (Tsai-Lenz eq. 15, Deniz & Cakir eq. 8),
@@ -304,12 +305,12 @@ def translation_least_squares(rot_x, motions: Motions) -> np.ndarray:
     return t
 
 
-def solution_transform(rot_x, t_x_normalised, motions: Motions) -> np.ndarray:
+def solution_transform(rot_x: ArrayLike, t_x_normalised: ArrayLike, motions: Motions) -> np.ndarray:
     """The 4x4 ``X`` in the caller's length unit from a rotation and a normalised translation."""
     return transform_from_rotation_translation(np.asarray(rot_x, float), np.asarray(t_x_normalised, float) * motions.scale)
 
 
-def nearest_rotation(matrix) -> np.ndarray:
+def nearest_rotation(matrix: ArrayLike) -> np.ndarray:
     """Closest rotation (Frobenius norm, ``det = +1``) to each matrix ``(..., 3, 3)``, via SVD."""
     u, _, vt = np.linalg.svd(np.asarray(matrix, dtype=float))
     d = np.sign(np.linalg.det(u @ vt))
@@ -319,7 +320,7 @@ def nearest_rotation(matrix) -> np.ndarray:
     return u @ vt
 
 
-def rotation_from_scaled_matrix(matrix) -> np.ndarray:
+def rotation_from_scaled_matrix(matrix: ArrayLike) -> np.ndarray:
     """Rotation from a matrix known only up to scale and sign (a null vector reshaped to 3x3).
 
     ``M`` is scaled by ``sign(det M) / |det M|^(1/3)`` (so that ``det = +1``) and then projected on
@@ -349,7 +350,7 @@ def _product_matrix(q, sign: float) -> np.ndarray:
     return out
 
 
-def left_matrix(q) -> np.ndarray:
+def left_matrix(q: np.ndarray) -> np.ndarray:
     """``L(q)`` with ``L(q) p = q * p`` (Hamilton product), for quaternions ``(..., 4)`` (w, x, y, z).
 
     Horaud & Dornaika's ``Q(q)`` (appendix A).
@@ -357,7 +358,7 @@ def left_matrix(q) -> np.ndarray:
     return _product_matrix(q, 1.0)
 
 
-def right_matrix(q) -> np.ndarray:
+def right_matrix(q: np.ndarray) -> np.ndarray:
     """``R(q)`` with ``R(q) p = p * q``, for quaternions ``(..., 4)`` (w, x, y, z).
 
     Horaud & Dornaika's ``W(q)`` (appendix A).
@@ -365,12 +366,12 @@ def right_matrix(q) -> np.ndarray:
     return _product_matrix(q, -1.0)
 
 
-def quaternions(rotation) -> np.ndarray:
+def quaternions(rotation: np.ndarray) -> np.ndarray:
     """Unit quaternions ``(..., 4)`` (w, x, y, z), ``w >= 0``, of rotation matrices ``(..., 3, 3)``."""
     return quaternion_from_matrix(rotation)
 
 
-def constrained_null_combination(v1, v2) -> np.ndarray:
+def constrained_null_combination(v1: np.ndarray, v2: np.ndarray) -> np.ndarray:
     """The combination ``x = l1 v1 + l2 v2`` of two 8-vectors with ``|x[:4]| = 1`` and ``x[:4] . x[4:] = 0``.
 
     The two right singular vectors of the smallest singular values of the Daniilidis and Lu-Chou
@@ -405,6 +406,8 @@ def constrained_null_combination(v1, v2) -> np.ndarray:
         norm = np.linalg.norm(x[:4])
         if best is None or norm > best[0]:
             best = (norm, x)
+    if best is None:
+        raise CalibrationError("no candidate combination of the two null vectors")  # candidates is never empty
     norm, x = best
     if not norm > 1e-12:
         raise CalibrationError("the dual quaternion system is degenerate; rotate the flange about at least two different axes")

@@ -35,7 +35,7 @@ def _dual_quaternions(rotation, translation) -> tuple[np.ndarray, np.ndarray]:
     return q, 0.5 * quaternion_multiply(t, q)
 
 
-def solve_daniilidis(hand, target2cam, pairs=None) -> np.ndarray:
+def solve_daniilidis(hand: np.ndarray, target2cam: np.ndarray, pairs: np.ndarray | None = None) -> np.ndarray:
     """Hand-eye ``X`` by Daniilidis (1999), simultaneous rotation and translation.
 
     Minimises ``|T x̌|`` over the 8-vectors ``x̌`` of the two-dimensional least-singular subspace,

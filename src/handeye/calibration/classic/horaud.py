@@ -29,7 +29,7 @@ def _unit_axes(rotation) -> np.ndarray:
     return rotvec / np.linalg.norm(rotvec, axis=1, keepdims=True)
 
 
-def solve_horaud(hand, target2cam, pairs=None) -> np.ndarray:
+def solve_horaud(hand: np.ndarray, target2cam: np.ndarray, pairs: np.ndarray | None = None) -> np.ndarray:
     """Hand-eye ``X`` by Horaud & Dornaika (1995), linear rotation then translation.
 
     Minimises ``Σ |n_A - R_X n_B|^2`` over rotations (unit axes: every kept pair weighs the same,

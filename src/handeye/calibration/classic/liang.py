@@ -21,7 +21,7 @@ from .common import prepare_motions, rotation_from_scaled_matrix, solution_trans
 __all__ = ["solve_liang"]
 
 
-def solve_liang(hand, target2cam, pairs=None) -> np.ndarray:
+def solve_liang(hand: np.ndarray, target2cam: np.ndarray, pairs: np.ndarray | None = None) -> np.ndarray:
     """Hand-eye ``X`` by Liang & Mao (2008), Kronecker null space then translation.
 
     Minimises ``Σ |R_A M - M R_B|_F^2`` over 3x3 matrices ``M`` with ``|M|_F = 1`` (no rotation

@@ -35,7 +35,7 @@ def _pure(vectors) -> np.ndarray:
     return np.concatenate([np.zeros(vectors.shape[:-1] + (1,)), vectors], axis=-1)
 
 
-def solve_lu(hand, target2cam, pairs=None) -> np.ndarray:
+def solve_lu(hand: np.ndarray, target2cam: np.ndarray, pairs: np.ndarray | None = None) -> np.ndarray:
     """Hand-eye ``X`` by Lu & Chou (1995), simultaneous, eight-space quaternions.
 
     Minimises the algebraic residual of the stacked 8x8 blocks above over unit ``q`` with

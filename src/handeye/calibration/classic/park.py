@@ -19,7 +19,7 @@ from .common import nearest_rotation, prepare_motions, solution_transform, trans
 __all__ = ["solve_park"]
 
 
-def solve_park(hand, target2cam, pairs=None) -> np.ndarray:
+def solve_park(hand: np.ndarray, target2cam: np.ndarray, pairs: np.ndarray | None = None) -> np.ndarray:
     """Hand-eye ``X`` by Park & Martin (1994).
 
     Minimises ``Σ |R_X β_i - α_i|^2`` over rotations (an orthogonal Procrustes problem on the

@@ -17,7 +17,7 @@ from .common import prepare_motions, quaternions, skew, solution_transform, tran
 __all__ = ["solve_tsai"]
 
 
-def solve_tsai(hand, target2cam, pairs=None) -> np.ndarray:
+def solve_tsai(hand: np.ndarray, target2cam: np.ndarray, pairs: np.ndarray | None = None) -> np.ndarray:
     """Hand-eye ``X`` by Tsai & Lenz (1989).
 
     Minimises, in the least-squares sense, the linear residual

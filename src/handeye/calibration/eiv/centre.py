@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..noise import skew
 from .fit import MLFit, _jacobians, _structures, _sum_t, fit_ml
@@ -43,7 +44,7 @@ def _lever(centre) -> np.ndarray:
     return out
 
 
-def centred(obs: "Observations", centre) -> "Observations":
+def centred(obs: "Observations", centre: ArrayLike) -> "Observations":
     """Observations whose board rotation noise (tilt, spin) turns the board about the board point ``centre``.
 
     A board pose measured by one camera is best determined at the middle of what the camera sees:
@@ -90,7 +91,7 @@ def _centre_nll(params, r, jac, g, rotation) -> tuple[float, np.ndarray]:
     return value, 0.5 * grad
 
 
-def board_centre(obs: "Observations", fit: "MLFit", keep, start) -> tuple[np.ndarray, np.ndarray] | None:
+def board_centre(obs: "Observations", fit: "MLFit", keep: ArrayLike, start: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """The board point about which the board's rotation noise acts, by restricted maximum likelihood.
 
     ``obs`` holds the rotation components about the board origin; the residuals of ``fit`` (its
@@ -131,7 +132,7 @@ def _centred_fit(obs: "Observations", centre, current: "MLFit", theta0, keep, ki
     return found if np.isfinite(found.loglik) and np.all(np.isfinite(found.theta)) else None
 
 
-def _centre_test(obs: "Observations", fit: "MLFit", keep, kinematic: bool):
+def _centre_test(obs: Observations, fit: MLFit, keep: np.ndarray, kinematic: bool) -> tuple[Observations, MLFit, dict]:
     """Board rotation noise about a fitted centre (sessions of board poses), kept when the likelihood
     ratio of the restricted likelihoods exceeds :data:`CENTRE_LR`; the centre and the fit are found
     alternately (twice). Returns the observations and the fit to go on with, and the report."""

@@ -3,6 +3,8 @@ predicts (the definitions of ``src/handeye/calibration/crossval.py``)."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..metrics import fixed_points
@@ -10,8 +12,12 @@ from ..noise import skew
 from .fit import MLFit, _jacobians, fit_ml
 from .model import Observations
 
+if TYPE_CHECKING:
+    from ..crossval import CrossValidation
 
-def ml_cross_validation(obs: Observations, fit: MLFit, keep: np.ndarray, folds: int, kinematic: bool = False):
+
+def ml_cross_validation(obs: Observations, fit: MLFit, keep: np.ndarray, folds: int,
+                        kinematic: bool = False) -> CrossValidation:
     """k-fold cross-validation of the ML fit (``crossval.py`` definition) with its predicted error.
 
     Each fold refits ``X, T`` (and the DH deviations when modelled) from the full solution with the

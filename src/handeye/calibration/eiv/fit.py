@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..noise import VARIANCE_FLOOR, adjoint, retract, twist_between
 from ...geometry import invert_transforms
@@ -337,7 +338,7 @@ def _damped(theta, lam, new, new_lam, last_delta):
 
 
 def fit_ml(obs: Observations, x0: np.ndarray, t0: np.ndarray | None = None, theta0: np.ndarray | None = None,
-           estimate_theta: bool = True, keep=None, kinematic0=None, kinematic_var0=None,
+           estimate_theta: bool = True, keep: ArrayLike | None = None, kinematic0: ArrayLike | None = None, kinematic_var0: ArrayLike | None = None,
            kinematic: bool = True, boundary_prior: float = 0.0) -> MLFit:
     """The ML solution over the postures ``keep`` (default all), from a start ``x0``.
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..noise import (
     CornerNoise,
@@ -99,7 +100,7 @@ class Observations:
     def n(self) -> int:
         return int(self.hand.shape[0])
 
-    def subset(self, keep) -> "Observations":
+    def subset(self, keep: ArrayLike) -> "Observations":
         keep = np.asarray(keep)
         comps = tuple(replace(c, structure=c.structure[keep]) for c in self.components)
         return replace(self, hand=self.hand[keep], board=self.board[keep], board_cov=self.board_cov[keep],
@@ -131,7 +132,7 @@ def _hand_components(problem: HandEyeProblem, notes: dict) -> tuple:
     robot, mismatch = _robot_for(problem, tool02base)
     if mismatch is not None:
         notes["joint_mismatch"] = mismatch.line()
-    if robot is not None:
+    if robot is not None and problem.joints_deg is not None:  # _robot_for gives a robot only with joints
         jac = flange_jacobian(robot, problem.joints_deg)
         g = to_hand @ (jac @ np.swapaxes(jac, 1, 2)) @ np.swapaxes(to_hand, 1, 2)
         kin, kinds = kinematic_jacobian(robot, problem.joints_deg)
@@ -182,8 +183,9 @@ def observations(problem: HandEyeProblem, stereo: tuple | None = None) -> Observ
     """
     pts, model, corners = _board_data(problem)
     n = problem.n
-    start = problem.target2cam if corners else None
-    if not corners:  # board poses from the three compact points (Horn, eq. 24-29)
+    if corners:
+        start = problem.target2cam
+    else:  # board poses from the three compact points (Horn, eq. 24-29)
         from ..absolute_orientation import absolute_orientation  # noqa: PLC0415
         from ...geometry import matrix_from_quaternion  # noqa: PLC0415
 
@@ -193,7 +195,7 @@ def observations(problem: HandEyeProblem, stereo: tuple | None = None) -> Observ
         start[:, :3, 3] = fit.translation
     notes: dict = {}
     hand_comps, kin = _hand_components(problem, notes)
-    kin_fields = {"notes": notes} if kin is None else {"kinematic": kin[0], "kinematic_kinds": kin[1], "notes": notes}
+    kinematic, kinematic_kinds = (None, None) if kin is None else kin
     if corners:
         f_px, baseline = stereo if stereo is not None else (None, None)
         kwargs = {} if f_px is None else {"f_px": f_px, "baseline_mm": baseline}
@@ -213,9 +215,9 @@ def observations(problem: HandEyeProblem, stereo: tuple | None = None) -> Observ
         cov = noise.covariances(shapes)
         board_cov = np.linalg.inv(fit.information)
         return Observations(problem.hand, fit.target2cam, board_cov, hand_comps, "corners", noise, pts, model, cov,
-                            **kin_fields)
+                            kinematic=kinematic, kinematic_kinds=kinematic_kinds, notes=notes)
     return Observations(problem.hand, start, np.zeros((n, 6, 6)), _pose_components(hand_comps, start, model), "poses",
-                        None, pts, model, **kin_fields)
+                        None, pts, model, kinematic=kinematic, kinematic_kinds=kinematic_kinds, notes=notes)
 
 
 def _pose_components(hand_comps: tuple, target2cam: np.ndarray, model: np.ndarray) -> tuple:

@@ -37,7 +37,7 @@ def _outlier_flags(problem: HandEyeProblem, obs: Observations, fit: MLFit, keep:
     breaking = gap_flags & (gaps > GAP_CONFIRM_Z * expected) & (residual_mm > RESIDUAL_FLOOR_MM)
     flags = np.zeros(n, bool)
     for i in np.flatnonzero(suspects | breaking):
-        d2, nu = deleted_mahalanobis(obs, fit, keep, i, kinematic)
+        d2, nu = deleted_mahalanobis(obs, fit, keep, int(i), kinematic)
         if nu > 0:
             flags[i] = (suspects[i] and d2 > 6.0 * f_dist.ppf(1.0 - OUTLIER_P / n, 6, nu)) or \
                        (breaking[i] and d2 > 6.0 * f_dist.ppf(1.0 - level, 6, nu))

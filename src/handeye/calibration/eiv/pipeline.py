@@ -3,6 +3,7 @@ loop, the kinematic-deviation and board-centre tests, covariance and cross-valid
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,6 +15,9 @@ from .fit import MLFit, fit_ml, initial_board_pose
 from .model import Observations, observations
 from .outliers import _outlier_flags
 from .start import _compact_residuals, _start, board_pose_angle_gaps_deg
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
 
 
 @dataclass(frozen=True)
@@ -65,6 +69,8 @@ def _noise_report(obs: Observations, fit: MLFit) -> dict:
     if obs.corner is not None:
         out["camera"]["corner_isotropic_mm"] = float(np.sqrt(obs.corner.isotropic_mm2))
         out["camera"]["stereo_pixel_px"] = float(np.sqrt(obs.corner.pixel_px2))
+        if obs.point_cov is None:
+            raise ValueError("corner observations without corner covariances (eiv.model.observations sets both)")
         out["camera"]["corner_rms_mm"] = float(np.sqrt(np.mean(np.trace(obs.point_cov, axis1=-2, axis2=-1))))
         out["camera"]["degrees_of_freedom"] = int(obs.corner.dof)
     board_cov = obs.board_cov.copy()
@@ -114,7 +120,7 @@ def _uncertainty(fit: MLFit, kinematic: bool) -> dict:
     }
 
 
-def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) -> EivSolution:
+def solve_eiv(problem: HandEyeProblem, progress: Callable[[int, int, str], object] | None = None, folds: int | None = None) -> EivSolution:
     """The default estimator: robust start, ML fit with outlier loop, covariance and cross-validation.
 
     Parameters
@@ -148,9 +154,11 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
     lr = centre = None
     for rounds in range(1, MAX_ROUNDS + 2):
         keep = ~flags
-        warm = {} if fit is None else {"t0": fit.target, "theta0": fit.theta, "kinematic0": fit.kinematic,
-                                       "kinematic_var0": fit.kinematic_var}
-        fit = fit_ml(obs, x, keep=keep, kinematic=kinematic, **warm)
+        if fit is None:
+            fit = fit_ml(obs, x, keep=keep, kinematic=kinematic)
+        else:  # warm start from the previous round
+            fit = fit_ml(obs, x, fit.target, fit.theta, keep=keep, kinematic=kinematic, kinematic0=fit.kinematic,
+                         kinematic_var0=fit.kinematic_var)
         if not tested:
             # Kinematic deviations of the arm (the same at every posture): kept only when they raise
             # the restricted likelihood significantly (likelihood ratio above KINEMATIC_LR).
@@ -167,6 +175,8 @@ def solve_eiv(problem: HandEyeProblem, progress=None, folds: int | None = None) 
         if n - new_flags.sum() < MIN_POSTURES or np.array_equal(new_flags, flags) or rounds > MAX_ROUNDS:
             break
         flags = new_flags
+    if fit is None or centre is None:  # the loop runs at least once and sets both
+        raise RuntimeError("the ML fit ran no round")
     keep = ~flags
     residual_mm = _compact_residuals(problem, fit.x, fit.target)
     uncertainty = _uncertainty(fit, kinematic)

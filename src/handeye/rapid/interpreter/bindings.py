@@ -13,10 +13,16 @@ wait. Failures a program can handle are raised as ``RapidRuntimeError("ERR_...")
 
 from __future__ import annotations
 
+from typing import Any, TYPE_CHECKING
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from .errors import RapidFatalError
+
+if TYPE_CHECKING:
+    from .runtime import Task
+    from .pendant import FlexPendant
 
 __all__ = ["Bindings", "SocketBinding", "SerialBinding", "IoBinding", "MotionBinding", "MemoryIo", "FixedArm"]
 
@@ -26,34 +32,34 @@ log = logging.getLogger(__name__)
 class SocketBinding:
     """Sockets of the PC Interface option (``SocketCreate`` ...). Handles are the binding's own objects."""
 
-    def create(self, task):
+    def create(self, task: Task) -> Any:
         raise NotImplementedError
 
-    def bind(self, handle, address: str, port: int) -> None:
+    def bind(self, handle: Any, address: str, port: int) -> None:
         raise NotImplementedError
 
-    def listen(self, handle) -> None:
+    def listen(self, handle: Any) -> None:
         raise NotImplementedError
 
-    def accept(self, task, handle, timeout: float | None) -> tuple:
+    def accept(self, task: Task, handle: Any, timeout: float | None) -> tuple:
         """``(client handle, client address)``; ``ERR_SOCK_TIMEOUT`` when nobody came in time."""
         raise NotImplementedError
 
-    def connect(self, task, handle, address: str, port: int, timeout: float | None) -> None:
+    def connect(self, task: Task, handle: Any, address: str, port: int, timeout: float | None) -> None:
         raise NotImplementedError
 
-    def receive(self, task, handle, max_bytes: int, timeout: float | None, exact: bool = False) -> bytes:
+    def receive(self, task: Task, handle: Any, max_bytes: int, timeout: float | None, exact: bool = False) -> bytes:
         """Whatever arrived, at most ``max_bytes`` (exactly that many with ``exact``); ``ERR_SOCK_TIMEOUT``,
         ``ERR_SOCK_CLOSED``."""
         raise NotImplementedError
 
-    def send(self, task, handle, data: bytes) -> None:
+    def send(self, task: Task, handle: Any, data: bytes) -> None:
         raise NotImplementedError
 
-    def close(self, handle) -> None:
+    def close(self, handle: Any) -> None:
         raise NotImplementedError
 
-    def status(self, handle) -> str:
+    def status(self, handle: Any) -> str:
         """``created``, ``bound``, ``listening``, ``connected`` or ``closed``."""
         raise NotImplementedError
 
@@ -61,20 +67,20 @@ class SocketBinding:
 class SerialBinding:
     """Serial channels (``Open "sio1:", dev \\Bin`` ...)."""
 
-    def open(self, task, name: str, binary: bool):
+    def open(self, task: Task, name: str, binary: bool) -> Any:
         raise NotImplementedError
 
-    def read_line(self, task, handle, timeout: float | None) -> bytes:
+    def read_line(self, task: Task, handle: Any, timeout: float | None) -> bytes:
         """One line without its LF (at most 80 characters); ``ERR_DEV_MAXTIME`` when none came in time."""
         raise NotImplementedError
 
-    def write(self, task, handle, data: bytes) -> None:
+    def write(self, task: Task, handle: Any, data: bytes) -> None:
         raise NotImplementedError
 
-    def clear(self, handle) -> None:
+    def clear(self, handle: Any) -> None:
         raise NotImplementedError
 
-    def close(self, handle) -> None:
+    def close(self, handle: Any) -> None:
         raise NotImplementedError
 
 
@@ -107,11 +113,11 @@ class MotionBinding:
         """``(position mm, quaternion w x y z)`` of tool0 in the base (world) frame now."""
         raise NotImplementedError
 
-    def move_joints(self, task, joints, speed: dict, zone: dict, tool) -> None:
+    def move_joints(self, task: Task, joints, speed: dict, zone: dict, tool) -> None:
         """Move all axes to ``joints`` and return when the arm stands still there (``task.idle`` meanwhile)."""
         raise NotImplementedError
 
-    def move_path(self, task, configurations, speed: dict, zone: dict, tool, what: str) -> None:
+    def move_path(self, task: Task, configurations, speed: dict, zone: dict, tool, what: str) -> None:
         """Move through the joint configurations ``(n, 6)`` in turn (``MoveJ``: one; ``MoveL``: its samples
         along the TCP line) and return when the arm stands still at the last; the whole path is checked
         first (``RapidFatalError`` naming ``what`` and what it would violate; the arm does not move)."""
@@ -135,10 +141,10 @@ class Bindings:
     serial: SerialBinding | None = None
     io: IoBinding | None = None
     motion: MotionBinding | None = None
-    pendant: object = None  # callable(text) for TPWrite, or None to log it
+    pendant: Callable[[str], object] | None = None  # callable(text) for TPWrite, or None to log it
     #: The operator's pendant (``rapid.interpreter.pendant.FlexPendant``): TPReadFK, UIMessageBox and
     #: Stop \NoRegain wait for it; None: nobody answers (they stop the program; Stop ends it).
-    flexpendant: object = None
+    flexpendant: FlexPendant | None = None
     sysinfo: dict = field(default_factory=lambda: {"LanIp": "127.0.0.1", "SystemName": "handeye",
                                                     "RobotType": "IRB 1400", "SWVersion": "6.0",
                                                     "CtrlId": "handeye-interpreter", "SerialNo": "0"})
@@ -198,11 +204,11 @@ class FixedArm(MotionBinding):
     def flange(self) -> tuple:
         return self._flange
 
-    def move_joints(self, task, joints, speed, zone, tool) -> None:
+    def move_joints(self, task: Task, joints, speed, zone, tool) -> None:
         self.moves.append(list(joints))
         self._joints = list(joints)
 
-    def move_path(self, task, configurations, speed, zone, tool, what: str) -> None:
+    def move_path(self, task: Task, configurations, speed, zone, tool, what: str) -> None:
         self.paths.append([list(map(float, c)) for c in configurations])
         self.move_joints(task, self.paths[-1][-1], speed, zone, tool)
 

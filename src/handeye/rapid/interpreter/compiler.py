@@ -10,7 +10,9 @@ loop variables never written, by-reference arguments that are data. A failure is
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any, NoReturn
 
 from . import syntax as S
 from .builtins import lookup as lookup_builtin
@@ -92,7 +94,7 @@ class Compiler:
         self.program, self.scope, self.source = program, scope, scope.source
 
     # ------------------------------------------------------------------ helpers
-    def fail(self, line: int, message: str):
+    def fail(self, line: int, message: str) -> NoReturn:
         raise RapidLoadError(self.source, line, message)
 
     def type_named(self, name: str, line: int) -> TypeInfo:
@@ -117,8 +119,10 @@ class Compiler:
         method = getattr(self, "_" + type(node).__name__.lower())
         return method(node, expected)
 
-    def value_of(self, node, expected, what: str):
-        """A closure giving ``node``'s value converted to ``expected`` (copied, float32 for num)."""
+    def value_of(self, node, expected, what: str) -> Callable[[Frame], Any]:
+        """A closure giving ``node``'s value converted to ``expected`` (copied, float32 for num).
+
+        The value is a RAPID value (Any to Python: its type is the RAPID type this compiler checked)."""
         fn, actual = self.expr(node, expected)
         self.check(expected, actual, node.line, what)
         if isinstance(expected, ArrayType):
@@ -202,7 +206,7 @@ class Compiler:
             for index in indices:
                 value = value[_position(value, index(f))]
             return value
-        return read, (ArrayType(element, rest) if rest else element)
+        return read, (ArrayType(element, rest) if rest and element is not None else element)  # rest: btype known
 
     def _field(self, node, expected):
         base, btype = self.expr(node.base)
@@ -277,7 +281,7 @@ class Compiler:
             result = _arith_type("-", lt, rt) if lt is not None and rt is not None else _NUM
         else:
             result = _arith_type(op, lt, rt)
-        if result == "bad":
+        if result == "bad" and lt is not None and rt is not None:  # "bad": two known types that do not combine
             self.fail(node.line, f"operator {op} cannot combine a {lt.name} and a {rt.name}")
         return (lambda f: function(left(f), right(f))), result
 
@@ -296,7 +300,7 @@ class Compiler:
                    "function the interpreter supports"
             self.fail(node.line, f"{node.name}() is {what}")
         call = self.builtin_call(spec, node.args, node.line)
-        return call, self.type_named(spec.returns, node.line) if spec.returns != "any" else None
+        return call, self.type_named(spec.returns, node.line) if spec.returns is not None and spec.returns != "any" else None
 
     def _present(self, node):
         if len(node.args) != 1 or not isinstance(node.args[0].value, S.Name):
@@ -326,7 +330,7 @@ class Compiler:
                 for index in indices[:-1]:
                     holder = holder[_position(holder, index(f))]
                 return Ref(holder, _position(holder, indices[-1](f)), element)
-            return index_ref, (ArrayType(element, rest) if rest else element)
+            return index_ref, (ArrayType(element, rest) if rest and element is not None else element)
         if isinstance(node, S.Field):
             base, btype = self.ref(node.base, writing)
             ftype = self._field_type(btype, node)
@@ -375,6 +379,8 @@ class Compiler:
         target = routine  # its body may be compiled later (recursion, forward calls)
         def call(f):
             compiled = target.compiled
+            if compiled is None:  # Program compiles every routine before a task runs
+                raise RapidFatalError(f"{target.name} is called before it is compiled")
             frame = Frame(f.task, compiled, compiled.size)
             slots = frame.slots
             for i, produce in producers:

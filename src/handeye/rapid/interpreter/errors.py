@@ -85,7 +85,7 @@ class RapidRuntimeError(_Located):
     def __init__(self, errno, message: str = ""):
         number = ERROR_NUMBERS[errno] if isinstance(errno, str) else int(errno)
         self.errno = number
-        self.handled_in = None
+        self.handled_in: object | None = None  # a frames.Frame (which imports this module)
         name = ERROR_NAMES.get(number, str(number))
         super().__init__(f"{name}{': ' + message if message else ''}")
 

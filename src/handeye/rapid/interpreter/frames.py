@@ -9,6 +9,8 @@ that no error handling in a binding catches them.
 
 from __future__ import annotations
 
+from typing import Any
+
 from .errors import RapidRuntimeError
 
 __all__ = ["Ref", "Frame", "ABSENT", "ReturnSignal", "RetrySignal", "TryNextSignal", "ExitSignal", "StopSignal",
@@ -34,18 +36,18 @@ class Ref:
 
     __slots__ = ("holder", "key", "type", "dims", "name")
 
-    def __init__(self, holder, key, type_, dims=(), name=""):
+    def __init__(self, holder, key, type_, dims=(), name: str = ""):
         self.holder, self.key, self.type, self.dims, self.name = holder, key, type_, dims, name
 
     def get(self):
         return self.holder[self.key]
 
-    def set(self, value) -> None:
+    def set(self, value: Any) -> None:
         self.holder[self.key] = value
 
 
 class ReturnSignal(BaseException):
-    def __init__(self, value=None):
+    def __init__(self, value: Any = None):
         self.value = value
 
 
@@ -84,7 +86,7 @@ class Frame:
 
     __slots__ = ("task", "routine", "slots", "in_handler", "retries", "error")
 
-    def __init__(self, task, routine, size: int):
+    def __init__(self, task: Any, routine, size: int):  # a runtime.Task, or the program's stand-in for constants
         self.task, self.routine, self.slots = task, routine, [None] * size
         self.in_handler, self.retries, self.error = False, 0, None
 

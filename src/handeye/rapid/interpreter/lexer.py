@@ -42,8 +42,22 @@ class Token:
 
     kind: str
     text: str
-    value: object
+    value: float | str | None  # None: eof
     line: int
+
+    @property
+    def word(self) -> str:
+        """``value`` of a keyword, name, operator or string token."""
+        if not isinstance(self.value, str):
+            raise TypeError(f"the {self.kind} token {self.text!r} has no word")
+        return self.value
+
+    @property
+    def number(self) -> float:
+        """``value`` of a number token."""
+        if not isinstance(self.value, float):
+            raise TypeError(f"the {self.kind} token {self.text!r} is not a number")
+        return self.value
 
     def is_kw(self, *words: str) -> bool:
         return self.kind == "kw" and self.value in words

@@ -10,11 +10,15 @@ faults and counts there.
 
 from __future__ import annotations
 
+from typing import Any, TYPE_CHECKING
 import errno
 import socket
 
 from .bindings import SocketBinding
 from .errors import RapidFatalError, RapidRuntimeError
+
+if TYPE_CHECKING:
+    from .runtime import Task
 
 __all__ = ["TcpSockets", "TcpHandle"]
 
@@ -36,8 +40,14 @@ class TcpHandle:
         if self.state != "closed":
             self.owner._close(self)
 
+    def os_socket(self) -> socket.socket:
+        """The OS socket, set from SocketBind (or accept) until the handle is closed."""
+        if self.sock is None:
+            raise RapidRuntimeError("ERR_SOCK_CLOSED", f"the socket is {self.state}")
+        return self.sock
+
     def fileno(self) -> int:
-        return self.sock.fileno()
+        return self.os_socket().fileno()
 
 
 class TcpSockets(SocketBinding):
@@ -70,7 +80,7 @@ class TcpSockets(SocketBinding):
         """Bytes read from the peer; returns what the program gets (None: the connection is dropped)."""
         return data
 
-    def sending(self, task, handle: TcpHandle, data: bytes) -> bytes | None:
+    def sending(self, task: Task, handle: TcpHandle, data: bytes) -> bytes | None:
         """Bytes the program sends; returns what goes out (None: the connection is dropped instead)."""
         return data
 
@@ -78,7 +88,7 @@ class TcpSockets(SocketBinding):
         """The program closes ``handle``."""
 
     # ------------------------------------------------------------------ the binding
-    def create(self, task):
+    def create(self, task: Task) -> TcpHandle:
         handle = TcpHandle(self)
         task.resources.append(handle)
         return handle
@@ -102,19 +112,19 @@ class TcpSockets(SocketBinding):
     def listen(self, handle: TcpHandle) -> None:
         if handle.state != "bound":
             raise RapidFatalError(f"SocketListen: the socket is {handle.state} (SocketBind first)")
-        handle.sock.listen(8)
-        handle.sock.setblocking(False)
+        handle.os_socket().listen(8)
+        handle.os_socket().setblocking(False)
         handle.state = "listening"
         if self.listening is not None:
             self.listening(handle)
 
-    def accept(self, task, handle: TcpHandle, timeout):
+    def accept(self, task: Task, handle: TcpHandle, timeout: float | None) -> tuple[TcpHandle, str]:
         if handle.state != "listening":
             raise RapidFatalError(f"SocketAccept: the socket is {handle.state} (SocketListen first)")
         end = None if timeout is None else task.clock() + timeout
         while True:
             try:
-                conn, addr = handle.sock.accept()
+                conn, addr = handle.os_socket().accept()
             except (BlockingIOError, InterruptedError):
                 left = None if end is None else end - task.clock()
                 if left is not None and left <= 0:
@@ -129,10 +139,10 @@ class TcpSockets(SocketBinding):
             self.accepted(client)
             return client, addr[0]
 
-    def connect(self, task, handle, address: str, port: int, timeout) -> None:
+    def connect(self, task: Task, handle: Any, address: str, port: int, timeout: float | None) -> None:
         raise RapidFatalError("SocketConnect is not supported by this controller's socket binding")
 
-    def receive(self, task, handle: TcpHandle, max_bytes: int, timeout, exact: bool = False) -> bytes:
+    def receive(self, task: Task, handle: TcpHandle, max_bytes: int, timeout: float | None, exact: bool = False) -> bytes:
         if handle.state != "connected" and not handle.rx:
             raise RapidRuntimeError("ERR_SOCK_CLOSED", "SocketReceive: the socket is not connected")
         end = None if timeout is None else task.clock() + timeout
@@ -151,7 +161,7 @@ class TcpSockets(SocketBinding):
     def _read(self, handle: TcpHandle) -> bool:
         """Move what the OS holds into ``handle.rx``; True if anything came (or the peer closed)."""
         try:
-            chunk = handle.sock.recv(4096)
+            chunk = handle.os_socket().recv(4096)
         except (BlockingIOError, InterruptedError):
             return False
         except OSError:
@@ -167,7 +177,7 @@ class TcpSockets(SocketBinding):
         handle.rx += data
         return True
 
-    def send(self, task, handle: TcpHandle, data: bytes) -> None:
+    def send(self, task: Task, handle: TcpHandle, data: bytes) -> None:
         if handle.state != "connected":
             raise RapidRuntimeError("ERR_SOCK_CLOSED", "SocketSend: the socket is not connected")
         out = self.sending(task, handle, data)
@@ -175,9 +185,10 @@ class TcpSockets(SocketBinding):
             self._close(handle, by_peer=True)
             raise RapidRuntimeError("ERR_SOCK_CLOSED", "SocketSend: the connection was closed")
         try:
-            handle.sock.setblocking(True)
-            handle.sock.settimeout(5.0)
-            handle.sock.sendall(out)
+            sock = handle.os_socket()
+            sock.setblocking(True)
+            sock.settimeout(5.0)
+            sock.sendall(out)
         except OSError:
             self._close(handle, by_peer=True)
             raise RapidRuntimeError("ERR_SOCK_CLOSED", "SocketSend: the connection was closed") from None

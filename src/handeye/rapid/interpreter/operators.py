@@ -7,6 +7,7 @@ for operand types RAPID does not combine (the compiler refuses most of those at 
 
 from __future__ import annotations
 
+from typing import Any, TypeGuard
 import math
 
 from .errors import RapidFatalError, RapidRuntimeError
@@ -15,7 +16,7 @@ from .values import MAX_STRING, Record, TYPES, describe
 __all__ = ["OPERATORS", "negate", "logical_not", "is_number", "equal"]
 
 
-def is_number(v) -> bool:
+def is_number(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
@@ -28,7 +29,7 @@ def _xyz(r: Record) -> tuple:
     return f["x"], f["y"], f["z"]
 
 
-def _is(v, name: str) -> bool:
+def _is(v: object, name: str) -> TypeGuard[Record]:
     return isinstance(v, Record) and v.type.name == name
 
 
@@ -36,7 +37,7 @@ def _bad(op: str, a, b):
     return RapidFatalError(f"operator {op} cannot combine {describe(a)} and {describe(b)}")
 
 
-def add(a, b):
+def add(a: Any, b: Any) -> Any:
     if is_number(a) and is_number(b):
         return a + b
     if isinstance(a, str) and isinstance(b, str):
@@ -48,7 +49,7 @@ def add(a, b):
     raise _bad("+", a, b)
 
 
-def sub(a, b):
+def sub(a: Any, b: Any) -> Any:
     if is_number(a) and is_number(b):
         return a - b
     if _is(a, "pos") and _is(b, "pos"):
@@ -56,7 +57,7 @@ def sub(a, b):
     raise _bad("-", a, b)
 
 
-def mul(a, b):
+def mul(a: Any, b: Any) -> Any:
     if is_number(a) and is_number(b):
         return a * b
     if is_number(a) and _is(b, "pos"):
@@ -72,7 +73,7 @@ def mul(a, b):
     raise _bad("*", a, b)
 
 
-def div(a, b):
+def div(a: Any, b: Any) -> Any:
     if is_number(a) and is_number(b):
         if b == 0:
             raise RapidRuntimeError("ERR_DIVZERO", "division by zero")
@@ -94,17 +95,17 @@ def _integers(op: str, a, b) -> tuple[int, int]:
     return int(a), int(b)
 
 
-def int_div(a, b):
+def int_div(a: Any, b: Any) -> Any:
     x, y = _integers("DIV", a, b)
     return float(abs(x) // abs(y) * (1 if (x >= 0) == (y >= 0) else -1))
 
 
-def mod(a, b):
+def mod(a: Any, b: Any) -> Any:
     x, y = _integers("MOD", a, b)
     return float(math.fmod(x, y))
 
 
-def equal(a, b) -> bool:
+def equal(a: Any, b: Any) -> bool:
     if is_number(a) and is_number(b):
         return a == b
     if type(a) is not type(b) and not (isinstance(a, Record) and isinstance(b, Record)):
@@ -138,7 +139,7 @@ OPERATORS = {
 }
 
 
-def negate(v):
+def negate(v: Any) -> Any:
     if is_number(v):
         return -v
     if _is(v, "pos"):
@@ -146,7 +147,7 @@ def negate(v):
     raise RapidFatalError(f"unary - cannot take {describe(v)}")
 
 
-def logical_not(v) -> bool:
+def logical_not(v: Any) -> bool:
     if not isinstance(v, bool):
         raise RapidFatalError(f"NOT needs a bool, got {describe(v)}")
     return not v

@@ -36,6 +36,7 @@ What RAPID has and this parser refuses, each with the line: ``GOTO`` and labels,
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import NoReturn
 
 from . import syntax as S
 from .errors import RapidLoadError
@@ -66,11 +67,11 @@ class _Parser:
         self.pos += 1
         return tok
 
-    def fail(self, message: str, tok: Token | None = None):
+    def fail(self, message: str, tok: Token | None = None) -> NoReturn:
         tok = tok or self.tok
         raise RapidLoadError(self.source, tok.line, message)
 
-    def expected(self, what: str):
+    def expected(self, what: str) -> NoReturn:
         self.fail(f"expected {what}, found {self.tok.text!r}")
 
     def op(self, symbol: str) -> Token:
@@ -156,12 +157,12 @@ class _Parser:
         self.op(";")
         if storage_tok.value == "CONST" and init is None:
             self.fail(f"CONST {name} needs a value (:= ...)", storage_tok)
-        return S.DataDecl(storage_tok.value, dtype, name, dims, init, storage_tok.line, local, task)
+        return S.DataDecl(storage_tok.word, dtype, name, dims, init, storage_tok.line, local, task)
 
     def routine(self) -> S.Routine:
         local = bool(self.tok.is_kw("LOCAL") and self.next())
         head = self.next()
-        kind, rtype, params = head.value, None, ()
+        kind, rtype, params = head.word, None, ()
         if kind == "FUNC":
             rtype = self.ident("the function's return type")
         name = self.ident("the routine name")
@@ -209,7 +210,7 @@ class _Parser:
     def param(self, group: int) -> S.Param:
         line = self.tok.line
         optional = bool(self.tok.is_op("\\") and self.next())
-        mode = self.next().value if self.tok.is_kw("INOUT", "VAR", "PERS") else ""
+        mode = self.next().word if self.tok.is_kw("INOUT", "VAR", "PERS") else ""
         ptype = self.ident("a parameter type")
         name = self.ident("the parameter name")
         dims = 0
@@ -238,7 +239,7 @@ class _Parser:
     def statement(self):
         tok = self.tok
         if tok.kind == "kw":
-            handler = _STATEMENTS.get(tok.value)
+            handler = _STATEMENTS.get(tok.word)
             if handler is None:
                 self.fail(f"{tok.value} cannot start a statement")
             return handler(self)
@@ -390,7 +391,7 @@ class _Parser:
         left = self.conjunction()
         while self.tok.is_kw("OR", "XOR"):
             tok = self.next()
-            left = S.Binary(tok.value, left, self.conjunction(), tok.line)
+            left = S.Binary(tok.word, left, self.conjunction(), tok.line)
         return left
 
     def conjunction(self):
@@ -407,7 +408,7 @@ class _Parser:
         left = self.sum()
         if self.tok.kind == "op" and self.tok.value in _RELATIONS:
             tok = self.next()
-            left = S.Binary(tok.value, left, self.sum(), tok.line)
+            left = S.Binary(tok.word, left, self.sum(), tok.line)
             if self.tok.kind == "op" and self.tok.value in _RELATIONS:
                 self.fail("comparisons cannot be chained; use AND")
         return left
@@ -416,20 +417,20 @@ class _Parser:
         left = self.term()
         while self.tok.is_op("+", "-"):
             tok = self.next()
-            left = S.Binary(tok.value, left, self.term(), tok.line)
+            left = S.Binary(tok.word, left, self.term(), tok.line)
         return left
 
     def term(self):
         left = self.unary()
         while self.tok.is_op("*", "/") or self.tok.is_kw("DIV", "MOD"):
             tok = self.next()
-            left = S.Binary(tok.value, left, self.unary(), tok.line)
+            left = S.Binary(tok.word, left, self.unary(), tok.line)
         return left
 
     def unary(self):
         if self.tok.is_op("-", "+"):
             tok = self.next()
-            return S.Unary(tok.value, self.unary(), tok.line)
+            return S.Unary(tok.word, self.unary(), tok.line)
         if self.tok.is_kw("NOT"):
             self.fail("NOT inside arithmetic: write the parentheses")
         return self.primary()
@@ -438,10 +439,10 @@ class _Parser:
         tok = self.tok
         if tok.kind == "num":
             self.next()
-            return S.Num(tok.value, tok.line, tok.text)
+            return S.Num(tok.number, tok.line, tok.text)
         if tok.kind == "str":
             self.next()
-            return S.Str(tok.value, tok.line)
+            return S.Str(tok.word, tok.line)
         if tok.is_kw("TRUE", "FALSE"):
             self.next()
             return S.Bool(tok.value == "TRUE", tok.line)

@@ -11,9 +11,13 @@ thread. Without a FlexPendant binding, ``TPReadFK`` and ``UIMessageBox`` stop th
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 import threading
 from collections import deque
 from dataclasses import dataclass
+
+if TYPE_CHECKING:
+    from .runtime import Task
 
 __all__ = ["FlexPendant", "Prompt"]
 
@@ -48,7 +52,7 @@ class FlexPendant:
             self.lines.append(str(text))
             self._cond.notify_all()
 
-    def ask(self, task, text: str, keys: dict, timeout: float | None = None) -> int | None:
+    def ask(self, task: Task, text: str, keys: dict, timeout: float | None = None) -> int | None:
         """Show ``text`` with the answers ``keys`` and wait (serving the task) for the operator's key (None
         after ``timeout`` s)."""
         end = None if timeout is None else task.clock() + timeout
@@ -69,7 +73,7 @@ class FlexPendant:
                 self._prompt = None
                 self._cond.notify_all()
 
-    def stop_here(self, task) -> None:
+    def stop_here(self, task: Task) -> None:
         """``Stop \\NoRegain``: wait until the operator presses Start."""
         resumed = threading.Event()
         with self._cond:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 from . import syntax as S
 from .compiler import ArrayType, Compiler
-from .errors import ERROR_NUMBERS, RapidLoadError
+from .errors import ERROR_NUMBERS, RapidFatalError, RapidLoadError
 from .frames import Frame
 from .parser import parse_module
 from .scope import DataSymbol, ModuleScope, ParamInfo, RoutineSymbol, SignalSymbol
@@ -184,7 +184,7 @@ class Program:
             params.append(ParamInfo(p.name, t, p.mode, p.optional, p.dims, p.group))
         rtype = None
         if node.kind == "FUNC":
-            rtype = type_info(node.rtype, self.records)
+            rtype = type_info(node.rtype, self.records) if node.rtype is not None else None
             if rtype is None:
                 raise RapidLoadError(m.source, node.line, f"function {node.name}: unknown return type {node.rtype!r}")
         symbol = RoutineSymbol(node.name, node.kind, tuple(params), rtype, m.name, node.line, node, node.local)
@@ -198,6 +198,8 @@ class Program:
             if id(symbol) in done:
                 return
             decl, scope = symbol.decl, symbol.scope
+            if decl is None or scope is None:  # _declare_data sets both for every entry of self.data
+                raise RapidFatalError(f"{symbol.name} is not data of the program")
             if id(symbol) in active:
                 raise RapidLoadError(scope.source, decl.line, f"the value of {decl.name} depends on itself")
             active.add(id(symbol))

@@ -18,10 +18,14 @@ import socket
 import threading
 from collections import deque
 from time import monotonic
+from typing import TYPE_CHECKING
 
 from .errors import RapidFatalError, RapidRuntimeError
 from .frames import ExitSignal, Frame, StopSignal, TaskStopped
 from .values import to_num
+
+if TYPE_CHECKING:
+    from .scope import RoutineSymbol
 
 __all__ = ["Task", "TrapFailed"]
 
@@ -81,7 +85,7 @@ class Task:
         self.pendant: deque = deque(maxlen=200)
         self.resources: list = []  # what bindings opened for this task (closed when it ends)
         self._timers: dict[int, _Timer] = {}
-        self._traps: dict[int, object] = {}
+        self._traps: dict[int, RoutineSymbol] = {}
         self._pending: deque = deque()
         self._next_interrupt = 0
         self._in_trap = False
@@ -249,6 +253,8 @@ class Task:
                 if trap is None:
                     continue
                 routine = trap.compiled
+                if routine is None:  # Program compiles every routine before a task runs
+                    raise RapidFatalError(f"TRAP {trap.name} is not compiled")
                 try:
                     routine.run(Frame(self, routine, routine.size))
                 except RapidRuntimeError as err:

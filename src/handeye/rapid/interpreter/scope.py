@@ -9,9 +9,14 @@ I/O signals of the controller's configuration. Names are case-insensitive.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from .errors import RapidLoadError
+from .syntax import DataDecl, Routine
 from .values import TypeInfo
+
+if TYPE_CHECKING:
+    from .statements import CompiledRoutine
 
 __all__ = ["DataSymbol", "LocalSymbol", "RoutineSymbol", "SignalSymbol", "ParamInfo", "ModuleScope", "RoutineScope"]
 
@@ -29,6 +34,8 @@ class DataSymbol:
     local: bool = False
     box: list = field(default_factory=lambda: [None])
     predefined: bool = False
+    decl: DataDecl | None = field(default=None, repr=False)  # a program's data: its declaration and scope
+    scope: ModuleScope | None = field(default=None, repr=False)
 
 
 @dataclass(eq=False)
@@ -72,9 +79,9 @@ class RoutineSymbol:
     rtype: TypeInfo | None
     module: str
     line: int
-    node: object = field(repr=False)
+    node: Routine = field(repr=False)
     local: bool = False
-    compiled: object = field(default=None, repr=False)
+    compiled: CompiledRoutine | None = field(default=None, repr=False)
 
 
 @dataclass(frozen=True)

@@ -18,12 +18,13 @@ inside it stops the program with that error. A normal end or ``RETURN`` of the r
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from time import monotonic
 
 from .builtins import lookup as lookup_builtin
 from .compiler import ArrayType, Compiler
 from .errors import RapidFatalError, RapidRuntimeError
-from .frames import RETRY, ExitSignal, ReturnSignal, RetrySignal, TaskStopped, TryNextSignal
+from .frames import RETRY, ExitSignal, Frame, ReturnSignal, RetrySignal, TaskStopped, TryNextSignal
 from .operators import equal
 from .scope import RoutineScope, RoutineSymbol
 from .values import TYPES, default_value, to_num
@@ -44,9 +45,9 @@ class CompiledRoutine:
         self.size = 0
         self.inits: list = []
         self.body: list = []
-        self.handler = None
-        self.error_numbers = None
-        self.undo = None
+        self.handler: Callable[[Frame], None] | None = None
+        self.error_numbers: frozenset[int] | None = None
+        self.undo: Callable[[Frame], None] | None = None
 
     def run(self, frame):
         for init in self.inits:

@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+from typing import Any, TypeVar, overload
 import struct
 from dataclasses import dataclass
 
@@ -24,6 +25,7 @@ __all__ = ["TypeInfo", "Record", "Array", "Aggregate", "Handle", "TYPES", "type_
 MAX_STRING = 80
 _F32 = struct.Struct("f")
 _F32_MAX = 3.4028234663852886e38
+_V = TypeVar("_V")
 
 
 def to_num(value: float) -> float:
@@ -139,6 +141,14 @@ def type_info(name: str, records: dict | None = None) -> TypeInfo | None:
     return TYPES.get(key)
 
 
+def _known_type(name: str, records: dict | None) -> TypeInfo:
+    """:func:`type_info` of a record field's type, which the program must know."""
+    t = type_info(name, records)
+    if t is None:
+        raise RapidFatalError(f"unknown data type {name!r}")
+    return t
+
+
 def _types_of(records):
     return lambda name: type_info(name, records)
 
@@ -149,13 +159,19 @@ def default_value(t: TypeInfo, records: dict | None = None, dims: tuple = ()):
         return Array([default_value(t, records, dims[1:]) for _ in range(int(dims[0]))],
                      t if len(dims) == 1 else TypeInfo(t.name, "array"))
     if t.kind == "record":
-        return Record(t, {name.lower(): default_value(type_info(ftype, records), records) for name, ftype in t.fields})
+        return Record(t, {name.lower(): default_value(_known_type(ftype, records), records) for name, ftype in t.fields})
     if t.kind == "handle":
         return Handle(t.name)
     return {"num": 0.0, "dnum": 0.0, "bool": False, "string": ""}[t.key]
 
 
-def copy_value(value):
+@overload
+def copy_value(value: Record) -> Record: ...
+@overload
+def copy_value(value: Array) -> Array: ...
+@overload
+def copy_value(value: _V) -> _V: ...
+def copy_value(value: Any):
     """A deep copy of a record or array (atomic values and handles are shared)."""
     if isinstance(value, Record):
         return Record(value.type, {k: copy_value(v) for k, v in value.fields.items()})
@@ -173,7 +189,7 @@ def compatible(target: TypeInfo | None, source: TypeInfo | None) -> bool:
     return target.key == source.key
 
 
-def coerce(value, t: TypeInfo, records: dict | None = None, what: str = "value"):
+def coerce(value: Any, t: TypeInfo, records: dict | None = None, what: str = "value"):
     """``value`` as type ``t``: num rounded to float32, aggregates made records or arrays, records copied.
 
     Raises
@@ -215,12 +231,12 @@ def _coerce_record(value, t: TypeInfo, records, what: str) -> Record:
     if isinstance(value, Aggregate):
         if len(value) != len(t.fields):
             raise RapidFatalError(f"{what}: a {t.name} has {len(t.fields)} components, the aggregate {len(value)}")
-        return Record(t, {name.lower(): coerce(v, type_info(ftype, records), records, f"{what}.{name}")
+        return Record(t, {name.lower(): coerce(v, _known_type(ftype, records), records, f"{what}.{name}")
                           for (name, ftype), v in zip(t.fields, value)})
     raise RapidFatalError(f"{what}: expected a {t.name}, got {describe(value)}")
 
 
-def coerce_array(value, element: TypeInfo, dims: tuple, records=None, what: str = "value") -> Array:
+def coerce_array(value: Any, element: TypeInfo, dims: tuple, records=None, what: str = "value") -> Array:
     """``value`` (an array or an aggregate) as an array of ``dims`` elements of type ``element``."""
     if not isinstance(value, (Array, Aggregate, list)) or len(value) != int(dims[0]):
         raise RapidFatalError(f"{what}: expected an array of {int(dims[0])} {element.name}")
@@ -229,7 +245,7 @@ def coerce_array(value, element: TypeInfo, dims: tuple, records=None, what: str 
     return Array([coerce_array(v, element, dims[1:], records, what) for v in value], TypeInfo(element.name, "array"))
 
 
-def describe(value) -> str:
+def describe(value: Any) -> str:
     """A short name of what ``value`` is, for messages."""
     if isinstance(value, bool):
         return "a bool"
@@ -256,7 +272,7 @@ def format_num(value: float) -> str:
     return text.replace("e+", "E+").replace("e-", "E-")
 
 
-def format_value(value, number=None, other=repr) -> str:
+def format_value(value: Any, number=None, other=repr) -> str:
     """``ValToStr`` of any value: ``[1,2,3]``, ``"text"``, ``TRUE``.
 
     ``number(float) -> str`` writes a num (default :func:`format_num`, ValToStr's 6 significant
@@ -275,7 +291,7 @@ def format_value(value, number=None, other=repr) -> str:
     return other(value)
 
 
-def aggregate(value):
+def aggregate(value: Any):
     """Nested Python lists as nested :class:`Aggregate` literals (what a parsed ``[...]`` gives)."""
     return Aggregate(aggregate(v) for v in value) if isinstance(value, list) else value
 

@@ -247,6 +247,8 @@ def _chosen(config, session, base: SessionBaseline, robot, here, count: int, pro
     record = session.extra["capture"]
     plan = np.array(record["plan_joints_deg"], float)
     problem, sol = base.problem, base.solution
+    if problem.joints_deg is None:
+        raise VerifyError("the session holds no joint angles, so its postures cannot be revisited: capture it again")
     ids = np.array([int(i) for i in problem.posture_ids])
     allowed = ~np.asarray(sol.outliers, bool) & (ids < len(plan))
     full = capture_time(robot, record)

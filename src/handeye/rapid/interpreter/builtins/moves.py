@@ -20,6 +20,7 @@ move stops the program, naming the singularity.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
 import math
 
 import numpy as np
@@ -31,6 +32,9 @@ from ..errors import RapidFatalError
 from ..values import PREDEFINED, TYPES, Record, copy_value, to_num
 from . import builtin
 from .geometry import pose_inv, pose_mult, qmul, qrot, quat, xyz
+
+if TYPE_CHECKING:
+    from ..runtime import Task
 
 __all__ = ["LINE_STEP_MM", "LINE_STEP_DEG", "line_samples", "flange_of", "motion_settings", "tcp_in"]
 
@@ -44,7 +48,7 @@ _MAX_SAMPLES = 600
 _SPEED = ("v_tcp", "v_ori", "v_leax", "v_reax")
 
 
-def motion_settings(task) -> dict:
+def motion_settings(task: Task) -> dict:
     """The task's ConfJ, ConfL and SingArea state (both checks on, no wrist interpolation at start)."""
     return task.__dict__.setdefault("motion_settings", {"confj": True, "confl": True, "wrist": False,
                                                         "override": 100.0, "max_tcp": 5000.0})

@@ -3,6 +3,7 @@ GetSysInfo, ErrWrite, Incr/Decr/Add/Clear, CDate/CTime."""
 
 from __future__ import annotations
 
+from typing import Any, TYPE_CHECKING
 import time
 
 import numpy as np
@@ -12,13 +13,16 @@ from ..frames import StopSignal
 from ..values import format_value, to_num
 from . import builtin
 
+if TYPE_CHECKING:
+    from ..runtime import Task
+
 __all__ = ["wait_for", "WAIT_MAX"]
 
 #: ``WAIT_MAX``: a time argument this large means "for ever".
 WAIT_MAX = 8388608.0
 
 
-def seconds(value, what: str, default: float | None = None) -> float | None:
+def seconds(value: Any, what: str, default: float | None = None) -> float | None:
     """A time argument in seconds (None: for ever)."""
     if value is None:
         return default
@@ -27,7 +31,7 @@ def seconds(value, what: str, default: float | None = None) -> float | None:
     return None if value >= WAIT_MAX else float(value)
 
 
-def wait_for(task, condition, max_time, flag, poll: float, what: str) -> None:
+def wait_for(task: Task, condition, max_time, flag, poll: float, what: str) -> None:
     """Poll ``condition`` until it holds; after ``max_time`` set ``flag`` TRUE or raise ERR_WAIT_MAXTIME."""
     limit = seconds(max_time, f"{what} \\MaxTime")
     met = task.poll_until(condition, limit, poll)
