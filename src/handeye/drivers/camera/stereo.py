@@ -186,10 +186,11 @@ class StereoModel:
         if self.K3 is not None:
             object.__setattr__(self, "K3", _matrix(self.K3, (3, 3), "K3"))
             object.__setattr__(self, "D3", _distortion(self.D3, "D3"))
-            object.__setattr__(self, "R3", _matrix(self.R3 if self.R3 is not None else np.eye(3), (3, 3), "R3"))
+            r3 = _matrix(self.R3 if self.R3 is not None else np.eye(3), (3, 3), "R3")
+            object.__setattr__(self, "R3", r3)
             object.__setattr__(self, "T3", _matrix(self.T3 if self.T3 is not None else 0.5 * self.T, (3,), "T3"))
             _check_camera_matrix(self.K3, "K3")
-            _check_rotation(self.R3, "R3")
+            _check_rotation(r3, "R3")
 
     # ------------------------------------------------------------------ geometry
     @property
@@ -208,8 +209,8 @@ class StereoModel:
         if name == "right":
             return self.K2, self.D2, self.R, self.T
         if name == "centre":
-            if self.K3 is not None:
-                return self.K3, self.D3, self.R3, self.T3
+            if self.K3 is not None and self.D3 is not None and self.R3 is not None and self.T3 is not None:
+                return self.K3, self.D3, self.R3, self.T3  # (__post_init__ sets all four with K3)
             return self.K1, self.D1, np.eye(3), 0.5 * self.T
         raise ValueError(f"view must be left, right or centre; got {name!r}")
 
@@ -296,7 +297,7 @@ class StereoModel:
         out = {"image_width": self.image_size[0], "image_height": self.image_size[1],
                "K1": self.K1, "D1": self.D1.reshape(1, -1), "K2": self.K2, "D2": self.D2.reshape(1, -1),
                "R": self.R, "T": self.T.reshape(3, 1)}
-        if self.K3 is not None:
+        if self.K3 is not None and self.D3 is not None and self.R3 is not None and self.T3 is not None:
             out.update({"K3": self.K3, "D3": self.D3.reshape(1, -1), "R3": self.R3, "T3": self.T3.reshape(3, 1)})
         return out
 
@@ -381,7 +382,7 @@ def load_stereo_model(path) -> StereoModel:
     refuse_base64_filestorage(text, path, StereoModelError)
     fs = _open_filestorage(path, text)
     try:
-        def node(key, required=True):
+        def node(key: str, required: bool = True) -> object:
             n = fs.getNode(key)
             if n.empty() or n.isNone():
                 if required:
@@ -392,14 +393,29 @@ def load_stereo_model(path) -> StereoModel:
                 raise StereoModelError(f"{key} is neither a number, an !!opencv-matrix nor a list of numbers")
             return value
 
+        def array(key: str, required: bool = True) -> np.ndarray | None:
+            value = node(key, required)
+            if value is None:
+                return None
+            try:
+                return np.asarray(value, dtype=float)
+            except (TypeError, ValueError):  # ragged lists, text
+                raise StereoModelError(f"{key} is not a matrix of numbers") from None
+
+        def needed(key: str) -> np.ndarray:
+            value = array(key)
+            if value is None:  # node() raises for a missing required key
+                raise StereoModelError(f"missing {key}")
+            return value
+
         width, height = node("image_width"), node("image_height")
         if not isinstance(width, float) or not isinstance(height, float):
             raise StereoModelError("image_width and image_height must be numbers")
-        extra = {}
+        k3 = d3 = r3 = t3 = None
         if node("K3", required=False) is not None:
-            extra = {"K3": node("K3"), "D3": node("D3", False), "R3": node("R3", False), "T3": node("T3", False)}
-        model = StereoModel((int(width), int(height)), node("K1"), node("D1"), node("K2"), node("D2"), node("R"),
-                            node("T"), name=str(path), **extra)
+            k3, d3, r3, t3 = needed("K3"), array("D3", False), array("R3", False), array("T3", False)
+        model = StereoModel((int(width), int(height)), needed("K1"), needed("D1"), needed("K2"), needed("D2"), needed("R"),
+                            needed("T"), K3=k3, D3=d3, R3=r3, T3=t3, name=str(path))
     except StereoModelError as exc:
         raise StereoModelError(f"{path}: {exc}") from None
     finally:

@@ -88,7 +88,7 @@ def _scalar(value) -> float | None:
     return number if np.isfinite(number) else None
 
 
-def _api_values(text: str) -> dict | None:
+def _api_values(text: str) -> dict[str, float] | None:
     """Flat ``key -> number`` of a YAML or INI file; ``None`` when it is neither."""
     try:
         data = parse_yaml(text, "Triclops values", StereoModelError)
@@ -111,7 +111,7 @@ def _api_values(text: str) -> dict | None:
     return {key: value for key, value in out.items() if value is not None}
 
 
-def _pick(values: dict, *names):
+def _pick(values: dict[str, float], *names: str) -> tuple[str | None, float | None]:
     for name in names:
         if name in values:
             return name, values[name]
@@ -164,6 +164,7 @@ def parse_triclops_text(text: str, where: str = "Triclops file", size=None) -> T
     if missing:
         raise StereoModelError(f"{where}: missing {', '.join(missing)} (Triclops gives focal_length in px, "
                                "center_row and center_col in px, baseline in metres)")
+    assert f is not None and row is not None and col is not None and baseline is not None  # else missing above
     _, w = _pick(api, "image_width", "width", "cols", "ncols")
     _, h = _pick(api, "image_height", "height", "rows", "nrows")
     if w is None or h is None:
