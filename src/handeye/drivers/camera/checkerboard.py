@@ -47,6 +47,7 @@ printed pattern, its contrast); this one detects, refines, checks and triangulat
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
@@ -57,6 +58,9 @@ from .errors import BoardNotFound, CameraError, FrameError, StereoMismatch
 from .grid_search import SEARCH_STAGES, GridSearch, board_region, find_grid, refuse_missing_grid
 from .pnp import pnp_pose
 from .stereo import StereoModel
+
+if TYPE_CHECKING:
+    from .charuco import CharucoDetection
 
 __all__ = [
     "Detection",
@@ -231,7 +235,7 @@ def off_grid_corners(grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         if residuals[worst] <= limit or keep.sum() <= basis.shape[1] + 4:
             break
         keep[worst] = False
-    return np.nonzero(residuals > limit)[0], residuals
+    return np.nonzero(np.greater(residuals, limit))[0], residuals
 
 
 def _refine(gray: np.ndarray, grid: np.ndarray) -> np.ndarray:
@@ -276,9 +280,9 @@ def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside
     gray = _gray_u8(image, what)
     nx, ny = board.corners
     result = find_grid(gray, (nx, ny), search)
-    refuse_missing_grid(result, gray, (nx, ny), what)
+    corners = refuse_missing_grid(result, gray, (nx, ny), what)
     stage = result.stage
-    grid = result.corners.reshape(ny, nx, 2)
+    grid = corners.reshape(ny, nx, 2)
     if refine:
         grid = _refine(gray, grid)
     candidates = canonical_orderings(grid)
@@ -387,15 +391,16 @@ class BoardObservation:
     ----------
     points_mm : ndarray, shape (nx*ny, 3)
         Corners in the camera frame (camera 1 = left), target index order, mm.
-    left, right : Detection
-        The two detections, consistently ordered.
+    left, right : Detection, or CharucoDetection
+        The two detections, consistently ordered (a board seen by id, :class:`~.charuco.PartialObservation`:
+        ChArUco detections of the corners both images saw).
     quality : dict
         :func:`board_quality` figures plus ``corners_left``, ``corners_right``, ``orientation``.
     """
 
     points_mm: np.ndarray
-    left: Detection
-    right: Detection
+    left: Detection | CharucoDetection
+    right: Detection | CharucoDetection
     quality: dict
 
 

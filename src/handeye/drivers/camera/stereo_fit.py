@@ -255,9 +255,10 @@ def _calibrate_camera(side: str, items: list, obj: np.ndarray, size, flags: int,
     total, dropped = len(items), 0
     while True:
         try:
-            rms, k, d, rvecs, tvecs, std_in, _, per_view = cv2.calibrateCameraExtended(
-                [obj] * len(items), [c.astype(np.float32).reshape(-1, 1, 2) for _, c in items], size, None, None,
-                flags=flags, criteria=CRITERIA)
+            # K, D None: OpenCV allocates them (its stubs omit None)
+            rms, k, d, rvecs, tvecs, std_in, _, per_view = cv2.calibrateCameraExtended(  # pyright: ignore[reportCallIssue]
+                [obj] * len(items), [c.astype(np.float32).reshape(-1, 1, 2) for _, c in items], size,
+                None, None, flags=flags, criteria=CRITERIA)  # pyright: ignore[reportArgumentType]
         except cv2.error as exc:
             raise StereoCalibrationError(
                 f"OpenCV could not calibrate the {side} camera ({str(exc).strip().splitlines()[-1][:120]}): the views "
@@ -284,10 +285,12 @@ def _calibrate_camera(side: str, items: list, obj: np.ndarray, size, flags: int,
 
 
 def _stereo(obj, pairs, left: CameraIntrinsics, right: CameraIntrinsics, size, flags, criteria=CRITERIA):
-    return cv2.stereoCalibrateExtended(
+    # R, T None: OpenCV allocates them (its stubs omit None)
+    return cv2.stereoCalibrateExtended(  # pyright: ignore[reportCallIssue]
         [obj] * len(pairs), [p.left.astype(np.float32).reshape(-1, 1, 2) for p in pairs],
         [p.right.astype(np.float32).reshape(-1, 1, 2) for p in pairs],
-        left.K.copy(), left.D.copy(), right.K.copy(), right.D.copy(), size, None, None, flags=flags, criteria=criteria)
+        left.K.copy(), left.D.copy(), right.K.copy(), right.D.copy(), size,
+        None, None, flags=flags, criteria=criteria)  # pyright: ignore[reportArgumentType]
 
 
 def epipolar_errors(model: StereoModel, left_px, right_px) -> np.ndarray:

@@ -65,14 +65,14 @@ class TriangulationResult:
     board: BoardGeometry
     stereo: str
     source: str
-    left_px: np.ndarray = field(repr=False, default=None)
-    right_px: np.ndarray = field(repr=False, default=None)
+    left_px: np.ndarray | None = field(repr=False, default=None)
+    right_px: np.ndarray | None = field(repr=False, default=None)
     #: Target index of each row of ``points_mm`` for a board seen by id (ChArUco, circles); None: a checkerboard.
     corner_ids: np.ndarray | None = field(repr=False, default=None)
 
     def to_json(self) -> dict:
         """The JSON of ``handeye triangulate --json`` (conventions.md keys first)."""
-        board = {"corners": [int(c) for c in self.board.corners]}
+        board: dict[str, object] = {"corners": [int(c) for c in self.board.corners]}
         if self.board.square_mm is not None:
             board["square_mm"] = float(self.board.square_mm)
         if self.corner_ids is not None:
@@ -109,8 +109,9 @@ def decode_image(data: bytes, name: str = "image") -> np.ndarray:
     image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     if image is None:
         raise FrameError(f"{name} is not an image OpenCV can read (PNG, TIFF, BMP, JPEG)")
+    image = np.asarray(image)  # imdecode gives an ndarray (its stub says MatLike, which may be a UMat)
     if image.dtype == np.uint16:
-        image = (image >> 8).astype(np.uint8)
+        image = (image.view(np.uint16) >> 8).astype(np.uint8)
     if image.ndim == 3:
         image = cv2.cvtColor(image, cv2.COLOR_BGRA2GRAY if image.shape[2] == 4 else cv2.COLOR_BGR2GRAY)
     return image

@@ -83,10 +83,11 @@ class RwsHttp(_Host):
     def _auth(self) -> AuthBase:
         from requests.auth import HTTPBasicAuth, HTTPDigestAuth
 
-        if getattr(self, "_auth_obj", None) is None:
+        auth: AuthBase | None = getattr(self, "_auth_obj", None)
+        if auth is None:
             cls = HTTPBasicAuth if self.generation == 2 else HTTPDigestAuth
-            self._auth_obj: AuthBase | None = cls(self.username, self._password)
-        return self._auth_obj  # pyright: ignore[reportReturnType]  # set just above when it was None
+            auth = self._auth_obj = cls(self.username, self._password)
+        return auth
 
     def _timeout(self, deadline: Deadline) -> float:
         left = deadline.remaining()
