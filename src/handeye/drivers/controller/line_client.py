@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import logging
 import time
-from typing import Any
 from abc import ABC, abstractmethod
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -55,7 +56,7 @@ class LineTransport(ABC):
 class LineBuffer:
     """Accumulates received bytes and cuts lines; too long a run without LF is garbage."""
 
-    def __init__(self, protocol_error):
+    def __init__(self, protocol_error: Callable[[str], Exception]):
         self.data = bytearray()
         self.protocol_error = protocol_error
 
@@ -283,7 +284,8 @@ class LineController(Controller):
         if echo != k:
             raise self.protocol_error(f"controller accepted posture {echo} when asked for {k}")
 
-    def wait_at_rest(self, k=None, timeout=None, *, deadline=None) -> ControllerStatus:
+    def wait_at_rest(self, k: int | None = None, timeout: float | None = None, *,
+                     deadline: Deadline | None = None) -> ControllerStatus:
         # A single-task RAPID program answers STATUS only after MoveAbsJ ... fine returned, so one
         # STATUS may take the whole move: it gets the whole remaining budget.
         deadline = deadline or Deadline(self.motion_timeout if timeout is None else timeout)

@@ -15,6 +15,7 @@ still answers means the RAPID program stopped, reported as a timeout naming it.
 from __future__ import annotations
 
 import logging
+import os
 import time
 from typing import Any
 
@@ -22,7 +23,7 @@ import numpy as np
 
 from .errors import InvalidRequest, ProtocolError, StationError
 from .interface import Controller, Deadline, LinkDown
-from .modbus_map import GUIDED_REGISTERS, STATE_NAMES, load_register_map
+from .modbus_map import GUIDED_REGISTERS, STATE_NAMES, RegisterMap, load_register_map
 from .polled import PolledHandshake
 from .protocol import E_AUTH, E_BUSY, E_STATE, E_TOOL, HINT, VERDICT, ERROR_CODES, KEY_TRIES, PROTOCOL_VERSION, write_key_code
 from .types import ACKED, AT, DONE, ERROR, LATE, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_timeout
@@ -80,7 +81,7 @@ class ModbusController(PolledHandshake, Controller):
 
     protocol = "modbus"
 
-    def __init__(self, host: str = "127.0.0.1", port: int = 502, *, register_map=None,
+    def __init__(self, host: str = "127.0.0.1", port: int = 502, *, register_map: str | os.PathLike[str] | RegisterMap | None = None,
                  heartbeat_timeout: float = 1.0, poll_s: float = 0.005, **options: Any):
         if isinstance(port, bool) or not isinstance(port, int) or not 0 < port < 65536:
             raise InvalidRequest(f"TCP port must be an integer 1..65535; got {port!r}")
