@@ -46,6 +46,7 @@ printed pattern, its contrast); this one detects, refines, checks and triangulat
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -60,6 +61,8 @@ from .pnp import pnp_pose
 from .stereo import StereoModel
 
 if TYPE_CHECKING:
+    import numpy.typing as npt
+
     from .charuco import CharucoDetection
 
 __all__ = [
@@ -92,7 +95,7 @@ OFF_GRID_PX, OFF_GRID_FRACTION = 1.5, 0.06
 MAX_ROW_DISAGREEMENT_PX = 2.0
 
 
-def as_board(board, square_mm: float | None = None) -> BoardGeometry:
+def as_board(board: BoardGeometry | str | Sequence[int], square_mm: float | None = None) -> BoardGeometry:
     """A :class:`BoardGeometry` from a geometry, ``(nx, ny)`` or ``"13x8"`` (long side first).
 
     Raises
@@ -247,7 +250,7 @@ def _refine(gray: np.ndarray, grid: np.ndarray) -> np.ndarray:
     return refined.reshape(grid.shape).astype(np.float64)
 
 
-def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside: bool = True,
+def detect_board(image: np.ndarray, board: BoardGeometry | tuple[int, int] | str, *, refine: bool = True, check_outside: bool = True,
                  search: str = "full", what: str = "image") -> Detection:
     """Find the board's inner corners in one image and put them in canonical order.
 
@@ -318,7 +321,8 @@ def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside
                      tuple(int(i) for i in off), float(residuals.max()) if len(off) else 0.0)
 
 
-def board_pose_from_corners(corners_px, board, camera_matrix, dist_coeffs=None) -> tuple[np.ndarray, float]:
+def board_pose_from_corners(corners_px: npt.ArrayLike, board: BoardGeometry | tuple[int, int] | str, camera_matrix: npt.ArrayLike,
+                            dist_coeffs: npt.ArrayLike | None = None) -> tuple[np.ndarray, float]:
     """Board pose ``target2cam`` (mm) of a canonical detection with ``cv2.solvePnP`` (monocular).
 
     Parameters
@@ -404,7 +408,7 @@ class BoardObservation:
     quality: dict
 
 
-def observe_board(left: np.ndarray, right: np.ndarray, model: StereoModel, board, *,
+def observe_board(left: np.ndarray, right: np.ndarray, model: StereoModel, board: BoardGeometry | tuple[int, int] | str, *,
                   max_row_disagreement_px: float = MAX_ROW_DISAGREEMENT_PX) -> BoardObservation:
     """Detect the board in a left/right pair, order both detections consistently and triangulate.
 

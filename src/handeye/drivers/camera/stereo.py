@@ -23,6 +23,8 @@ computed once per model, and so are the pixel maps of :meth:`StereoModel.rectifi
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -32,6 +34,11 @@ import numpy as np
 
 from ...base import read_text_file
 from .errors import StereoMismatch, StereoModelError
+
+if TYPE_CHECKING:
+    import os
+
+    import numpy.typing as npt
 
 __all__ = [
     "NOMINAL_XB3",
@@ -214,7 +221,7 @@ class StereoModel:
             return self.K1, self.D1, np.eye(3), 0.5 * self.T
         raise ValueError(f"view must be left, right or centre; got {name!r}")
 
-    def project(self, points_mm, view: str = "left") -> np.ndarray:
+    def project(self, points_mm: npt.ArrayLike, view: str = "left") -> np.ndarray:
         """Pixel coordinates ``(n, 2)`` of points ``(n, 3)`` given in the camera frame."""
         k, d, r, t = self.view(view)
         pts = np.asarray(points_mm, dtype=float).reshape(-1, 3)
@@ -248,7 +255,7 @@ class StereoModel:
         m1x, m1y, m2x, m2y = self.rectification_maps()
         return (cv2.remap(left, m1x, m1y, cv2.INTER_LINEAR), cv2.remap(right, m2x, m2y, cv2.INTER_LINEAR))
 
-    def rectify_points(self, left_px, right_px) -> tuple[np.ndarray, np.ndarray]:
+    def rectify_points(self, left_px: npt.ArrayLike, right_px: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Rectified pixel coordinates ``(n, 2)`` of raw (distorted) pixel coordinates in each image."""
         rect = self.rectification
         left = np.asarray(left_px, dtype=np.float64).reshape(-1, 1, 2)
@@ -257,7 +264,7 @@ class StereoModel:
         rr = cv2.undistortPointsIter(right, self.K2, self.D2, rect.R2, rect.P2, _SUBPIXEL_CRITERIA)
         return rl.reshape(-1, 2), rr.reshape(-1, 2)
 
-    def triangulate(self, left_px, right_px) -> Triangulation:
+    def triangulate(self, left_px: npt.ArrayLike, right_px: npt.ArrayLike) -> Triangulation:
         """Points in the camera frame (mm) from corresponding pixel coordinates in the left and right images.
 
         Parameters
@@ -333,7 +340,7 @@ def _node_value(n):
     return None
 
 
-def refuse_base64_filestorage(text: str, path, error) -> None:
+def refuse_base64_filestorage(text: str, path: object, error: type[Exception]) -> None:
     """Refuse FileStorage text holding a base64 (``!!binary``) value before cv2 parses it.
 
     OpenCV 4's YAML reader loops forever (in C++, beyond any timeout or Ctrl-C of Python) on a damaged
@@ -367,7 +374,7 @@ def _open_filestorage(path: Path, text: str):
     return fs
 
 
-def load_stereo_model(path) -> StereoModel:
+def load_stereo_model(path: str | os.PathLike[str]) -> StereoModel:
     """Read a stereo model from an OpenCV FileStorage file (YAML/XML, see the module docstring).
 
     Matrices may be ``!!opencv-matrix`` entries or plain nested lists.
@@ -423,7 +430,7 @@ def load_stereo_model(path) -> StereoModel:
     return model
 
 
-def save_stereo_model(path, model: StereoModel, extra: dict | None = None) -> Path:
+def save_stereo_model(path: str | os.PathLike[str], model: StereoModel, extra: dict | None = None) -> Path:
     """Write ``model`` as an OpenCV FileStorage YAML file; returns the path.
 
     ``extra`` adds entries after the model's (numbers or strings, e.g. the calibration's RMS error);

@@ -29,6 +29,8 @@ Object points are in millimetres (``square_mm``), so ``T`` is in mm, as ``STEREO
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from dataclasses import dataclass, field
 
 import cv2
@@ -38,6 +40,9 @@ from ...geometry import BoardGeometry, board_corners
 from .errors import CameraError, StereoModelError
 from .pnp import pose_from_rvec
 from .stereo import StereoModel
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "StereoCalibrationError",
@@ -293,7 +298,7 @@ def _stereo(obj, pairs, left: CameraIntrinsics, right: CameraIntrinsics, size, f
         None, None, flags=flags, criteria=criteria)  # pyright: ignore[reportArgumentType]
 
 
-def epipolar_errors(model: StereoModel, left_px, right_px) -> np.ndarray:
+def epipolar_errors(model: StereoModel, left_px: npt.ArrayLike, right_px: npt.ArrayLike) -> np.ndarray:
     """Distances (px) of undistorted corners from the epipolar lines of their matches, ``(2n,)``.
 
     The points of both images are undistorted to pixel coordinates of their own camera matrix and

@@ -12,6 +12,8 @@ loading the stereo model, whose rectification is computed once per model before 
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,6 +28,9 @@ from .checkerboard import as_board, observe_board
 from .decode import decode_xb3_frame, frame_bytes
 from .errors import FrameError, FrameUsageError, SquareSizeMismatch
 from .stereo import StereoModel, load_stereo_model, nominal_xb3_model
+
+if TYPE_CHECKING:
+    import os
 
 __all__ = [
     "TriangulationResult",
@@ -95,7 +100,7 @@ class TriangulationResult:
 MAX_IMAGE_BYTES = 512 * 1024 * 1024
 
 
-def read_image_bytes(path) -> bytes:
+def read_image_bytes(path: str | os.PathLike[str]) -> bytes:
     """The bytes of an image or frame file; :class:`FrameError` naming the file when it cannot be read."""
     path = Path(path)
     data = read_file_bytes(path, "image", FrameError, missing=f"file not found: {path}", max_bytes=MAX_IMAGE_BYTES)
@@ -137,7 +142,7 @@ def _result(obs, board: BoardGeometry, model: StereoModel, source: str, start: f
                                obs.left.corners_px, obs.right.corners_px, getattr(obs, "corner_ids", None))
 
 
-def triangulate_images(left: np.ndarray, right: np.ndarray, board=STATION_BOARD.corners, square_mm: float | None = None,
+def triangulate_images(left: np.ndarray, right: np.ndarray, board: BoardGeometry | tuple[int, int] | str = STATION_BOARD.corners, square_mm: float | None = None,
                        model: StereoModel | None = None) -> TriangulationResult:
     """Corners in mm from a left/right image pair already in memory (grey or BGR arrays).
 
@@ -151,7 +156,7 @@ def triangulate_images(left: np.ndarray, right: np.ndarray, board=STATION_BOARD.
     return _result(obs, board, model, "images", start)
 
 
-def triangulate_xb3_frame(buffer, board=STATION_BOARD.corners, square_mm: float | None = None, model: StereoModel | None = None,
+def triangulate_xb3_frame(buffer: bytes | bytearray | memoryview | np.ndarray, board: BoardGeometry | tuple[int, int] | str = STATION_BOARD.corners, square_mm: float | None = None, model: StereoModel | None = None,
                           *, colour: bool = True, width: int | None = None,
                           height: int | None = None) -> TriangulationResult:
     """Corners in mm from one raw XB3 frame (3-sensor RGB8 layout; the wide left-right pair).
@@ -178,7 +183,9 @@ def triangulate_xb3_frame(buffer, board=STATION_BOARD.corners, square_mm: float 
     return _result(obs, board, model, "xb3-raw", start)
 
 
-def triangulate_files(*, left=None, right=None, xb3_raw=None, stereo=None, board=STATION_BOARD.corners, square_mm: float | None = STATION_BOARD.square_mm,
+def triangulate_files(*, left: str | os.PathLike[str] | None = None, right: str | os.PathLike[str] | None = None,
+                      xb3_raw: str | os.PathLike[str] | None = None, stereo: str | os.PathLike[str] | None = None,
+                      board: BoardGeometry | tuple[int, int] | str = STATION_BOARD.corners, square_mm: float | None = STATION_BOARD.square_mm,
                       colour: bool = True) -> TriangulationResult:
     """:func:`triangulate_images` or :func:`triangulate_xb3_frame` on files.
 
@@ -211,6 +218,7 @@ def triangulate_files(*, left=None, right=None, xb3_raw=None, stereo=None, board
                 f"{' (truncated?)' if len(data) < frame_bytes('rgb8', w, h) else ''}; the stereo model sets the frame size"
             )
         return triangulate_xb3_frame(data, board, square_mm, model, colour=colour)
+    assert left is not None and right is not None  # refused above without both
     left_bytes, right_bytes = read_image_bytes(left), read_image_bytes(right)
     model, geometry = _prepare(model, board, square_mm)
     start = time.perf_counter()
