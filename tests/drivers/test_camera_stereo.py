@@ -125,6 +125,9 @@ def test_plain_yaml_lists_are_accepted(tmp_path):
         (lambda t: t.replace("R: [[1, 0, 0], [0, 1, 0], [0, 0, 1]]", "R: [[1, 0, 0], [0, 2, 0], [0, 0, 1]]"), "not a rotation"),
         (lambda t: t.replace("D2: [0, 0, 0, 0, 0]\n", ""), "missing D2"),
         (lambda t: t.replace("K1: [[983, 0, 643.6]", "K1: [[-983, 0, 643.6]"), "K1 is not a camera matrix"),
+        # ragged lists: numpy refuses them with ValueError, which escaped as a traceback for the distortions
+        (lambda t: t.replace("D1: [0, 0, 0, 0, 0]", "D1: [0, [0, 0], 0, 0]"), "D1 is not a matrix of numbers"),
+        (lambda t: t.replace("D2: [0, 0, 0, 0, 0]", "D2: [0, 0, 0, [0, 0]]"), "D2 is not a matrix of numbers"),
     ],
 )
 def test_bad_files_are_refused_with_the_reason(tmp_path, edit, message):

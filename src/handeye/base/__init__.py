@@ -38,6 +38,7 @@ _EXPORTS = {
     "lazy_exports": "lazy",
     "WORKERS": "parallel",
     "map_chunks": "parallel",
+    "Choices": "registry",
     "Registry": "registry",
     "load_target": "registry",
     "quiet_loads": "registry",
@@ -58,6 +59,6 @@ if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
     from .files import HEAD_BYTES, binary_offset, check_regular_file, make_folder, parse_yaml, read_file_bytes, read_text_file, remove_stale_temporaries, write_bytes_atomic, write_failure, write_text_atomic, write_texts_atomic  # noqa: F401
     from .lazy import lazy_exports  # noqa: F401
     from .parallel import WORKERS, map_chunks  # noqa: F401
-    from .registry import Registry, load_target, quiet_loads, unusable_clause  # noqa: F401
+    from .registry import Choices, Registry, load_target, quiet_loads, unusable_clause  # noqa: F401
     from .time_bound import OutOfTime, TIME_VARIABLE, call_within, plugin_time_s  # noqa: F401
     from .write_key import WRITE_KEY_PATTERN, write_key_code  # noqa: F401

@@ -21,7 +21,7 @@ _BRIEF.maxstring = _BRIEF.maxother = 60
 _BRIEF.maxlong = 40
 
 
-def brief(value) -> str:
+def brief(value: object) -> str:
     """A short ``repr`` of any value read from a file, for a one-line message: bounded in length and
     in the work it takes (a YAML alias bomb, a list of lists of the same list ..., is not expanded;
     an integer of thousands of digits is described, not printed)."""

@@ -24,6 +24,7 @@ import errno
 import os
 import stat
 import tempfile
+from collections.abc import Iterable
 from pathlib import Path
 
 from .errors import OutputError, SessionError
@@ -91,7 +92,7 @@ def _read_failure(exc: OSError, what: str, path, error, missing: str | None) -> 
     return error(f"cannot read {_describe(what, path)}: {(exc.strerror or str(exc)).lower()}")
 
 
-def check_regular_file(path, what: str = "file", error: type[Exception] = SessionError, *, missing: str | None = None,
+def check_regular_file(path: str | os.PathLike[str], what: str = "file", error: type[Exception] = SessionError, *, missing: str | None = None,
                        max_bytes: int | None = MAX_FILE_BYTES) -> os.stat_result:
     """Refuse anything but an existing regular file of at most ``max_bytes`` (``None``: no limit).
 
@@ -137,7 +138,7 @@ def _check_stat(info: os.stat_result, what: str, path, error, max_bytes: int | N
                     f"refused: is it the right file?")
 
 
-def read_file_bytes(path, what: str = "file", error: type[Exception] = SessionError, *, missing: str | None = None,
+def read_file_bytes(path: str | os.PathLike[str], what: str = "file", error: type[Exception] = SessionError, *, missing: str | None = None,
                     max_bytes: int | None = MAX_FILE_BYTES, head: int | None = None) -> bytes:
     """The bytes of a regular file (all of them, or the first ``head``), or a one-line ``error``.
 
@@ -191,7 +192,7 @@ def _text_problem(data: bytes, complete: bool) -> str | None:
     return None
 
 
-def read_text_file(path, what: str = "file", error: type[Exception] = SessionError, *, missing: str | None = None,
+def read_text_file(path: str | os.PathLike[str], what: str = "file", error: type[Exception] = SessionError, *, missing: str | None = None,
                    max_bytes: int | None = MAX_FILE_BYTES) -> str:
     """The UTF-8 text of a regular file (a leading byte-order mark dropped), or a one-line ``error``.
 
@@ -241,7 +242,7 @@ def _first_existing(path: Path) -> Path | None:
     return None
 
 
-def write_failure(path, exc: OSError, action: str = "write") -> OutputError:
+def write_failure(path: str | os.PathLike[str], exc: OSError, action: str = "write") -> OutputError:
     """An :class:`OutputError` for an ``OSError`` raised while writing ``path``: path, reason, what to do.
 
     Parameters
@@ -276,7 +277,7 @@ def write_failure(path, exc: OSError, action: str = "write") -> OutputError:
     return OutputError(f"cannot {action} {path}: {reason}; {todo}")
 
 
-def make_folder(path) -> Path:
+def make_folder(path: str | os.PathLike[str]) -> Path:
     """``mkdir -p path``, or an :class:`OutputError` naming the path, the reason and what to do."""
     path = Path(path)
     try:
@@ -290,7 +291,7 @@ def _temporary_prefix(path: Path) -> str:
     return f".{path.name}."
 
 
-def remove_stale_temporaries(folder) -> list:
+def remove_stale_temporaries(folder: str | os.PathLike[str]) -> list[Path]:
     """Remove the temporary files :func:`write_text_atomic` leaves when its process is killed between
     writing and renaming (``.NAME.*.tmp``), in ``folder`` and below; returns the paths removed.
 
@@ -305,7 +306,7 @@ def remove_stale_temporaries(folder) -> list:
     return removed
 
 
-def write_text_atomic(path, text: str, encoding: str = "utf-8", newline: str | None = None) -> Path:
+def write_text_atomic(path: str | os.PathLike[str], text: str, encoding: str = "utf-8", newline: str | None = None) -> Path:
     """Write ``text`` to ``path`` atomically: a temporary file in the same folder, flushed to disk,
     renamed over the target (and the rename itself synced). The file gets the user's usual
     permissions (umask), not a temporary file's 0600. Used for every file the package writes.
@@ -319,12 +320,12 @@ def write_text_atomic(path, text: str, encoding: str = "utf-8", newline: str | N
     return _write_atomic(path, lambda fd: os.fdopen(fd, "w", encoding=encoding, newline=newline), text, encoding)
 
 
-def write_bytes_atomic(path, data: bytes) -> Path:
+def write_bytes_atomic(path: str | os.PathLike[str], data: bytes) -> Path:
     """Write ``data`` (an image) to ``path`` atomically, as :func:`write_text_atomic` writes text."""
     return _write_atomic(path, lambda fd: os.fdopen(fd, "wb"), bytes(data), "bytes")
 
 
-def write_texts_atomic(files, encoding: str = "utf-8") -> list:
+def write_texts_atomic(files: Iterable[tuple[str | os.PathLike[str], str]], encoding: str = "utf-8") -> list[Path]:
     """Write many files as :func:`write_text_atomic` writes one (temporary file, flushed to disk,
     renamed over the target), with one flush to disk for all of them instead of one per file: every
     temporary file is written first, then the data synced at once (``os.sync`` where it exists, else

@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import importlib
 import sys
+from collections.abc import Callable
+from typing import Any
 
 __all__ = ["lazy_exports"]
 
 
-def lazy_exports(package: str, exports: dict[str, str]):
+def lazy_exports(package: str, exports: dict[str, str]) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
     """``__getattr__`` and ``__dir__`` for a package that re-exports names of its modules lazily.
 
     Parameters
@@ -34,7 +36,7 @@ def lazy_exports(package: str, exports: dict[str, str]):
     >>> __getattr__, __dir__ = lazy_exports(__name__, {"calibrate": "solve"})  # doctest: +SKIP
     """
 
-    def __getattr__(name: str):
+    def __getattr__(name: str) -> Any:
         module = exports.get(name)
         if module is None:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")

@@ -8,15 +8,20 @@ without processes or copies.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from typing import TypeVar
 
 __all__ = ["WORKERS", "map_chunks"]
+
+T = TypeVar("T")
+R = TypeVar("R")
 
 #: Threads used for batch work (at most 4; 1 disables threading).
 WORKERS = max(1, min(4, os.cpu_count() or 1))
 
 
-def map_chunks(fn, items: list) -> list:
+def map_chunks(fn: Callable[[T], R], items: list[T]) -> list[R]:
     """``[fn(item) for item in items]``, in threads when there is more than one item.
 
     The threads live for this call only (starting them costs well under a millisecond), so no

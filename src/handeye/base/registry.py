@@ -25,7 +25,7 @@ import importlib
 import importlib.metadata
 import logging
 import threading
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import replace
 from typing import Any, Generic, TypeVar, cast
 
@@ -41,7 +41,7 @@ _QUIET = [0]
 
 
 @contextlib.contextmanager
-def quiet_loads():
+def quiet_loads() -> Iterator[None]:
     """Within it, plug-ins that fail to load are not logged as warnings (the message being written names
     them and why itself)."""
     _QUIET[0] += 1
@@ -56,7 +56,7 @@ def quiet_loads():
 _HANGING: dict[str, threading.Thread] = {}
 
 
-def load_target(target):
+def load_target(target: object) -> Any:
     """The object a ``"module:attribute"`` string names (imported now), or ``target`` itself."""
     if not isinstance(target, str):
         return target
@@ -106,7 +106,7 @@ class Registry(Mapping, Generic[E]):
         """Remove an entry registered in code (entry points come back at the next refresh)."""
         self._registered.pop(name.lower(), None)
 
-    def update(self, name: str, **changes) -> E:
+    def update(self, name: str, **changes: Any) -> E:
         """Change some fields of a registered entry (``mock=...`` from the mocks); returns it."""
         return self.register(replace(cast(Any, self[name]), **changes))
 
@@ -264,13 +264,13 @@ class Registry(Mapping, Generic[E]):
         what the package's shipped documents describe, whatever plug-ins this machine has installed."""
         return tuple(self._registered)
 
-    def unknown(self, name, names=None) -> str:
+    def unknown(self, name: object, names: Iterable[str] | None = None) -> str:
         """The one-line message for a name that is not registered (or whose plug-in did not load: why)."""
         text = f"unknown {self.kind} {name!r}; choose one of {', '.join(self.names() if names is None else names)}"
         why = self.why_unusable(name)
         return f"{text} ({why})" if why else text
 
-    def why_unusable(self, name) -> str | None:
+    def why_unusable(self, name: object) -> str | None:
         """Why the entry point ``name`` gives no entry (``the camera back end 'stuck' of the installed package
         ... did not load within 30 s: fix or uninstall that package``); None when it is not one that failed."""
         key = str(name).lower()
@@ -299,7 +299,7 @@ class Choices:
                  lacking: str = ""):
         self.registry, self.where, self.extra, self.lacking = registry, where, tuple(extra), lacking
 
-    def refusal(self, value) -> str | None:
+    def refusal(self, value: object) -> str | None:
         """Why ``value``, a name of the registry, is not a choice (its plug-in did not load, or it lacks
         what ``where`` asks: ``lacking``, a clause: ``has no mock``); None for a name the registry does not have."""
         why = self.registry.why_unusable(value)

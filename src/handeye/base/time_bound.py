@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 import threading
 from collections.abc import Callable
+from typing import Any, TypeVar
 
 from .errors import HandEyeError
 
@@ -23,6 +24,8 @@ __all__ = ["DEFAULT_TIME_S", "TIME_VARIABLE", "OutOfTime", "plugin_time_s", "cal
 TIME_VARIABLE = "HANDEYE_PLUGIN_TIME_S"
 #: The bound when the variable is unset or not a positive number, s.
 DEFAULT_TIME_S = 30.0
+
+T = TypeVar("T")
 
 
 class OutOfTime(HandEyeError):
@@ -42,7 +45,7 @@ def plugin_time_s() -> float:
     return seconds if 0 < seconds < float("inf") else DEFAULT_TIME_S
 
 
-def call_within(function: Callable, name: str, seconds: float | None = None):
+def call_within(function: Callable[[], T], name: str, seconds: float | None = None) -> T:
     """``function()``, run in a daemon thread ``handeye-plugin-<name>`` for at most ``seconds``.
 
     Parameters
@@ -65,7 +68,7 @@ def call_within(function: Callable, name: str, seconds: float | None = None):
         ``function`` was still running after ``seconds``.
     """
     seconds = plugin_time_s() if seconds is None else seconds
-    outcome: dict = {}
+    outcome: dict[str, Any] = {}
 
     def run():
         try:
@@ -80,4 +83,4 @@ def call_within(function: Callable, name: str, seconds: float | None = None):
         raise OutOfTime(seconds, thread)
     if "error" in outcome:
         raise outcome["error"]
-    return outcome.get("value")
+    return outcome["value"]  # set: the thread ended without raising

@@ -17,6 +17,7 @@ Everything PyYAML raises becomes one line naming the file (and the line where Py
 from __future__ import annotations
 
 import re
+from typing import Any
 
 import yaml
 
@@ -35,7 +36,7 @@ _EXPONENT_FLOAT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE
 class DuplicateKeyError(yaml.YAMLError):
     """A mapping holds the same key twice; ``key``, ``first_line`` and ``second_line`` (1-based)."""
 
-    def __init__(self, key, first_line: int, second_line: int):
+    def __init__(self, key: object, first_line: int, second_line: int):
         super().__init__(f"key {key!r} on lines {first_line} and {second_line}")
         self.key, self.first_line, self.second_line = key, first_line, second_line
 
@@ -49,7 +50,7 @@ class AliasBombError(yaml.YAMLError):
     """Aliases expand the document beyond :data:`ALIAS_EXPANSION_BUDGET` values."""
 
 
-def expanded_size(node, limit: int) -> tuple[int, int]:
+def expanded_size(node: yaml.Node, limit: int) -> tuple[int, int]:
     """``(values the document holds once every alias is expanded, capped just past limit; distinct
     nodes visited)``: each distinct node is counted once (memoised), so the cost is that of the text.
 
@@ -115,7 +116,7 @@ def _refuse_duplicate_keys(loader, node) -> None:
             continue
 
 
-def parse_yaml(text: str, source, error: type[Exception] = SessionError, hint: str = ""):
+def parse_yaml(text: str, source: object, error: type[Exception] = SessionError, hint: str = "") -> Any:
     """The YAML document in ``text``; text that cannot be loaded raises ``error`` naming ``source``.
 
     Parameters

@@ -82,7 +82,11 @@ class Refused(StationError):
     ----------
     code : int
         The error code of the reply (for a controller: ``protocol.ERROR_CODES``).
+    reason : str
+        The device's own words, where its reply has them (the line back ends set it; absent otherwise).
     """
+
+    reason: str
 
     def __init__(self, message: str = "", code: int = 0, *, backend: str | None = None):
         super().__init__(message, backend=backend)

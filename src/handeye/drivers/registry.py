@@ -19,7 +19,7 @@ command-line choices, the runtime, the mocks, test parameters) asks the registry
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import TypeVar
 
@@ -114,7 +114,7 @@ class Setting:
         return text if self.required else f"[{text}]"
 
 
-def declared_settings(registry, attribute: str, names=None) -> dict:
+def declared_settings(registry: _Registry, attribute: str, names: Iterable[str] | None = None) -> dict:
     """``{key: (Setting, names of the back ends declaring it)}`` over the back ends ``names`` of
     ``registry`` (registry order; default: those loaded, :meth:`~handeye.base.registry.Registry.loaded_names`:
     handeye's own and the plug-ins asked for so far, so describing settings imports no other plug-in),
@@ -131,7 +131,7 @@ def declared_settings(registry, attribute: str, names=None) -> dict:
     return out
 
 
-def chosen_with_own(registry, chosen) -> tuple[str, ...]:
+def chosen_with_own(registry: _Registry, chosen: object) -> tuple[str, ...]:
     """The names of ``registry``'s own back ends (registered in code), and ``chosen`` when it is a plug-in's
     that loads: the back ends whose settings a station config section using ``chosen`` may hold."""
     own = registry.names_in_code()
@@ -140,7 +140,7 @@ def chosen_with_own(registry, chosen) -> tuple[str, ...]:
     return own
 
 
-def keyword_options(settings, value_of: Callable, missing: Callable) -> dict:
+def keyword_options(settings: Iterable[Setting], value_of: Callable, missing: Callable) -> dict:
     """The class's keyword options of ``settings`` (:class:`Setting` s) whose value ``value_of(key)`` is
     set (not None); ``missing(setting)`` makes the exception raised for a required one that is not."""
     out = {}

@@ -265,3 +265,13 @@ def test_the_rate_limiter_keeps_the_average_below_the_ceiling(monkeypatch):
     for _ in range(10):
         limiter.wait()
     assert clock["slept"] == pytest.approx(2.0)
+
+
+def test_the_guided_program_is_refused_in_one_line_over_rws():
+    # Robot Web Services has no guided program: the refusal names the link (it raised AttributeError on
+    # Controller.name, which no back end has, until pyright found it). Nothing is sent: no server needed.
+    robot = open_controller("rws", connect=False)
+    with pytest.raises(ControllerRefused, match="the rws link has no guided program: capture --guided"):
+        robot.guide(1, 0)
+    with pytest.raises(ControllerRefused, match="the rws link has no guided program"):
+        robot.wait_operator(0.1)

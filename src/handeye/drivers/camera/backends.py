@@ -11,8 +11,9 @@ with :func:`register_backend` or an entry point in the ``handeye.cameras`` group
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from typing import Any
 
 from ..registry import Backend, Registry, Setting, declared_settings, keyword_options
 from .errors import CameraError
@@ -20,7 +21,7 @@ from .errors import CameraError
 __all__ = ["CameraBackend", "CAMERAS", "camera_settings", "register_backend", "no_options"]
 
 
-def no_options(section) -> dict:
+def no_options(section: object) -> dict:
     """A back end that takes nothing from the station config (the constructor's defaults)."""
     return {}
 
@@ -45,7 +46,7 @@ class CameraBackend(Backend):
     options: Callable = no_options
     simulated: bool = False
 
-    def camera_options(self, section) -> dict:
+    def camera_options(self, section: object) -> dict:
         """The class's keyword options for the station config's ``camera`` section: its settings that
         the section sets, then what :attr:`options` adds.
 
@@ -78,14 +79,14 @@ CAMERAS.register(CameraBackend(
                       "only XB3 on the bus (several are refused, naming their GUIDs)", check=_guid, metavar="GUID"),)))
 
 
-def camera_settings(names=None) -> dict:
+def camera_settings(names: Iterable[str] | None = None) -> dict:
     """The camera back ends' settings by key, with the back ends that declare it (registry order): of
     ``names`` (default: every back end loaded so far, so no other plug-in is imported): the keys of the
     station config's ``camera`` section beyond its own."""
     return declared_settings(CAMERAS, "settings", names)
 
 
-def register_backend(backend, target=None, **fields) -> CameraBackend:
+def register_backend(backend: CameraBackend | str, target: object = None, **fields: Any) -> CameraBackend:
     """Add a camera back end (or replace the one of the same name); returns it.
 
     ``backend`` is a :class:`CameraBackend`, or a name with ``target`` (a Camera sub-class or a

@@ -46,7 +46,9 @@ printed pattern, its contrast); this one detects, refines, checks and triangulat
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
@@ -57,6 +59,11 @@ from .errors import BoardNotFound, CameraError, FrameError, StereoMismatch
 from .grid_search import SEARCH_STAGES, GridSearch, board_region, find_grid, refuse_missing_grid
 from .pnp import pnp_pose
 from .stereo import StereoModel
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from .charuco import CharucoDetection
 
 __all__ = [
     "Detection",
@@ -88,7 +95,7 @@ OFF_GRID_PX, OFF_GRID_FRACTION = 1.5, 0.06
 MAX_ROW_DISAGREEMENT_PX = 2.0
 
 
-def as_board(board, square_mm: float | None = None) -> BoardGeometry:
+def as_board(board: BoardGeometry | str | Sequence[int], square_mm: float | None = None) -> BoardGeometry:
     """A :class:`BoardGeometry` from a geometry, ``(nx, ny)`` or ``"13x8"`` (long side first).
 
     Raises
@@ -231,7 +238,7 @@ def off_grid_corners(grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         if residuals[worst] <= limit or keep.sum() <= basis.shape[1] + 4:
             break
         keep[worst] = False
-    return np.nonzero(residuals > limit)[0], residuals
+    return np.nonzero(np.greater(residuals, limit))[0], residuals
 
 
 def _refine(gray: np.ndarray, grid: np.ndarray) -> np.ndarray:
@@ -243,7 +250,7 @@ def _refine(gray: np.ndarray, grid: np.ndarray) -> np.ndarray:
     return refined.reshape(grid.shape).astype(np.float64)
 
 
-def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside: bool = True,
+def detect_board(image: np.ndarray, board: BoardGeometry | tuple[int, int] | str, *, refine: bool = True, check_outside: bool = True,
                  search: str = "full", what: str = "image") -> Detection:
     """Find the board's inner corners in one image and put them in canonical order.
 
@@ -276,9 +283,9 @@ def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside
     gray = _gray_u8(image, what)
     nx, ny = board.corners
     result = find_grid(gray, (nx, ny), search)
-    refuse_missing_grid(result, gray, (nx, ny), what)
+    corners = refuse_missing_grid(result, gray, (nx, ny), what)
     stage = result.stage
-    grid = result.corners.reshape(ny, nx, 2)
+    grid = corners.reshape(ny, nx, 2)
     if refine:
         grid = _refine(gray, grid)
     candidates = canonical_orderings(grid)
@@ -314,7 +321,8 @@ def detect_board(image: np.ndarray, board, *, refine: bool = True, check_outside
                      tuple(int(i) for i in off), float(residuals.max()) if len(off) else 0.0)
 
 
-def board_pose_from_corners(corners_px, board, camera_matrix, dist_coeffs=None) -> tuple[np.ndarray, float]:
+def board_pose_from_corners(corners_px: npt.ArrayLike, board: BoardGeometry | tuple[int, int] | str, camera_matrix: npt.ArrayLike,
+                            dist_coeffs: npt.ArrayLike | None = None) -> tuple[np.ndarray, float]:
     """Board pose ``target2cam`` (mm) of a canonical detection with ``cv2.solvePnP`` (monocular).
 
     Parameters
@@ -387,19 +395,20 @@ class BoardObservation:
     ----------
     points_mm : ndarray, shape (nx*ny, 3)
         Corners in the camera frame (camera 1 = left), target index order, mm.
-    left, right : Detection
-        The two detections, consistently ordered.
+    left, right : Detection, or CharucoDetection
+        The two detections, consistently ordered (a board seen by id, :class:`~.charuco.PartialObservation`:
+        ChArUco detections of the corners both images saw).
     quality : dict
         :func:`board_quality` figures plus ``corners_left``, ``corners_right``, ``orientation``.
     """
 
     points_mm: np.ndarray
-    left: Detection
-    right: Detection
+    left: Detection | CharucoDetection
+    right: Detection | CharucoDetection
     quality: dict
 
 
-def observe_board(left: np.ndarray, right: np.ndarray, model: StereoModel, board, *,
+def observe_board(left: np.ndarray, right: np.ndarray, model: StereoModel, board: BoardGeometry | tuple[int, int] | str, *,
                   max_row_disagreement_px: float = MAX_ROW_DISAGREEMENT_PX) -> BoardObservation:
     """Detect the board in a left/right pair, order both detections consistently and triangulate.
 

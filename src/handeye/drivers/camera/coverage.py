@@ -15,10 +15,15 @@ edge is nearer (depth falls to the right: ``dZ/dX = -n_x / n_z``), ``n_y > 0`` i
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ["CELL_NAMES", "TILT_CLASSES", "Hint", "Coverage", "tilt_class", "coverage_map"]
 
@@ -34,7 +39,7 @@ MIN_TILT_DEG = 20.0
 MIN_CORNERS_IN_CELL = 3
 
 
-def tilt_class(target2cam) -> tuple[str | None, float]:
+def tilt_class(target2cam: npt.ArrayLike) -> tuple[str | None, float]:
     """``(class, tilt_deg)`` of a board pose; the class is ``None`` between facing and tilted."""
     n = np.asarray(target2cam, float)[:3, 2]
     tilt = float(np.degrees(np.arccos(np.clip(n[2], -1.0, 1.0))))
@@ -90,7 +95,7 @@ class Coverage:
     tilts: dict = field(default_factory=lambda: {t: 0 for t in TILT_CLASSES})
     outlines: list = field(default_factory=list)
 
-    def cells_of(self, corners) -> np.ndarray:
+    def cells_of(self, corners: npt.ArrayLike) -> np.ndarray:
         """Boolean ``(3, 3)``: the cells holding at least :data:`MIN_CORNERS_IN_CELL` of ``corners``."""
         w, h = self.image_size
         pts = np.asarray(corners, float).reshape(-1, 2)
@@ -100,7 +105,7 @@ class Coverage:
         np.add.at(counts, (row, col), 1)
         return counts >= MIN_CORNERS_IN_CELL
 
-    def add(self, left=None, right=None, target2cam=None, used: bool = True) -> None:
+    def add(self, left: npt.ArrayLike | None = None, right: npt.ArrayLike | None = None, target2cam: npt.ArrayLike | None = None, used: bool = True) -> None:
         """Count one view: its corners in the left and/or right image and the board pose (camera frame)."""
         for side, corners in (("left", left), ("right", right)):
             if corners is None:

@@ -75,7 +75,7 @@ def _as_bytes_array(buffer) -> np.ndarray:
         raise FrameError(f"an XB3 frame is a byte buffer; got {type(buffer).__name__}") from None
 
 
-def deinterleave(buffer, layout: str = "rgb8", width: int = XB3_WIDTH, height: int = XB3_HEIGHT,
+def deinterleave(buffer: bytes | bytearray | memoryview | np.ndarray, layout: str = "rgb8", width: int = XB3_WIDTH, height: int = XB3_HEIGHT,
                  *, allow_padding: bool = False) -> dict[str, np.ndarray]:
     """Split a packed XB3 frame into its sensor planes.
 
@@ -143,7 +143,7 @@ def to_gray(image: np.ndarray) -> np.ndarray:
     raise FrameError(f"cannot read an image of shape {image.shape} as grey")
 
 
-def decode_xb3_frame(buffer, layout: str = "rgb8", width: int = XB3_WIDTH, height: int = XB3_HEIGHT, *,
+def decode_xb3_frame(buffer: bytes | bytearray | memoryview | np.ndarray, layout: str = "rgb8", width: int = XB3_WIDTH, height: int = XB3_HEIGHT, *,
                      colour: bool = True, output: str = "bgr", centre: bool = True, timestamp: float | None = None,
                      serial: int | None = None, allow_padding: bool = False, keep_raw: bool = False) -> StereoFrame:
     """Decode a packed XB3 frame into a :class:`StereoFrame`.

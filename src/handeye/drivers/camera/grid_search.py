@@ -205,8 +205,8 @@ def find_grid(gray: np.ndarray, pattern: tuple[int, int], search: str = "full") 
             return GridSearch(corners + (x0, y0), "roi", seconds=seconds)
     if search == "fast":
         return GridSearch(None, seconds=seconds)
-    half = _half(gray) if large else None
-    corners = _opencv_grid(half if large else gray, pattern, DETECT_FLAGS)
+    searched = _half(gray) if large else gray  # the image of stages fast and sb
+    corners = _opencv_grid(searched, pattern, DETECT_FLAGS)
     lap("fast")
     if corners is not None:
         return GridSearch(corners * 2.0 + 0.5 if large else corners, "fast", seconds=seconds)
@@ -219,11 +219,11 @@ def find_grid(gray: np.ndarray, pattern: tuple[int, int], search: str = "full") 
     if corners is not None:
         return GridSearch(corners, "full", seconds=seconds)
     # SB costs grow with the area searched: the region when it is small, else the half-size image
-    if region is not None and (region[2] - region[0]) * (region[3] - region[1]) < 0.25 * w * h:
+    if crop is not None and region is not None and (region[2] - region[0]) * (region[3] - region[1]) < 0.25 * w * h:
         found, corners = cv2.findChessboardCornersSB(crop, pattern, flags=SB_FLAGS)
         offset, scale = np.array(region[:2], float), 1.0
     else:
-        found, corners = cv2.findChessboardCornersSB(half if large else gray, pattern, flags=SB_FLAGS)
+        found, corners = cv2.findChessboardCornersSB(searched, pattern, flags=SB_FLAGS)
         offset, scale = (np.array([0.5, 0.5]) if large else np.zeros(2)), (2.0 if large else 1.0)
     lap("sb")
     if found:
@@ -231,9 +231,9 @@ def find_grid(gray: np.ndarray, pattern: tuple[int, int], search: str = "full") 
     return GridSearch(None, seconds=seconds)
 
 
-def refuse_missing_grid(result: GridSearch, gray: np.ndarray, pattern: tuple, what: str) -> None:
+def refuse_missing_grid(result: GridSearch, gray: np.ndarray, pattern: tuple, what: str) -> np.ndarray:
     """Raise :class:`BoardNotFound` saying why ``result`` holds no grid of ``pattern`` (another count,
-    a larger board, a board partly out of view, none at all); return when it holds one."""
+    a larger board, a board partly out of view, none at all); return its corners when it holds one."""
     nx, ny = pattern
     if result.other_pattern is not None:
         a, b = result.other_pattern
@@ -251,3 +251,4 @@ def refuse_missing_grid(result: GridSearch, gray: np.ndarray, pattern: tuple, wh
                 f"(--board; e.g. 13x8 for 14x9 squares)"
             )
         raise NoBoardInView(f"no checkerboard in the {what}: check that the board is in view, lit evenly and in focus")
+    return result.corners

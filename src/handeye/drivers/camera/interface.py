@@ -16,6 +16,8 @@ add more.
 
 from __future__ import annotations
 
+from typing import Any
+
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
@@ -108,7 +110,7 @@ class Camera(ABC):
         self.close()
 
 
-def open_camera(backend_name: str = "xb3", *, connect: bool = True, **options) -> Camera:
+def open_camera(backend_name: str = "xb3", *, connect: bool = True, **options: Any) -> Camera:
     """Create (and by default connect) the camera back end ``backend_name``.
 
     Parameters

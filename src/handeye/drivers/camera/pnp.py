@@ -3,13 +3,18 @@ reprojection RMS: what a board pose (``checkerboard``) and a tag pose (the ViSP 
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import cv2
 import numpy as np
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ["pnp_pose", "pose_from_rvec"]
 
 
-def pnp_pose(objects, pixels, camera_matrix, dist_coeffs, flags: int = cv2.SOLVEPNP_ITERATIVE,
+def pnp_pose(objects: npt.ArrayLike, pixels: npt.ArrayLike, camera_matrix: npt.ArrayLike, dist_coeffs: npt.ArrayLike | None, flags: int = cv2.SOLVEPNP_ITERATIVE,
              refine: bool = False) -> tuple[np.ndarray, float] | None:
     """The pose of the object frame in the camera and the reprojection RMS, or None when PnP fails.
 
@@ -46,7 +51,7 @@ def pnp_pose(objects, pixels, camera_matrix, dist_coeffs, flags: int = cv2.SOLVE
     return pose_from_rvec(rvec, tvec), rms
 
 
-def pose_from_rvec(rvec, tvec) -> np.ndarray:
+def pose_from_rvec(rvec: npt.ArrayLike, tvec: npt.ArrayLike) -> np.ndarray:
     """The 4x4 pose of OpenCV's rotation vector and translation (``solvePnP``, ``calibrateCamera``)."""
     pose = np.eye(4)
     pose[:3, :3] = cv2.Rodrigues(np.asarray(rvec, float))[0]

@@ -23,6 +23,8 @@ computed once per model, and so are the pixel maps of :meth:`StereoModel.rectifi
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -32,6 +34,11 @@ import numpy as np
 
 from ...base import read_text_file
 from .errors import StereoMismatch, StereoModelError
+
+if TYPE_CHECKING:
+    import os
+
+    import numpy.typing as npt
 
 __all__ = [
     "NOMINAL_XB3",
@@ -186,10 +193,11 @@ class StereoModel:
         if self.K3 is not None:
             object.__setattr__(self, "K3", _matrix(self.K3, (3, 3), "K3"))
             object.__setattr__(self, "D3", _distortion(self.D3, "D3"))
-            object.__setattr__(self, "R3", _matrix(self.R3 if self.R3 is not None else np.eye(3), (3, 3), "R3"))
+            r3 = _matrix(self.R3 if self.R3 is not None else np.eye(3), (3, 3), "R3")
+            object.__setattr__(self, "R3", r3)
             object.__setattr__(self, "T3", _matrix(self.T3 if self.T3 is not None else 0.5 * self.T, (3,), "T3"))
             _check_camera_matrix(self.K3, "K3")
-            _check_rotation(self.R3, "R3")
+            _check_rotation(r3, "R3")
 
     # ------------------------------------------------------------------ geometry
     @property
@@ -208,12 +216,12 @@ class StereoModel:
         if name == "right":
             return self.K2, self.D2, self.R, self.T
         if name == "centre":
-            if self.K3 is not None:
-                return self.K3, self.D3, self.R3, self.T3
+            if self.K3 is not None and self.D3 is not None and self.R3 is not None and self.T3 is not None:
+                return self.K3, self.D3, self.R3, self.T3  # (__post_init__ sets all four with K3)
             return self.K1, self.D1, np.eye(3), 0.5 * self.T
         raise ValueError(f"view must be left, right or centre; got {name!r}")
 
-    def project(self, points_mm, view: str = "left") -> np.ndarray:
+    def project(self, points_mm: npt.ArrayLike, view: str = "left") -> np.ndarray:
         """Pixel coordinates ``(n, 2)`` of points ``(n, 3)`` given in the camera frame."""
         k, d, r, t = self.view(view)
         pts = np.asarray(points_mm, dtype=float).reshape(-1, 3)
@@ -247,7 +255,7 @@ class StereoModel:
         m1x, m1y, m2x, m2y = self.rectification_maps()
         return (cv2.remap(left, m1x, m1y, cv2.INTER_LINEAR), cv2.remap(right, m2x, m2y, cv2.INTER_LINEAR))
 
-    def rectify_points(self, left_px, right_px) -> tuple[np.ndarray, np.ndarray]:
+    def rectify_points(self, left_px: npt.ArrayLike, right_px: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Rectified pixel coordinates ``(n, 2)`` of raw (distorted) pixel coordinates in each image."""
         rect = self.rectification
         left = np.asarray(left_px, dtype=np.float64).reshape(-1, 1, 2)
@@ -256,7 +264,7 @@ class StereoModel:
         rr = cv2.undistortPointsIter(right, self.K2, self.D2, rect.R2, rect.P2, _SUBPIXEL_CRITERIA)
         return rl.reshape(-1, 2), rr.reshape(-1, 2)
 
-    def triangulate(self, left_px, right_px) -> Triangulation:
+    def triangulate(self, left_px: npt.ArrayLike, right_px: npt.ArrayLike) -> Triangulation:
         """Points in the camera frame (mm) from corresponding pixel coordinates in the left and right images.
 
         Parameters
@@ -296,7 +304,7 @@ class StereoModel:
         out = {"image_width": self.image_size[0], "image_height": self.image_size[1],
                "K1": self.K1, "D1": self.D1.reshape(1, -1), "K2": self.K2, "D2": self.D2.reshape(1, -1),
                "R": self.R, "T": self.T.reshape(3, 1)}
-        if self.K3 is not None:
+        if self.K3 is not None and self.D3 is not None and self.R3 is not None and self.T3 is not None:
             out.update({"K3": self.K3, "D3": self.D3.reshape(1, -1), "R3": self.R3, "T3": self.T3.reshape(3, 1)})
         return out
 
@@ -332,7 +340,7 @@ def _node_value(n):
     return None
 
 
-def refuse_base64_filestorage(text: str, path, error) -> None:
+def refuse_base64_filestorage(text: str, path: object, error: type[Exception]) -> None:
     """Refuse FileStorage text holding a base64 (``!!binary``) value before cv2 parses it.
 
     OpenCV 4's YAML reader loops forever (in C++, beyond any timeout or Ctrl-C of Python) on a damaged
@@ -366,7 +374,7 @@ def _open_filestorage(path: Path, text: str):
     return fs
 
 
-def load_stereo_model(path) -> StereoModel:
+def load_stereo_model(path: str | os.PathLike[str]) -> StereoModel:
     """Read a stereo model from an OpenCV FileStorage file (YAML/XML, see the module docstring).
 
     Matrices may be ``!!opencv-matrix`` entries or plain nested lists.
@@ -381,7 +389,7 @@ def load_stereo_model(path) -> StereoModel:
     refuse_base64_filestorage(text, path, StereoModelError)
     fs = _open_filestorage(path, text)
     try:
-        def node(key, required=True):
+        def node(key: str, required: bool = True) -> object:
             n = fs.getNode(key)
             if n.empty() or n.isNone():
                 if required:
@@ -392,14 +400,29 @@ def load_stereo_model(path) -> StereoModel:
                 raise StereoModelError(f"{key} is neither a number, an !!opencv-matrix nor a list of numbers")
             return value
 
+        def array(key: str, required: bool = True) -> np.ndarray | None:
+            value = node(key, required)
+            if value is None:
+                return None
+            try:
+                return np.asarray(value, dtype=float)
+            except (TypeError, ValueError):  # ragged lists, text
+                raise StereoModelError(f"{key} is not a matrix of numbers") from None
+
+        def needed(key: str) -> np.ndarray:
+            value = array(key)
+            if value is None:  # node() raises for a missing required key
+                raise StereoModelError(f"missing {key}")
+            return value
+
         width, height = node("image_width"), node("image_height")
         if not isinstance(width, float) or not isinstance(height, float):
             raise StereoModelError("image_width and image_height must be numbers")
-        extra = {}
+        k3 = d3 = r3 = t3 = None
         if node("K3", required=False) is not None:
-            extra = {"K3": node("K3"), "D3": node("D3", False), "R3": node("R3", False), "T3": node("T3", False)}
-        model = StereoModel((int(width), int(height)), node("K1"), node("D1"), node("K2"), node("D2"), node("R"),
-                            node("T"), name=str(path), **extra)
+            k3, d3, r3, t3 = needed("K3"), array("D3", False), array("R3", False), array("T3", False)
+        model = StereoModel((int(width), int(height)), needed("K1"), needed("D1"), needed("K2"), needed("D2"), needed("R"),
+                            needed("T"), K3=k3, D3=d3, R3=r3, T3=t3, name=str(path))
     except StereoModelError as exc:
         raise StereoModelError(f"{path}: {exc}") from None
     finally:
@@ -407,7 +430,7 @@ def load_stereo_model(path) -> StereoModel:
     return model
 
 
-def save_stereo_model(path, model: StereoModel, extra: dict | None = None) -> Path:
+def save_stereo_model(path: str | os.PathLike[str], model: StereoModel, extra: dict | None = None) -> Path:
     """Write ``model`` as an OpenCV FileStorage YAML file; returns the path.
 
     ``extra`` adds entries after the model's (numbers or strings, e.g. the calibration's RMS error);

@@ -32,6 +32,8 @@ Object points are in millimetres (``square_mm``), so ``T`` is in mm, as ``STEREO
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from dataclasses import dataclass, field
 
 import cv2
@@ -41,6 +43,9 @@ from ...geometry import BoardGeometry, board_corners, view_refusal
 from .errors import CameraError, StereoModelError
 from .pnp import pose_from_rvec
 from .stereo import StereoModel
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "StereoCalibrationError",
@@ -282,10 +287,10 @@ def _calibrate_camera(side: str, items: list, obj: np.ndarray, size, flags: int,
     total, dropped = len(items), 0
     while True:
         try:
-            rms, k, d, rvecs, tvecs, std_in, _, per_view = cv2.calibrateCameraExtended(
+            # K, D None: OpenCV allocates them (its stubs omit None)
+            rms, k, d, rvecs, tvecs, std_in, _, per_view = cv2.calibrateCameraExtended(  # pyright: ignore[reportCallIssue]
                 [obj[ids] for _, _, ids in items], [c.astype(np.float32).reshape(-1, 1, 2) for _, c, _ in items], size,
-                None, None,
-                flags=flags, criteria=CRITERIA)
+                None, None, flags=flags, criteria=CRITERIA)  # pyright: ignore[reportArgumentType]
         except cv2.error as exc:
             raise StereoCalibrationError(
                 f"OpenCV could not calibrate the {side} camera ({str(exc).strip().splitlines()[-1][:120]}): the views "
@@ -314,10 +319,12 @@ def _calibrate_camera(side: str, items: list, obj: np.ndarray, size, flags: int,
 def _stereo(obj, pairs, left: CameraIntrinsics, right: CameraIntrinsics, size, flags, criteria=CRITERIA):
     """``cv2.stereoCalibrateExtended`` on the corners both images of each pair saw (matched by id)."""
     common = [p.common(len(obj)) for p in pairs]
-    return cv2.stereoCalibrateExtended(
+    # R, T None: OpenCV allocates them (its stubs omit None)
+    return cv2.stereoCalibrateExtended(  # pyright: ignore[reportCallIssue]
         [obj[ids] for ids, _, _ in common], [a.astype(np.float32).reshape(-1, 1, 2) for _, a, _ in common],
         [b.astype(np.float32).reshape(-1, 1, 2) for _, _, b in common],
-        left.K.copy(), left.D.copy(), right.K.copy(), right.D.copy(), size, None, None, flags=flags, criteria=criteria)
+        left.K.copy(), left.D.copy(), right.K.copy(), right.D.copy(), size,
+        None, None, flags=flags, criteria=criteria)  # pyright: ignore[reportArgumentType]
 
 
 def _per_pair_rms(errors, pairs) -> np.ndarray:
@@ -325,7 +332,7 @@ def _per_pair_rms(errors, pairs) -> np.ndarray:
     return np.sqrt(np.mean(np.asarray(errors, float).reshape(len(pairs), -1) ** 2, axis=1))
 
 
-def epipolar_errors(model: StereoModel, left_px, right_px) -> np.ndarray:
+def epipolar_errors(model: StereoModel, left_px: npt.ArrayLike, right_px: npt.ArrayLike) -> np.ndarray:
     """Distances (px) of undistorted corners from the epipolar lines of their matches, ``(2n,)``.
 
     The points of both images are undistorted to pixel coordinates of their own camera matrix and

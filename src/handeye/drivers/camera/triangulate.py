@@ -12,6 +12,8 @@ loading the stereo model, whose rectification is computed once per model before 
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,6 +28,9 @@ from .checkerboard import as_board, observe_board
 from .decode import decode_xb3_frame, frame_bytes
 from .errors import FrameError, FrameUsageError, SquareSizeMismatch
 from .stereo import StereoModel, load_stereo_model, nominal_xb3_model
+
+if TYPE_CHECKING:
+    import os
 
 __all__ = [
     "TriangulationResult",
@@ -65,14 +70,14 @@ class TriangulationResult:
     board: BoardGeometry
     stereo: str
     source: str
-    left_px: np.ndarray = field(repr=False, default=None)
-    right_px: np.ndarray = field(repr=False, default=None)
+    left_px: np.ndarray | None = field(repr=False, default=None)
+    right_px: np.ndarray | None = field(repr=False, default=None)
     #: Target index of each row of ``points_mm`` for a board seen by id (ChArUco, circles); None: a checkerboard.
     corner_ids: np.ndarray | None = field(repr=False, default=None)
 
     def to_json(self) -> dict:
         """The JSON of ``handeye triangulate --json`` (conventions.md keys first)."""
-        board = {"corners": [int(c) for c in self.board.corners]}
+        board: dict[str, object] = {"corners": [int(c) for c in self.board.corners]}
         if self.board.square_mm is not None:
             board["square_mm"] = float(self.board.square_mm)
         if self.corner_ids is not None:
@@ -95,7 +100,7 @@ class TriangulationResult:
 MAX_IMAGE_BYTES = 512 * 1024 * 1024
 
 
-def read_image_bytes(path) -> bytes:
+def read_image_bytes(path: str | os.PathLike[str]) -> bytes:
     """The bytes of an image or frame file; :class:`FrameError` naming the file when it cannot be read."""
     path = Path(path)
     data = read_file_bytes(path, "image", FrameError, missing=f"file not found: {path}", max_bytes=MAX_IMAGE_BYTES)
@@ -109,8 +114,9 @@ def decode_image(data: bytes, name: str = "image") -> np.ndarray:
     image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     if image is None:
         raise FrameError(f"{name} is not an image OpenCV can read (PNG, TIFF, BMP, JPEG)")
+    image = np.asarray(image)  # imdecode gives an ndarray (its stub says MatLike, which may be a UMat)
     if image.dtype == np.uint16:
-        image = (image >> 8).astype(np.uint8)
+        image = (image.view(np.uint16) >> 8).astype(np.uint8)
     if image.ndim == 3:
         image = cv2.cvtColor(image, cv2.COLOR_BGRA2GRAY if image.shape[2] == 4 else cv2.COLOR_BGR2GRAY)
     return image
@@ -136,7 +142,7 @@ def _result(obs, board: BoardGeometry, model: StereoModel, source: str, start: f
                                obs.left.corners_px, obs.right.corners_px, getattr(obs, "corner_ids", None))
 
 
-def triangulate_images(left: np.ndarray, right: np.ndarray, board=STATION_BOARD.corners, square_mm: float | None = None,
+def triangulate_images(left: np.ndarray, right: np.ndarray, board: BoardGeometry | tuple[int, int] | str = STATION_BOARD.corners, square_mm: float | None = None,
                        model: StereoModel | None = None) -> TriangulationResult:
     """Corners in mm from a left/right image pair already in memory (grey or BGR arrays).
 
@@ -150,7 +156,7 @@ def triangulate_images(left: np.ndarray, right: np.ndarray, board=STATION_BOARD.
     return _result(obs, board, model, "images", start)
 
 
-def triangulate_xb3_frame(buffer, board=STATION_BOARD.corners, square_mm: float | None = None, model: StereoModel | None = None,
+def triangulate_xb3_frame(buffer: bytes | bytearray | memoryview | np.ndarray, board: BoardGeometry | tuple[int, int] | str = STATION_BOARD.corners, square_mm: float | None = None, model: StereoModel | None = None,
                           *, colour: bool = True, width: int | None = None,
                           height: int | None = None) -> TriangulationResult:
     """Corners in mm from one raw XB3 frame (3-sensor RGB8 layout; the wide left-right pair).
@@ -177,7 +183,9 @@ def triangulate_xb3_frame(buffer, board=STATION_BOARD.corners, square_mm: float 
     return _result(obs, board, model, "xb3-raw", start)
 
 
-def triangulate_files(*, left=None, right=None, xb3_raw=None, stereo=None, board=STATION_BOARD.corners, square_mm: float | None = STATION_BOARD.square_mm,
+def triangulate_files(*, left: str | os.PathLike[str] | None = None, right: str | os.PathLike[str] | None = None,
+                      xb3_raw: str | os.PathLike[str] | None = None, stereo: str | os.PathLike[str] | None = None,
+                      board: BoardGeometry | tuple[int, int] | str = STATION_BOARD.corners, square_mm: float | None = STATION_BOARD.square_mm,
                       colour: bool = True) -> TriangulationResult:
     """:func:`triangulate_images` or :func:`triangulate_xb3_frame` on files.
 
@@ -210,6 +218,7 @@ def triangulate_files(*, left=None, right=None, xb3_raw=None, stereo=None, board
                 f"{' (truncated?)' if len(data) < frame_bytes('rgb8', w, h) else ''}; the stereo model sets the frame size"
             )
         return triangulate_xb3_frame(data, board, square_mm, model, colour=colour)
+    assert left is not None and right is not None  # refused above without both
     left_bytes, right_bytes = read_image_bytes(left), read_image_bytes(right)
     model, geometry = _prepare(model, board, square_mm)
     start = time.perf_counter()

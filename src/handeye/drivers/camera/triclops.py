@@ -43,6 +43,8 @@ another size is scaled keeping pixel centres: ``c' = (c + 0.5) s - 0.5``.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import configparser
 import re
 from pathlib import Path
@@ -52,6 +54,9 @@ import numpy as np
 from ...base import parse_yaml, read_file_bytes
 from .errors import StereoModelError
 from .stereo import StereoModel
+
+if TYPE_CHECKING:
+    import os
 
 __all__ = ["TriclopsValues", "read_triclops_model", "parse_triclops_text", "rectified_model"]
 
@@ -88,7 +93,7 @@ def _scalar(value) -> float | None:
     return number if np.isfinite(number) else None
 
 
-def _api_values(text: str) -> dict | None:
+def _api_values(text: str) -> dict[str, float] | None:
     """Flat ``key -> number`` of a YAML or INI file; ``None`` when it is neither."""
     try:
         data = parse_yaml(text, "Triclops values", StereoModelError)
@@ -111,14 +116,14 @@ def _api_values(text: str) -> dict | None:
     return {key: value for key, value in out.items() if value is not None}
 
 
-def _pick(values: dict, *names):
+def _pick(values: dict[str, float], *names: str) -> tuple[str | None, float | None]:
     for name in names:
         if name in values:
             return name, values[name]
     return None, None
 
 
-def parse_triclops_text(text: str, where: str = "Triclops file", size=None) -> TriclopsValues:
+def parse_triclops_text(text: str, where: str = "Triclops file", size: tuple[int, int] | None = None) -> TriclopsValues:
     """The rectified values of a ``.cal`` header or of a YAML/INI file of API values (see the module docstring).
 
     Parameters
@@ -164,6 +169,7 @@ def parse_triclops_text(text: str, where: str = "Triclops file", size=None) -> T
     if missing:
         raise StereoModelError(f"{where}: missing {', '.join(missing)} (Triclops gives focal_length in px, "
                                "center_row and center_col in px, baseline in metres)")
+    assert f is not None and row is not None and col is not None and baseline is not None  # else missing above
     _, w = _pick(api, "image_width", "width", "cols", "ncols")
     _, h = _pick(api, "image_height", "height", "rows", "nrows")
     if w is None or h is None:
@@ -203,7 +209,7 @@ def _checked(v: TriclopsValues, where: str) -> TriclopsValues:
     return v
 
 
-def rectified_model(values: TriclopsValues, size=None, name: str = "") -> StereoModel:
+def rectified_model(values: TriclopsValues, size: tuple[int, int] | None = None, name: str = "") -> StereoModel:
     """The rectified stereo model of ``values``, scaled to ``size = (width, height)`` if given."""
     w0, h0 = values["width"], values["height"]
     width, height = (int(s) for s in size) if size is not None else (w0, h0)
@@ -218,7 +224,7 @@ def rectified_model(values: TriclopsValues, size=None, name: str = "") -> Stereo
                        np.array([-values["baseline_mm"], 0.0, 0.0]), name=label)
 
 
-def read_triclops_model(path, size=None) -> StereoModel:
+def read_triclops_model(path: str | os.PathLike[str], size: tuple[int, int] | None = None) -> StereoModel:
     """The rectified stereo model of a Triclops ``.cal`` file or a YAML/INI file of Triclops API values.
 
     Parameters

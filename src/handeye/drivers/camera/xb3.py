@@ -144,7 +144,7 @@ def _not_installed(tried) -> CameraError:
 
 def load_library(path: str | None = None) -> ctypes.CDLL:
     """Load libdc1394 (``path`` or the usual names); :class:`CameraError` naming the package when absent."""
-    names = [path] if path else list(LIBRARY_NAMES)
+    names: list[str] = [path] if path else list(LIBRARY_NAMES)
     if not path:
         found = ctypes.util.find_library("dc1394")
         if found and found not in names:
@@ -456,7 +456,7 @@ class XB3Camera(Camera):
 
     def calibration_file(self) -> bytes:
         """The factory calibration file (Triclops .cal) stored in the head (registers 0x1FFC, 0x2000..)."""
-        if self._cam is None:
+        if self._cam is None or self._dc is None:  # (connect sets _dc before _cam)
             raise CameraError("the XB3 is not connected")
         length = self._dc.get_registers(self._cam, REG_CALIBRATION_LENGTH)[0]
         if not 0 < length < 1 << 20:
@@ -471,7 +471,7 @@ class XB3Camera(Camera):
     def grab(self, timeout_s: float = 2.0) -> StereoFrame:
         from .decode import decode_xb3_frame
 
-        if self._cam is None:
+        if self._cam is None or self._dc is None:  # (connect sets _dc before _cam)
             raise CameraError("the XB3 is not connected: call connect() or use it in a with-block")
         data, stamp, behind = self._dc.dequeue(self._cam, timeout_s)
         frame = decode_xb3_frame(data, self.layout, self.width, self.height, colour=bool(self.colour),

@@ -16,11 +16,15 @@ Nothing here imports a hardware library: the class is imported when the back end
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 from ..registry import Backend, Registry, Setting, declared_settings, keyword_options, load_target
 from .errors import InvalidRequest
+
+if TYPE_CHECKING:
+    from ...base import Choices
 
 __all__ = ["ControllerBackend", "ControllerLink", "LinkSetting", "MockServer", "CONTROLLERS", "DEFAULT_PROTOCOL", "RAPID_LINKS",
            "link_settings", "rapid_protocol_choices", "register_backend", "setting_options", "standard_options", "tcp_options"]
@@ -31,7 +35,7 @@ __all__ = ["ControllerBackend", "ControllerLink", "LinkSetting", "MockServer", "
 LinkSetting = Setting
 
 
-def link_settings(names=None) -> dict[str, tuple[LinkSetting, tuple[str, ...]]]:
+def link_settings(names: Iterable[str] | None = None) -> dict[str, tuple[LinkSetting, tuple[str, ...]]]:
     """The back ends' link settings by key, with the back ends that declare it (registry order): of
     ``names`` (default: every back end loaded so far, :func:`~handeye.drivers.registry.declared_settings`,
     so no other plug-in is imported): the keys of the config's ``controller`` section and the flags of
@@ -61,20 +65,20 @@ class ControllerLink:
         reading one raises ``AttributeError`` (``link.key``) or ``KeyError`` (``link.get``) the same way.
     """
 
-    def __init__(self, host: str = "127.0.0.1", port: int | None = None, **settings):
+    def __init__(self, host: str = "127.0.0.1", port: int | None = None, **settings: Any):
         unknown = sorted(set(settings) - set(link_settings()))
         if unknown:
             raise TypeError(_unknown_setting(unknown[0]))
         self.host, self.port = host, port
         self.settings = {key: value for key, value in settings.items() if value is not None}
 
-    def get(self, key: str, default=None):
+    def get(self, key: str, default: Any = None) -> Any:
         """The value of a link setting (``default`` when not set); a key no back end declares raises ``KeyError``."""
         if key not in self.settings and key not in link_settings():
             raise KeyError(_unknown_setting(key))
         return self.settings.get(key, default)
 
-    def __getattr__(self, name: str):
+    def __getattr__(self, name: str) -> Any:
         """A link setting by key (None when not set); a key no back end declares raises ``AttributeError``."""
         if name.startswith("_") or name == "settings":
             raise AttributeError(name)
@@ -91,7 +95,7 @@ class ControllerLink:
         return f"ControllerLink(host={self.host!r}, port={self.port!r}, settings={shown!r})"
 
     @classmethod
-    def of(cls, section) -> "ControllerLink":
+    def of(cls, section: object) -> "ControllerLink":
         """The link of any object with these attributes (the station config's controller section)."""
         keys = link_settings()
         return cls(getattr(section, "host", "127.0.0.1"), getattr(section, "port", None),
@@ -198,7 +202,7 @@ class ControllerBackend(Backend):
     mock: MockServer | None = None
     rapid_link: object = None
 
-    def link_options(self, link) -> dict:
+    def link_options(self, link: object) -> dict:
         """The class's keyword options for ``link`` (a :class:`ControllerLink` or a config section)."""
         return self.options(link if isinstance(link, ControllerLink) else ControllerLink.of(link), self)
 
@@ -249,8 +253,8 @@ DEFAULT_PROTOCOL = "socket"
 #: Every controller back end by name: the package's (socket, serial, modbus, rws), then plug-ins.
 CONTROLLERS: Registry[ControllerBackend] = Registry("controller protocol", "handeye.controllers", ControllerBackend)
 
-_HERE = __package__
-_LINKS = f"{__package__.rsplit('.', 2)[0]}.rapid.links"  # handeye.rapid.links: the RAPID side of each
+_HERE = __name__.rpartition(".")[0]  # this package (what __package__ holds; the type checker sees str | None)
+_LINKS = f"{_HERE.rsplit('.', 2)[0]}.rapid.links"  # handeye.rapid.links: the RAPID side of each
 CONTROLLERS.register(ControllerBackend(
     "socket", f"{_HERE}.socket_client:SocketController", default_port=1025, rapid_link=f"{_LINKS}:HE_SOCKET",
     help="TCP to the RAPID program's server (PC Interface option)"))
@@ -290,7 +294,7 @@ class _RapidLinks(Mapping):
 RAPID_LINKS: Mapping = _RapidLinks()
 
 
-def rapid_protocol_choices():
+def rapid_protocol_choices() -> Choices:
     """The protocols ``rapid generate`` can write a link module for, checked one at a time (asking about one
     imports that plug-in only); one left out says it has no RAPID link module."""
     return CONTROLLERS.choices(lambda backend: backend.rapid_link is not None,

@@ -21,6 +21,8 @@ import logging
 import threading
 import time
 from abc import ABC, abstractmethod
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
@@ -38,9 +40,14 @@ from .types import (
     robot_model,
 )
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
 __all__ = ["Controller", "Deadline", "LinkDown", "open_controller", "read_robot_state"]
 
 log = logging.getLogger(__name__)
+
+T = TypeVar("T")
 
 
 class LinkDown(Exception):
@@ -126,7 +133,7 @@ class Controller(ABC):
 
     def __init__(self, *, timeout: float = 2.0, motion_timeout: float = 120.0, retries: int = 3,
                  backoff_s: float = 0.05, backoff_max_s: float = 1.0, robot: str = "IRB1400",
-                 postures=None, max_tool_mass_kg: float = 5.0, idle_timeout: float = 5.0, write_key: str | None = None):
+                 postures: npt.ArrayLike | None = None, max_tool_mass_kg: float = 5.0, idle_timeout: float = 5.0, write_key: str | None = None):
         self.timeout = check_timeout("timeout", timeout)
         self.idle_timeout = check_timeout("idle_timeout", idle_timeout)
         self._write_key = check_write_key(write_key)
@@ -203,16 +210,17 @@ class Controller(ABC):
         return f"<{type(self).__name__} {self.address} {state}>"
 
     # ------------------------------------------------------------------ the retry loop
-    def _budget(self, timeout) -> Deadline:
+    def _budget(self, timeout: float | None) -> Deadline:
         return Deadline(self.timeout if timeout is None else check_timeout("timeout", timeout))
 
-    def _call(self, what: str, operation, timeout=None, deadline: Deadline | None = None):
+    def _call(self, what: str, operation: Callable[[Deadline], T], timeout: float | None = None,
+              deadline: Deadline | None = None) -> T:
         """Run ``operation(deadline)``; reconnect with back-off if the link drops, within the budget."""
         deadline = deadline or self._budget(timeout)
         with self._lock:
             return self._retry(what, operation, deadline)
 
-    def _retry(self, what: str, operation, deadline: Deadline):
+    def _retry(self, what: str, operation: Callable[[Deadline], T], deadline: Deadline) -> T:
         delay = self.backoff_s
         failures = 0
         while True:
@@ -263,7 +271,7 @@ class Controller(ABC):
         """The program's state and current posture."""
 
     # ------------------------------------------------------------------ motion
-    def check_posture(self, k, expected_joints=None) -> int:
+    def check_posture(self, k: int, expected_joints: npt.ArrayLike | None = None) -> int:
         """Validate a posture request on the PC (index, plan, joint limits); returns the index."""
         count = self._info.postures if self._info is not None else None
         k = check_posture_index(k, count)
@@ -275,7 +283,7 @@ class Controller(ABC):
             check_joints(expected_joints, self.robot, f"posture {k}")
         return k
 
-    def goto_posture(self, k: int, *, expected_joints=None, wait: bool = True,
+    def goto_posture(self, k: int, *, expected_joints: npt.ArrayLike | None = None, wait: bool = True,
                      timeout: float | None = None) -> ControllerStatus | None:
         """Move to approved posture ``k`` (1-based) with ``MoveAbsJ ... fine``.
 
@@ -376,7 +384,7 @@ class Controller(ABC):
             The link has no guided program (this base class: Robot Web Services guides with no program), or
             the program is not waiting for a verdict.
         """
-        raise self.refused_error(f"the {self.name} link has no guided program: capture --guided reads the "
+        raise self.refused_error(f"the {self.protocol} link has no guided program: capture --guided reads the "
                                  "joints while the operator jogs")
 
     def wait_operator(self, timeout: float) -> ControllerStatus | None:
@@ -386,10 +394,10 @@ class Controller(ABC):
         Over a line the program answers nothing while it prompts or is stopped (a single-task program):
         the request waits, and a reply arriving after ``timeout`` is skipped by its id later.
         """
-        raise self.refused_error(f"the {self.name} link has no guided program")
+        raise self.refused_error(f"the {self.protocol} link has no guided program")
 
 
-def open_controller(name: str, *, connect: bool = True, **options) -> Controller:
+def open_controller(name: str, *, connect: bool = True, **options: Any) -> Controller:
     """A controller back end by name (any registered one: :data:`~.backends.CONTROLLERS`), connected
     unless ``connect=False``.
 

@@ -11,6 +11,8 @@ from __future__ import annotations
 import logging
 import time
 from abc import ABC, abstractmethod
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -54,7 +56,7 @@ class LineTransport(ABC):
 class LineBuffer:
     """Accumulates received bytes and cuts lines; too long a run without LF is garbage."""
 
-    def __init__(self, protocol_error):
+    def __init__(self, protocol_error: Callable[[str], Exception]):
         self.data = bytearray()
         self.protocol_error = protocol_error
 
@@ -87,7 +89,7 @@ class LineBuffer:
 class LineController(Controller):
     """A :class:`Controller` speaking the handeye line protocol over a :class:`LineTransport`."""
 
-    def __init__(self, **options):
+    def __init__(self, **options: Any):
         super().__init__(**options)
         self._transport: LineTransport | None = None
         self._last_id = 0
@@ -108,6 +110,12 @@ class LineController(Controller):
     @property
     def is_connected(self) -> bool:
         return self._transport is not None and self._transport.is_open
+
+    def _link(self) -> LineTransport:
+        """The open transport (:class:`LinkDown` when there is none: the call reconnects)."""
+        if self._transport is None:
+            raise LinkDown("not connected")
+        return self._transport
 
     def _open(self, deadline: Deadline) -> None:
         transport = self._make_transport()
@@ -143,7 +151,7 @@ class LineController(Controller):
         resend_s = max(self.idle_timeout / 2.0, 0.05)
         while True:
             request_id = self._next_id()
-            self._transport.write(b"\n" + P.encode_request(request_id, "PING"), deadline)
+            self._link().write(b"\n" + P.encode_request(request_id, "PING"), deadline)
             if deadline.remaining() <= resend_s:
                 self._await_pong(request_id, deadline)
                 return
@@ -214,7 +222,7 @@ class LineController(Controller):
     def _read_line(self, command: str, deadline: Deadline) -> bytes:
         """One line from the transport, its failures worded for ``command``."""
         try:
-            line = self._transport.read_line(deadline)
+            line = self._link().read_line(deadline)
             self._heard_at = time.monotonic()
             return line
         except P.ProtocolError as exc:
@@ -245,16 +253,16 @@ class LineController(Controller):
         return self._call(what, lambda d: self._exchange(steps, d), timeout, deadline)
 
     # ------------------------------------------------------------------ reading
-    def ping(self, timeout=None) -> float:
+    def ping(self, timeout: float | None = None) -> float:
         start = time.perf_counter()
         self._run("ping", [("PING", ())], timeout)
         return time.perf_counter() - start
 
-    def read_joints(self, timeout=None) -> np.ndarray:
+    def read_joints(self, timeout: float | None = None) -> np.ndarray:
         (values,) = self._run("read joints", [("JOINTS", ())], timeout)
         return np.array(values, dtype=float)
 
-    def read_tool0_pose(self, timeout=None) -> FlangePose:
+    def read_tool0_pose(self, timeout: float | None = None) -> FlangePose:
         position, quaternion = self._run("read flange pose", [("POSE", ()), ("QUAT", ())], timeout)
         q = np.array(quaternion, dtype=float)
         norm = float(np.linalg.norm(q))
@@ -263,7 +271,7 @@ class LineController(Controller):
         q = q / norm
         return FlangePose(np.array(position, dtype=float), -q if q[0] < 0 else q)
 
-    def status(self, timeout=None) -> ControllerStatus:
+    def status(self, timeout: float | None = None) -> ControllerStatus:
         return self._status(self._budget(timeout))
 
     def _status(self, deadline: Deadline) -> ControllerStatus:
@@ -276,7 +284,8 @@ class LineController(Controller):
         if echo != k:
             raise self.protocol_error(f"controller accepted posture {echo} when asked for {k}")
 
-    def wait_at_rest(self, k=None, timeout=None, *, deadline=None) -> ControllerStatus:
+    def wait_at_rest(self, k: int | None = None, timeout: float | None = None, *,
+                     deadline: Deadline | None = None) -> ControllerStatus:
         # A single-task RAPID program answers STATUS only after MoveAbsJ ... fine returned, so one
         # STATUS may take the whole move: it gets the whole remaining budget.
         deadline = deadline or Deadline(self.motion_timeout if timeout is None else timeout)
@@ -290,7 +299,7 @@ class LineController(Controller):
                 raise self.timeout_error(f"robot still moving to posture {status.posture} after {deadline.seconds:g} s")
             time.sleep(POLL_S)
 
-    def acknowledge(self, k: int, timeout=None) -> ControllerStatus:
+    def acknowledge(self, k: int, timeout: float | None = None) -> ControllerStatus:
         k = check_posture_index(k)
         deadline = self._budget(timeout)
         ((echo,),) = self._run(f"acknowledge posture {k}", [("ACK", (k,))], deadline=deadline)
@@ -299,7 +308,7 @@ class LineController(Controller):
         return self._status(deadline)
 
     # ------------------------------------------------------------------ the guided program
-    def guide(self, verdict: int, hint: int, timeout=None) -> int:
+    def guide(self, verdict: int, hint: int, timeout: float | None = None) -> int:
         ((offered,),) = self._run("send the verdict and hint", [("GUIDE", (verdict, hint))], timeout)
         return offered
 
@@ -310,7 +319,7 @@ class LineController(Controller):
         def wait(deadline: Deadline) -> tuple:
             if self._pending_status is None:
                 request_id = self._next_id()
-                self._transport.write(P.encode_request(request_id, "STATUS"), deadline)
+                self._link().write(P.encode_request(request_id, "STATUS"), deadline)
                 self._pending_status = request_id
             reply = self._read_reply(self._pending_status, "STATUS", deadline)
             self._pending_status = None
@@ -343,7 +352,7 @@ class LineController(Controller):
                 "that controller.write_key in the station config is the key of the HeKey.sys loaded on the "
                 "controller (handeye rapid generate --config STATION.yaml -o DIR writes it)", exc.code) from None
 
-    def read_tool(self, timeout=None) -> ToolData:
+    def read_tool(self, timeout: float | None = None) -> ToolData:
         p, q, load = self._run("read tool data", [("GETTOOLPOS", ()), ("GETTOOLROT", ()), ("GETTOOLLOAD", ())], timeout)
         return ToolData(tuple(p), tuple(q), load[0], tuple(load[1:]))
 

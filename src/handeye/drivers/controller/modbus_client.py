@@ -15,13 +15,15 @@ still answers means the RAPID program stopped, reported as a timeout naming it.
 from __future__ import annotations
 
 import logging
+import os
 import time
+from typing import Any
 
 import numpy as np
 
 from .errors import InvalidRequest, ProtocolError, StationError
 from .interface import Controller, Deadline, LinkDown
-from .modbus_map import GUIDED_REGISTERS, STATE_NAMES, load_register_map
+from .modbus_map import GUIDED_REGISTERS, STATE_NAMES, RegisterMap, load_register_map
 from .polled import PolledHandshake
 from .protocol import E_AUTH, E_BUSY, E_STATE, E_TOOL, HINT, VERDICT, ERROR_CODES, KEY_TRIES, PROTOCOL_VERSION, write_key_code
 from .types import ACKED, AT, DONE, ERROR, LATE, READY, ControllerInfo, ControllerStatus, FlangePose, ToolData, check_timeout
@@ -79,8 +81,8 @@ class ModbusController(PolledHandshake, Controller):
 
     protocol = "modbus"
 
-    def __init__(self, host: str = "127.0.0.1", port: int = 502, *, register_map=None,
-                 heartbeat_timeout: float = 1.0, poll_s: float = 0.005, **options):
+    def __init__(self, host: str = "127.0.0.1", port: int = 502, *, register_map: str | os.PathLike[str] | RegisterMap | None = None,
+                 heartbeat_timeout: float = 1.0, poll_s: float = 0.005, **options: Any):
         if isinstance(port, bool) or not isinstance(port, int) or not 0 < port < 65536:
             raise InvalidRequest(f"TCP port must be an integer 1..65535; got {port!r}")
         self.host, self.port = str(host), int(port)
@@ -200,7 +202,7 @@ class ModbusController(PolledHandshake, Controller):
                  lambda c: c.write_registers(start, block, device_id=self.map.device_id), deadline)
 
     # ------------------------------------------------------------------ reading
-    def ping(self, timeout=None) -> float:
+    def ping(self, timeout: float | None = None) -> float:
         start = time.perf_counter()
         self._call("ping", lambda d: self._read_named(d, "heartbeat"), timeout)
         return time.perf_counter() - start
@@ -213,11 +215,11 @@ class ModbusController(PolledHandshake, Controller):
                                       f"(check word_order in {self.map.source})")
         return np.round(arr, decimals)
 
-    def read_joints(self, timeout=None) -> np.ndarray:
+    def read_joints(self, timeout: float | None = None) -> np.ndarray:
         values = self._call("read joints", lambda d: self._read_named(d, "joints"), timeout)
         return self._floats(values["joints"], "joint", 400.0, 4)
 
-    def read_tool0_pose(self, timeout=None) -> FlangePose:
+    def read_tool0_pose(self, timeout: float | None = None) -> FlangePose:
         values = self._call("read flange pose", lambda d: self._read_named(d, "tool0_position", "tool0_quaternion"), timeout)
         p = self._floats(values["tool0_position"], "flange position", 4000.0, 3)
         q = self._floats(values["tool0_quaternion"], "flange quaternion", 1.0 + 1e-6, 6)
@@ -235,7 +237,7 @@ class ModbusController(PolledHandshake, Controller):
         return {"state": STATE_NAMES[code], "posture": values["posture"][0], "error": values["error"][0],
                 "heartbeat": values["heartbeat"][0]}
 
-    def status(self, timeout=None) -> ControllerStatus:
+    def status(self, timeout: float | None = None) -> ControllerStatus:
         raw = self._call("read status", self._raw_status, timeout)
         return ControllerStatus(raw["state"], raw["posture"])
 
@@ -282,7 +284,7 @@ class ModbusController(PolledHandshake, Controller):
             raise self.refused_error(f"the register map {self.map.source} has no {', '.join(missing)}: the guided "
                                      "program needs them (see src/handeye/drivers/controller/modbus_map.yaml)", E_STATE)
 
-    def guide(self, verdict: int, hint: int, timeout=None) -> int:
+    def guide(self, verdict: int, hint: int, timeout: float | None = None) -> int:
         """Write ``guide_hint`` then ``guide_verdict`` in READY/DONE, wait until the program took them (it
         leaves READY/DONE), clear ``guide_verdict``; returns the ``posture`` register (postures offered)."""
         self._guide_registers()
@@ -321,6 +323,10 @@ class ModbusController(PolledHandshake, Controller):
 
     # ------------------------------------------------------------------ tool data
     def _write_tool(self, tool: ToolData, deadline: Deadline) -> None:
+        key = self._write_key
+        if key is None:  # set_tool refuses a write without the key before it comes here
+            raise InvalidRequest(f"cannot write tool data to {self.address} without the station's write key; "
+                                 "nothing was sent")
         raw = self._call("read status", self._raw_status, deadline=deadline)
         if raw["state"] in (ACKED, ERROR):
             self._clear_request(deadline)
@@ -329,7 +335,7 @@ class ModbusController(PolledHandshake, Controller):
                                      "tool data is taken only when it is READY: acknowledge the posture first", E_BUSY)
         (last,) = self._call("read tool_ack", lambda d: self._read_named(d, "tool_ack"), deadline=deadline)["tool_ack"]
         seq = last % 0xFFFF + 1
-        code = write_key_code(self._write_key)
+        code = write_key_code(key)
         self._call("write tool values and key", lambda d: self._write_named(d, {"tool_values": tool.values(), "tool_key": code}),
                    deadline=deadline)
         code = self._await_tool_ack(seq, deadline)
@@ -371,7 +377,7 @@ class ModbusController(PolledHandshake, Controller):
         except StationError as exc:
             log.info("could not clear tool_key at %s: %s", self.address, exc)
 
-    def read_tool(self, timeout=None) -> ToolData:
+    def read_tool(self, timeout: float | None = None) -> ToolData:
         values = self._call("read tool data", lambda d: self._read_named(d, "tool_readback"), timeout)["tool_readback"]
         arr = self._floats(values, "tool read-back", 4000.0, 6)
         p, q, m, c = arr[0:3], arr[3:7], arr[7], arr[8:11]

@@ -8,8 +8,10 @@ holding-register address, type (``uint16``, ``uint32`` or ``float32``), count, w
 
 from __future__ import annotations
 
+import os
 import re
 import struct
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -41,7 +43,7 @@ REQUIRED = {
 _WIDTH = {"uint16": 1, "uint32": 2, "float32": 2}
 
 
-def floats_to_registers(values, word_order: str = "big") -> list[int]:
+def floats_to_registers(values: Iterable[float], word_order: str = "big") -> list[int]:
     """IEEE-754 float32 values to 16-bit registers, two per value, in ``word_order``."""
     out = []
     for v in values:
@@ -50,7 +52,7 @@ def floats_to_registers(values, word_order: str = "big") -> list[int]:
     return out
 
 
-def registers_to_floats(registers, word_order: str = "big") -> list[float]:
+def registers_to_floats(registers: Sequence[int], word_order: str = "big") -> list[float]:
     """16-bit registers (two per value, in ``word_order``) to float32 values (as Python floats)."""
     regs = list(registers)
     if len(regs) % 2:
@@ -104,7 +106,7 @@ class RegisterMap:
     def __getitem__(self, name: str) -> Register:
         return self.registers[name]
 
-    def span(self, *names) -> tuple[int, int]:
+    def span(self, *names: str) -> tuple[int, int]:
         """``(first address, count)`` of one read covering ``names``."""
         regs = [self.registers[n] for n in names]
         start = min(r.address for r in regs)
@@ -115,22 +117,22 @@ class RegisterMap:
         """Registers needed to hold every address of the map."""
         return max(r.end for r in self.registers.values())
 
-    def encode(self, name: str, values) -> list[int]:
+    def encode(self, name: str, values: float | list[float] | tuple[float, ...]) -> list[int]:
         reg = self.registers[name]
-        values = list(values) if isinstance(values, (list, tuple)) else [values]
-        if len(values) != reg.count:
-            raise ValueError(f"register {name} holds {reg.count} values; got {len(values)}")
+        items = list(values) if isinstance(values, (list, tuple)) else [values]
+        if len(items) != reg.count:
+            raise ValueError(f"register {name} holds {reg.count} values; got {len(items)}")
         if reg.type == "float32":
-            return floats_to_registers(values, self.word_order)
+            return floats_to_registers(items, self.word_order)
         if reg.type == "uint32":
             out = []
-            for v in values:
+            for v in items:
                 high, low = (int(v) >> 16) & 0xFFFF, int(v) & 0xFFFF
                 out += [high, low] if self.word_order == "big" else [low, high]
             return out
-        return [int(v) & 0xFFFF for v in values]
+        return [int(v) & 0xFFFF for v in items]
 
-    def decode(self, name: str, registers, start: int | None = None) -> list:
+    def decode(self, name: str, registers: Sequence[int], start: int | None = None) -> list:
         """Values of ``name`` from a block of ``registers`` read from address ``start``."""
         reg = self.registers[name]
         offset = reg.address - (reg.address if start is None else start)
@@ -149,7 +151,7 @@ def _bad(source, message):
     return ConfigError(f"register map {source}: {message}", backend="modbus")
 
 
-def load_register_map(path=None) -> RegisterMap:
+def load_register_map(path: str | os.PathLike[str] | RegisterMap | None = None) -> RegisterMap:
     """Read and check a register map (default: the built-in ``modbus_map.yaml``).
 
     Raises

@@ -12,17 +12,35 @@ acknowledged (0 for none).
 
 from __future__ import annotations
 
-from .interface import Deadline
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+from .interface import Controller, Deadline
 from .protocol import E_BUSY, E_STATE, ERROR_CODES
 from .types import ACKED, AT, ERROR, LATE, MOVING, READY, ControllerStatus, check_posture_index, check_timeout
 
 __all__ = ["PolledHandshake"]
 
+# For the type checker only: the mixin's methods run on a Controller (it is mixed in before Controller);
+# at run time its base is object, so the back end's own base list alone makes its method order.
+_Host = Controller if TYPE_CHECKING else object
 
-class PolledHandshake:
+
+class PolledHandshake(_Host):
     """Posture requests, waits and acknowledgements over a polled state (see the module docstring)."""
 
     _requested = 0
+
+    if TYPE_CHECKING:  # what the back end provides (see the module docstring)
+        def _raw_status(self, deadline: Deadline) -> dict: ...
+
+        def _wait_for(self, what: str, done: Callable[[dict], bool], deadline: Deadline) -> dict: ...
+
+        def _clear_request(self, deadline: Deadline) -> None: ...
+
+        def _send_request(self, k: int, deadline: Deadline) -> None: ...
+
+        def _send_acknowledgement(self, k: int, raw: dict, deadline: Deadline) -> None: ...
 
     def _request_posture(self, k: int, deadline: Deadline) -> None:
         raw = self._call("read status", self._raw_status, deadline=deadline)
@@ -38,7 +56,7 @@ class PolledHandshake:
         self._send_request(k, deadline)
         self._requested = k
 
-    def acknowledge(self, k: int, timeout=None) -> ControllerStatus:
+    def acknowledge(self, k: int, timeout: float | None = None) -> ControllerStatus:
         k = check_posture_index(k)
         deadline = self._budget(timeout)
         raw = self._call("read status", self._raw_status, deadline=deadline)
@@ -49,11 +67,12 @@ class PolledHandshake:
         self._requested = 0
         return self.status(timeout=max(deadline.remaining(), 1e-3))
 
-    def wait_at_rest(self, k=None, timeout=None, *, deadline=None) -> ControllerStatus:
+    def wait_at_rest(self, k: int | None = None, timeout: float | None = None, *,
+                     deadline: Deadline | None = None) -> ControllerStatus:
         deadline = deadline or Deadline(self.motion_timeout if timeout is None else check_timeout("timeout", timeout))
         pending = self._requested if (k is None or k == self._requested) else 0
 
-        def done(raw):
+        def done(raw: dict) -> bool:
             if raw["state"] == ERROR:
                 return True
             if raw["state"] == READY:

@@ -100,7 +100,7 @@ class NumField:
     limit: float
     positive: bool = False
 
-    def format(self, value) -> str:
+    def format(self, value: float) -> str:
         v = float(value)
         if not math.isfinite(v):
             raise ValueError(f"{self.name} must be finite; got {v}")
@@ -126,7 +126,7 @@ class IntField:
     low: int
     high: int
 
-    def format(self, value) -> str:
+    def format(self, value: float) -> str:
         if isinstance(value, bool) or int(value) != value:
             raise ValueError(f"{self.name} must be an integer; got {value!r}")
         v = int(value)
@@ -150,7 +150,7 @@ class WordField:
     name: str
     choices: tuple | None = None
 
-    def format(self, value) -> str:
+    def format(self, value: object) -> str:
         text = str(value)
         if not _WORD.fullmatch(text) or (self.choices and text not in self.choices):
             raise ValueError(f"{self.name} {text!r} is not a protocol word")
@@ -172,7 +172,7 @@ class KeyField:
 
     name: str = "write key"
 
-    def format(self, value) -> str:
+    def format(self, value: object) -> str:
         text = value if isinstance(value, str) else ""
         if not WRITE_KEY_PATTERN.fullmatch(text):
             raise ValueError(f"the {self.name} must be 8 to 32 letters, digits, '_' or '-'")
@@ -280,7 +280,7 @@ def _finish(text: str) -> bytes:
     return text.encode("ascii") + b"\n"
 
 
-def decode_line(raw) -> str:
+def decode_line(raw: object) -> str:
     """One received line (LF and an optional CR stripped) as text, checked for length and characters."""
     if isinstance(raw, str):
         raw = raw.encode("utf-8", errors="replace")
@@ -300,7 +300,7 @@ def decode_line(raw) -> str:
     return data.decode("ascii")
 
 
-def encode_request(request_id: int, command: str, *args) -> bytes:
+def encode_request(request_id: int, command: str, *args: object) -> bytes:
     """``<id> <COMMAND> <args>`` + LF, each argument formatted by its field.
 
     Raises
@@ -317,7 +317,7 @@ def encode_request(request_id: int, command: str, *args) -> bytes:
     return _finish(" ".join(parts))
 
 
-def parse_request(raw) -> Request:
+def parse_request(raw: object) -> Request:
     """Server side: a request line to a :class:`Request` with typed arguments.
 
     Raises
@@ -349,7 +349,7 @@ def parse_request(raw) -> Request:
     return Request(request_id, spec.name, args)
 
 
-def encode_ok(request: Request, *values) -> bytes:
+def encode_ok(request: Request, *values: object) -> bytes:
     """The OK reply to ``request`` carrying ``values`` formatted by the command's reply fields."""
     spec = SPECS[request.command]
     if len(values) != len(spec.reply):
@@ -368,7 +368,7 @@ def encode_error(request_id: int, code: int, message: str) -> bytes:
     return _finish(f"{head} {text[:room]}" if text and room > 0 else head)
 
 
-def parse_reply(raw) -> Reply:
+def parse_reply(raw: object) -> Reply:
     """A reply line to a :class:`Reply` (values left as text; see :func:`decode_values`).
 
     Raises

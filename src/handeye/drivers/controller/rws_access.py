@@ -6,24 +6,36 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, TypeVar
 
 from .errors import ControllerRefused
 from .interface import Deadline, LinkDown
-from .rws_http import RMMP_HINT
+from .rws_http import RMMP_HINT, RwsHttp
 
 __all__ = ["RwsAccess"]
 
 log = logging.getLogger("handeye.drivers.controller.rws_client")
 
+T = TypeVar("T")
 
-class RwsAccess:
+# For the type checker only: the mixin's methods use RwsHttp's (RwsController mixes both in); at run time
+# its base is object, so RwsController's own base list alone makes its method order.
+_Host = RwsHttp if TYPE_CHECKING else object
+
+
+class RwsAccess(_Host):
     """Mastership and RMMP (see the module docstring)."""
+
+    # Set by RwsController.__init__.
+    poll_s: float
+    rmmp_timeout: float
 
     def _mastership(self, action: str, deadline: Deadline) -> None:
         path = f"/rw/mastership?action={action}" if self.generation == 1 else f"/rw/mastership/edit/{action}"
         self._request("POST", path, deadline, data={}, what=f"mastership {action}")
 
-    def _as_master(self, what: str, write, deadline: Deadline):
+    def _as_master(self, what: str, write: Callable[[Deadline], T], deadline: Deadline) -> T:
         """``write(deadline)`` inside a mastership request/release; in manual mode, where the controller
         refuses mastership without RMMP, the grant is asked for (the operator presses Allow) first."""
         try:

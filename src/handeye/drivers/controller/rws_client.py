@@ -38,6 +38,8 @@ answers, symbols), ``rws_access`` (mastership, RMMP), ``rws_codec`` (RAPID value
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -101,10 +103,10 @@ class RwsController(RwsHandshake, RwsProgram, RwsAccess, RwsHttp, PolledHandshak
     writes_need_key = False
 
     def __init__(self, host: str = "127.0.0.1", port: int | None = None, *, username: str = "Default User",
-                 password: str = "robotics", generation="auto", tls_fingerprint: str | None = None,
+                 password: str = "robotics", generation: str | int = "auto", tls_fingerprint: str | None = None,
                  task: str = "T_ROB1", mechunit: str = "ROB_1", tool_name: str = "tHeCamera",
                  tool_module: str = "HeTool", link_module: str = "HeRws", max_rate: float = 20.0,
-                 poll_s: float = 0.02, rmmp_timeout: float = 60.0, **options):
+                 poll_s: float = 0.02, rmmp_timeout: float = 60.0, **options: Any):
         if port is not None and (isinstance(port, bool) or not isinstance(port, int) or not 0 < port < 65536):
             raise InvalidRequest(f"TCP port must be an integer 1..65535; got {port!r}")
         if str(generation).lower() not in ("auto", "1", "2"):
@@ -188,6 +190,7 @@ class RwsController(RwsHandshake, RwsProgram, RwsAccess, RwsHttp, PolledHandshak
                 failure = ("link", failure[1] + "; a RobotWare 7 controller answers HTTPS only: give its "
                                                  "certificate's fingerprint (controller.tls_fingerprint)")
             self._fail("connect", failure, deadline)
+        assert probe is not None  # _send gives a response whenever it gives no failure
         challenge = probe.headers.get("WWW-Authenticate", "").split(" ", 1)[0].lower()
         found = {"digest": 1, "basic": 2}.get(challenge)
         if found is None and probe.status_code == 200:
@@ -225,19 +228,22 @@ class RwsController(RwsHandshake, RwsProgram, RwsAccess, RwsHttp, PolledHandshak
             close_session(old)
 
     def _goodbye(self) -> None:
+        http = self._http
+        if http is None:  # no session: nothing to log out of
+            return
         try:
-            self._http.get(self._url("/logout"), timeout=min(self.timeout, 0.5), auth=self._auth())
+            http.get(self._url("/logout"), timeout=min(self.timeout, 0.5), auth=self._auth())
         finally:
-            close_session(self._http)
+            close_session(http)
             self._http = None
 
-    def ping(self, timeout=None) -> float:
+    def ping(self, timeout: float | None = None) -> float:
         start = time.perf_counter()
         self._call("ping", lambda d: self._get("/rw/panel/ctrlstate" if self.generation == 1 else "/rw/panel/ctrl-state",
                                                d, "ping"), timeout)
         return time.perf_counter() - start
 
-    def _numbers(self, state: dict, keys, what: str) -> np.ndarray:
+    def _numbers(self, state: dict, keys: Sequence[str], what: str) -> np.ndarray:
         try:
             values = np.array([float(state[k]) for k in keys])
         except (KeyError, TypeError, ValueError):
@@ -246,12 +252,12 @@ class RwsController(RwsHandshake, RwsProgram, RwsAccess, RwsHttp, PolledHandshak
             raise self.protocol_error(f"{what}: {self.address} answered {values.tolist()}")
         return values
 
-    def read_joints(self, timeout=None) -> np.ndarray:
+    def read_joints(self, timeout: float | None = None) -> np.ndarray:
         path = f"/rw/motionsystem/mechunits/{self.mechunit}/jointtarget"
         state = self._call("read joints", lambda d: self._get(path, d, "read joints"), timeout)
         return np.round(self._numbers(state, [f"rax_{i}" for i in range(1, 7)], "read joints"), 4)
 
-    def read_tool0_pose(self, timeout=None) -> FlangePose:
+    def read_tool0_pose(self, timeout: float | None = None) -> FlangePose:
         path = f"/rw/motionsystem/mechunits/{self.mechunit}/robtarget?tool=tool0&wobj=wobj0&coordinate=Base"
         state = self._call("read flange pose", lambda d: self._get(path, d, "read flange pose"), timeout)
         p = np.round(self._numbers(state, "xyz", "read flange pose"), 3)
@@ -263,9 +269,9 @@ class RwsController(RwsHandshake, RwsProgram, RwsAccess, RwsHttp, PolledHandshak
         q = (-q if q[0] < 0 else q) + 0.0  # + 0.0: no -0.0 in what is printed
         return FlangePose(p + 0.0, q)
 
-    def controller_state(self, timeout=None) -> dict:
+    def controller_state(self, timeout: float | None = None) -> dict:
         """``{"ctrlstate": "motoron", "opmode": "AUTO", "execution": "running", "robotware": "6.08"}``."""
-        def read(d):
+        def read(d: Deadline) -> dict:
             ctrl = self._get("/rw/panel/ctrlstate" if self.generation == 1 else "/rw/panel/ctrl-state", d)
             mode = self._get("/rw/panel/opmode", d)
             execution = self._get("/rw/rapid/execution", d)
@@ -279,7 +285,7 @@ class RwsController(RwsHandshake, RwsProgram, RwsAccess, RwsHttp, PolledHandshak
             "write tool data", lambda d2: self._set_symbol(self.tool_module, self.tool_name, value, d2), d),
             deadline=deadline)
 
-    def read_tool(self, timeout=None) -> ToolData:
+    def read_tool(self, timeout: float | None = None) -> ToolData:
         value = self._call("read tool data", lambda d: self._symbol_value(self.tool_module, self.tool_name, d), timeout)
         try:
             tool = tool_of_value(value)

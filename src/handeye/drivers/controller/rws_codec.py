@@ -5,13 +5,18 @@ The mock RWS controller reads its writes with the same functions."""
 from __future__ import annotations
 
 import re
+from typing import Any, Union
 
 from .types import ToolData
 
 __all__ = ["rapid_literal", "parse_rapid_value", "tooldata_value", "tool_of_value"]
 
 
-def rapid_literal(values) -> str:
+#: What :func:`rapid_literal` writes: nested lists or tuples of numbers and bools.
+RapidData = Union[bool, float, list["RapidData"], tuple["RapidData", ...]]
+
+
+def rapid_literal(values: RapidData) -> str:
     """A RAPID aggregate literal of nested numbers and bools: ``[TRUE,[[1,2,3],[1,0,0,0]],...]``."""
     if isinstance(values, bool):
         return "TRUE" if values else "FALSE"
@@ -24,8 +29,9 @@ def rapid_literal(values) -> str:
 _TOKEN = re.compile(r"\s*(\[|\]|,|\"(?:[^\"]|\"\")*\"|TRUE|FALSE|[-+0-9.eE]+)", re.IGNORECASE)
 
 
-def parse_rapid_value(text: str):
-    """A RAPID value as RWS prints it (``[1,2,3]``, ``TRUE``, ``"text"``, ``9E+09``) as nested lists.
+def parse_rapid_value(text: str) -> Any:
+    """A RAPID value as RWS prints it (``[1,2,3]``, ``TRUE``, ``"text"``, ``9E+09``) as nested lists (of
+    the shape the controller sent: typed ``Any``, as :func:`json.loads` is).
 
     Raises
     ------
@@ -65,7 +71,7 @@ def tooldata_value(tool: ToolData, robhold: bool = True) -> list:
             [tool.mass_kg, list(tool.cog_mm), [1, 0, 0, 0], 0, 0, 0]]
 
 
-def tool_of_value(value) -> ToolData:
+def tool_of_value(value: Any) -> ToolData:
     """The :class:`ToolData` of a parsed RAPID ``tooldata`` value (``ValueError`` when it is not one)."""
     try:
         (_, (p, q), (mass, cog, *_)) = value

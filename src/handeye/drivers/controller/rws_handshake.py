@@ -6,20 +6,33 @@ program publishes ``heRwsLink`` (``[state, posture, error, count, version]``).""
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from .interface import Deadline
 from .protocol import E_STATE
+from .rws_access import RwsAccess
 from .types import ACKED, AT, ERROR, LATE, MOVING, READY, ControllerStatus
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ["RwsHandshake", "STATE_NAMES"]
 
 #: ``heRwsLink{1}`` values (HeMain's HE_READY ...).
 STATE_NAMES = {0: READY, 1: MOVING, 2: AT, 3: LATE, 4: ACKED, 5: ERROR}
 
+# For the type checker only: the mixin's methods use RwsAccess's and RwsHttp's (RwsController mixes them
+# in); at run time its base is object, so RwsController's own base list alone makes its method order.
+_Host = RwsAccess if TYPE_CHECKING else object
 
-class RwsHandshake:
+
+class RwsHandshake(_Host):
     """What :class:`~handeye.drivers.controller.polled.PolledHandshake` needs over RWS: the state, the
     request and the acknowledgement written under mastership, and the check that the program runs."""
+
+    # Set by RwsController.__init__.
+    link_module: str
 
     def _raw_status(self, deadline: Deadline) -> dict:
         values = self._symbol_value(self.link_module, "heRwsLink", deadline)
@@ -31,11 +44,11 @@ class RwsHandshake:
             raise self.protocol_error(f"heRwsLink at {self.address} holds state {code}, not a known state")
         return {"state": STATE_NAMES[code], "posture": posture, "error": error}
 
-    def status(self, timeout=None) -> ControllerStatus:
+    def status(self, timeout: float | None = None) -> ControllerStatus:
         raw = self._call("read status", self._raw_status, timeout)
         return ControllerStatus(raw["state"], raw["posture"])
 
-    def check_posture(self, k, expected_joints=None) -> int:
+    def check_posture(self, k: int, expected_joints: npt.ArrayLike | None = None) -> int:
         if self._info is not None and self._info.postures == 0:
             raise self.refused_error(f"no handeye program runs in {self.task} at {self.address} ({self._info.program}): "
                                      "handeye capture loads it over RWS, or load HeMain, HeRws and HeTool and start "
@@ -59,7 +72,7 @@ class RwsHandshake:
             raise self.refused_error(f"{what}: the RAPID program at {self.address} is {execution}: start it "
                                      "(handeye loads and starts it with the capture, or press Play)", E_STATE)
 
-    def _wait_for(self, what: str, done, deadline: Deadline) -> dict:
+    def _wait_for(self, what: str, done: Callable[[dict], bool], deadline: Deadline) -> dict:
         while True:
             raw = self._call(what, self._raw_status, deadline=deadline)
             if done(raw):

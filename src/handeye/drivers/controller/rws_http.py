@@ -7,10 +7,16 @@ from __future__ import annotations
 
 import re
 import time
+from typing import TYPE_CHECKING, Any, NoReturn
 
-from .interface import Deadline, LinkDown
-from .rws_codec import parse_rapid_value, rapid_literal
-from .rws_transport import failure_reason, pinned_adapter
+from .errors import ControllerRefused
+from .interface import Controller, Deadline, LinkDown
+from .rws_codec import RapidData, parse_rapid_value, rapid_literal
+from .rws_transport import RateLimiter, failure_reason, pinned_adapter
+
+if TYPE_CHECKING:
+    import requests
+    from requests.auth import AuthBase
 
 __all__ = ["RwsHttp", "HAL_JSON", "FORM_V2", "RMMP_HINT"]
 
@@ -20,21 +26,45 @@ FORM_V2 = "application/x-www-form-urlencoded;v=2.0"
 #: What the operator is told when the controller is in manual mode.
 RMMP_HINT = "press Allow on the FlexPendant to grant this PC write access in manual mode"
 
+#: Why no answer came (:meth:`RwsHttp._send`): ``(kind, reason)``, kind ``tls``, ``timeout`` or ``link``.
+Failure = tuple[str, str]
 
-class RwsHttp:
+# For the type checker only: the mixin's methods run on the RwsController, a Controller; at run time its
+# base is object, so RwsController's own base list alone makes its method order.
+_Host = Controller if TYPE_CHECKING else object
+
+
+class RwsHttp(_Host):
     """Requests, answers and symbols over RWS (see the module docstring); the controller sets
     ``https``, ``host``, ``port``, ``generation``, ``username``, ``limiter`` and the request counters."""
+
+    # Set by RwsController.__init__ (and generation by its detection at connect).
+    https: bool
+    host: str
+    port: int
+    username: str
+    _password: str
+    tls_fingerprint: str | None
+    task: str
+    generation: int | None
+    limiter: RateLimiter
+    requests: int
+    busy_answers: int
+    _http: requests.Session | None
+    _connected: bool
 
     @property
     def address(self) -> str:
         return f"{'https' if self.https else 'http'}://{self.host}:{self.port}"
 
-    def _session(self):
+    def _session(self) -> requests.Session:
         import requests
 
         if self._http is None:
             http = requests.Session()
             if self.https:
+                if self.tls_fingerprint is None:  # https is set from the fingerprint: a bug if it is missing
+                    raise ValueError("RWS over HTTPS needs the controller's certificate fingerprint")
                 http.mount("https://", pinned_adapter(self.tls_fingerprint))
                 http.verify = False  # the pinned fingerprint replaces the CA check (self-signed)
             self._http = http
@@ -50,13 +80,14 @@ class RwsHttp:
     def _url(self, path: str) -> str:
         return f"{self.address}{path}"
 
-    def _auth(self):
+    def _auth(self) -> AuthBase:
         from requests.auth import HTTPBasicAuth, HTTPDigestAuth
 
-        if getattr(self, "_auth_obj", None) is None:
+        auth: AuthBase | None = getattr(self, "_auth_obj", None)
+        if auth is None:
             cls = HTTPBasicAuth if self.generation == 2 else HTTPDigestAuth
-            self._auth_obj = cls(self.username, self._password)
-        return self._auth_obj
+            auth = self._auth_obj = cls(self.username, self._password)
+        return auth
 
     def _timeout(self, deadline: Deadline) -> float:
         left = deadline.remaining()
@@ -64,7 +95,8 @@ class RwsHttp:
             raise self.timeout_error(f"no time left within {deadline.seconds:g} s")
         return max(min(self.timeout, left), 1e-3)
 
-    def _request(self, method: str, path: str, deadline: Deadline, data=None, what: str = ""):
+    def _request(self, method: str, path: str, deadline: Deadline, data: dict | str | bytes | None = None,
+                 what: str = "") -> requests.Response:
         """One request (503 retried with back-off within the budget); the response when 2xx."""
 
         if not self._connected and self._http is None:
@@ -72,7 +104,7 @@ class RwsHttp:
         what = what or f"{method} {path.split('?')[0]}"
         if self.generation == 1:
             path += ("&" if "?" in path else "?") + "json=1"
-            headers = {}
+            headers: dict[str, str] = {}
             if data is not None:
                 headers["Content-Type"] = "application/x-www-form-urlencoded"
         else:
@@ -87,6 +119,7 @@ class RwsHttp:
                                            timeout=self._timeout(deadline))
             if failure is not None:
                 self._fail(what, failure, deadline)
+            assert response is not None  # _send gives a response whenever it gives no failure
             if response.status_code != 503:
                 break
             self.busy_answers += 1
@@ -99,13 +132,13 @@ class RwsHttp:
             raise self._http_error(response, what)
         return response
 
-    def _send(self, method: str, url: str, **options):
+    def _send(self, method: str, url: str, **options: Any) -> tuple[requests.Response | None, Failure | None]:
         """``(response, None)``, or ``(None, (kind, reason))`` when no answer came (kind: ``tls``,
         ``timeout``, ``link``). No exception object is kept: its traceback would hold the dropped
         connection's socket until the garbage collector runs."""
         import requests
 
-        failure = None
+        failure: Failure | None = None
         try:
             return self._session().request(method, url, allow_redirects=False, **options), None
         except requests.exceptions.SSLError as exc:
@@ -118,7 +151,7 @@ class RwsHttp:
             failure = ("link", failure_reason(exc))
         return None, failure
 
-    def _fail(self, what: str, failure: tuple, deadline: Deadline):
+    def _fail(self, what: str, failure: Failure, deadline: Deadline) -> NoReturn:
         kind, reason = failure
         if kind == "tls":
             raise self.connection_error(f"{what}: {self._tls_message(reason)}")
@@ -130,7 +163,7 @@ class RwsHttp:
     def _timeout_text(self, deadline: Deadline) -> str:
         return f"{min(self.timeout, deadline.seconds):g} s"
 
-    def _message(self, response) -> str:
+    def _message(self, response: requests.Response) -> str:
         """The controller's own message of an error answer (JSON status, or the body's text)."""
         try:
             body = response.json()
@@ -141,7 +174,7 @@ class RwsHttp:
         code = status.get("code")
         return f"{msg} (code {code})" if code is not None else str(msg)
 
-    def _http_error(self, response, what: str):
+    def _http_error(self, response: requests.Response, what: str) -> ControllerRefused:
         status, message = response.status_code, self._message(response)
         if status == 401:
             return self.refused_error(f"{what}: {self.address} refused the login: wrong user or password for "
@@ -162,7 +195,7 @@ class RwsHttp:
                                       "that the handeye modules are loaded in task " + self.task, 404)
         return self.refused_error(f"{what}: {self.address} answered HTTP {status}: {message}", status)
 
-    def _states(self, response, what: str) -> list:
+    def _states(self, response: requests.Response, what: str) -> list:
         try:
             body = response.json()
         except ValueError:
@@ -184,14 +217,14 @@ class RwsHttp:
             return f"/rw/rapid/symbol/data/RAPID/{self.task}/{module}/{name}"
         return f"/rw/rapid/symbol/RAPID/{self.task}/{module}/{name}/data"
 
-    def _symbol_value(self, module: str, name: str, deadline: Deadline):
+    def _symbol_value(self, module: str, name: str, deadline: Deadline) -> Any:
         state = self._get(self._symbol_path(module, name), deadline, f"read {module}.{name}")
         try:
             return parse_rapid_value(state["value"])
         except (KeyError, ValueError) as exc:
             raise self.protocol_error(f"read {module}.{name}: {self.address} answered {str(state)[:80]} ({exc})") from None
 
-    def _set_symbol(self, module: str, name: str, value, deadline: Deadline) -> None:
+    def _set_symbol(self, module: str, name: str, value: RapidData, deadline: Deadline) -> None:
         path = self._symbol_path(module, name)
         path = path + "?action=set" if self.generation == 1 else path
         self._request("POST", path, deadline, data={"value": rapid_literal(value)}, what=f"write {module}.{name}")

@@ -5,18 +5,28 @@ service, load them into the task, reset the program pointer, start and stop exec
 from __future__ import annotations
 
 import time
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
 
 from .errors import InvalidRequest
 from .interface import Deadline
 from .protocol import PROTOCOL_VERSION
+from .rws_access import RwsAccess
 
 __all__ = ["RwsProgram"]
 
+# For the type checker only: the mixin's methods use RwsAccess's and RwsHttp's (RwsController mixes them
+# in); at run time its base is object, so RwsController's own base list alone makes its method order.
+_Host = RwsAccess if TYPE_CHECKING else object
 
-class RwsProgram:
+
+class RwsProgram(_Host):
     """Loading, starting and stopping the program under mastership (see the module docstring)."""
 
-    def load_program(self, modules, timeout: float | None = None, folder: str = "$HOME/handeye") -> None:
+    # Set by RwsController.__init__.
+    link_module: str
+
+    def load_program(self, modules: Iterable[tuple[str, str]], timeout: float | None = None, folder: str = "$HOME/handeye") -> None:
         """Upload RAPID modules, load them into the task (replacing those of the same name), reset the
         program pointer and start ``main``.
 
@@ -30,7 +40,7 @@ class RwsProgram:
         if not files:
             raise InvalidRequest("no RAPID modules to load")
 
-        def load(d):
+        def load(d: Deadline) -> None:
             self._execution("stop", d, {"stopmode": "stop", "usetsp": "normal"})
             for name, text in files:
                 self._request("PUT", f"/fileservice/{folder}/{name}", d, data=text.encode("latin-1"),

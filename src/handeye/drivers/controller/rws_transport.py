@@ -7,6 +7,11 @@ from __future__ import annotations
 import re
 import threading
 import time
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import requests
+    from requests.adapters import HTTPAdapter
 
 __all__ = ["RateLimiter", "pinned_adapter", "close_session", "failure_reason"]
 
@@ -32,12 +37,14 @@ class RateLimiter:
             self.tokens -= 1.0
 
 
-def close_session(http) -> None:
+def close_session(http: requests.Session) -> None:
     """Close a requests session and its sockets now: urllib3 2 leaves the pools of a cleared
     PoolManager to the garbage collector, which may keep a socket open long after a dropped link."""
     for adapter in http.adapters.values():
         pools = getattr(getattr(adapter, "poolmanager", None), "pools", None)
-        for key in list(pools.keys()) if pools is not None else []:
+        if pools is None:
+            continue
+        for key in list(pools.keys()):
             try:
                 pools[key].close()
             except KeyError:
@@ -45,7 +52,7 @@ def close_session(http) -> None:
     http.close()
 
 
-def failure_reason(exc) -> str:
+def failure_reason(exc: BaseException) -> str:
     """The innermost reason of a requests/urllib3 error, one line."""
     text = str(exc)
     m = re.search(r"\((?:Caused by )?\w+\((.*)\)\)\)?$", text)
@@ -53,7 +60,7 @@ def failure_reason(exc) -> str:
     return re.sub(r"\s+", " ", text)[:200]
 
 
-def pinned_adapter(fingerprint: str):
+def pinned_adapter(fingerprint: str) -> HTTPAdapter:
     """A requests adapter that accepts exactly the certificate of SHA-256 ``fingerprint`` (self-signed)."""
     from requests.adapters import HTTPAdapter
 

@@ -9,6 +9,8 @@ earlier PC left on the line (an unfinished request, late replies) never mixes wi
 
 from __future__ import annotations
 
+from typing import Any
+
 from .errors import InvalidRequest
 from .interface import Deadline, LinkDown
 from .line_client import LineBuffer, LineController, LineTransport
@@ -106,7 +108,7 @@ class SerialController(LineController):
 
     protocol = "serial"
 
-    def __init__(self, url: str, baudrate: int = 9600, **options):
+    def __init__(self, url: str, baudrate: int = 9600, **options: Any):
         if not isinstance(url, str) or not url:
             raise InvalidRequest(f"serial url must be a device path or pyserial URL; got {url!r}")
         if isinstance(baudrate, bool) or not isinstance(baudrate, int) or baudrate <= 0:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import socket
+from typing import Any
 
 from .interface import Deadline, LinkDown
 from .line_client import LineBuffer, LineController, LineTransport
@@ -94,7 +95,7 @@ class SocketController(LineController):
 
     protocol = "socket"
 
-    def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT, **options):
+    def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT, **options: Any):
         from .errors import InvalidRequest
 
         if isinstance(port, bool) or not isinstance(port, int) or not 0 < port < 65536:

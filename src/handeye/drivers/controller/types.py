@@ -10,13 +10,20 @@ from __future__ import annotations
 import math
 import numbers
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import TYPE_CHECKING, SupportsInt, cast
 
 import numpy as np
 
 from ...base import WRITE_KEY_PATTERN, write_key_code  # one definition for drivers and rapid
 from .errors import InvalidRequest
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from ...robot import RobotModel
 
 __all__ = [
     "STATES",
@@ -170,7 +177,8 @@ class ToolData:
     cog_mm: tuple = (0.0, 0.0, 0.0)
 
     @classmethod
-    def from_transform(cls, cam2tool0, mass_kg: float = 1.0, cog_mm=(0.0, 0.0, 0.0)) -> "ToolData":
+    def from_transform(cls, cam2tool0: npt.ArrayLike, mass_kg: float = 1.0,
+                       cog_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> "ToolData":
         """Tool data whose frame is the 4x4 ``cam2tool0`` (mm)."""
         from ...geometry import canonical_quaternions, quaternion_from_matrix
 
@@ -190,7 +198,7 @@ class ToolData:
         return [*map(float, p), *map(float, q), m, *map(float, c)]
 
     @classmethod
-    def from_values(cls, values) -> "ToolData":
+    def from_values(cls, values: Iterable[float]) -> "ToolData":
         v = [float(x) for x in values]
         if len(v) != 11:
             raise ValueError(f"tool data needs 11 numbers; got {len(v)}")
@@ -200,11 +208,11 @@ class ToolData:
                  mass_kg: float = 1e-3) -> bool:
         """Equal within the link's precision (0.001 mm, 1e-6 per quaternion component)."""
         a, b = self.as_arrays(), other.as_arrays()
-        return (np.all(np.abs(a[0] - b[0]) <= position_mm) and np.all(np.abs(a[1] - b[1]) <= quaternion)
-                and abs(a[2] - b[2]) <= mass_kg and np.all(np.abs(a[3] - b[3]) <= position_mm))
+        return bool(np.all(np.abs(a[0] - b[0]) <= position_mm) and np.all(np.abs(a[1] - b[1]) <= quaternion)
+                    and abs(a[2] - b[2]) <= mass_kg and np.all(np.abs(a[3] - b[3]) <= position_mm))
 
 
-def check_finite(name: str, values) -> np.ndarray:
+def check_finite(name: str, values: object) -> np.ndarray:
     """``values`` as a float array; :class:`InvalidRequest` if any is NaN or infinite."""
     try:
         arr = np.asarray(values, dtype=float)
@@ -216,14 +224,14 @@ def check_finite(name: str, values) -> np.ndarray:
 
 
 @lru_cache(maxsize=None)
-def robot_model(name: str):
+def robot_model(name: str) -> RobotModel:
     """The kinematics model (joint limits) of a robot by name; ValueError if unknown."""
     from ...robot import load_robot
 
     return load_robot(name)
 
 
-def check_joints(joints_deg, robot: str = "IRB1400", what: str = "posture") -> np.ndarray:
+def check_joints(joints_deg: npt.ArrayLike, robot: str = "IRB1400", what: str = "posture") -> np.ndarray:
     """Controller axis angles (deg), shape (dof,) of ``robot``'s model, finite and inside its joint limits.
 
     Raises
@@ -241,7 +249,7 @@ def check_joints(joints_deg, robot: str = "IRB1400", what: str = "posture") -> n
     return arr
 
 
-def check_posture_index(k, count: int | None = None) -> int:
+def check_posture_index(k: object, count: int | None = None) -> int:
     """A 1-based posture index as an int (no bool, no NaN, no fraction), within ``1..count`` if known."""
     if isinstance(k, (bool, np.bool_)) or not isinstance(k, numbers.Real):
         raise InvalidRequest(f"posture index must be an integer >= 1; got {k!r}")
@@ -249,7 +257,7 @@ def check_posture_index(k, count: int | None = None) -> int:
         if not math.isfinite(k) or k != int(k):
             raise InvalidRequest(f"posture index must be an integer >= 1; got {k!r}")
     try:
-        value = int(k)
+        value = int(cast(SupportsInt, k))  # a numbers.Real (float, numpy, Fraction) has __int__; typeshed's ABC omits it
     except (TypeError, ValueError):
         raise InvalidRequest(f"posture index must be an integer >= 1; got {k!r}") from None
     if value < 1 or (count is not None and value > count):
@@ -292,7 +300,7 @@ def check_tooldata(tool: ToolData, max_mass_kg: float = MAX_TOOL_MASS_KG) -> Too
     return ToolData(tuple(float(v) for v in p), tuple(float(v) for v in q), float(m), tuple(float(v) for v in c))
 
 
-def check_timeout(name: str, value) -> float:
+def check_timeout(name: str, value: float | str) -> float:
     """A positive, finite number of seconds."""
     try:
         t = float(value)
@@ -303,7 +311,7 @@ def check_timeout(name: str, value) -> float:
     return t
 
 
-def check_write_key(value, name: str = "write_key") -> str | None:
+def check_write_key(value: object, name: str = "write_key") -> str | None:
     """The station's write key (None: no key), checked without ever echoing it.
 
     Raises
@@ -321,7 +329,7 @@ def check_write_key(value, name: str = "write_key") -> str | None:
     return value
 
 
-def check_fingerprint(value, name: str = "controller.tls_fingerprint") -> str:
+def check_fingerprint(value: object, name: str = "controller.tls_fingerprint") -> str:
     """A SHA-256 certificate fingerprint as 64 lower-case hex digits (colons allowed in ``value``, as
     browsers and openssl print it).
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import os
 import re
 import threading
 import time
@@ -169,7 +170,7 @@ class ModbusControllerServer(RapidControllerServer):
     kind = "modbus"
 
     def __init__(self, program: ControllerProgram, robot: SimulatedRobot, host: str = "127.0.0.1", port: int = 0,
-                 faults: Faults | None = None, *, register_map: object = None, idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None):
+                 faults: Faults | None = None, *, register_map: str | os.PathLike[str] | None = None, idle_timeout_s: float = DEFAULT_IDLE_TIMEOUT_S, write_key: str | None = None):
         super().__init__(program, robot, host, port, faults, idle_timeout_s=idle_timeout_s, write_key=write_key)
         #: Connections closed for idleness (for tests).
         self.idle_closes = 0
