@@ -423,7 +423,7 @@ def _session_program(config: StationConfig, plan_joints: np.ndarray, board2base,
     from ...rapid import station_from_dict
 
     data = config.rapid_dict(plan_joints, board2base)
-    if link is not None and link.mock is not None and data["controller"]["write_key"] is None:
+    if link is not None and link.is_mock and link.mock is not None and data["controller"]["write_key"] is None:
         # the embedded station's controller holds a key of its own (HeKey.sys, handed to the PC): its
         # link module asks HeKey for it. The key itself never goes into the program modules.
         data["controller"]["write_key"] = link.mock.write_key

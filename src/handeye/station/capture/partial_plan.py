@@ -82,7 +82,7 @@ def _acceptor(board):
     return accept
 
 
-def _spread(hand) -> float:
+def _coverage_deg(hand) -> float:
     return float(hand_axis_coverage(hand, "tool0").spread_deg)
 
 
@@ -125,7 +125,7 @@ def widen_with_partial_views(robot: RobotModel, joints: np.ndarray, cam2tool0, b
     pool_hand = robot.forward_transform(pool) if len(pool) else np.zeros((0, 4, 4))
     fractions = in_view_fraction(robot, pool, cam2tool0, board2base, corners, views, sampling.margin_px) if len(pool) else []
     replaced, left, swapped = set(), list(range(len(pool))), []
-    spread = _spread(hand)
+    spread = _coverage_deg(hand)
     while len(swapped) < most and left:
         best = None
         for c in left:
@@ -134,7 +134,7 @@ def widen_with_partial_views(robot: RobotModel, joints: np.ndarray, cam2tool0, b
                     continue
                 trial = hand.copy()
                 trial[i] = pool_hand[c]
-                gain = _spread(trial) - spread
+                gain = _coverage_deg(trial) - spread
                 if gain > MIN_GAIN_DEG and (best is None or gain > best[0]):
                     best = (gain, c, i)
         if best is None:
