@@ -82,3 +82,19 @@ def test_a_session_without_the_prediction_has_none(station, tmp_path):
         assert code == 0 and data["standoff"] is None
     finally:
         (session / STANDOFF_FILE).write_text(saved)
+
+
+@pytest.mark.parametrize("damage", [{"without_correction_mm": None}, {"postures": "0-9"}, {"standoff_mm": -750},
+                                    {"with_correction_mm": [1.0]}, {"postures": [0.5]}])
+def test_a_damaged_prediction_is_not_used(station, damage):
+    """A prediction whose hash still matches but whose content does not hold (edited by hand, damaged) is not
+    compared against: the check runs and says nothing of the stand-off, rather than failing as handeye's fault."""
+    _, session = station
+    saved = (session / STANDOFF_FILE).read_text()
+    damaged = {**json.loads(saved), **damage}
+    (session / STANDOFF_FILE).write_text(json.dumps({k: v for k, v in damaged.items() if v is not None}))
+    try:
+        assert read_prediction(session) is None
+    finally:
+        (session / STANDOFF_FILE).write_text(saved)
+    assert read_prediction(session) is not None

@@ -53,9 +53,25 @@ def read_prediction(session_dir) -> dict | None:
         return None
     if not isinstance(data, dict) or data.get("format") != STANDOFF_FORMAT:
         return None
-    if data.get("postures_sha256") != postures_hash(session_dir):
+    if data.get("postures_sha256") != postures_hash(session_dir) or not _well_formed(data):
         return None
     return data
+
+
+def _well_formed(data: dict) -> bool:
+    """True when the prediction holds what :func:`predicted_at` reads: a positive stand-off and, per posture,
+    an integer number and two finite errors (a file edited by hand, or damaged, is not used)."""
+    def numbers(key: str) -> list | None:
+        values = data.get(key)
+        ok = isinstance(values, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
+        return values if ok else None
+
+    postures, with_, without = numbers("postures"), numbers("with_correction_mm"), numbers("without_correction_mm")
+    standoff = data.get("standoff_mm")
+    if postures is None or with_ is None or without is None or not len(postures) == len(with_) == len(without):
+        return False
+    return (isinstance(standoff, (int, float)) and not isinstance(standoff, bool) and standoff > 0
+            and all(float(n).is_integer() for n in postures) and bool(np.all(np.isfinite(with_ + without))))
 
 
 def predicted_at(data: dict, numbers) -> tuple[float, float] | None:
