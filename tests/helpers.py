@@ -187,3 +187,38 @@ def joint_path(nodes: np.ndarray, step_deg: float) -> np.ndarray:
         n = max(2, int(np.ceil(np.max(np.abs(b - a)) / step_deg)) + 1)
         samples.append(a + np.linspace(0, 1, n)[:, None] * (b - a))
     return np.concatenate(samples)
+
+
+def mock_station_config(folder: Path, name: str, base_yaml: str, faults: str = "") -> str:
+    """``folder/name.yaml``: ``base_yaml`` (an embedded mock station's config) with, given ``faults``
+    (flow mapping text), ``mock.faults`` added inside the ``mock:`` section ``base_yaml`` ends with, or a new one."""
+    text = base_yaml
+    if faults:
+        text += ("" if ("\n" + base_yaml).count("\nmock:\n") else "mock:\n") + f"  faults: {{{faults}}}\n"
+    path = Path(folder) / f"{name}.yaml"
+    path.write_text(text)
+    return str(path)
+
+
+def mock_baseline(root: Path, config: str, *calibrate: str) -> Path:
+    """``root/base``: a capture on the embedded mock station of ``config``, calibrated again with the
+    ``calibrate`` options when given (e.g. ``--kinematics``), its tool data written back."""
+    from handeye.station.cli import main
+
+    session = Path(root) / "base"
+    assert main(["capture", "--config", config, "--session", str(session), "--yes"]) == 0
+    if calibrate:
+        assert main(["calibrate", str(session), *calibrate, "--quiet"]) == 0
+    assert main(["writeback", str(session), "--config", config]) == 0
+    return session
+
+
+def verify_against(root: Path, session: Path, config: str, name: str) -> tuple[int, dict]:
+    """``handeye verify --config CONFIG --against SESSION --json root/name.json``: its exit code and JSON."""
+    import json
+
+    from handeye.station.cli import main
+
+    out = Path(root) / f"{name}.json"
+    code = main(["verify", "--config", config, "--against", str(session), "--json", str(out)])
+    return code, json.loads(out.read_text())

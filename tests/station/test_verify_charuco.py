@@ -5,39 +5,30 @@ points by id) and says OK when nothing changed, and names the cause of an inject
 
 from __future__ import annotations
 
-import json
 
 import numpy as np
 import pytest
 
 from handeye.calibration.session import read_session
-from handeye.station.cli import main
+from helpers import mock_baseline, mock_station_config, verify_against
 
 BASE_YAML = ("controller: {protocol: mock}\ncamera: {backend: mock}\nplan: {postures: 14}\nboard: {type: charuco}\n"
              "mock:\n  occlude: {postures: 0.35}\n")
 
 
 def _config(folder, name: str, faults: str = "") -> str:
-    path = folder / f"{name}.yaml"
-    path.write_text(BASE_YAML + (f"  faults: {{{faults}}}\n" if faults else ""))
-    return str(path)
+    return mock_station_config(folder, name, BASE_YAML, faults)
 
 
 @pytest.fixture(scope="module")
 def station(tmp_path_factory):
     root = tmp_path_factory.mktemp("verify_charuco")
-    config = _config(root, "mock")
-    session = root / "base"
-    assert main(["capture", "--config", config, "--session", str(session), "--yes"]) == 0
-    assert main(["writeback", str(session), "--config", config]) == 0
-    return root, session
+    return root, mock_baseline(root, _config(root, "mock"))
 
 
 def _verify(station, name: str, faults: str = ""):
     root, session = station
-    out = root / f"{name}.json"
-    code = main(["verify", "--config", _config(root, name, faults), "--against", str(session), "--json", str(out)])
-    return code, json.loads(out.read_text())
+    return verify_against(root, session, _config(root, name, faults), name)
 
 
 def _partial_postures(folder) -> list:

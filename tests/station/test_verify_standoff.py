@@ -10,7 +10,7 @@ import json
 import numpy as np
 import pytest
 
-from handeye.station.cli import main
+from helpers import mock_baseline, mock_station_config, verify_against
 from handeye.station.standoff_file import STANDOFF_FILE, read_prediction
 
 ARM = ("mock:\n  arm: {joint_zero_deg: [0, 0.012, -0.01, 0.008, -0.012, 0],"
@@ -19,28 +19,18 @@ BASE_YAML = "controller: {protocol: mock}\ncamera: {backend: mock}\nplan: {postu
 
 
 def _config(folder, name: str, faults: str = "") -> str:
-    path = folder / f"{name}.yaml"
-    text = BASE_YAML + ARM + (f"  faults: {{{faults}}}\n" if faults else "")
-    path.write_text(text)
-    return str(path)
+    return mock_station_config(folder, name, BASE_YAML + ARM, faults)
 
 
 @pytest.fixture(scope="module")
 def station(tmp_path_factory):
     root = tmp_path_factory.mktemp("verify_standoff")
-    config = _config(root, "mock")
-    session = root / "base"
-    assert main(["capture", "--config", config, "--session", str(session), "--yes"]) == 0
-    assert main(["calibrate", str(session), "--kinematics", "--quiet"]) == 0
-    assert main(["writeback", str(session), "--config", config]) == 0
-    return root, session
+    return root, mock_baseline(root, _config(root, "mock"), "--kinematics")
 
 
 def _verify(station, name: str, faults: str = ""):
     root, session = station
-    out = root / f"{name}.json"
-    code = main(["verify", "--config", _config(root, name, faults), "--against", str(session), "--json", str(out)])
-    return code, json.loads(out.read_text())
+    return verify_against(root, session, _config(root, name, faults), name)
 
 
 def test_calibrate_kinematics_saves_the_prediction_per_posture(station):
