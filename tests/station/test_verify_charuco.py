@@ -5,7 +5,6 @@ points by id) and says OK when nothing changed, and names the cause of an inject
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 
