@@ -42,6 +42,17 @@ def _browser():
     return webdriver.Chrome(service=Service(DRIVER), options=options)  # the system's driver: nothing downloaded
 
 
+def live_view_url(process: subprocess.Popen, lines: list) -> str:
+    """The URL a ``capture --view`` ``process`` prints, read from its output (each line kept in ``lines``)."""
+    while True:
+        line = process.stdout.readline()
+        assert line, "capture ended without printing the live view's URL:\n" + "".join(lines)
+        lines.append(line)
+        match = re.search(r"live view: (http://\S+)", line)
+        if match:
+            return match.group(1)
+
+
 def _on_disk(session: Path) -> int:
     return len(list((session / "postures").glob("[0-9][0-9][0-9].yaml"))) if (session / "postures").is_dir() else 0
 
@@ -65,13 +76,7 @@ def watched_capture(tmp_path_factory):
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
     lines, samples = [], []
     try:
-        url = None
-        while url is None:
-            line = process.stdout.readline()
-            assert line, "capture ended without printing the live view's URL:\n" + "".join(lines)
-            lines.append(line)
-            match = re.search(r"live view: (http://\S+)", line)
-            url = match.group(1) if match else None
+        url = live_view_url(process, lines)
         refused = []
         for bad in (url.split("?")[0], url.split("?")[0] + "events", url[:-3] + "xyz"):
             try:

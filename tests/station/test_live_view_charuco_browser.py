@@ -8,9 +8,6 @@ Skips, saying why, without Chromium (Debian: `chromium`, `chromium-driver`) or s
 
 from __future__ import annotations
 
-import os
-import re
-import shutil
 import subprocess
 import sys
 import time
@@ -19,28 +16,15 @@ import numpy as np
 import pytest
 
 from handeye.geometry.targets import STATION_CHARUCO
+from test_live_view_browser import CHROMIUM, DRIVER, _browser, live_view_url
 
 POSTURES = 3
-CHROMIUM = os.environ.get("HANDEYE_CHROMIUM") or shutil.which("chromium") or shutil.which("chromium-browser")
-DRIVER = os.environ.get("HANDEYE_CHROMEDRIVER") or shutil.which("chromedriver")
 
 pytestmark = pytest.mark.skipif(CHROMIUM is None or DRIVER is None,
                                 reason="no headless Chromium here (apt-get install chromium chromium-driver)")
 
 CONFIG = ("controller: {protocol: mock}\ncamera: {backend: mock}\nboard: {type: charuco}\n"
           "mock: {occlude: {postures: 1.0, band: [0.25, 0.4]}}\n")
-
-
-def _browser():
-    webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed (pip install -e '.[test]')")
-    from selenium.webdriver.chrome.service import Service
-
-    options = webdriver.ChromeOptions()
-    options.binary_location = CHROMIUM
-    for argument in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                     "--window-size=1400,1200", "--disable-extensions", "--no-first-run"):
-        options.add_argument(argument)
-    return webdriver.Chrome(service=Service(DRIVER), options=options)
 
 
 @pytest.fixture(scope="module")
@@ -55,14 +39,7 @@ def watched(tmp_path_factory):
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
     lines = []
     try:
-        url = None
-        while url is None:
-            line = process.stdout.readline()
-            assert line, "capture ended without printing the live view's URL:\n" + "".join(lines)
-            lines.append(line)
-            match = re.search(r"live view: (http://\S+)", line)
-            url = match.group(1) if match else None
-        browser.get(url)
+        browser.get(live_view_url(process, lines))
         drawn = []
         while process.poll() is None:
             drawn = browser.execute_script("return (window.viewLog.drawn || []).slice();") or drawn
