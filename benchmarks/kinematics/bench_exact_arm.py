@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 
 import numpy as np
 
@@ -26,6 +25,8 @@ from handeye.calibration.arm_synthetic import deviated_session
 from handeye.calibration.solve import problem_from_session
 from handeye.calibration.synthetic import SceneConfig, make_scene
 from handeye.station.kinematics_step import kinematics_json
+
+from bench_kinematics import run_seeds
 
 
 def one_seed(seed: int) -> dict:
@@ -56,15 +57,9 @@ def main(argv=None) -> int:
     p.add_argument("--first", type=int, default=1)
     p.add_argument("--out", default="benchmarks/kinematics/results_exact.jsonl")
     args = p.parse_args(argv)
-    rows = []
-    with open(args.out, "w", encoding="utf-8") as out:
-        for seed in range(args.first, args.first + args.seeds):
-            row = one_seed(seed)
-            rows.append(row)
-            out.write(json.dumps(row) + "\n")
-            print(f"seed {seed}: chi-square {row['chi_square']:.1f} (limit {row['limit']:.1f}), camera change "
-                  f"{row['change_rms_in_sigmas']:.2f} sigma RMS, Mahalanobis {row['change_mahalanobis_squared']:.2f}",
-                  file=sys.stderr, flush=True)
+    rows = run_seeds(range(args.first, args.first + args.seeds), one_seed, args.out, lambda row: (
+        f"chi-square {row['chi_square']:.1f} (limit {row['limit']:.1f}), camera change "
+        f"{row['change_rms_in_sigmas']:.2f} sigma RMS, Mahalanobis {row['change_mahalanobis_squared']:.2f}"))
     print(json.dumps(summary(rows), indent=1))
     return 0
 

@@ -142,6 +142,20 @@ def figure(rows: list[dict], path: Path) -> None:
     fig.savefig(path, format="png", dpi=100, facecolor="white")
 
 
+def run_seeds(seeds, one_seed, out_path, describe) -> list:
+    """``one_seed(seed)`` for every seed: each row written to ``out_path`` (JSON lines) as it comes, and
+    ``seed N: describe(row)`` on stderr; the rows."""
+    rows = []
+    with open(out_path, "w", encoding="utf-8") as out:
+        for seed in seeds:
+            row = one_seed(seed)
+            rows.append(row)
+            out.write(json.dumps(row) + "\n")
+            out.flush()
+            print(f"seed {seed}: {describe(row)}", file=sys.stderr, flush=True)
+    return rows
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--seeds", type=int, default=50)
@@ -153,16 +167,9 @@ def main(argv=None) -> int:
     if args.summary:
         rows = [json.loads(line) for line in Path(args.summary).read_text().splitlines() if line.strip()]
     else:
-        rows = []
-        with open(args.out, "w", encoding="utf-8") as out:
-            for seed in range(args.first, args.first + args.seeds):
-                row = one_seed(seed)
-                rows.append(row)
-                out.write(json.dumps(row) + "\n")
-                out.flush()
-                print(f"seed {seed}: reduction {row['reduction']:.3f}, predicted/measured with "
-                      f"{row['predicted_over_measured_with']:.2f} without {row['predicted_over_measured_without']:.2f}, "
-                      f"z {[round(v['z'], 2) for v in row['zeros'].values()]}", file=sys.stderr, flush=True)
+        rows = run_seeds(range(args.first, args.first + args.seeds), one_seed, args.out, lambda row: (
+            f"reduction {row['reduction']:.3f}, predicted/measured with {row['predicted_over_measured_with']:.2f} "
+            f"without {row['predicted_over_measured_without']:.2f}, z {[round(v['z'], 2) for v in row['zeros'].values()]}"))
     print(json.dumps(summary(rows), indent=1))
     if args.figure:
         figure(rows, Path(args.figure))

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from bench_kinematics import standoff_figures, summary  # noqa: E402
+from bench_kinematics import run_seeds, standoff_figures, summary  # noqa: E402
 
 from handeye.calibration.arm_identification import identify_arm  # noqa: E402
 from handeye.calibration.arm_parameters import parameter_names  # noqa: E402
@@ -82,17 +82,11 @@ def main(argv=None) -> int:
     p.add_argument("--first", type=int, default=1)
     p.add_argument("--out", default="benchmarks/kinematics/results_mock.jsonl")
     args = p.parse_args(argv)
-    rows = []
-    with tempfile.TemporaryDirectory() as tmp, open(args.out, "w", encoding="utf-8") as out:
-        for seed in range(args.first, args.first + args.seeds):
-            row = one_seed(seed, Path(tmp))
-            rows.append(row)
-            out.write(json.dumps(row) + "\n")
-            out.flush()
-            print(f"seed {seed}: reduction {row['reduction']:.3f} ({row['measured_with_mm']:.3f} vs "
-                  f"{row['measured_without_mm']:.3f} mm), predicted/measured with {row['predicted_over_measured_with']:.2f} "
-                  f"without {row['predicted_over_measured_without']:.2f}, z {[round(v['z'], 2) for v in row['zeros'].values()]}",
-                  file=sys.stderr, flush=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        rows = run_seeds(range(args.first, args.first + args.seeds), lambda seed: one_seed(seed, Path(tmp)), args.out,
+                         lambda row: f"reduction {row['reduction']:.3f} ({row['measured_with_mm']:.3f} vs "
+                         f"{row['measured_without_mm']:.3f} mm), predicted/measured with {row['predicted_over_measured_with']:.2f} "
+                         f"without {row['predicted_over_measured_without']:.2f}, z {[round(v['z'], 2) for v in row['zeros'].values()]}")
     print(json.dumps(summary(rows), indent=1))
     return 0
 
