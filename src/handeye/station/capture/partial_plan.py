@@ -111,7 +111,7 @@ def widen_with_partial_views(robot: RobotModel, joints: np.ndarray, cam2tool0, b
     partial : list of PartialPosture
         The swapped-in postures (``number`` unset), in the order they were swapped in.
     """
-    joints = np.asarray(joints, float)
+    joints = np.array(joints, float)  # a copy: the swaps below do not change the caller's draw
     n = len(joints)
     most = int(np.floor(MAX_PARTIAL_SHARE * n))
     if not partial_ok(board) or most < 1 or n < 3:
