@@ -124,6 +124,7 @@ _EXPORTS = {
     "identify_arm": "arm_identification",
     "predicted_standoff": "standoff",
     "working_volume_joints": "standoff",
+    "flange_standoff_points": "standoff",
     "CrossValidation": "crossval",
     "EivSolution": "eiv",
     "Explanation": "drift_causes",
@@ -139,7 +140,7 @@ if TYPE_CHECKING:  # what the names are, for type checkers and IDEs
     from .arm_parameters import corrected_robot  # noqa: F401
     from .noise import twist_between  # noqa: F401
     from .arm_identification import identify_arm  # noqa: F401
-    from .standoff import predicted_standoff, working_volume_joints  # noqa: F401
+    from .standoff import flange_standoff_points, predicted_standoff, working_volume_joints  # noqa: F401
     from .compact_points import compact_points_from_corners  # noqa: F401
     from .crossval import CrossValidation, cross_validate  # noqa: F401
     from .diagnostics import diagnose, find_unit_problems  # noqa: F401

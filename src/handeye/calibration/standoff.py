@@ -32,12 +32,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .arm_parameters import corrected_robot, parameter_jacobian
 from .noise import adjoint, skew
 from ..geometry import invert_transforms
 
-__all__ = ["DEFAULT_STANDOFF_MM", "DRAWS", "StandoffError", "predicted_standoff", "working_volume_joints", "rms_draws", "standoff_points", "measured_standoff"]
+__all__ = ["DEFAULT_STANDOFF_MM", "DRAWS", "StandoffError", "predicted_standoff", "working_volume_joints", "rms_draws", "standoff_points", "flange_standoff_points",
+           "measured_standoff"]
 
 #: The inspection stand-off along the camera's optical axis, mm.
 DEFAULT_STANDOFF_MM = 750.0
@@ -132,8 +134,15 @@ def _point_rows_at(points: np.ndarray) -> np.ndarray:
 
 def standoff_points(robot, joints_deg, x, target, standoff_mm: float = DEFAULT_STANDOFF_MM) -> np.ndarray:
     """The stand-off point in the board's frame, ``(n, 3)``, for an arm model, a camera and a board pose."""
-    g = invert_transforms(target)[None] @ robot.forward_transform(joints_deg) @ x[None]
-    return g[:, :3, :3] @ np.array([0.0, 0.0, standoff_mm]) + g[:, :3, 3]
+    return flange_standoff_points(robot.forward_transform(joints_deg), x, target, standoff_mm)
+
+
+def flange_standoff_points(flange: ArrayLike, x: ArrayLike, target: ArrayLike,
+                           standoff_mm: float = DEFAULT_STANDOFF_MM) -> np.ndarray:
+    """The stand-off point in the board's frame, ``(n, 3)``: ``standoff_mm`` along the axis of the camera ``x``
+    (4, 4; in tool0) on the flange poses ``flange`` (n, 4, 4; tool0 in base), the board at ``target`` (4, 4; in base)."""
+    g = invert_transforms(np.asarray(target, float))[None] @ np.asarray(flange, float) @ np.asarray(x, float)[None]
+    return g[:, :3, :3] @ np.array([0.0, 0.0, float(standoff_mm)]) + g[:, :3, 3]
 
 
 def _jacobian(robot, joints, x, target, columns, standoff_mm) -> np.ndarray:

@@ -37,10 +37,11 @@ def measured_standoff_mm(x, target, flange, board_in_camera, standoff_mm: float)
     board_in_camera : ndarray, shape (n, 4, 4)
         The board as the check's camera saw it.
     """
-    point = np.array([0.0, 0.0, float(standoff_mm), 1.0])
-    model = invert_transforms(target)[None] @ np.asarray(flange, float) @ np.asarray(x, float)[None]
-    seen = invert_transforms(np.asarray(board_in_camera, float))
-    return np.linalg.norm((model @ point)[:, :3] - (seen @ point)[:, :3], axis=1)
+    from ...calibration import flange_standoff_points
+
+    seen = invert_transforms(np.asarray(board_in_camera, float))  # the camera in the board's frame
+    measured = seen[:, :3, :3] @ np.array([0.0, 0.0, float(standoff_mm)]) + seen[:, :3, 3]
+    return np.linalg.norm(flange_standoff_points(flange, x, target, standoff_mm) - measured, axis=1)
 
 
 def standoff_comparison(session_dir, check_problem, baseline, numbers) -> dict | None:
