@@ -16,15 +16,21 @@ from handeye.station.config.station import config_from_dict
 MOCK = {"controller": {"protocol": "mock"}, "camera": {"backend": "mock"}}
 
 
-def test_a_charuco_frame_through_the_xb3_layout_is_detected_by_id_at_the_true_corners():
-    camera = MockCamera(board=PrintedBoard(STATION_CHARUCO), seed=2, render_centre=False)
+def _observed(board):
+    """One mock XB3 frame of ``board`` through the real detection: the observation and each corner's
+    distance (mm) from the mock's true corner of the same id."""
+    camera = MockCamera(board=PrintedBoard(board), seed=2, render_centre=False)
     with camera:
         frame = camera.grab()
-    obs = observe_board(frame.left, frame.right, camera.model, STATION_CHARUCO)
+    obs = observe_board(frame.left, frame.right, camera.model, board)
     truth = frame.info["target2cam_truth"]
-    true_points = STATION_CHARUCO.grid() @ truth[:3, :3].T + truth[:3, 3]
+    true_points = board.grid() @ truth[:3, :3].T + truth[:3, 3]
+    return obs, np.linalg.norm(obs.points_mm - true_points[obs.corner_ids], axis=1)
+
+
+def test_a_charuco_frame_through_the_xb3_layout_is_detected_by_id_at_the_true_corners():
+    obs, error = _observed(STATION_CHARUCO)
     assert len(obs.corner_ids) >= 95
-    error = np.linalg.norm(obs.points_mm - true_points[obs.corner_ids], axis=1)
     assert np.sqrt(np.mean(error**2)) < 0.5
 
 
@@ -69,14 +75,8 @@ def test_the_station_config_takes_a_board_section_and_mock_occlude():
 def test_a_circle_grid_frame_is_found_whole_at_the_true_centres():
     from handeye.geometry.targets import STATION_CIRCLES
 
-    camera = MockCamera(board=PrintedBoard(STATION_CIRCLES), seed=2, render_centre=False)
-    with camera:
-        frame = camera.grab()
-    obs = observe_board(frame.left, frame.right, camera.model, STATION_CIRCLES)
-    truth = frame.info["target2cam_truth"]
-    true_points = STATION_CIRCLES.grid() @ truth[:3, :3].T + truth[:3, 3]
+    obs, error = _observed(STATION_CIRCLES)
     assert len(obs.corner_ids) == STATION_CIRCLES.count
-    error = np.linalg.norm(obs.points_mm - true_points[obs.corner_ids], axis=1)
     assert np.sqrt(np.mean(error**2)) < 0.5
     assert abs(obs.quality["square_mm_measured"] - STATION_CIRCLES.square_mm) < 0.1
 
